@@ -1,0 +1,403 @@
+"""The paper's closed forms: one step of the staircase, edge to edge.
+
+Normalised units (DESIGN.md): step height = step length = g = 1, restitution
+``e`` in [0, 1), horizontal speed ``u > 0``, so one step takes ``T = 1/u``.
+The state at a step edge is ``(y, v)``: the height above the floor of the step
+the ball is entering and the vertical velocity.
+
+Everything the numba kernels of :mod:`stairbounce.scan` and
+:mod:`stairbounce.orbits` need is a ``@njit`` scalar function here (names with a
+leading underscore, taking the per-parameter constants ``T = 1/u`` and
+``ratio = (1+e)/(1-e)`` precomputed).  The public functions validate their
+input, raise :class:`ValueError` naming the parameter and its allowed range, and
+call the same compiled functions, so Python and the kernels share one
+implementation of the map.
+
+References are to Campos, Romero-Valles and Torres, "A fractal structure in a
+bouncing ball model" (the paper), and its reference [1]: Campos,
+Romero-Valles, Torres and Veerman, Chaos, Solitons & Fractals 32 (2007) 415-426.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "SLIDING",
+    "poincare_map",
+    "slides",
+    "impact_number",
+    "impact_times",
+    "no_sliding_bound",
+    "tongue",
+    "iterate",
+]
+
+SLIDING = -1
+"""Impact number of a step on which the impacts accumulate (Prop. 2.1)."""
+
+# Impacts on one step are first counted one by one (one multiply-add each); past
+# this many the closed form of Prop. 2.2 takes over.  Most steps of the paper's
+# parameter plane have 0, 1 or 2 impacts.
+_COUNTED_IMPACTS = 8
+
+
+# --------------------------------------------------------------------------- #
+# Compiled scalar functions (one source of truth for Python and the kernels)   #
+# --------------------------------------------------------------------------- #
+
+
+@njit(cache=True)
+def _constants(e, u):
+    """Per-parameter constants ``(T, ratio) = (1/u, (1+e)/(1-e))``."""
+    return 1.0 / u, (1.0 + e) / (1.0 - e)
+
+
+@njit(cache=True)
+def _impact_speed(y, v):
+    """Speed at the first impact on the floor, ``sqrt(v^2 + 2y)`` (eq. 2.1)."""
+    return math.sqrt(v * v + 2.0 * y)
+
+
+@njit(cache=True)
+def _slides(y, v, T, ratio):
+    """Prop. 2.1 in the form (2.4): ``v + (1+e)/(1-e) sqrt(v^2+2y) <= T``.
+
+    Equality counts as sliding (DESIGN.md).
+    """
+    return v + ratio * math.sqrt(v * v + 2.0 * y) <= T
+
+
+@njit(cache=True)
+def _impact_time(v, s, e, k):
+    """Eq. (2.2): time of the k-th impact, ``v + (1+e-2e^k)/(1-e) s``."""
+    return v + (1.0 + e - 2.0 * e**k) / (1.0 - e) * s
+
+
+@njit(cache=True)
+def _impact_number_closed(y, v, e, T):
+    """Prop. 2.2, ``k = E[log_e(((v - T)(1-e)) / (2 s) + (1+e)/2)]``.
+
+    Returns ``SLIDING`` when the argument of the logarithm is not positive
+    (the solution slides, DESIGN.md).  The floor of a rounded logarithm can be
+    one off; the result is corrected so that ``t_k <= T < t_{k+1}`` holds with
+    the impact times of eq. (2.2), which is the definition in the proof.
+    """
+    s = math.sqrt(v * v + 2.0 * y)
+    if v + s > T:  # first impact after the edge: the ball flies over
+        return 0
+    if e == 0.0:  # plastic impact: it sticks at its first contact
+        return SLIDING
+    arg = (v - T) * (1.0 - e) / (2.0 * s) + 0.5 * (1.0 + e)
+    if arg <= 0.0:
+        return SLIDING
+    kf = math.floor(math.log(arg) / math.log(e))
+    if kf > 1.0e6:  # the geometric series has converged to T in float64
+        kf = 1.0e6
+    k = max(int(kf), 1)
+    # rounding of log/pow: move k until t_k <= T < t_{k+1}, a few steps at most
+    for _ in range(4):
+        if k > 1 and _impact_time(v, s, e, k) > T:
+            k -= 1
+        elif _impact_time(v, s, e, k + 1) <= T:
+            k += 1
+        else:
+            break
+    return k
+
+
+@njit(cache=True)
+def _step_closed(y, v, e, T, ratio):
+    """Prop. 2.3, the Poincare map with the impact number of Prop. 2.2.
+
+    The plain closed-form evaluation: log and pow on every step with impacts.
+    :func:`_step` gives the same map faster; both are tested against the
+    impact-by-impact loop of ``tests/naive.py``.
+    """
+    if _slides(y, v, T, ratio):
+        return 1.0, 0.0, SLIDING
+    s = math.sqrt(v * v + 2.0 * y)
+    k = _impact_number_closed(y, v, e, T)
+    if k == SLIDING:  # rounding at the boundary of (2.4)
+        return 1.0, 0.0, SLIDING
+    if k == 0:
+        return y + v * T - 0.5 * T * T + 1.0, v - T, 0
+    tk = _impact_time(v, s, e, k)
+    vk = e**k * s
+    d = T - tk
+    return -0.5 * d * d + vk * d + 1.0, vk - d, k
+
+
+@njit(cache=True)
+def _step(y, v, e, T, ratio):
+    """Prop. 2.3, the Poincare map ``(y, v) -> (y_T, v_T, k)``, fast form.
+
+    After the sliding test (2.4) the impacts are counted one by one along the
+    geometric series of eq. (2.2) (``t_{k+1} = t_k + 2 v_k``, ``v_{k+1} = e v_k``):
+    one square root and a few flops for the usual 0, 1 or 2 impacts.  Past
+    ``_COUNTED_IMPACTS`` impacts the closed form of Prop. 2.2 takes over.
+
+    Returns ``(1, 0, SLIDING)`` when the impacts accumulate before the edge.
+    """
+    s = math.sqrt(v * v + 2.0 * y)
+    if v + ratio * s <= T:  # (2.4): accumulation before the edge
+        return 1.0, 0.0, SLIDING
+    t = v + s  # first impact
+    if t > T:  # flies over the step
+        return y + v * T - 0.5 * T * T + 1.0, v - T, 0
+    w = e * s  # velocity after the current impact
+    k = 1
+    while k < _COUNTED_IMPACTS:
+        nt = t + 2.0 * w
+        if nt > T:
+            d = T - t
+            return -0.5 * d * d + w * d + 1.0, w - d, k
+        t = nt
+        w *= e
+        k += 1
+    return _step_closed(y, v, e, T, ratio)
+
+
+@njit(cache=True)
+def _slide_or_steps(y, v, e, T, ratio, max_steps):
+    """Iterate the map from ``(y, v)`` until it slides, at most ``max_steps`` steps.
+
+    Returns ``(steps, impacts, jumps)``: the number of steps up to and including
+    the sliding step (0 when it did not slide), the finite impacts on the way
+    and the number of non-zero jump numbers (steps with at least one impact,
+    the sliding step included).  From ``(1, 0)`` these are the period, the
+    impacts per period and the non-zero letters of the periodic sliding
+    solution's word; its length is ``impacts + 1`` (DESIGN.md).
+    """
+    impacts = 0
+    jumps = 0
+    for n in range(1, max_steps + 1):
+        y, v, k = _step(y, v, e, T, ratio)
+        if k == SLIDING:
+            return n, impacts, jumps + 1
+        if k > 0:
+            impacts += k
+            jumps += 1
+    return 0, impacts, jumps
+
+
+@njit(cache=True)
+def _iterate(y, v, e, T, ratio, steps, ys, vs, ks):
+    """Fill ``ys[0..steps]``, ``vs``, ``ks[1..steps]`` with the Poincare iterates."""
+    ys[0] = y
+    vs[0] = v
+    ks[0] = 0
+    for n in range(1, steps + 1):
+        y, v, k = _step(y, v, e, T, ratio)
+        ys[n] = y
+        vs[n] = v
+        ks[n] = k
+
+
+# --------------------------------------------------------------------------- #
+# Validation                                                                  #
+# --------------------------------------------------------------------------- #
+
+
+def _finite(name, x):
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {x!r}") from None
+    if not math.isfinite(x):
+        raise ValueError(f"{name} must be finite, got {x}")
+    return x
+
+
+def check_e(e):
+    """Validate the restitution coefficient: a float in [0, 1)."""
+    e = _finite("e", e)
+    if not 0.0 <= e < 1.0:
+        raise ValueError(f"e (restitution coefficient) must be in [0, 1), got {e}")
+    return e
+
+
+def check_u(u):
+    """Validate the horizontal speed: a finite float > 0."""
+    u = _finite("u", u)
+    if not u > 0.0:
+        raise ValueError(f"u (horizontal speed) must be > 0, got {u}")
+    return u
+
+
+def check_state(y, v, yname="y", vname="v"):
+    """Validate an edge state: ``y >= 0`` finite (the paper's domain is y >= 1;
+    heights in [0, 1) are accepted as initial states, as in Section 4) and ``v``
+    finite."""
+    y = _finite(yname, y)
+    if y < 0.0:
+        raise ValueError(f"{yname} (height above the step's floor) must be >= 0, got {y}")
+    return y, _finite(vname, v)
+
+
+def check_count(name, n, minimum):
+    """Validate an integer count ``n >= minimum``."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        if isinstance(n, float) and n.is_integer():
+            n = int(n)
+        else:
+            raise ValueError(f"{name} must be an integer >= {minimum}, got {n!r}")
+    n = int(n)
+    if n < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {n}")
+    return n
+
+
+# --------------------------------------------------------------------------- #
+# Public API                                                                  #
+# --------------------------------------------------------------------------- #
+
+
+def poincare_map(y, v, e, u):
+    """poincare_map(y, v, e, u) -> (y_next, v_next, impacts)
+
+    One step of the staircase, edge to edge (Prop. 2.3).
+
+    ``P(y, v) = (y(T) + 1, y'(T+))`` with ``T = 1/u``: fly until the first impact
+    ``t_1 = v + sqrt(v^2 + 2y)``, bounce with impact times and velocities of
+    eq. (2.2), and measure the state when the ball passes the next edge.  If the
+    impacts accumulate before the edge (Prop. 2.1) the ball slides off it with
+    zero vertical velocity: ``P = (1, 0)`` and ``impacts = SLIDING``.
+
+    Parameters
+    ----------
+    y : float >= 0
+        Height above the floor of the step being entered (the paper's domain is
+        y >= 1; smaller heights are accepted as initial states).
+    v : float
+        Vertical velocity (positive upwards).
+    e : float in [0, 1)
+        Restitution coefficient (0: plastic, the ball sticks at first contact).
+    u : float > 0
+        Horizontal speed; one step takes ``T = 1/u``.
+
+    Returns
+    -------
+    (y_next, v_next, impacts) : (float, float, int)
+        ``impacts`` is 0 when the ball flies over the step, k >= 1 impacts, or
+        ``SLIDING`` (-1).
+    """
+    y, v = check_state(y, v)
+    e = check_e(e)
+    T, ratio = _constants(e, check_u(u))
+    yn, vn, k = _step(y, v, e, T, ratio)
+    return float(yn), float(vn), int(k)
+
+
+def slides(y, v, e, u):
+    """slides(y, v, e, u) -> bool
+
+    Whether the impacts accumulate on the first step (Prop. 2.1).
+
+    Evaluated as (2.4), ``v + (1+e)/(1-e) sqrt(v^2 + 2y) <= 1/u``, which is
+    equivalent to (2.3).  Equality counts as sliding.
+    """
+    y, v = check_state(y, v)
+    T, ratio = _constants(check_e(e), check_u(u))
+    return bool(_slides(y, v, T, ratio))
+
+
+def impact_number(y, v, e, u):
+    """impact_number(y, v, e, u) -> int
+
+    Number of impacts on the first step (Prop. 2.2).
+
+    ``k = E[log_e((v - 1/u)(1-e) / (2 sqrt(v^2+2y)) + (1+e)/2)]``, corrected
+    for rounding so that ``t_k <= T < t_{k+1}`` with the times of eq. (2.2);
+    0 when the ball flies over the step.
+
+    Raises
+    ------
+    ValueError
+        When the solution slides on this step (the impact number is infinite).
+    """
+    y, v = check_state(y, v)
+    e = check_e(e)
+    T, ratio = _constants(e, check_u(u))
+    if _slides(y, v, T, ratio):
+        raise ValueError(
+            "the solution slides on this step (Prop. 2.1): its impact number is infinite"
+        )
+    k = _impact_number_closed(y, v, e, T)
+    if k == SLIDING:
+        raise ValueError(
+            "the solution slides on this step (Prop. 2.1): its impact number is infinite"
+        )
+    return int(k)
+
+
+def impact_times(y, v, e, k):
+    """impact_times(y, v, e, k) -> (times, velocities)
+
+    The first ``k`` impact times and post-impact velocities on a step, eq. (2.2).
+
+    ``t_j = v + (1+e-2e^j)/(1-e) sqrt(v^2+2y)``, ``v_j = e^j sqrt(v^2+2y)``,
+    j = 1..k, measured from the edge, assuming every impact happens on this
+    step (the horizontal speed does not enter).
+
+    Returns two float arrays of length ``k``.
+    """
+    y, v = check_state(y, v)
+    e = check_e(e)
+    k = check_count("k", k, 0)
+    s = math.sqrt(v * v + 2.0 * y)
+    j = np.arange(1, k + 1, dtype=float)
+    ej = e**j
+    return v + (1.0 + e - 2.0 * ej) / (1.0 - e) * s, ej * s
+
+
+def no_sliding_bound(e):
+    """no_sliding_bound(e) -> float
+
+    Corollary 2.1: for ``u >= (1-e) / (2 sqrt(2e))`` no solution slides.
+
+    Infinite for ``e = 0`` (a plastic ball sticks at every speed).
+    """
+    e = check_e(e)
+    if e == 0.0:
+        return math.inf
+    return (1.0 - e) / (2.0 * math.sqrt(2.0 * e))
+
+
+def tongue(n, e):
+    """tongue(n, e) -> (u_low, u_high)
+
+    Theorem 3.1: the ``(n, 0^inf)`` sliding tongue at restitution ``e``.
+
+    Periodic solutions of type ``(n, 0^inf)`` exist iff
+    ``(n-1)/2 < u^2 <= n/2 ((1-e)/(1+e))^2``, i.e. ``u_low < u <= u_high`` with
+    ``u_low = sqrt((n-1)/2)`` (excluded) and
+    ``u_high = sqrt(n/2) (1-e)/(1+e)`` (included).  The interval is empty when
+    ``u_high <= u_low``.
+    """
+    n = check_count("n", n, 1)
+    e = check_e(e)
+    return math.sqrt((n - 1) / 2.0), math.sqrt(n / 2.0) * (1.0 - e) / (1.0 + e)
+
+
+def iterate(y, v, e, u, steps):
+    """iterate(y, v, e, u, steps) -> (ys, vs, impacts)
+
+    Poincare iterates ``P^n(y, v)`` for n = 0..steps (Prop. 2.3).
+
+    Returns float arrays ``ys``, ``vs`` of length ``steps + 1`` (index 0 is the
+    initial state) and an int array ``impacts`` of the same length with the
+    impact number of the step that led to each iterate (``impacts[0] = 0``).
+    """
+    y, v = check_state(y, v)
+    e = check_e(e)
+    T, ratio = _constants(e, check_u(u))
+    steps = check_count("steps", steps, 0)
+    ys = np.empty(steps + 1)
+    vs = np.empty(steps + 1)
+    ks = np.empty(steps + 1, dtype=np.int64)
+    _iterate(y, v, e, T, ratio, steps, ys, vs, ks)
+    return ys, vs, ks

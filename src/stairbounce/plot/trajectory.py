@@ -1,0 +1,102 @@
+"""The ball on the staircase (the paper's Fig. 1) and the Poincare section (Fig. 2)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model import SLIDING
+
+
+def _axes(ax, **subplot_kw):
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(7, 4.5), **subplot_kw)
+    return ax
+
+
+def _staircase(steps):
+    """Outline of steps -1..steps: edge at x = j, floor of step j at -j."""
+    xs, ys = [], []
+    for j in range(-1, steps + 1):
+        xs += [j, j + 1]
+        ys += [-j, -j]
+    return np.array(xs, float), np.array(ys, float)
+
+
+def plot_trajectory(traj, ax=None, samples_per_step=400, show_impacts=True):
+    """Draw a :class:`~stairbounce.Trajectory` on the staircase (Fig. 1).
+
+    Flights are drawn from ``traj.position`` on a fine time grid (plus every
+    impact time, so the corners are sharp); impacts are dots, accumulation
+    points stars, slides thick segments along the floor.
+    """
+    ax = _axes(ax)
+    sx, sy = _staircase(max(traj.steps, 1))
+    ax.fill_between(sx, sy, sy.min() - 0.6, step=None, color="0.88", zorder=0)
+    ax.plot(sx, sy, color="0.3", lw=1.2, zorder=1)
+    t = np.linspace(0.0, traj.duration, max(2, samples_per_step * max(traj.steps, 1)))
+    t = np.union1d(t, [i.time for i in traj.impacts if i.time <= traj.duration])
+    x, y = traj.position(t)
+    ax.plot(x, y, color="C0", lw=1.3, label="ball", zorder=2)
+    if show_impacts and traj.impacts:
+        ax.plot([i.x for i in traj.impacts], [i.y for i in traj.impacts], "o", ms=3.5,
+                color="C3", label="impacts", zorder=3)
+    for s in traj.slides:
+        ax.plot([s.x_start, s.x_end], [s.y, s.y], color="C2", lw=3.5, solid_capstyle="butt",
+                zorder=3)
+    if traj.slides:
+        ax.plot([], [], color="C2", lw=3.5, label="sliding")
+    if traj.accumulations:
+        ax.plot([a.x for a in traj.accumulations], [a.y for a in traj.accumulations], "*",
+                ms=11, color="C1", mec="k", mew=0.5, label="accumulation of impacts", zorder=4)
+    ax.set_xlabel("x (steps)")
+    ax.set_ylabel("height")
+    ax.set_title(f"e = {traj.e:g}, u = {traj.u:g}")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(loc="upper right", fontsize="small")
+    return ax
+
+
+def plot_poincare_section(ys, vs, impacts=None, ax=None):
+    """Draw Poincare iterates ``(y_n, v_n)`` at consecutive step edges (Fig. 2).
+
+    Iterates reached by sliding (``impacts == SLIDING``), which are all the
+    point (1, 0), are drawn as a larger marker.
+    """
+    ax = _axes(ax)
+    ys, vs = np.asarray(ys), np.asarray(vs)
+    ax.plot(ys, vs, color="0.7", lw=0.6, zorder=1)
+    ax.scatter(ys, vs, c=np.arange(len(ys)), cmap="viridis", s=14, zorder=2, label="iterates")
+    if impacts is not None:
+        sl = np.asarray(impacts) == SLIDING
+        if sl.any():
+            ax.plot(ys[sl], vs[sl], "*", ms=12, color="C1", mec="k", mew=0.5,
+                    label="after sliding (1, 0)", zorder=3)
+    ax.axvline(1.0, color="0.5", lw=0.8, ls="--")
+    ax.set_xlabel("y (height at the edge)")
+    ax.set_ylabel("v (vertical velocity at the edge)")
+    ax.set_title("Poincare section")
+    ax.legend(loc="best", fontsize="small")
+    return ax
+
+
+def animate_trajectory(traj, path, fps=30, seconds_per_step=0.6):
+    """Write an animation of the ball (GIF through Pillow) to ``path``."""
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    plot_trajectory(traj, ax=ax, show_impacts=False)
+    frames = max(2, int(fps * seconds_per_step * max(traj.steps, 1)))
+    times = np.linspace(0.0, traj.duration, frames)
+    xs, ys = traj.position(times)
+    (ball,) = ax.plot([xs[0]], [ys[0]], "o", ms=9, color="C3", zorder=5)
+
+    def update(i):
+        ball.set_data([xs[i]], [ys[i]])
+        return (ball,)
+
+    anim = FuncAnimation(fig, update, frames=frames, blit=True)
+    anim.save(str(path), writer=PillowWriter(fps=fps))
+    plt.close(fig)

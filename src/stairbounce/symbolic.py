@@ -1,0 +1,153 @@
+"""Words of periodic sliding solutions (Section 3 of the paper, DESIGN.md).
+
+A word lists the jump numbers between consecutive impacts, starting from the
+ball's departure at ``(1, 0)`` (it has just slid off an edge).  Landing on the
+step right below is a jump of 1; a step with ``k >= 1`` impacts contributes its
+jump and then ``k - 1`` zeros; the step where the impacts accumulate contributes
+its jump and the accumulation tail ``0^inf``, which is not a letter.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from .model import SLIDING, _constants, _step, check_count, check_e, check_u
+
+__all__ = ["Word", "sliding_word", "parse_word"]
+
+INFINITY = "\u221e"
+
+
+@dataclass(frozen=True)
+class Word:
+    """The word of a periodic sliding solution, tail ``0^inf`` left out.
+
+    ``letters`` are the jump numbers; ``period`` (steps per period) is their
+    sum and ``impacts`` (finite impacts per period) is ``len(word) - 1``: every
+    letter but the last one ends in an impact, the last one in the accumulation.
+    """
+
+    letters: tuple[int, ...]
+
+    def __post_init__(self):
+        letters = tuple(int(a) for a in self.letters)
+        if not letters or letters[0] < 1 or letters[-1] < 1 or min(letters) < 0:
+            raise ValueError(
+                "letters must be non-negative jump numbers, the first and last >= 1, "
+                f"got {letters}"
+            )
+        object.__setattr__(self, "letters", letters)
+
+    @property
+    def period(self) -> int:
+        """Steps per period: the sum of the jump numbers."""
+        return sum(self.letters)
+
+    @property
+    def impacts(self) -> int:
+        """Finite impacts per period (the accumulation not counted)."""
+        return len(self.letters) - 1
+
+    @property
+    def jumps(self) -> int:
+        """Non-zero letters: the steps of a period on which the ball lands."""
+        return sum(1 for a in self.letters if a)
+
+    def __len__(self) -> int:
+        return len(self.letters)
+
+    def format(self, ascii: bool = False) -> str:
+        """``(2, 0, 3, 1, 0^inf)``, with the infinity sign unless ``ascii``."""
+        tail = "0^inf" if ascii else "0^" + INFINITY
+        return "(" + ", ".join([*map(str, self.letters), tail]) + ")"
+
+    def __str__(self) -> str:
+        return self.format()
+
+
+def parse_word(text: str) -> Word:
+    """Read a word written as in the paper, ``(2, 0, 3, 1, 0^inf)`` (or with the
+    infinity sign)."""
+    m = re.fullmatch(r"\s*\(\s*((?:\d+\s*,\s*)+)0\^(?:inf|\u221e)\s*\)\s*", text)
+    if not m:
+        raise ValueError(f"word must look like (2, 0, 3, 1, 0^inf), got {text!r}")
+    return Word(tuple(int(a) for a in m.group(1).split(",") if a.strip()))
+
+
+def terminal_can_print_infinity(stream=None) -> bool:
+    """Whether ``stream`` (default stdout) can encode the infinity sign."""
+    enc = getattr(stream or sys.stdout, "encoding", None) or "ascii"
+    try:
+        INFINITY.encode(enc)
+    except (UnicodeEncodeError, LookupError):
+        return False
+    return True
+
+
+@njit(cache=True)
+def _impacts_until_slide(y, v, e, T, ratio, max_steps, ks):
+    """Impact numbers of the steps from ``(y, v)`` up to the first slide.
+
+    Fills ``ks[:n]`` and returns ``n``, the step count including the sliding
+    step, or 0 when the orbit does not slide within ``max_steps`` steps.
+    """
+    for n in range(max_steps):
+        y, v, k = _step(y, v, e, T, ratio)
+        ks[n] = k
+        if k == SLIDING:
+            return n + 1
+    return 0
+
+
+def word_from_impacts(impacts) -> Word:
+    """The word of one period from the impact numbers of its steps, the last
+    one ``SLIDING`` (DESIGN.md's convention)."""
+    letters = []
+    jump = 0
+    for k in impacts:
+        jump += 1
+        if k == 0:
+            continue
+        letters.append(jump)
+        jump = 0
+        if k == SLIDING:
+            return Word(tuple(letters))
+        letters.extend([0] * (int(k) - 1))
+    raise ValueError("impacts must end with a sliding step (SLIDING)")
+
+
+def sliding_word(e, u, max_steps=1000):
+    """sliding_word(e, u, max_steps=1000) -> Word | None
+
+    The periodic sliding solution through ``(1, 0)``, as a word.
+
+    Every sliding solution passes through ``(1, 0)`` (it slides off an edge
+    with zero vertical velocity), so a periodic sliding solution exists exactly
+    when the orbit of ``(1, 0)`` under the Poincare map (Prop. 2.3) slides
+    again; the sliding test (2.3)/(2.4) is the stop criterion of Section 3.
+
+    Parameters
+    ----------
+    e : float in [0, 1)
+    u : float > 0
+    max_steps : int >= 1, default 1000
+        Steps to iterate before giving up.
+
+    Returns
+    -------
+    Word or None
+        ``None`` when the orbit does not slide within ``max_steps`` steps.
+    """
+    e = check_e(e)
+    T, ratio = _constants(e, check_u(u))
+    max_steps = check_count("max_steps", max_steps, 1)
+    ks = np.empty(max_steps, dtype=np.int64)
+    n = _impacts_until_slide(1.0, 0.0, e, T, ratio, max_steps, ks)
+    if n == 0:
+        return None
+    return word_from_impacts(ks[:n])

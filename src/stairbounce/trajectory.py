@@ -1,0 +1,219 @@
+"""The exact continuous-time solution: flights, impacts, accumulation, sliding.
+
+Coordinates: the ball starts at time 0 at the edge ``x = 0`` with height ``y0``
+above the floor of step 0.  Step ``j`` covers ``j <= x < j + 1`` and its floor
+is at height ``-j``; the horizontal motion is uniform, ``x = u t``.  Every step
+is solved in closed form from its entry state (the Poincare iterates of
+Prop. 2.3): a parabolic flight to the first impact, the impact times and
+velocities of eq. (2.2), and, when they accumulate (Prop. 2.1), the exact
+accumulation time ``t_inf = v + (1+e)/(1-e) sqrt(v^2 + 2y)`` followed by a slide
+along the floor to the edge.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .model import SLIDING, _constants, check_count, check_e, check_state, check_u, iterate
+
+__all__ = ["Trajectory", "Flight", "Impact", "Accumulation", "Slide", "trajectory"]
+
+
+@dataclass(frozen=True)
+class Flight:
+    """A parabolic arc: ``y(t) = y_start + v_start (t - t_start) - (t - t_start)^2 / 2``."""
+
+    t_start: float
+    t_end: float
+    y_start: float
+    v_start: float
+    step: int
+
+
+@dataclass(frozen=True)
+class Impact:
+    """An impact on the floor of ``step`` (at height ``y = -step``)."""
+
+    time: float
+    x: float
+    y: float
+    v_before: float
+    v_after: float
+    step: int
+
+
+@dataclass(frozen=True)
+class Accumulation:
+    """The limit of infinitely many impacts on ``step`` at the exact time of the
+    geometric series; ``listed`` impacts before it are in ``Trajectory.impacts``."""
+
+    time: float
+    x: float
+    y: float
+    step: int
+    listed: int
+
+
+@dataclass(frozen=True)
+class Slide:
+    """The ball slides along the floor of ``step`` (height ``y``) to its edge."""
+
+    t_start: float
+    t_end: float
+    x_start: float
+    x_end: float
+    y: float
+    step: int
+
+
+@dataclass
+class Trajectory:
+    """The solution over ``steps`` steps; see :func:`trajectory`."""
+
+    e: float
+    u: float
+    steps: int
+    edge_y: np.ndarray  # Poincare iterates: state at each edge, length steps + 1
+    edge_v: np.ndarray
+    edge_impacts: np.ndarray  # impact number of step j at index j + 1
+    flights: list[Flight] = field(default_factory=list)
+    impacts: list[Impact] = field(default_factory=list)
+    accumulations: list[Accumulation] = field(default_factory=list)
+    slides: list[Slide] = field(default_factory=list)
+
+    @property
+    def T(self) -> float:
+        """Time to cross one step, ``1/u``."""
+        return 1.0 / self.u
+
+    @property
+    def duration(self) -> float:
+        return self.steps / self.u
+
+    def _local(self, t):
+        """Step index, local time and local (height, velocity) for times ``t``."""
+        t = np.asarray(t, dtype=float)
+        if np.any(~np.isfinite(t)) or np.any(t < 0) or np.any(t > self.duration * (1 + 1e-12)):
+            raise ValueError(f"t must be in [0, {self.duration}] (the trajectory's duration)")
+        e, T = self.e, self.T
+        j = np.clip(np.floor(t / T).astype(np.int64), 0, max(self.steps - 1, 0))
+        tau = t - j * T
+        y0 = self.edge_y[j]
+        v0 = self.edge_v[j]
+        s = np.sqrt(v0 * v0 + 2.0 * y0)
+        t1 = v0 + s
+        sliding = self.edge_impacts[np.minimum(j + 1, self.steps)] == SLIDING
+        ratio = (1.0 + e) / (1.0 - e)
+        t_inf = v0 + ratio * s
+
+        y = y0 + v0 * tau - 0.5 * tau * tau  # flight from the edge
+        v = v0 - tau
+        bouncing = tau >= t1
+        if np.any(bouncing):
+            resting = bouncing & sliding & (tau >= t_inf)
+            b = bouncing & ~resting
+            if e > 0.0 and np.any(b):
+                # impacts with t_k <= tau: Prop. 2.2 with T replaced by tau
+                tb, vb, sb = tau[b], v0[b], s[b]
+                arg = (vb - tb) * (1.0 - e) / (2.0 * sb) + 0.5 * (1.0 + e)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    kf = np.floor(np.log(np.maximum(arg, 1e-300)) / math.log(e))
+                k = np.clip(np.nan_to_num(kf, nan=1.0), 1, 100_000).astype(np.int64)
+
+                def tk(n):
+                    return vb + (1.0 + e - 2.0 * e ** n.astype(float)) / (1.0 - e) * sb
+
+                for _ in range(3):  # rounding of log: t_k <= tau < t_{k+1}
+                    k = np.where((k > 1) & (tk(k) > tb), k - 1, k)
+                    k = np.where(tk(k + 1) <= tb, k + 1, k)
+                d = tb - tk(k)
+                vk = e ** k.astype(float) * sb
+                y[b] = -0.5 * d * d + vk * d
+                v[b] = vk - d
+            elif np.any(b):  # e = 0 sticks at the first contact: it slides
+                y[b] = 0.0
+                v[b] = 0.0
+            y[resting] = 0.0
+            v[resting] = 0.0
+        return j, tau, y, v
+
+    def position(self, t):
+        """position(t) -> (x, y): exact position at times ``t`` (vectorised)."""
+        t = np.asarray(t, dtype=float)
+        j, _, y, _ = self._local(t)
+        return self.u * t, y - j
+
+    def velocity(self, t):
+        """velocity(t) -> (vx, vy): horizontal and vertical velocity at ``t``
+        (right limits at impact times)."""
+        t = np.asarray(t, dtype=float)
+        _, _, _, v = self._local(t)
+        return np.full_like(v, self.u), v
+
+
+def trajectory(e, u, y0=1.0, v0=0.0, steps=10, max_listed=30):
+    """trajectory(e, u, y0=1.0, v0=0.0, steps=10, max_listed=30) -> Trajectory
+
+    The exact continuous-time solution of (1.3)-(1.4) over ``steps`` steps.
+
+    Each step is solved from its entry state (the Poincare iterates, Prop. 2.3):
+    a flight to ``t_1 = v + sqrt(v^2 + 2y)``, impacts at the times of eq. (2.2),
+    and when the impacts accumulate (Prop. 2.1) the accumulation at
+    ``t_inf = v + (1+e)/(1-e) sqrt(v^2+2y)`` (the sum of the geometric series)
+    and a slide to the edge.  The result lists flight arcs, impacts (time,
+    position, velocity before and after, step), accumulation points and slides,
+    and evaluates the exact position at any time with ``position(t)``.
+
+    Parameters
+    ----------
+    e : float in [0, 1)
+    u : float > 0
+    y0 : float >= 0, default 1.0
+        Initial height above the floor of step 0, at the edge x = 0.
+    v0 : float, default 0.0
+        Initial vertical velocity.
+    steps : int >= 0, default 10
+    max_listed : int >= 1, default 30
+        Impacts listed before an accumulation point (the rest of the infinite
+        sequence is still resolved exactly by ``position``).
+    """
+    e = check_e(e)
+    u = check_u(u)
+    y0, v0 = check_state(y0, v0, "y0", "v0")
+    steps = check_count("steps", steps, 0)
+    max_listed = check_count("max_listed", max_listed, 1)
+    T, ratio = _constants(e, u)
+    ys, vs, ks = iterate(y0, v0, e, u, steps)
+    traj = Trajectory(e=e, u=u, steps=steps, edge_y=ys, edge_v=vs, edge_impacts=ks)
+    for j in range(steps):
+        _solve_step(traj, j, ys[j], vs[j], int(ks[j + 1]), e, T, ratio, max_listed)
+    return traj
+
+
+def _solve_step(traj, j, y, v, k, e, T, ratio, max_listed):
+    """Append the flights, impacts, accumulation and slide of step ``j``."""
+    t0 = j * T
+    s = math.sqrt(v * v + 2.0 * y)
+    if k == 0:
+        traj.flights.append(Flight(t0, t0 + T, y - j, v, j))
+        return
+    n = k if k != SLIDING else (1 if e == 0.0 else max_listed)
+    tk = v + s  # eq. (2.1)
+    vk = s
+    traj.flights.append(Flight(t0, t0 + tk, y - j, v, j))
+    for i in range(1, n + 1):
+        if i > 1:
+            t_next = v + (1.0 + e - 2.0 * e**i) / (1.0 - e) * s  # eq. (2.2)
+            traj.flights.append(Flight(t0 + tk, t0 + t_next, -float(j), vk, j))
+            tk = t_next
+        traj.impacts.append(Impact(t0 + tk, traj.u * (t0 + tk), -float(j), -vk, e * vk, j))
+        vk = e * vk
+    if k != SLIDING:
+        traj.flights.append(Flight(t0 + tk, t0 + T, -float(j), vk, j))
+        return
+    t_inf = t0 + v + ratio * s
+    traj.accumulations.append(Accumulation(t_inf, traj.u * t_inf, -float(j), j, n))
+    traj.slides.append(Slide(t_inf, t0 + T, traj.u * t_inf, float(j + 1), -float(j), j))
