@@ -1,0 +1,77 @@
+"""Slow, obviously-correct references: no closed form of the paper in here.
+
+One step is simulated impact by impact: the flight to the floor is the root of
+``y + v t - t^2/2 = 0``, every bounce with take-off speed ``w`` lasts ``2 w`` and
+leaves with ``e w``.  Impacts "accumulate" when the bounce speed has fallen
+below ``REST * (impact speed)``, which is where float64 can no longer tell a
+bounce from rest; states that close to the sliding boundary are excluded from
+exact comparisons by the tests.
+"""
+
+from __future__ import annotations
+
+import math
+
+SLIDING = -1
+REST = 1e-13
+
+
+def step(y, v, e, u, max_impacts=10_000_000):
+    """One step edge to edge, impact by impact: ``(y_next, v_next, impacts)``."""
+    T = 1.0 / u
+    speed = math.sqrt(v * v + 2.0 * y)
+    t = v + speed  # time when y + v t - t^2/2 reaches the floor
+    if t > T:
+        return y + v * T - 0.5 * T * T + 1.0, v - T, 0
+    w = e * speed  # take-off speed after the impact
+    k = 1
+    while k < max_impacts:
+        if w <= REST * speed:
+            return 1.0, 0.0, SLIDING
+        if t + 2.0 * w > T:
+            d = T - t
+            return w * d - 0.5 * d * d + 1.0, w - d, k
+        t += 2.0 * w
+        w *= e
+        k += 1
+    return 1.0, 0.0, SLIDING
+
+
+def accumulation_time(y, v, e):
+    """Time at which impacts on the first step would accumulate, summed term by
+    term (used only to measure how close a state is to the sliding boundary)."""
+    speed = math.sqrt(v * v + 2.0 * y)
+    t = v + speed
+    w = e * speed
+    while w > 1e-17 * speed:
+        t += 2.0 * w
+        w *= e
+    return t
+
+
+def orbit_until_slide(y, v, e, u, max_steps):
+    """Impact numbers of the steps up to the first slide (inclusive), or None."""
+    ks = []
+    for _ in range(max_steps):
+        y, v, k = step(y, v, e, u)
+        ks.append(k)
+        if k == SLIDING:
+            return ks
+    return None
+
+
+def word(e, u, max_steps=1000):
+    """Letters of the periodic sliding solution through (1, 0) (DESIGN.md), or None."""
+    ks = orbit_until_slide(1.0, 0.0, e, u, max_steps)
+    if ks is None:
+        return None
+    letters, jump = [], 0
+    for k in ks:
+        jump += 1
+        if k == 0:
+            continue
+        letters.append(jump)
+        jump = 0
+        if k != SLIDING:
+            letters.extend([0] * (k - 1))
+    return tuple(letters)
