@@ -1,0 +1,456 @@
+"""The (e, u) parameter plane: where periodic sliding solutions exist (Section 3).
+
+For every point of a grid of restitution coefficients ``e`` and horizontal
+speeds ``u`` the Poincare map (Prop. 2.3) is iterated until the sliding test
+(2.3)/(2.4) holds; the word of the periodic sliding solution then gives the
+colour of the point (the paper's Figures 3, 4 and 5).
+
+The public wrappers validate, allocate and call a private numba kernel:
+
+- ``_scan_fast``: the kernel used by :func:`scan` and :func:`scan_coords`,
+  the map of :func:`stairbounce.model._step` (impacts counted along the
+  geometric series, no log/pow) evaluated on several pixels in lockstep,
+  parallel over both cores with interleaved work so that cheap and expensive
+  parts of the plane are shared evenly.
+- ``_scan_plain``: the baseline, one pixel at a time with the plain closed
+  form :func:`stairbounce.model._step_closed`, ``prange`` over rows.
+
+Nothing here imports matplotlib, Typer or the web stack.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+import xarray as xr
+from numba import njit, prange
+
+from .model import (
+    SLIDING,
+    _constants,
+    _slide_or_steps,
+    _step_closed,
+    check_count,
+)
+
+__all__ = [
+    "pixel_centres",
+    "scan",
+    "scan_coords",
+    "tongue_mask",
+    "no_sliding_curve",
+    "save",
+    "load",
+    "estimate_bytes",
+]
+
+CONVENTION = (
+    "word of the periodic sliding solution through (1, 0): jump numbers between "
+    "consecutive impacts, the first counted from the departure (landing on the step "
+    "right below is 1); a step with k >= 1 impacts gives its jump then k-1 zeros; the "
+    "accumulation tail 0^inf is not a letter. word_length = impacts + 1; period = sum "
+    "of letters = steps per period; jumps = non-zero letters; impacts = finite impacts "
+    "per period. status 0: periodic sliding solution found, 1: no slide within max_iter "
+    "steps (then word_length = jumps = period = impacts = 0). Coordinates are pixel "
+    "centres; the image covers [e_min, e_max] x [u_min, u_max]."
+)
+
+# Output variables, their dtypes and meaning.  word_length and impacts can
+# exceed 2**31 only for absurd max_iter near e = 1, but they are int64 anyway.
+_FIELDS = {
+    "status": (np.uint8, "0: periodic sliding solution found; 1: no slide within max_iter steps"),
+    "word_length": (np.int64, "length of the word of the periodic sliding solution (impacts + 1)"),
+    "jumps": (np.int32, "non-zero letters of the word (steps of a period with a landing)"),
+    "period": (np.int32, "steps per period (sum of the letters)"),
+    "impacts": (np.int64, "finite impacts per period (the accumulation not counted)"),
+}
+_BYTES_PER_PIXEL = sum(np.dtype(dt).itemsize for dt, _ in _FIELDS.values())
+
+
+# --------------------------------------------------------------------------- #
+# Kernels                                                                     #
+# --------------------------------------------------------------------------- #
+
+
+@njit(cache=True)
+def _slide_or_steps_closed(y, v, e, T, ratio, max_steps):
+    """:func:`stairbounce.model._slide_or_steps` with the plain closed form."""
+    impacts = 0
+    jumps = 0
+    for n in range(1, max_steps + 1):
+        y, v, k = _step_closed(y, v, e, T, ratio)
+        if k == SLIDING:
+            return n, impacts, jumps + 1
+        if k > 0:
+            impacts += k
+            jumps += 1
+    return 0, impacts, jumps
+
+
+@njit(cache=True)
+def _store(i, j, n, imp, jmp, status, word_length, jumps, period, impacts):
+    if n == 0:
+        status[i, j] = 1
+        word_length[i, j] = 0
+        jumps[i, j] = 0
+        period[i, j] = 0
+        impacts[i, j] = 0
+    else:
+        status[i, j] = 0
+        word_length[i, j] = imp + 1
+        jumps[i, j] = jmp
+        period[i, j] = n
+        impacts[i, j] = imp
+
+
+@njit(cache=True, parallel=True)
+def _scan_plain(es, us, max_iter, y0, v0, status, word_length, jumps, period, impacts):
+    """Baseline kernel: per pixel, the closed form of Prop. 2.2/2.3, prange over rows.
+
+    A transient from ``(y0, v0)`` up to its first slide, then one period from
+    ``(1, 0)``; the transient is skipped when ``(y0, v0) = (1, 0)``.
+    """
+    from_rest = y0 == 1.0 and v0 == 0.0
+    for i in prange(us.shape[0]):
+        for j in range(es.shape[0]):
+            e = es[j]
+            T, ratio = _constants(e, us[i])
+            n = 1
+            if not from_rest:
+                n, _, _ = _slide_or_steps_closed(y0, v0, e, T, ratio, max_iter)
+            imp = 0
+            jmp = 0
+            if n != 0:
+                n, imp, jmp = _slide_or_steps_closed(1.0, 0.0, e, T, ratio, max_iter)
+            _store(i, j, n, imp, jmp, status, word_length, jumps, period, impacts)
+
+
+@njit(cache=True, parallel=True)
+def _scan_fast(es, us, max_iter, y0, v0, rows, status, word_length, jumps, period, impacts):
+    """Fast kernel: the map of :func:`stairbounce.model._step`, rows interleaved.
+
+    ``rows`` is a permutation of the row indices spreading every part of the u
+    range over the static blocks prange hands to each thread.
+    """
+    from_rest = y0 == 1.0 and v0 == 0.0
+    for r in prange(rows.shape[0]):
+        i = rows[r]
+        for j in range(es.shape[0]):
+            e = es[j]
+            T, ratio = _constants(e, us[i])
+            n = 1
+            if not from_rest:
+                n, _, _ = _slide_or_steps(y0, v0, e, T, ratio, max_iter)
+            imp = 0
+            jmp = 0
+            if n != 0:
+                n, imp, jmp = _slide_or_steps(1.0, 0.0, e, T, ratio, max_iter)
+            _store(i, j, n, imp, jmp, status, word_length, jumps, period, impacts)
+
+
+def _interleaved_rows(n, stride=16):
+    """Row order ``0, 16, 32, ..., 1, 17, ...``: each contiguous block of this
+    order samples the whole u range, so prange's static split is balanced."""
+    return np.concatenate([np.arange(k, n, stride) for k in range(min(stride, n))]).astype(np.int64)
+
+
+# --------------------------------------------------------------------------- #
+# Validation and memory                                                       #
+# --------------------------------------------------------------------------- #
+
+
+def _real(name, x):
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {x!r}") from None
+    if not math.isfinite(x):
+        raise ValueError(f"{name} must be finite, got {x}")
+    return x
+
+
+def _window(name, spec, lo_min, hi_max, lo_text):
+    try:
+        lo, hi, n = spec
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a tuple ({name}_min, {name}_max, n_{name}), got {spec!r}") from None
+    lo = _real(f"{name}_min", lo)
+    hi = _real(f"{name}_max", hi)
+    n = check_count(f"n_{name}", n, 1)
+    if lo < lo_min or hi > hi_max:
+        raise ValueError(f"{name} window must lie in {lo_text}, got [{lo}, {hi}]")
+    if not lo < hi:
+        raise ValueError(f"{name}_min must be < {name}_max, got {name}_min = {lo}, {name}_max = {hi}")
+    return lo, hi, n
+
+
+def _coords(name, values):
+    a = np.asarray(values, dtype=np.float64)
+    if a.ndim != 1 or a.size == 0:
+        raise ValueError(f"{name} values must be a non-empty 1-D array, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} values must be finite")
+    if name == "e" and not np.all((a >= 0.0) & (a < 1.0)):
+        raise ValueError(
+            f"e (restitution coefficient) values must be in [0, 1), got [{a.min()}, {a.max()}]"
+        )
+    if name == "u" and not np.all(a > 0.0):
+        raise ValueError(f"u (horizontal speed) values must be > 0, got min {a.min()}")
+    return np.ascontiguousarray(a)
+
+
+def estimate_bytes(n_e, n_u):
+    """estimate_bytes(n_e, n_u) -> int
+
+    Memory the outputs of a scan of ``n_e x n_u`` pixels take: one uint8,
+    two int32 and two int64 per pixel (25 bytes) plus the coordinates.
+    """
+    return int(n_e) * int(n_u) * _BYTES_PER_PIXEL + 8 * (int(n_e) + int(n_u))
+
+
+def _available_memory():
+    """Bytes of memory available now (MemAvailable on Linux, else free pages)."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - no way to tell
+        return None
+
+
+def _check_memory(n_e, n_u):
+    need = estimate_bytes(n_e, n_u)
+    avail = _available_memory()
+    if avail is not None and need > avail:
+        raise ValueError(
+            f"a scan of {n_e} x {n_u} pixels needs about {_human(need)} for its outputs, "
+            f"more than the {_human(avail)} of memory available: reduce the size or scan tiles"
+        )
+    return need
+
+
+def _human(n):
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if n < 1024 or unit == "TiB":
+            return f"{n:.1f} {unit}" if unit != "B" else f"{n} B"
+        n /= 1024.0
+    return f"{n} B"  # pragma: no cover
+
+
+# --------------------------------------------------------------------------- #
+# Public API                                                                  #
+# --------------------------------------------------------------------------- #
+
+
+def pixel_centres(lo, hi, n):
+    """pixel_centres(lo, hi, n) -> np.ndarray
+
+    Centres of ``n`` equal pixels covering exactly ``[lo, hi]``.
+
+    ``c_j = lo + (j + 1/2) (hi - lo) / n``, j = 0..n-1.  Sub-windows of a scan
+    must be cut out of this array (not recomputed from their own bounds) to be
+    bit-identical to the whole scan.
+    """
+    lo = _real("lo", lo)
+    hi = _real("hi", hi)
+    n = check_count("n", n, 1)
+    return lo + (np.arange(n) + 0.5) * (hi - lo) / n
+
+
+def scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0):
+    """scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0) -> xarray.Dataset
+
+    The scan of :func:`scan` on arbitrary 1-D coordinate arrays.
+
+    Same kernel, same data variables and attributes as :func:`scan`, without
+    the window bounds (the coordinates need not be evenly spaced).  Pixels are
+    independent, so a tile cut out of a :func:`pixel_centres` grid gives the
+    same values, bit for bit, as the whole scan.
+
+    Parameters
+    ----------
+    e_values : 1-D array of floats in [0, 1)
+    u_values : 1-D array of floats > 0
+    max_iter, y0, v0 : as in :func:`scan`.
+    """
+    es = _coords("e", e_values)
+    us = _coords("u", u_values)
+    max_iter = check_count("max_iter", max_iter, 1)
+    if max_iter > 2**31 - 1:
+        raise ValueError(f"max_iter must be an integer in [1, 2**31 - 1], got {max_iter}")
+    y0 = _real("y0", y0)
+    v0 = _real("v0", v0)
+    if y0 < 0.0:
+        raise ValueError(f"y0 (initial height above the step's floor) must be >= 0, got {y0}")
+    _check_memory(es.size, us.size)
+    out = {k: np.empty((us.size, es.size), dtype=dt) for k, (dt, _) in _FIELDS.items()}
+    _scan_fast(
+        es, us, max_iter, y0, v0, _interleaved_rows(us.size),
+        out["status"], out["word_length"], out["jumps"], out["period"], out["impacts"],
+    )
+    from . import __version__
+
+    data_vars = {
+        k: (("u", "e"), out[k], {"long_name": desc}) for k, (_, desc) in _FIELDS.items()
+    }
+    coords = {
+        "e": ("e", es, {"long_name": "restitution coefficient e"}),
+        "u": ("u", us, {"long_name": "horizontal speed u (normalised units)"}),
+    }
+    attrs = {
+        "title": "periodic sliding solutions in the (e, u) plane",
+        "max_iter": max_iter,
+        "y0": y0,
+        "v0": v0,
+        "kernel": "stairbounce.scan._scan_fast",
+        "stairbounce_version": __version__,
+        "convention": CONVENTION,
+        "reference": "Campos, Romero-Valles, Torres, A fractal structure in a bouncing ball model, Section 3",
+    }
+    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0):
+    """scan(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, y0=1.0, v0=0.0) -> xarray.Dataset
+
+    Periodic sliding solutions on an ``n_u x n_e`` grid of the (e, u) plane.
+
+    At every pixel centre (:func:`pixel_centres`) the Poincare map (Prop. 2.3)
+    is iterated with the sliding test (2.3)/(2.4) as stop criterion.  From
+    ``(y0, v0) = (1, 0)`` the steps up to the first slide are one period of
+    the periodic sliding solution.  From any other state the orbit is first
+    iterated up to its first slide (a transient); the ball then leaves the edge
+    at ``(1, 0)``, so the periodic sliding solution is the orbit of ``(1, 0)``
+    and its period is measured from there until it slides again.  ``status``
+    is 0 only when both happen, each within ``max_iter`` steps.
+
+    Data variables (dims ``("u", "e")``): ``status`` (0 found, 1 not),
+    ``word_length`` (impacts + 1), ``jumps`` (non-zero letters), ``period``
+    (steps per period), ``impacts`` (finite impacts per period); all zero
+    where ``status`` is 1.  Attributes record every input, the window, the
+    package version and the word convention.
+
+    Kernel: ``_scan_fast`` (the fast map of :func:`stairbounce.model._step`,
+    several pixels in lockstep, interleaved over threads); ``_scan_plain`` is
+    the closed-form baseline it is tested and benchmarked against.
+
+    Parameters
+    ----------
+    e : (e_min, e_max, n_e), default (0, 1, 500)
+        Image edges along e, within [0, 1] (pixel centres lie inside, < 1).
+    u : (u_min, u_max, n_u), default (0, 1.5, 350)
+        Image edges along u, u_min >= 0 (pixel centres lie inside, > 0).
+    max_iter : int >= 1, default 1000
+        Steps allowed for the transient and for the period, each.
+    y0, v0 : float, default 1.0, 0.0
+        Initial state at a step edge (y0 >= 0).
+
+    Raises
+    ------
+    ValueError
+        A bound or size out of range (naming it), or outputs that would not
+        fit in the memory available (with the estimate).
+
+    Reference: Section 3 of the paper (the scheme behind Figures 4 and 5).
+    """
+    e_min, e_max, n_e = _window("e", e, 0.0, 1.0, "[0, 1]")
+    u_min, u_max, n_u = _window("u", u, 0.0, math.inf, "[0, inf)")
+    _check_memory(n_e, n_u)
+    ds = scan_coords(
+        pixel_centres(e_min, e_max, n_e), pixel_centres(u_min, u_max, n_u), max_iter, y0, v0
+    )
+    ds.attrs.update(
+        e_min=e_min, e_max=e_max, n_e=n_e, u_min=u_min, u_max=u_max, n_u=n_u
+    )
+    return ds
+
+
+def tongue_mask(e, u, n_max):
+    """tongue_mask(e, u, n_max) -> np.ndarray of bool
+
+    Theorem 3.1: where a periodic solution of type ``(n, 0^inf)`` exists for some n <= n_max.
+
+    True where ``sqrt((n-1)/2) < u <= sqrt(n/2) (1-e)/(1+e)`` for some
+    ``1 <= n <= n_max`` (inequalities (3.1), the bounds evaluated as in
+    :func:`stairbounce.tongue`).  ``e`` and ``u`` broadcast against each other.
+    """
+    n_max = check_count("n_max", n_max, 1)
+    e, u = np.broadcast_arrays(np.asarray(e, dtype=float), np.asarray(u, dtype=float))
+    mask = np.zeros(e.shape, dtype=bool)
+    if mask.size == 0:
+        return mask
+    # only tongues with sqrt((n-1)/2) < max(u) can contain a point
+    n_top = min(n_max, int(2.0 * float(np.nanmax(u)) ** 2) + 2)
+    shrink = (1.0 - e) / (1.0 + e)
+    for n in range(1, n_top + 1):
+        mask |= (math.sqrt((n - 1) / 2.0) < u) & (u <= math.sqrt(n / 2.0) * shrink)
+    return mask
+
+
+def no_sliding_curve(e):
+    """no_sliding_curve(e) -> np.ndarray
+
+    Corollary 2.1: above ``u = (1-e) / (2 sqrt(2e))`` no solution slides.
+
+    Vectorised over ``e``; infinite at ``e = 0``.
+    """
+    e = np.asarray(e, dtype=float)
+    with np.errstate(divide="ignore"):
+        return (1.0 - e) / (2.0 * np.sqrt(2.0 * e))
+
+
+# --------------------------------------------------------------------------- #
+# Files                                                                       #
+# --------------------------------------------------------------------------- #
+
+
+def _format(path):
+    s = str(path).rstrip("/")
+    if s.endswith(".zarr"):
+        return "zarr"
+    if s.endswith(".nc"):
+        return "nc"
+    raise ValueError(f"path must end in .zarr or .nc, got {str(path)!r}")
+
+
+def save(ds, path, chunks=256):
+    """save(ds, path, chunks=256) -> None
+
+    Write a scan to ``.zarr`` (chunked ``chunks x chunks``) or ``.nc`` (netCDF4,
+    compressed), atomically: under a temporary name, renamed when complete.
+    """
+    from ._io import atomic_path
+
+    fmt = _format(path)
+    chunks = check_count("chunks", chunks, 1)
+    with atomic_path(path) as tmp:
+        if fmt == "zarr":
+            enc = {
+                k: {"chunks": tuple(min(chunks, s) for s in ds[k].shape)}
+                for k in ds.data_vars
+            }
+            ds.to_zarr(tmp, mode="w", encoding=enc, consolidated=False)
+        else:
+            enc = {k: {"zlib": True, "complevel": 4} for k in ds.data_vars}
+            ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=enc)
+
+
+def load(path):
+    """load(path) -> xarray.Dataset
+
+    Read a scan written by :func:`save` (``.zarr`` or ``.nc``) into memory.
+    """
+    fmt = _format(path)
+    if not os.path.exists(path):
+        raise ValueError(f"no such file: {path}")
+    engine = "zarr" if fmt == "zarr" else "netcdf4"
+    kw = {"consolidated": False} if fmt == "zarr" else {}
+    with xr.open_dataset(path, engine=engine, chunks=None, **kw) as ds:
+        return ds.load()
