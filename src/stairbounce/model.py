@@ -298,7 +298,13 @@ def slides(y, v, e, u):
     Whether the impacts accumulate on the first step (Prop. 2.1).
 
     Evaluated as (2.4), ``v + (1+e)/(1-e) sqrt(v^2 + 2y) <= 1/u``, which is
-    equivalent to (2.3).  Equality counts as sliding.
+    equivalent to the parabola (2.3).  Equality counts as sliding.
+
+    Note: the paper prints the constant term of (2.3) as
+    ``(1+e)^2 / (2 u^2 (1-e)^2)``; squaring (2.4) gives
+    ``(1-e)^2 / (2 u^2 (1+e)^2)``, the only one consistent with the vertex
+    ``y* = (1-e)^2 / (8 e u^2)`` of Corollary 2.1.  We use (2.4), which needs
+    no correction (``tests/test_model.py`` checks both statements).
     """
     y, v = check_state(y, v)
     T, ratio = _constants(check_e(e), check_u(u))

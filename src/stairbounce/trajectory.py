@@ -98,16 +98,23 @@ class Trajectory:
         t = np.asarray(t, dtype=float)
         if np.any(~np.isfinite(t)) or np.any(t < 0) or np.any(t > self.duration * (1 + 1e-12)):
             raise ValueError(f"t must be in [0, {self.duration}] (the trajectory's duration)")
-        e, T = self.e, self.T
-        j = np.clip(np.floor(t / T).astype(np.int64), 0, max(self.steps - 1, 0))
-        tau = t - j * T
+        j = np.clip(np.floor(t / self.T).astype(np.int64), 0, max(self.steps - 1, 0))
+        tau = t - j * self.T
+        y, v = self._solve_local(j, tau)
+        return j, tau, y, v
+
+    def _solve_local(self, j, tau):
+        """Height above the floor of step ``j`` and vertical velocity at local
+        time ``tau`` (0 <= tau <= T) after entering it, in closed form."""
+        e = self.e
+        j = np.asarray(j)
+        tau = np.asarray(tau, dtype=float)
         y0 = self.edge_y[j]
         v0 = self.edge_v[j]
         s = np.sqrt(v0 * v0 + 2.0 * y0)
         t1 = v0 + s
         sliding = self.edge_impacts[np.minimum(j + 1, self.steps)] == SLIDING
-        ratio = (1.0 + e) / (1.0 - e)
-        t_inf = v0 + ratio * s
+        t_inf = v0 + (1.0 + e) / (1.0 - e) * s
 
         y = y0 + v0 * tau - 0.5 * tau * tau  # flight from the edge
         v = v0 - tau
@@ -138,7 +145,19 @@ class Trajectory:
                 v[b] = 0.0
             y[resting] = 0.0
             v[resting] = 0.0
-        return j, tau, y, v
+        return y, v
+
+    def edge_state(self, j):
+        """edge_state(j) -> (y, v): the state at edge ``j`` (1 <= j <= steps)
+        from the continuous solution of step ``j - 1`` evaluated at its end.
+
+        It equals the Poincare iterate ``P^j(y0, v0)``, computed independently.
+        """
+        j = check_count("j", j, 1)
+        if j > self.steps:
+            raise ValueError(f"j must be an integer in [1, {self.steps}], got {j}")
+        y, v = self._solve_local(np.array([j - 1]), np.array([self.T]))
+        return float(y[0]) + 1.0, float(v[0])
 
     def position(self, t):
         """position(t) -> (x, y): exact position at times ``t`` (vectorised)."""

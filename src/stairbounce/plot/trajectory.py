@@ -53,8 +53,8 @@ def plot_trajectory(traj, ax=None, samples_per_step=400, show_impacts=True):
     ax.set_xlabel("x (steps)")
     ax.set_ylabel("height")
     ax.set_title(f"e = {traj.e:g}, u = {traj.u:g}")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(loc="upper right", fontsize="small")
+    ax.set_aspect("equal", adjustable="box")
+    ax.legend(loc="lower left", fontsize="small")
     return ax
 
 
@@ -66,7 +66,8 @@ def plot_poincare_section(ys, vs, impacts=None, ax=None):
     """
     ax = _axes(ax)
     ys, vs = np.asarray(ys), np.asarray(vs)
-    ax.plot(ys, vs, color="0.7", lw=0.6, zorder=1)
+    if len(ys) <= 40:  # the order of a few iterates helps; of many it is clutter
+        ax.plot(ys, vs, color="0.7", lw=0.6, zorder=1)
     ax.scatter(ys, vs, c=np.arange(len(ys)), cmap="viridis", s=14, zorder=2, label="iterates")
     if impacts is not None:
         sl = np.asarray(impacts) == SLIDING
