@@ -17,6 +17,7 @@ from .model import (
     slides,
     tongue,
 )
+from .orbits import orbit_density, orbit_diagram
 from .symbolic import Word, parse_word, sliding_word
 from .trajectory import Trajectory, trajectory
 from .units import normalized_speed, physical_speed, time_scale
@@ -36,6 +37,8 @@ __all__ = [
     "iterate",
     "no_sliding_bound",
     "normalized_speed",
+    "orbit_density",
+    "orbit_diagram",
     "parse_word",
     "physical_speed",
     "poincare_map",

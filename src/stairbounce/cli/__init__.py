@@ -11,6 +11,7 @@ import sys
 import typer
 
 from . import model_commands  # noqa: F401  (registers word, map, trajectory)
+from . import orbits_commands  # noqa: F401  (registers orbit-diagram)
 from ._app import CLIError, app
 
 __all__ = ["app", "main"]

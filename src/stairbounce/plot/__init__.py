@@ -1,6 +1,7 @@
 """matplotlib renderers: they take arrays, datasets and trajectories and draw
 them; they never compute dynamics.  Kept out of the core's import path."""
 
+from .orbits import plot_orbit_diagram
 from .trajectory import animate_trajectory, plot_poincare_section, plot_trajectory
 
-__all__ = ["animate_trajectory", "plot_poincare_section", "plot_trajectory"]
+__all__ = ["animate_trajectory", "plot_orbit_diagram", "plot_poincare_section", "plot_trajectory"]
