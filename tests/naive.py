@@ -75,3 +75,30 @@ def word(e, u, max_steps=1000):
         if k != SLIDING:
             letters.extend([0] * (k - 1))
     return tuple(letters)
+
+
+def box_count(image, s, oy=0, ox=0):
+    """Boxes of side ``s`` (grid corners at ``(k s - oy, l s - ox)``, boxes cut
+    by the image edge included) holding a nonzero pixel, one box at a time."""
+    h, w = len(image), len(image[0])
+    count = 0
+    for top in range(-oy, h, s):
+        for left in range(-ox, w, s):
+            rows = range(max(top, 0), min(top + s, h))
+            cols = range(max(left, 0), min(left + s, w))
+            if any(image[i][j] for i in rows for j in cols):
+                count += 1
+    return count
+
+
+def border_pixels(mask):
+    """Pixels of ``mask`` with a 4-neighbour inside the image and outside the mask."""
+    h, w = len(mask), len(mask[0])
+    out = [[False] * w for _ in range(h)]
+    for i in range(h):
+        for j in range(w):
+            if mask[i][j]:
+                for a, b in ((i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1)):
+                    if 0 <= a < h and 0 <= b < w and not mask[a][b]:
+                        out[i][j] = True
+    return out
