@@ -10,6 +10,7 @@ import sys
 
 import typer
 
+from . import figures_commands  # noqa: F401  (registers figures, the main job)
 from . import model_commands  # noqa: F401  (registers word, map, trajectory)
 from . import orbits_commands  # noqa: F401  (registers orbit-diagram)
 from ._app import CLIError, app

@@ -2,6 +2,7 @@
 them; they never compute dynamics.  Kept out of the core's import path."""
 
 from .orbits import plot_orbit_diagram
+from .tongues import plot_tongues
 from .trajectory import animate_trajectory, plot_poincare_section, plot_trajectory
 
 __all__ = ["animate_trajectory", "plot_orbit_diagram", "plot_poincare_section", "plot_trajectory"]
