@@ -1,0 +1,457 @@
+"""Tiled, resumable scans of the (e, u) plane, written to Zarr, locally or on Dask.
+
+A scan too large for one sitting (a deep zoom, a 32768 x 32768 atlas at a high
+``max_iter``) is cut into square tiles.  Every tile is computed with
+:func:`stairbounce.scan.scan_coords` on its slice of the
+:func:`stairbounce.scan.pixel_centres` grid, so the assembled store is the same,
+bit for bit, as :func:`stairbounce.scan.scan` on the whole window, and it has
+the same variables, coordinates and attributes.
+
+Layout of a store (Zarr, one chunk per tile and variable)::
+
+    atlas.zarr/
+      status, word_length, jumps, period, impacts   (u, e), chunks tile x tile
+      e, u                                           pixel centres
+      tiles/done                                     bool per tile, chunks 1 x 1
+      tiles (group attributes)                       tile size, format
+
+The root group is exactly what :func:`stairbounce.scan.save` writes (the tile
+record lives in a sub-group that xarray does not read), so
+:func:`stairbounce.scan.load` and ``xarray.open_zarr`` read an atlas like any
+saved scan.
+
+Resuming: the store is created up front (atomically: it exists complete with
+its coordinates and attributes, or not at all), then each tile writes its data
+and only afterwards sets its ``tiles/done`` flag.  Chunk files are replaced
+atomically by Zarr's local store, so an interrupted tile is either absent or
+whole per variable, and in any case unmarked: a re-run computes it again.
+
+Dask and Numba threads: each tile runs the parallel numba kernel of
+:mod:`stairbounce.scan`.  On a Dask worker a tile takes a process-wide lock and
+uses as many numba threads as the worker has Dask threads, so one worker
+process never runs more kernel threads than it was given cores, whether it is
+started as ``--nworkers 1 --nthreads 16`` or ``--nworkers 16 --nthreads 1``.
+(The kernel holds the GIL anyway; the lock also makes concurrent launches from
+two threads of one process impossible, which numba's ``workqueue`` layer does
+not survive.)  Writing a tile happens outside the lock.
+
+Dask and distributed are imported inside the functions that need them: they
+are the optional extra ``stairbounce[dask]``.  Nothing here imports
+matplotlib, Typer or the web stack.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+from pathlib import Path
+
+import numpy as np
+
+from .model import check_count
+
+__all__ = ["scan_to_zarr", "tile_slices", "tiles_done", "downsample"]
+
+FORMAT = "stairbounce-atlas-1"
+TILES_GROUP = "tiles"
+
+# One kernel launch at a time per process (see the module docstring).
+_KERNEL_LOCK = threading.Lock()
+
+
+# --------------------------------------------------------------------------- #
+# Tiles                                                                       #
+# --------------------------------------------------------------------------- #
+
+
+def tile_slices(n, tile):
+    """tile_slices(n, tile) -> list of slice
+
+    The slices ``[0, tile), [tile, 2 tile), ...`` covering ``range(n)``; the
+    last one is shorter when ``tile`` does not divide ``n``.
+    """
+    n = check_count("n", n, 1)
+    tile = check_count("tile", tile, 1)
+    return [slice(a, min(a + tile, n)) for a in range(0, n, tile)]
+
+
+def _tile_record(path):
+    import zarr
+
+    return zarr.open_group(str(path), mode="r")[TILES_GROUP]
+
+
+def tiles_done(path):
+    """tiles_done(path) -> np.ndarray of bool, shape (tiles along u, tiles along e)
+
+    Which tiles of the store at ``path`` are complete.
+    """
+    try:
+        return np.asarray(_tile_record(path)["done"][...], dtype=bool)
+    except (KeyError, FileNotFoundError):
+        raise ValueError(f"{path} is not a tiled scan store (no tile record)") from None
+
+
+def _run_tile(path, i, j, su, se, e_values, u_values, max_iter, y0, v0, numba_threads):
+    """Compute tile (i, j) and write it into its region of the store, then mark it done.
+
+    Runs in the calling process (local scans) or on a Dask worker.
+    """
+    import numba
+    import zarr
+
+    from .scan import scan_coords
+
+    threads = numba_threads if numba_threads is not None else _worker_threads()
+    threads = max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS))
+    with _KERNEL_LOCK:
+        before = numba.get_num_threads()
+        numba.set_num_threads(threads)
+        try:
+            ds = scan_coords(e_values, u_values, max_iter, y0, v0)
+        finally:
+            numba.set_num_threads(before)
+    root = zarr.open_group(str(path), mode="r+")
+    for name, var in ds.data_vars.items():
+        root[name][su, se] = var.values
+    # only now: a tile killed above is recomputed on the next run
+    root[TILES_GROUP]["done"][i, j] = True
+    return i, j
+
+
+def _worker_threads():
+    """Dask threads of the worker running this task; all of numba's outside Dask."""
+    import numba
+
+    try:
+        from distributed import get_worker
+
+        worker = get_worker()
+    except (ImportError, ValueError):
+        return numba.get_num_threads()
+    n = getattr(getattr(worker, "state", None), "nthreads", None) or getattr(worker, "nthreads", None)
+    return int(n) if n else 1
+
+
+# --------------------------------------------------------------------------- #
+# The store                                                                   #
+# --------------------------------------------------------------------------- #
+
+
+def _check_path(path):
+    path = Path(os.path.abspath(os.fspath(path)))
+    if path.suffix != ".zarr":
+        raise ValueError(f"path must end in .zarr, got {str(path)!r}")
+    if not path.parent.is_dir():
+        raise ValueError(f"cannot write {path}: folder {path.parent} does not exist")
+    return path
+
+
+def _writable(folder):
+    """Whether a file can be created in ``folder`` (tried: root ignores mode bits)."""
+    if not os.access(folder, os.W_OK):
+        return False
+    probe = Path(folder) / f".stairbounce-probe-{os.getpid()}-{threading.get_ident()}"
+    try:
+        probe.touch(exist_ok=False)
+    except OSError:
+        return False
+    probe.unlink(missing_ok=True)
+    return True
+
+
+def _template(probe, es, us, tile):
+    """The dataset of the store, lazy zeros, with the attributes of ``probe``."""
+    import dask.array as da
+    import xarray as xr
+
+    n_e, n_u = es.size, us.size
+    chunks = (min(tile, n_u), min(tile, n_e))
+    data_vars = {}
+    for name, var in probe.data_vars.items():
+        if var.dims != ("u", "e"):  # pragma: no cover - a change in scan's layout
+            raise RuntimeError(f"scan variable {name} has dims {var.dims}, expected ('u', 'e')")
+        data_vars[name] = (var.dims, da.zeros((n_u, n_e), dtype=var.dtype, chunks=chunks), var.attrs)
+    coords = {
+        "e": ("e", es, probe["e"].attrs),
+        "u": ("u", us, probe["u"].attrs),
+    }
+    attrs = dict(probe.attrs)
+    attrs.update(n_e=n_e, n_u=n_u)
+    ds = xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    encoding = {name: {"chunks": chunks} for name in data_vars}
+    return ds, encoding
+
+
+def _create(path, template, encoding, shape_tiles, tile):
+    import zarr
+
+    from ._io import atomic_path
+
+    try:
+        with atomic_path(path) as tmp:
+            template.to_zarr(tmp, mode="w", compute=False, encoding=encoding, consolidated=False)
+            record = zarr.open_group(str(tmp), mode="r+").create_group(TILES_GROUP)
+            record.attrs.update(format=FORMAT, tile=tile)
+            record.zeros(name="done", shape=shape_tiles, chunks=(1, 1), dtype=bool)
+    except PermissionError as exc:
+        raise ValueError(f"cannot write {path}: {exc.strerror.lower()} ({path.parent})") from None
+
+
+def _check_existing(path, attrs, tile):
+    """Refuse an existing store made for another scan; never mix two scans."""
+    import zarr
+
+    try:
+        root = zarr.open_group(str(path), mode="r")
+        record = root[TILES_GROUP]
+    except Exception:
+        raise ValueError(
+            f"{path} exists and is not a tiled scan store: choose another path or remove it"
+        ) from None
+    if record.attrs.get("format") != FORMAT:
+        raise ValueError(f"{path} is a tile store of another format ({record.attrs.get('format')!r})")
+    differ = []
+    if record.attrs.get("tile") != tile:
+        differ.append(f"tile: store {record.attrs.get('tile')!r}, asked {tile!r}")
+    stored = dict(root.attrs)
+    for key in attrs:
+        if key not in stored or _differs(stored[key], attrs[key]):
+            differ.append(f"{key}: store {stored.get(key)!r}, asked {attrs[key]!r}")
+    if differ:
+        raise ValueError(
+            f"{path} holds a different scan ({'; '.join(differ)}): resume it with its own "
+            "parameters, or write to a new path"
+        )
+
+
+def _differs(a, b):
+    if isinstance(b, float) or isinstance(a, float):
+        try:
+            return float(a) != float(b)
+        except (TypeError, ValueError):
+            return True
+    return a != b
+
+
+# --------------------------------------------------------------------------- #
+# Public API                                                                  #
+# --------------------------------------------------------------------------- #
+
+
+def scan_to_zarr(
+    path,
+    e=(0.0, 1.0, 500),
+    u=(0.0, 1.5, 350),
+    max_iter=1000,
+    y0=1.0,
+    v0=0.0,
+    tile=1024,
+    client=None,
+    progress=None,
+    numba_threads=None,
+):
+    """scan_to_zarr(path, e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, y0=1.0, v0=0.0, tile=1024, client=None, progress=None, numba_threads=None) -> xarray.Dataset
+
+    :func:`stairbounce.scan.scan` cut into tiles, computed locally or on Dask, written to Zarr.
+
+    The ``n_u x n_e`` grid of pixel centres is cut into ``tile x tile`` blocks
+    (shorter at the far edges).  Each block is computed by
+    :func:`stairbounce.scan.scan_coords` on its slice of the grid (so the
+    result equals the whole :func:`~stairbounce.scan.scan`, bit for bit) and
+    written into its own region, one Zarr chunk per variable, of a store
+    created up front with the full coordinates and attributes.  A tile is
+    marked complete only after its data is written; running the same call
+    again skips complete tiles, so an interrupted scan resumes where it
+    stopped.  An existing store made with another window, ``max_iter``,
+    ``y0``, ``v0``, ``tile`` or package version is refused, never mixed.
+
+    Parameters
+    ----------
+    path : str or path-like ending in ``.zarr``
+        The store.  Its folder must exist and be writable; with a Dask
+        cluster it must be on a file system every worker sees at the same path.
+    e, u, max_iter, y0, v0 :
+        As in :func:`stairbounce.scan.scan` (same defaults, same checks).
+    tile : int >= 1, default 1024
+        Tile edge in pixels; also the chunk edge of the store.
+    client : None, ``dask.distributed.Client`` or str, default None
+        None: compute tile after tile in this process (numba uses all its
+        threads).  A client, or a scheduler address such as
+        ``"tcp://10.0.0.1:8786"`` (connected for this call and closed): every
+        tile is a task; the worker computes it and writes its region itself.
+    progress : callable ``progress(done, total)`` or None
+        Called with the number of complete tiles: once before any work
+        (counting tiles found complete), then after each tile.  An exception
+        raised there stops the scan (tiles already complete stay complete).
+    numba_threads : int >= 1 or None
+        Numba threads per tile.  None: all of numba's threads locally; on a
+        Dask worker, as many as the worker has Dask threads (tiles of one
+        worker process run one at a time).
+
+    Returns
+    -------
+    xarray.Dataset
+        The store, opened lazily (dask arrays chunked ``tile x tile``).
+
+    Raises
+    ------
+    ValueError
+        A bad parameter (naming it), a path that does not end in ``.zarr``,
+        whose folder is missing or read-only, or an existing store made for a
+        different scan.
+
+    Reference: Section 3 of the paper (the scan behind Figures 4 and 5).
+    """
+    import xarray as xr
+
+    from .scan import pixel_centres, scan
+
+    path = _check_path(path)
+    tile = check_count("tile", tile, 1)
+    if numba_threads is not None:
+        numba_threads = check_count("numba_threads", numba_threads, 1)
+    if client is not None and not isinstance(client, str) and not hasattr(client, "submit"):
+        raise ValueError(
+            f"client must be None, a dask.distributed.Client or a scheduler address, got {client!r}"
+        )
+    # one pixel through the public scan: validates everything as scan does and
+    # gives its variables and attributes, whatever scan records
+    (e_lo, e_hi, n_e), (u_lo, u_hi, n_u) = _triple("e", e), _triple("u", u)
+    probe = scan(e=(e_lo, e_hi, 1), u=(u_lo, u_hi, 1), max_iter=max_iter, y0=y0, v0=v0)
+    n_e = check_count("n_e", n_e, 1)
+    n_u = check_count("n_u", n_u, 1)
+    a = probe.attrs
+    es = pixel_centres(a["e_min"], a["e_max"], n_e)
+    us = pixel_centres(a["u_min"], a["u_max"], n_u)
+    template, encoding = _template(probe, es, us, tile)
+    rows, cols = tile_slices(n_u, tile), tile_slices(n_e, tile)
+
+    if path.exists():
+        _check_existing(path, template.attrs, tile)
+    else:
+        if not _writable(path.parent):
+            raise ValueError(f"cannot write {path}: folder {path.parent} is not writable")
+        _create(path, template, encoding, (len(rows), len(cols)), tile)
+
+    done = tiles_done(path)
+    todo = [(i, j) for i in range(len(rows)) for j in range(len(cols)) if not done[i, j]]
+    total = done.size
+    if todo and not _writable(path):
+        raise ValueError(f"cannot resume {path}: the store is not writable")
+    if progress is not None:
+        progress(total - len(todo), total)
+
+    args = [
+        (str(path), i, j, rows[i], cols[j], es[cols[j]], us[rows[i]], a["max_iter"], a["y0"], a["v0"], numba_threads)
+        for i, j in todo
+    ]
+    if client is None:
+        for n, arg in enumerate(args, start=total - len(todo) + 1):
+            _run_tile(*arg)
+            if progress is not None:
+                progress(n, total)
+    else:
+        _run_on_dask(client, args, total - len(todo), total, progress)
+    return xr.open_zarr(str(path), consolidated=False)
+
+
+def _triple(name, spec):
+    try:
+        lo, hi, n = spec
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a tuple ({name}_min, {name}_max, n_{name}), got {spec!r}") from None
+    return lo, hi, n
+
+
+def _run_on_dask(client, args, n_done, total, progress):
+    from distributed import Client, as_completed
+
+    own = isinstance(client, str)
+    if own:
+        address = client
+        try:
+            client = Client(address, timeout="30s")
+        except OSError as exc:
+            raise ValueError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+    futures = []
+    try:
+        futures = [client.submit(_run_tile, *arg, pure=False) for arg in args]
+        for future in as_completed(futures):
+            future.result()
+            n_done += 1
+            if progress is not None:
+                progress(n_done, total)
+    finally:
+        pending = [f for f in futures if not f.done()]
+        if pending:
+            client.cancel(pending)
+        if own:
+            client.close()
+
+
+def downsample(ds, max_pixels, method="mode"):
+    """downsample(ds, max_pixels, method="mode") -> xarray.Dataset
+
+    A scan reduced to at most ``max_pixels`` pixels by blocks of ``f x f``.
+
+    ``f = ceil(sqrt(n_u n_e / max_pixels))``; pixels beyond a whole number of
+    blocks at the far edges are dropped.  The variables are categorical (word
+    lengths, periods), so blocks are never averaged:
+
+    - ``"mode"``: the most frequent value of the block (ties: the smallest),
+    - ``"max"``: the largest value,
+    - ``"stride"``: the first pixel of the block (a sample, no reduction).
+
+    Coordinates become the block centres.  Works lazily on dask-backed
+    datasets (an opened store): only the reduced result is held in memory
+    when it is computed.  ``f = 1`` returns ``ds`` unchanged.
+    """
+    import xarray as xr
+
+    max_pixels = check_count("max_pixels", max_pixels, 1)
+    if method not in ("mode", "max", "stride"):
+        raise ValueError(f"method must be one of 'mode', 'max', 'stride', got {method!r}")
+    n = ds.sizes["u"] * ds.sizes["e"]
+    f = math.ceil(math.sqrt(n / max_pixels))
+    while f > 1 and (ds.sizes["u"] // f) * (ds.sizes["e"] // f) > max_pixels:
+        f += 1  # pragma: no cover - float rounding of the square root
+    f = max(1, min(f, ds.sizes["u"], ds.sizes["e"]))
+    if f == 1:
+        return ds
+    window = {"u": f, "e": f}
+    if method == "stride":
+        nu, ne = (ds.sizes["u"] // f) * f, (ds.sizes["e"] // f) * f
+        out = ds.isel(u=slice(0, nu, f), e=slice(0, ne, f))
+        centres = ds[["u", "e"]].coarsen(window, boundary="trim").mean()
+        out = out.assign_coords(u=centres["u"].values, e=centres["e"].values)
+    elif method == "max":
+        out = ds.coarsen(window, boundary="trim").max()
+    else:
+        blocks = ds.coarsen(window, boundary="trim").construct(u=("u", "u_in"), e=("e", "e_in"))
+        out = xr.apply_ufunc(
+            _block_mode,
+            blocks,
+            input_core_dims=[["u_in", "e_in"]],
+            dask="parallelized",
+            keep_attrs=True,
+        )
+        centres = ds[["u", "e"]].coarsen(window, boundary="trim").mean()
+        out = out.assign_coords(u=centres["u"].values, e=centres["e"].values)
+    for name in out.variables:
+        out[name].attrs = ds[name].attrs
+    out.attrs = dict(ds.attrs, downsampled=f, downsample_method=method)
+    return out
+
+
+def _block_mode(x):
+    """Most frequent value over the last two axes (ties: the smallest)."""
+    shape = x.shape[:-2]
+    flat = np.sort(x.reshape(-1, x.shape[-2] * x.shape[-1]), axis=1)
+    k = flat.shape[1]
+    idx = np.broadcast_to(np.arange(k), flat.shape)
+    starts = np.where(np.diff(flat, axis=1, prepend=flat[:, :1] - 1) != 0, idx, 0)
+    run = idx - np.maximum.accumulate(starts, axis=1) + 1
+    best = np.argmax(run, axis=1)
+    return flat[np.arange(flat.shape[0]), best].reshape(shape)
