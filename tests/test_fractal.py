@@ -396,3 +396,26 @@ def test_perimeter_dimension_rejects_bad_windows(kwargs, message):
     kwargs = {"resolution": 32, "max_iter": 50, **kwargs}
     with pytest.raises(ValueError, match=message):
         perimeter_dimension(**kwargs)
+
+
+def test_plot_box_dimension_draws_border_and_fitted_line():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from stairbounce.plot import plot_box_dimension
+
+    est = perimeter_dimension(**FIG7, resolution=64, max_iter=200, fit_range=(1, 16))
+    fig = plot_box_dimension(est)
+    img_ax, log_ax = fig.axes[:2]
+    assert img_ax.images[0].get_array().shape == (64, 64)
+    assert img_ax.images[0].get_extent() == [*FIG7["e"], *FIG7["u"]]
+    assert f"D = {est.dimension:.3f}" in log_ax.get_title() and "CI" in log_ax.get_title()
+    line = [ln for ln in log_ax.lines if ln.get_label().startswith("slope")][0]
+    x, y = line.get_data()
+    assert np.allclose(y, est.fit.intercept + est.dimension * x)
+    # a plain box-dimension result needs the image it measured
+    with pytest.raises(ValueError, match="image"):
+        plot_box_dimension(box_dimension(segment(128)))
+    plt.close("all")

@@ -1,0 +1,128 @@
+"""The paper's Figures 6 and 7: a border image beside its box-counting plot."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def plot_box_counts(result, ax=None):
+    """Draw ``log N(s)`` against ``log(1/s)`` of a box-dimension result.
+
+    Every measured size is a marker (hollow when it was not fitted, grey when
+    it has a single box); the fitted line spans the fit range, which is shaded.
+    The title gives D, its 95% confidence interval and r.  Axes are in
+    natural logarithms with the box side in pixels on a secondary top axis.
+
+    Parameters
+    ----------
+    result : :class:`stairbounce.fractal.BoxDimension`
+    ax : matplotlib Axes or None
+    """
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(5, 4.5))
+    sizes = np.asarray(result.sizes, dtype=float)
+    counts = np.asarray(result.counts, dtype=float)
+    keep = counts > 0
+    x = np.log(1.0 / sizes[keep])
+    y = np.log(counts[keep])
+    fitted = result.fitted[keep]
+    usable = result.usable[keep]
+    ax.plot(x[fitted], y[fitted], "o", color="C0", label="fitted sizes", zorder=3)
+    rest = usable & ~fitted
+    if rest.any():
+        ax.plot(x[rest], y[rest], "o", mfc="none", color="C0", label="not fitted", zorder=3)
+    if (~usable).any():
+        ax.plot(x[~usable], y[~usable], "o", mfc="none", color="0.6", label="one box", zorder=3)
+    lo, hi = np.log(1.0 / result.fit_range[1]), np.log(1.0 / result.fit_range[0])
+    ax.axvspan(lo, hi, color="C0", alpha=0.08, lw=0, label="fit range")
+    xs = np.array([x.min(), x.max()])
+    ax.plot(xs, result.fit.intercept + result.fit.slope * xs, "-", color="C3", lw=1.2,
+            label=f"slope {result.dimension:.3f}", zorder=2)
+    ax.set_xlabel("log(1/s)   (s: box side in pixels)")
+    ax.set_ylabel("log N(s)")
+    ci = result.ci
+    ax.set_title(f"D = {result.dimension:.3f}  95% CI [{ci[0]:.3f}, {ci[1]:.3f}]  r = {result.r:.5f}",
+                 fontsize="medium")
+    top = ax.secondary_xaxis(
+        "top", functions=(lambda v: np.exp(-v), lambda s: -np.log(np.maximum(s, 1e-300)))
+    )
+    top.set_xticks(sizes)
+    top.set_xticklabels([f"{int(s)}" for s in sizes], fontsize="x-small")
+    top.set_xlabel("s (px)", fontsize="small")
+    ax.legend(loc="lower right", fontsize="small")
+    ax.grid(True, alpha=0.3)
+    return ax
+
+
+def plot_border(border, e=None, u=None, ax=None, title=None):
+    """Draw a border image (black on white), rows upwards.
+
+    With ``e = (e_min, e_max)`` and ``u = (u_min, u_max)`` the axes are the
+    parameter plane (e across, u up, as in Figs. 6 and 7); without, pixels.
+    """
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(5, 5))
+    img = np.asarray(border, dtype=bool)
+    if e is not None and u is not None:
+        extent = (e[0], e[1], u[0], u[1])
+        ax.set_xlabel("e (restitution coefficient)")
+        ax.set_ylabel("u (horizontal speed)")
+    else:
+        extent = (0, img.shape[1], 0, img.shape[0])
+        ax.set_xlabel("pixels")
+    # interpolation="antialiased" would thin a one-pixel border away when
+    # the image has more pixels than the axes
+    ax.imshow(img, cmap="gray_r", origin="lower", extent=extent, aspect="auto",
+              interpolation="none" if img.shape[0] <= 1024 else "antialiased", vmin=0, vmax=1)
+    if title:
+        ax.set_title(title, fontsize="medium")
+    return ax
+
+
+def plot_box_dimension(result, image=None, axes=None, title=None):
+    """Draw the paper's Figures 6/7: the border image beside the box-counting plot.
+
+    Parameters
+    ----------
+    result : :class:`~stairbounce.fractal.BoxDimension` or
+        :class:`~stairbounce.fractal.PerimeterDimension`
+        A perimeter result carries its border image and window; for a plain
+        box-dimension result pass the measured ``image``.
+    image : 2-D array or None
+    axes : (ax_image, ax_plot) or None
+        None: a new figure of two panels.
+    title : str or None
+        Figure title; default names the window, resolution and max_iter of a
+        perimeter result.
+
+    Returns the figure.
+    """
+    import matplotlib.pyplot as plt
+
+    if axes is None:
+        fig, axes = plt.subplots(1, 2, figsize=(11, 5), gridspec_kw={"width_ratios": [1, 1.1]})
+    else:
+        fig = axes[0].figure
+    border = image if image is not None else getattr(result, "border", None)
+    if border is None:
+        raise ValueError("image is needed to draw a box-dimension result that has no border image")
+    e = getattr(result, "e", None)
+    u = getattr(result, "u", None)
+    panel = None
+    if getattr(result, "border", None) is not None and image is None:
+        what = "sliding region" if result.which == "sliding" else "word-length regions"
+        panel = f"border of the {what}, {result.resolution} x {result.resolution} px"
+    plot_border(border, e, u, ax=axes[0], title=panel)
+    plot_box_counts(result, ax=axes[1])
+    if title is None and e is not None and getattr(result, "border", None) is not None:
+        title = (f"perimeter of the periodic sliding region in [{e[0]:g}, {e[1]:g}] x "
+                 f"[{u[0]:g}, {u[1]:g}]  (max_iter = {result.max_iter}, boxes of "
+                 f"{result.fit_range[0]}..{result.fit_range[1]} px fitted)")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,147 @@
+"""``stairbounce dimension``: output, pictures, and one-line errors with exit status 2."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from stairbounce.cli import main
+from stairbounce.fractal import boundary, box_dimension, perimeter_dimension
+
+FIG7 = ["--e", "0.155:0.2138", "--u", "0.6:0.658"]
+
+
+def run(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["dimension", *argv])
+    out, err = capsys.readouterr()
+    return exc.value.code, out, err
+
+
+def number(pattern, text):
+    return float(re.search(pattern, text).group(1))
+
+
+def write_picture(path, black):
+    """A black-on-white picture: ``black`` True is drawn black."""
+    Image.fromarray(np.where(black, 0, 255).astype(np.uint8)).save(path)
+
+
+def disk(n, radius=0.35):
+    y, x = np.mgrid[:n, :n] + 0.5
+    return (x - n / 2) ** 2 + (y - n / 2) ** 2 <= (radius * n) ** 2
+
+
+def test_scan_prints_the_api_result(capsys):
+    code, out, err = run([*FIG7, "--resolution", "128", "--max-iter", "300", "--fit-range", "1:32"], capsys)
+    assert code == 0, err
+    ref = perimeter_dimension(e=(0.155, 0.2138), u=(0.6, 0.658), resolution=128, max_iter=300, fit_range=(1, 32))
+    assert number(r"D = ([\d.]+)", out) == pytest.approx(ref.dimension, abs=5e-5)
+    lo, hi = re.search(r"95% CI = \[([\d.]+), ([\d.]+)\]", out).groups()
+    assert (float(lo), float(hi)) == pytest.approx(ref.ci, abs=5e-5)
+    assert number(r"r = ([\d.]+)", out) == pytest.approx(ref.r, abs=5e-6)
+    assert "boxes of 1..32 px" in out and "128 x 128 px" in out
+
+
+def test_png_draws_border_and_loglog_plot(tmp_path, capsys):
+    png = tmp_path / "fig7.png"
+    code, out, err = run([*FIG7, "--resolution", "96", "--max-iter", "200", "--png", str(png)], capsys)
+    assert code == 0, err
+    with Image.open(png) as im:
+        assert im.format == "PNG" and im.width > im.height > 200
+    assert not list(tmp_path.glob(".*part*"))  # written atomically, nothing left behind
+
+
+def test_image_measures_the_border_of_the_black_region(tmp_path, capsys):
+    path = tmp_path / "disk.png"
+    black = disk(512)
+    write_picture(path, black)
+    code, out, err = run(["--image", str(path)], capsys)
+    assert code == 0, err
+    ref = box_dimension(boundary(black))
+    assert number(r"D = ([\d.]+)", out) == pytest.approx(ref.dimension, abs=5e-5)
+    assert abs(ref.dimension - 1.0) < 0.06  # a circle
+    assert "border of the black region, 512 x 512 px" in out
+    # the white region: the pixels just outside the circle
+    code, out, _ = run(["--image", str(path), "--region", "white"], capsys)
+    white = box_dimension(boundary(~black))
+    assert code == 0 and number(r"D = ([\d.]+)", out) == pytest.approx(white.dimension, abs=5e-5)
+    assert white.dimension != ref.dimension
+    # --pixels measures the black pixels themselves: a filled disk is an area
+    code, out, _ = run(["--image", str(path), "--pixels"], capsys)
+    area = box_dimension(black)
+    assert code == 0 and number(r"D = ([\d.]+)", out) == pytest.approx(area.dimension, abs=5e-5)
+    assert abs(area.dimension - 2.0) < 0.1
+
+
+def test_image_threshold_is_mid_grey(tmp_path, capsys):
+    black = disk(256)
+    grey = np.where(black, 127, 128).astype(np.uint8)  # just either side of mid grey
+    Image.fromarray(grey).save(tmp_path / "grey.png")
+    write_picture(tmp_path / "bw.png", black)
+    code1, out1, _ = run(["--image", str(tmp_path / "grey.png")], capsys)
+    code2, out2, _ = run(["--image", str(tmp_path / "bw.png")], capsys)
+    assert code1 == code2 == 0
+    assert out1.split("\n", 1)[1] == out2.split("\n", 1)[1]
+
+
+@pytest.mark.parametrize(
+    "picture, message",
+    [
+        (np.zeros((64, 64), bool), "no black pixel"),
+        (np.ones((64, 64), bool), "has no border"),
+        (np.eye(3, dtype=bool), "fewer than 3 usable box sizes"),
+    ],
+    ids=["all white", "all black", "too small"],
+)
+def test_bad_pictures_exit_2_with_one_line(tmp_path, capsys, picture, message):
+    path = tmp_path / "p.png"
+    write_picture(path, picture)
+    code, out, err = run(["--image", str(path)], capsys)
+    assert code == 2
+    assert err.startswith("stairbounce: error: ") and message in err
+    assert err.count("\n") == 1
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--image", "{tmp}/missing.png"], "no such file"),
+        (["--image", "{tmp}/text.png"], "cannot read"),
+        (["--e", "0.5:0.6", "--u", "1.0:1.2", "--resolution", "16", "--max-iter", "20"], "region is empty"),
+        (["--e", "0.3:0.2"], "MIN < MAX"),
+        (["--resolution", "4"], "--resolution"),
+        (["--fit-range", "0:8"], "--fit-range"),
+        (["--fit-range", "64:128", *FIG7, "--resolution", "64", "--max-iter", "50"], "fit_range"),
+        (["--which", "both"], "--which"),
+        (["--connectivity", "6"], "--connectivity"),
+        (["--region", "red", "--image", "x.png"], "--region"),
+        (["--png", "{tmp}/out.jpg"], "--png"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line(tmp_path, capsys, argv, message):
+    (tmp_path / "text.png").write_text("not a picture")
+    argv = [a.format(tmp=tmp_path) for a in argv]
+    code, out, err = run(argv, capsys)
+    assert code == 2, out
+    assert err.startswith("stairbounce: error: ") and message in err
+    assert err.count("\n") == 1
+
+
+def test_console_script(tmp_path):
+    path = tmp_path / "square.png"
+    black = np.zeros((128, 128), bool)
+    black[20:100, 30:90] = True
+    write_picture(path, black)
+    script = Path(sys.executable).with_name("stairbounce")
+    proc = subprocess.run(
+        [str(script), "dimension", "--image", str(path)], capture_output=True, text=True, timeout=120
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert abs(number(r"D = ([\d.]+)", proc.stdout) - 1.0) < 0.1  # the outline of a rectangle
