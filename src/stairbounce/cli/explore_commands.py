@@ -1,0 +1,38 @@
+"""``stairbounce explore``: serve the browser app (the ``web`` extra)."""
+
+from __future__ import annotations
+
+import typer
+
+from ._app import CLIError, app
+
+
+@app.command()
+def explore(
+    port: int = typer.Option(5006, "--port", help="TCP port to serve on (0: any free port)."),
+    host: str = typer.Option(
+        "127.0.0.1", "--host", help="Address to listen on; the default serves this machine only."
+    ),
+    no_browser: bool = typer.Option(False, "--no-browser", help="Do not open a web browser."),
+):
+    """Serve an interactive, zoomable map of the (e, u) plane; tap a point to see its orbit."""
+    if not 0 <= port <= 65535:
+        raise CLIError(f"--port must be in [0, 65535], got {port}")
+    if not host.strip():
+        raise CLIError("--host must not be empty")
+    try:
+        import bokeh  # noqa: F401
+        import panel  # noqa: F401
+    except ImportError:
+        raise CLIError(
+            "the browser app needs Panel and Bokeh: pip install 'stairbounce[web]'"
+        ) from None
+    from ..explorer import serve
+
+    def ready(url):
+        typer.echo(f"stairbounce explorer at {url} (Ctrl-C to stop)")
+
+    try:
+        serve(port=port, host=host, show=not no_browser, on_ready=ready)
+    except OSError as exc:  # port in use, address not available
+        raise CLIError(f"cannot serve on {host}:{port}: {exc.strerror or exc}") from None

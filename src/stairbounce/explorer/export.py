@@ -1,0 +1,89 @@
+"""The app's downloads: the current view as a PNG figure and as netCDF data.
+
+Both take the dataset the page shows (they never recompute it), so what is
+downloaded is what was on screen.
+"""
+
+from __future__ import annotations
+
+import io
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .. import scan
+from .view import View, classes, color_key, overlay_curves
+
+__all__ = ["view_png", "view_netcdf", "export_name"]
+
+
+def export_name(view: View, suffix: str) -> str:
+    """``stairbounce_e0-1_u0-1.5.png``: a file name that says which window it holds."""
+    def f(x):
+        return f"{x:.10g}"
+
+    return f"stairbounce_e{f(view.e_lo)}-{f(view.e_hi)}_u{f(view.u_lo)}-{f(view.u_hi)}{suffix}"
+
+
+def view_png(ds, view: View, dpi: int = 100) -> bytes:
+    """view_png(ds, view, dpi=100) -> bytes
+
+    A PNG of the map as shown: one image pixel per scan pixel (nearest
+    neighbour), axes in e and u, the colour key, the overlays of the view,
+    the window and max_iter in the title.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    key = color_key(view.color)
+    idx = classes(ds, view.color).astype(float)
+    idx[idx < 0] = np.nan
+    cmap = ListedColormap(list(key.colors)).with_extremes(bad="white")
+    n = len(key.colors)
+    norm = BoundaryNorm(np.arange(n + 1) - 0.5, n)
+    w, h = view.width, view.height
+    fig = plt.figure(figsize=(w / dpi + 2.6, h / dpi + 1.3), dpi=dpi)
+    ax = fig.add_axes([1.0 / (w / dpi + 2.6), 0.7 / (h / dpi + 1.3),
+                       (w / dpi) / (w / dpi + 2.6), (h / dpi) / (h / dpi + 1.3)])
+    im = ax.imshow(idx, origin="lower", extent=(view.e_lo, view.e_hi, view.u_lo, view.u_hi),
+                   aspect="auto", interpolation="nearest", cmap=cmap, norm=norm)
+    curves = overlay_curves(view)
+    styles = {"tongues": dict(color="0.6", lw=0.7), "no_sliding": dict(color="C3", lw=1.2, ls="--")}
+    for name in view.overlays:
+        for xs, ys in zip(*curves[name]):
+            ax.plot(xs, ys, **styles[name])
+    ax.set_xlim(view.e_lo, view.e_hi)
+    ax.set_ylim(view.u_lo, view.u_hi)
+    ax.set_xlabel("e (restitution coefficient)")
+    ax.set_ylabel("u (horizontal speed)")
+    ax.set_title(
+        f"{key.title}: e in [{view.e_lo:.10g}, {view.e_hi:.10g}], "
+        f"u in [{view.u_lo:.10g}, {view.u_hi:.10g}], max_iter {view.max_iter}",
+        fontsize="small",
+    )
+    cax = fig.add_axes([(w / dpi + 1.25) / (w / dpi + 2.6), 0.7 / (h / dpi + 1.3),
+                        0.2 / (w / dpi + 2.6), (h / dpi) / (h / dpi + 1.3)])
+    cb = fig.colorbar(im, cax=cax, ticks=np.arange(n))
+    cb.ax.set_yticklabels(list(key.labels), fontsize="small")
+    cb.set_label(f"{key.title} (white: none within max_iter)", fontsize="small")
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def view_netcdf(ds) -> bytes:
+    """view_netcdf(ds) -> bytes
+
+    The scan of the view as a netCDF4 file, written by
+    :func:`stairbounce.scan.save` (same variables and attributes as
+    ``stairbounce scan --out view.nc``).
+    """
+    with tempfile.TemporaryDirectory(prefix="stairbounce-") as tmp:
+        path = Path(tmp) / "view.nc"
+        scan.save(ds, path)
+        return path.read_bytes()

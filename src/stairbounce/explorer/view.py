@@ -1,0 +1,589 @@
+"""What the browser app shows, without the browser: views, URL queries, renders.
+
+Everything here is pure Python on top of the library (no Panel, no Bokeh), so
+the server side of the app can be tested by calling these functions directly:
+
+- :class:`View`: one window of the (e, u) plane with its pixel size, the
+  iteration cap, the variable that colours it and the overlays;
+- :func:`parse_query` / :func:`view_query`: the view <-> the page's URL query
+  (``?e=0:1&u=0:1.5&size=600x600&max_iter=1000&color=word_length``), with every
+  malformed or out-of-range value replaced by its default and reported;
+- :func:`check_view`: the limits of one render (the pixel and work budgets,
+  float64 resolution), raising :class:`ValueError` with the reason;
+- :func:`compute_view`: the scan of a view (:func:`stairbounce.scan.scan_coords`
+  on the view's :func:`~stairbounce.scan.pixel_centres`, in bands of rows so a
+  newer request can cancel it between bands);
+- :func:`shade`, :func:`color_key`: the colours of the map (datashader's split:
+  compute the labelled grid first, shade it as a separate step);
+- :func:`overlay_curves`, :func:`point_details`, :func:`orbit_along_u`: the
+  tongues of Theorem 3.1, the curve of Corollary 2.1, and what a tap shows.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from urllib.parse import urlencode
+
+import numpy as np
+import xarray as xr
+
+from .. import orbits, scan
+from ..model import check_e, check_u, tongue
+from ..symbolic import sliding_word
+from ..trajectory import trajectory
+
+__all__ = [
+    "View",
+    "DEFAULT_VIEW",
+    "COLOR_VARS",
+    "OVERLAYS",
+    "PIXEL_BUDGET",
+    "WORK_BUDGET",
+    "MAX_ITER_LIMIT",
+    "U_LIMIT",
+    "Cancelled",
+    "ColorKey",
+    "parse_query",
+    "parse_window",
+    "format_window",
+    "view_query",
+    "view_url_query",
+    "check_view",
+    "compute_view",
+    "color_key",
+    "shade",
+    "overlay_curves",
+    "point_details",
+    "orbit_along_u",
+    "pixel_of",
+]
+
+COLOR_VARS = ("word_length", "period", "impacts", "jumps", "status")
+"""Data variables of :func:`stairbounce.scan.scan` that can colour the map."""
+
+OVERLAYS = ("tongues", "no_sliding")
+"""Curves drawn over the map: the (n, 0^inf) tongues of Theorem 3.1 and the
+no-sliding bound of Corollary 2.1."""
+
+PIXEL_BUDGET = 1_000_000
+"""Largest view, in pixels, that is computed (1000 x 1000)."""
+
+WORK_BUDGET = 5_000_000_000
+"""Largest ``pixels * max_iter`` computed: the worst case (nothing slides, every
+pixel runs ``max_iter`` steps) takes of the order of 10 s on two cores."""
+
+MAX_ITER_LIMIT = 1_000_000
+"""Largest ``max_iter`` accepted (the work budget usually binds first)."""
+
+U_LIMIT = 50.0
+"""Largest u shown; the (n, 0^inf) tongues reach u = sqrt(n/2) only as e -> 0."""
+
+MIN_SIDE = 16
+"""Smallest side of a view in pixels."""
+
+# A window is refused when neighbouring pixel centres are closer than this many
+# float64 spacings: deeper than that the picture would be rounding noise.
+_MIN_ULPS_PER_PIXEL = 4
+
+# Rows are computed in bands of at most this many potential map steps
+# (pixels * max_iter), so a newer request waits at most about a band (~0.1 s
+# here) for the kernel to notice it has been cancelled.
+_BAND_WORK = 50_000_000
+
+
+@dataclass(frozen=True)
+class View:
+    """One view of the (e, u) plane: window, pixel size, iteration cap, colouring.
+
+    ``e_lo < e_hi`` within [0, 1], ``u_lo < u_hi`` within [0, U_LIMIT];
+    ``width`` pixels along e and ``height`` along u; ``point`` is the tapped
+    ``(e, u)`` or ``None``.
+    """
+
+    e_lo: float = 0.0
+    e_hi: float = 1.0
+    u_lo: float = 0.0
+    u_hi: float = 1.5
+    width: int = 600
+    height: int = 600
+    max_iter: int = 1000
+    color: str = "word_length"
+    overlays: tuple[str, ...] = field(default=OVERLAYS)
+    point: tuple[float, float] | None = None
+
+    @property
+    def pixels(self) -> int:
+        return self.width * self.height
+
+    @property
+    def work(self) -> int:
+        """Most map steps the scan can take: every pixel runs ``max_iter`` steps."""
+        return self.pixels * self.max_iter
+
+    def with_window(self, e_lo, e_hi, u_lo, u_hi) -> View:
+        return replace(self, e_lo=float(e_lo), e_hi=float(e_hi), u_lo=float(u_lo), u_hi=float(u_hi))
+
+
+DEFAULT_VIEW = View()
+"""The paper's Figure 4 window, e in [0, 1], u in [0, 1.5], 600 x 600 pixels."""
+
+
+class Cancelled(Exception):
+    """A render was abandoned because a newer one was requested."""
+
+
+# --------------------------------------------------------------------------- #
+# URL query <-> view                                                          #
+# --------------------------------------------------------------------------- #
+
+
+def _fmt(x: float) -> str:
+    """Shortest text that reads back as the same float64 (deep zooms survive)."""
+    s = repr(float(x))
+    return s[:-2] if s.endswith(".0") else s
+
+
+def format_window(lo: float, hi: float) -> str:
+    """``"0:1.5"``: a window as the URL and the page show it (exact float64 text)."""
+    return f"{_fmt(lo)}:{_fmt(hi)}"
+
+
+def _text(value) -> str:
+    """One query value: Panel gives lists of bytes, tests give plain strings."""
+    if isinstance(value, (list, tuple)):
+        if not value:
+            return ""
+        value = value[-1]  # a repeated parameter: the last one wins, as in browsers' forms
+    if isinstance(value, bytes):
+        value = value.decode("utf-8", errors="replace")
+    return str(value).strip()
+
+
+def _number(name, text):
+    try:
+        x = float(text)
+    except ValueError:
+        raise ValueError(f"{name} must be a number, got {text!r}") from None
+    if not math.isfinite(x):
+        raise ValueError(f"{name} must be finite, got {text!r}")
+    return x
+
+
+def parse_window(name: str, text: str, limit: float) -> tuple[float, float]:
+    """``"0:1.5"`` -> ``(0.0, 1.5)`` with ``0 <= lo < hi <= limit``."""
+    parts = text.split(":")
+    if len(parts) != 2:
+        raise ValueError(f"{name} must be a range LO:HI, got {text!r}")
+    lo, hi = (_number(name, p) for p in parts)
+    if not 0.0 <= lo < hi <= limit:
+        raise ValueError(f"{name} must satisfy 0 <= LO < HI <= {_fmt(limit)}, got {text!r}")
+    return lo, hi
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``"600x400"`` -> ``(600, 400)``: width along e, height along u, within the budget."""
+    parts = text.lower().split("x")
+    try:
+        w, h = (int(p) for p in parts)
+    except ValueError:
+        raise ValueError(f"size must be WIDTHxHEIGHT in pixels, e.g. 600x600, got {text!r}") from None
+    if w < MIN_SIDE or h < MIN_SIDE:
+        raise ValueError(f"size must be at least {MIN_SIDE}x{MIN_SIDE} pixels, got {text!r}")
+    if w * h > PIXEL_BUDGET:
+        raise ValueError(
+            f"size {w}x{h} is {w * h} pixels, over the pixel budget of {PIXEL_BUDGET}"
+        )
+    return w, h
+
+
+def parse_max_iter(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise ValueError(f"max_iter must be an integer in [1, {MAX_ITER_LIMIT}], got {text!r}") from None
+    if not 1 <= n <= MAX_ITER_LIMIT:
+        raise ValueError(f"max_iter must be an integer in [1, {MAX_ITER_LIMIT}], got {text!r}")
+    return n
+
+
+def parse_color(text: str) -> str:
+    if text not in COLOR_VARS:
+        raise ValueError(f"color must be one of {', '.join(COLOR_VARS)}, got {text!r}")
+    return text
+
+
+def parse_overlays(text: str) -> tuple[str, ...]:
+    if text in ("", "none"):
+        return ()
+    names = tuple(dict.fromkeys(t.strip() for t in text.split(",")))
+    bad = [n for n in names if n not in OVERLAYS]
+    if bad:
+        raise ValueError(
+            f"overlays must be 'none' or a comma-separated list of {', '.join(OVERLAYS)}, got {text!r}"
+        )
+    return tuple(n for n in OVERLAYS if n in names)
+
+
+def parse_point(text: str) -> tuple[float, float]:
+    """``"0.1,0.75"`` -> ``(0.1, 0.75)``, a valid ``(e, u)``."""
+    parts = text.split(",")
+    if len(parts) != 2:
+        raise ValueError(f"point must be E,U, got {text!r}")
+    e, u = (_number("point", p) for p in parts)
+    try:
+        e, u = check_e(e), check_u(u)
+    except ValueError as exc:
+        raise ValueError(f"point: {exc}") from None
+    if u > U_LIMIT:
+        raise ValueError(f"point: u must be <= {_fmt(U_LIMIT)}, got {u}")
+    return e, u
+
+
+def parse_query(args) -> tuple[View, list[str]]:
+    """parse_query(args) -> (View, messages)
+
+    The view a page URL asks for, and what was wrong with it.
+
+    ``args`` maps query names to a string, bytes, or a list of them (Panel's
+    ``pn.state.session_args`` gives lists of bytes).  Recognised names:
+    ``e=LO:HI`` (0 <= LO < HI <= 1), ``u=LO:HI`` (0 <= LO < HI <= U_LIMIT),
+    ``size=WxH`` (W*H <= PIXEL_BUDGET), ``max_iter=N``, ``color=NAME``
+    (one of :data:`COLOR_VARS`), ``overlays=tongues,no_sliding`` or ``none``,
+    ``point=E,U``.  Each malformed or out-of-range value is replaced by the
+    default of :data:`DEFAULT_VIEW` and reported in one message; so is a view
+    that fails :func:`check_view` as a whole.  Never raises on user input.
+    """
+    view = DEFAULT_VIEW
+    messages: list[str] = []
+    parsers = {
+        "e": lambda t: dict(zip(("e_lo", "e_hi"), parse_window("e", t, 1.0))),
+        "u": lambda t: dict(zip(("u_lo", "u_hi"), parse_window("u", t, U_LIMIT))),
+        "size": lambda t: dict(zip(("width", "height"), parse_size(t))),
+        "max_iter": lambda t: {"max_iter": parse_max_iter(t)},
+        "color": lambda t: {"color": parse_color(t)},
+        "overlays": lambda t: {"overlays": parse_overlays(t)},
+        "point": lambda t: {"point": parse_point(t)},
+    }
+    defaults = view_query(DEFAULT_VIEW)
+    for name, value in dict(args or {}).items():
+        if name not in parsers:
+            messages.append(f"ignored unknown URL parameter {name!r}")
+            continue
+        text = _text(value)
+        try:
+            view = replace(view, **parsers[name](text))
+        except ValueError as exc:
+            fallback = defaults.get(name, "none")
+            messages.append(f"ignored {name}={text!r} from the URL: {exc}; using {fallback}")
+    if view.work > WORK_BUDGET:
+        messages.append(
+            f"ignored max_iter={view.max_iter} from the URL: {view.pixels} pixels x max_iter is "
+            f"over the work budget of {WORK_BUDGET:.3g} map steps; using {DEFAULT_VIEW.max_iter}"
+        )
+        view = replace(view, max_iter=DEFAULT_VIEW.max_iter)  # <= 1e9 steps at any allowed size
+    try:
+        check_view(view)
+    except ValueError as exc:  # only the window can still be wrong: float64 resolution
+        messages.append(f"ignored the URL's window: {exc}; using the Figure 4 window")
+        view = view.with_window(DEFAULT_VIEW.e_lo, DEFAULT_VIEW.e_hi, DEFAULT_VIEW.u_lo, DEFAULT_VIEW.u_hi)
+    return view, messages
+
+
+def view_query(view: View) -> dict[str, str]:
+    """view_query(view) -> dict
+
+    The URL query of a view; :func:`parse_query` reads it back exactly.
+    """
+    q = {
+        "e": format_window(view.e_lo, view.e_hi),
+        "u": format_window(view.u_lo, view.u_hi),
+        "size": f"{view.width}x{view.height}",
+        "max_iter": str(view.max_iter),
+        "color": view.color,
+        "overlays": ",".join(view.overlays) or "none",
+    }
+    if view.point is not None:
+        q["point"] = f"{_fmt(view.point[0])},{_fmt(view.point[1])}"
+    return q
+
+
+def view_url_query(view: View) -> str:
+    """``?e=0:1&u=0:1.5&...``: the query string of a shareable link."""
+    return "?" + urlencode(view_query(view), safe=":,")
+
+
+# --------------------------------------------------------------------------- #
+# Limits and computation                                                      #
+# --------------------------------------------------------------------------- #
+
+
+def _check_resolution(name, lo, hi, n):
+    step = (hi - lo) / n
+    ulp = float(np.spacing(max(abs(lo), abs(hi))))
+    if not step >= _MIN_ULPS_PER_PIXEL * ulp:
+        raise ValueError(
+            f"the {name} window [{_fmt(lo)}, {_fmt(hi)}] is too narrow for {n} pixels in float64 "
+            f"(pixel width {step:.3g}, float64 spacing {ulp:.3g}): zoom out"
+        )
+
+
+def check_view(view: View) -> View:
+    """check_view(view) -> View
+
+    Raise :class:`ValueError` (naming the limit) when a view must not be computed.
+
+    Limits: the window within e in [0, 1] and u in [0, U_LIMIT] with
+    ``lo < hi``; each side >= MIN_SIDE pixels; ``width * height <=
+    PIXEL_BUDGET``; ``1 <= max_iter <= MAX_ITER_LIMIT`` and ``width * height *
+    max_iter <= WORK_BUDGET``; neighbouring pixel centres at least a few
+    float64 spacings apart (deeper zooms are rounding noise).
+    """
+    for name, lo, hi, limit in (("e", view.e_lo, view.e_hi, 1.0), ("u", view.u_lo, view.u_hi, U_LIMIT)):
+        if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 <= lo < hi <= limit):
+            raise ValueError(f"{name} window must satisfy 0 <= lo < hi <= {_fmt(limit)}, got [{lo}, {hi}]")
+    if view.width < MIN_SIDE or view.height < MIN_SIDE:
+        raise ValueError(f"view size must be at least {MIN_SIDE}x{MIN_SIDE} pixels, got {view.width}x{view.height}")
+    if view.pixels > PIXEL_BUDGET:
+        raise ValueError(
+            f"view of {view.width}x{view.height} = {view.pixels} pixels refused: over the pixel "
+            f"budget of {PIXEL_BUDGET}"
+        )
+    if not 1 <= view.max_iter <= MAX_ITER_LIMIT:
+        raise ValueError(f"max_iter must be in [1, {MAX_ITER_LIMIT}], got {view.max_iter}")
+    if view.work > WORK_BUDGET:
+        raise ValueError(
+            f"view refused: {view.pixels} pixels x max_iter {view.max_iter} = {view.work:.3g} map "
+            f"steps in the worst case, over the work budget of {WORK_BUDGET:.3g}; lower max_iter "
+            "or the size"
+        )
+    if view.color not in COLOR_VARS:
+        raise ValueError(f"color must be one of {', '.join(COLOR_VARS)}, got {view.color!r}")
+    _check_resolution("e", view.e_lo, view.e_hi, view.width)
+    _check_resolution("u", view.u_lo, view.u_hi, view.height)
+    return view
+
+
+def compute_view(view: View, cancelled=None, progress=None) -> xr.Dataset:
+    """compute_view(view, cancelled=None, progress=None) -> xarray.Dataset
+
+    The scan of a view: :func:`stairbounce.scan.scan` on its window and pixels.
+
+    The rows (u) are computed in bands with :func:`stairbounce.scan.scan_coords`
+    on slices of :func:`stairbounce.scan.pixel_centres`, which gives the same
+    values bit for bit as one call of ``scan`` (pixels are independent); the
+    dataset carries the same attributes.  Between bands ``cancelled()`` is
+    asked whether a newer request superseded this one (then
+    :class:`Cancelled` is raised) and ``progress(done, total)`` is told how
+    many rows are done.
+
+    Raises :class:`ValueError` from :func:`check_view` for a view over budget.
+    """
+    check_view(view)
+    es = scan.pixel_centres(view.e_lo, view.e_hi, view.width)
+    us = scan.pixel_centres(view.u_lo, view.u_hi, view.height)
+    rows = max(1, min(view.height, _BAND_WORK // max(1, view.width * view.max_iter)))
+    parts = []
+    for start in range(0, view.height, rows):
+        if cancelled is not None and cancelled():
+            raise Cancelled
+        parts.append(scan.scan_coords(es, us[start : start + rows], max_iter=view.max_iter))
+        if progress is not None:
+            progress(min(view.height, start + rows), view.height)
+    ds = parts[0] if len(parts) == 1 else xr.concat(parts, dim="u", combine_attrs="override")
+    ds.attrs.update(
+        e_min=view.e_lo, e_max=view.e_hi, n_e=view.width,
+        u_min=view.u_lo, u_max=view.u_hi, n_u=view.height,
+    )
+    return ds
+
+
+def pixel_of(view: View, e: float, u: float) -> tuple[int, int] | None:
+    """Indices ``(row along u, column along e)`` of the pixel containing ``(e, u)``,
+    or ``None`` outside the window."""
+    if not (view.e_lo <= e <= view.e_hi and view.u_lo <= u <= view.u_hi):
+        return None
+    j = min(view.width - 1, int((e - view.e_lo) / (view.e_hi - view.e_lo) * view.width))
+    i = min(view.height - 1, int((u - view.u_lo) / (view.u_hi - view.u_lo) * view.height))
+    return i, j
+
+
+# --------------------------------------------------------------------------- #
+# Colours                                                                     #
+# --------------------------------------------------------------------------- #
+
+# Lower bounds of the colour classes, counted from the least value a variable
+# takes on a sliding pixel (1 for word length, period and jumps; 0 for
+# impacts): the first class holds the (n, 0^inf) solutions for word length,
+# impacts and jumps (black, as the paper's tongues in Fig. 4); classes widen
+# because the counts fall off roughly geometrically.
+_CLASS_STARTS = (0, 1, 2, 3, 4, 5, 7, 10, 15, 25, 50, 100, 250, 500)
+_LEAST = {"word_length": 1, "period": 1, "impacts": 0, "jumps": 1}
+NO_SLIDING_COLOR = "#ffffff"
+_LABELS = {
+    "word_length": "word length",
+    "period": "period (steps)",
+    "impacts": "impacts per period",
+    "jumps": "non-zero letters",
+    "status": "periodic sliding solution",
+}
+
+
+@dataclass(frozen=True)
+class ColorKey:
+    """The colour classes of a variable: ``colors[i]`` paints values in class
+    ``i`` (labelled ``labels[i]``); pixels without a sliding solution get
+    ``NO_SLIDING_COLOR``."""
+
+    var: str
+    title: str
+    labels: tuple[str, ...]
+    colors: tuple[str, ...]
+
+
+def _palette(n):
+    """Black, then ``n - 1`` well separated colours of the turbo map."""
+    from matplotlib import colormaps
+    from matplotlib.colors import to_hex
+
+    cmap = colormaps["turbo"]
+    return ("#000000",) + tuple(to_hex(cmap(x)) for x in np.linspace(0.1, 0.95, n - 1))
+
+
+def color_key(var: str) -> ColorKey:
+    """color_key(var) -> ColorKey: the classes and colours used for ``var``."""
+    if var == "status":
+        return ColorKey(var, _LABELS[var], ("found", "none"), ("#000000", NO_SLIDING_COLOR))
+    if var not in _LEAST:
+        raise ValueError(f"color must be one of {', '.join(COLOR_VARS)}, got {var!r}")
+    b = _LEAST[var]
+    labels = []
+    for lo, hi in zip(_CLASS_STARTS, _CLASS_STARTS[1:] + (None,)):
+        if hi is None:
+            labels.append(f">= {b + lo}")
+        elif hi - lo == 1:
+            labels.append(str(b + lo))
+        else:
+            labels.append(f"{b + lo}-{b + hi - 1}")
+    return ColorKey(var, _LABELS[var], tuple(labels), _palette(len(labels)))
+
+
+def _rgba32(hex_colors):
+    """Hex colours -> uint32 RGBA in the little-endian byte order Bokeh's
+    ``image_rgba`` and Pillow's ``RGBA`` mode read."""
+    out = np.empty(len(hex_colors), dtype=np.uint32)
+    for i, h in enumerate(hex_colors):
+        r, g, b = (int(h[k : k + 2], 16) for k in (1, 3, 5))
+        out[i] = r | (g << 8) | (b << 16) | (255 << 24)
+    return out
+
+
+def classes(ds: xr.Dataset, var: str) -> np.ndarray:
+    """Class index of every pixel under :func:`color_key` (-1: no sliding)."""
+    sliding = ds["status"].values == 0
+    if var == "status":
+        return np.where(sliding, 0, 1)
+    v = ds[var].values.astype(np.int64) - _LEAST[var]
+    idx = np.searchsorted(np.asarray(_CLASS_STARTS), v, side="right") - 1
+    return np.where(sliding, idx, -1)
+
+
+def shade(ds: xr.Dataset, var: str) -> np.ndarray:
+    """shade(ds, var) -> uint32 array (n_u, n_e)
+
+    RGBA pixels of a scan coloured by ``var`` (row 0 is the lowest u), the
+    colours of :func:`color_key`; no sliding solution is white.
+    """
+    key = color_key(var)
+    lut = _rgba32(key.colors + (NO_SLIDING_COLOR,))
+    return lut[classes(ds, var)]  # index -1 picks the no-sliding colour
+
+
+# --------------------------------------------------------------------------- #
+# Overlays and the tapped point                                               #
+# --------------------------------------------------------------------------- #
+
+
+def overlay_curves(view: View, samples: int = 400, max_tongues: int = 400) -> dict:
+    """overlay_curves(view, samples=400, max_tongues=400) -> dict
+
+    Curves of the paper over the view's e range, as lists of polylines.
+
+    ``"tongues"``: the outline of every (n, 0^inf) tongue of Theorem 3.1 that
+    meets the window, ``sqrt((n-1)/2) < u <= sqrt(n/2) (1-e)/(1+e)`` (bounds
+    from :func:`stairbounce.tongue`), closed at the e where the two bounds
+    meet; ``"no_sliding"``: Corollary 2.1's ``u = (1-e)/(2 sqrt(2e))``
+    (:func:`stairbounce.scan.no_sliding_curve`).  Each value is
+    ``(xs, ys)``, two lists of 1-D arrays; at most ``max_tongues`` tongues
+    (the ones nearest the window's bottom).
+    """
+    e = np.linspace(view.e_lo, min(view.e_hi, np.nextafter(1.0, 0.0)), samples)
+    shrink = (1.0 - e) / (1.0 + e)
+    txs, tys = [], []
+    n_first = max(1, int(2.0 * view.u_lo**2))  # sqrt(n/2) <= u_lo: the tongue lies below
+    n_last = min(n_first + max_tongues, int(2.0 * view.u_hi**2) + 1)
+    for n in range(n_first, n_last + 1):
+        u_low, top0 = tongue(n, 0.0)
+        if top0 <= view.u_lo or u_low >= view.u_hi:
+            continue
+        # the bounds meet where (1-e)/(1+e) = u_low / top0
+        r = u_low / top0
+        e_tip = (1.0 - r) / (1.0 + r)
+        inside = e < e_tip
+        if not inside.any():
+            continue
+        ee = np.concatenate([e[inside], [e_tip]]) if e_tip <= view.e_hi else e[inside]
+        top = top0 * (1.0 - ee) / (1.0 + ee)
+        xs = np.concatenate([ee, ee[::-1]])
+        ys = np.concatenate([top, np.full(ee.size, u_low)[::-1]])
+        txs.append(xs)
+        tys.append(ys)
+    with np.errstate(divide="ignore"):
+        ns = scan.no_sliding_curve(e)
+    ok = np.isfinite(ns)
+    return {"tongues": (txs, tys), "no_sliding": ([e[ok]], [ns[ok]])}
+
+
+def point_details(e: float, u: float, max_iter: int, steps: int | None = None) -> dict:
+    """point_details(e, u, max_iter, steps=None) -> dict
+
+    What a tap on ``(e, u)`` shows: the word of the periodic sliding solution
+    through (1, 0) (:func:`stairbounce.sliding_word`, ``None`` when it does
+    not slide within ``max_iter`` steps) and the exact trajectory from (1, 0)
+    over ``steps`` steps (default: one period and two more steps, 4 to 16
+    steps; 12 when it does not slide) sampled for drawing, with its impacts,
+    accumulation points and slides.
+    """
+    e, u = check_e(e), check_u(u)
+    w = sliding_word(e, u, max_steps=max_iter)
+    if steps is None:
+        steps = 12 if w is None else int(min(16, max(4, w.period + 2)))
+    traj = trajectory(e, u, 1.0, 0.0, steps)
+    t = np.linspace(0.0, traj.duration, 200 * steps + 1)
+    t = np.union1d(t, [i.time for i in traj.impacts if i.time <= traj.duration])
+    x, y = traj.position(t)
+    return {
+        "e": e,
+        "u": u,
+        "word": w,
+        "steps": steps,
+        "path": (x, y),
+        "impacts": (np.array([i.x for i in traj.impacts]), np.array([i.y for i in traj.impacts])),
+        "accumulations": (
+            np.array([a.x for a in traj.accumulations]),
+            np.array([a.y for a in traj.accumulations]),
+        ),
+        "slides": [(s.x_start, s.x_end, s.y) for s in traj.slides],
+    }
+
+
+def orbit_along_u(e: float, u_lo: float, u_hi: float, n: int = 300, transient: int = 2000,
+                  keep: int = 200) -> xr.Dataset:
+    """orbit_along_u(e, u_lo, u_hi, n=300, transient=2000, keep=200) -> xarray.Dataset
+
+    The orbit diagram of Section 4 (Figs. 8, 9) at restitution ``e`` over ``n``
+    pixel centres of ``[u_lo, u_hi]``: :func:`stairbounce.orbits.orbit_diagram`
+    from the paper's ``(y0, v0) = (0.1, 0)``.
+    """
+    us = scan.pixel_centres(u_lo, u_hi, n)
+    return orbits.orbit_diagram(e, us, y0=0.1, v0=0.0, transient=transient, keep=keep)

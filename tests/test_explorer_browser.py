@@ -1,0 +1,209 @@
+"""``stairbounce explore`` in a real browser: Debian's Chromium driven by Playwright.
+
+The server is the console script, started on a free localhost port in a
+subprocess.  Screenshots are saved under ``test-artifacts/`` (gitignored).
+Skipped only when ``/usr/bin/chromium`` or the web extra is missing.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+from urllib.parse import parse_qs, urlparse
+
+import numpy as np
+import pytest
+
+from stairbounce import scan, sliding_word
+
+pytestmark = pytest.mark.browser
+
+CHROMIUM = "/usr/bin/chromium"
+CHROMIUM_ARGS = [
+    "--no-sandbox", "--headless", "--disable-gpu", "--disable-background-networking",
+    "--disable-component-update", "--disable-sync", "--no-first-run",
+]
+ARTIFACTS = Path(__file__).resolve().parent.parent / "test-artifacts"
+
+if not os.path.exists(CHROMIUM):
+    pytest.skip(f"no Chromium at {CHROMIUM} (apt-get install chromium)", allow_module_level=True)
+sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is in the test extra")
+pytest.importorskip("panel", reason="panel is in the web extra")
+from PIL import Image  # noqa: E402
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def server():
+    port = _free_port()
+    exe = shutil.which("stairbounce", path=os.path.dirname(sys.executable)) or shutil.which("stairbounce")
+    cmd = [exe] if exe else [sys.executable, "-c", "from stairbounce.cli import main; main()"]
+    proc = subprocess.Popen(cmd + ["explore", "--port", str(port), "--no-browser"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    deadline = time.monotonic() + 60
+    while True:
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=0.5).close()
+            break
+        except OSError:
+            if proc.poll() is not None or time.monotonic() > deadline:
+                proc.kill()
+                out = proc.stdout.read() if proc.stdout else ""
+                pytest.fail(f"stairbounce explore did not start: {out}")
+            time.sleep(0.2)
+    yield f"http://127.0.0.1:{port}/"
+    proc.terminate()
+    try:
+        proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_api.sync_playwright() as p:
+        b = p.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        yield b
+        b.close()
+
+
+@pytest.fixture
+def page(browser):
+    ARTIFACTS.mkdir(exist_ok=True)
+    page = browser.new_page(viewport={"width": 1600, "height": 1000})
+    errors = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    yield page
+    page.close()
+    assert not errors, f"JavaScript errors on the page: {errors}"
+
+
+def _wait_rendered(page, timeout=90_000):
+    """Wait until the status line reports a finished render; return its text."""
+    done = page.locator(".sb-status .sb-info").get_by_text("computed in")
+    done.wait_for(timeout=timeout)
+    return done.inner_text()
+
+
+def _map_canvas(page):
+    # the first Bokeh canvas of the page is the map
+    return page.locator(".bk-Canvas").first
+
+
+def _frame_box(page):
+    """The map's plot frame (left, top, width, height) in its canvas, from Bokeh's views."""
+    return page.evaluate(
+        """() => {
+            let found = null;
+            function walk(v) {
+              const t = v.model && v.model.title && v.model.title.text;
+              if (t && t.startsWith('periodic sliding') && v.frame) {
+                const b = v.frame.bbox;
+                found = {left: b.x0, top: b.y0, width: b.x1 - b.x0, height: b.y1 - b.y0};
+              }
+              for (const c of (v.child_views ?? [])) walk(c);
+            }
+            for (const root of Bokeh.index) walk(root);
+            return found;
+        }"""
+    )
+
+
+def _window(page):
+    return (page.locator(".sb-e-window input").input_value(),
+            page.locator(".sb-u-window input").input_value())
+
+
+def _query(page):
+    return {k: v[-1] for k, v in parse_qs(urlparse(page.url).query).items()}
+
+
+def test_page_loads_and_draws_the_map(server, page):
+    page.goto(server + "?e=0:1&u=0:1.5&size=320x320&max_iter=300")
+    text = _wait_rendered(page)
+    assert "320 x 320 pixels" in text and "max_iter 300" in text
+    assert _window(page) == ("0:1", "0:1.5")
+    png = _map_canvas(page).screenshot(path=str(ARTIFACTS / "explorer-map.png"))
+    img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+    colours = np.unique(img.reshape(-1, 3), axis=0)
+    # the Figure 4 window has black tongues, white no-sliding region and many word-length colours
+    assert len(colours) > 12
+    assert (img.sum(axis=2) == 0).mean() > 0.05
+    page.screenshot(path=str(ARTIFACTS / "explorer-page.png"))
+
+
+def test_wheel_zoom_changes_window_and_url(server, page):
+    page.goto(server + "?e=0:1&u=0:1.5&size=320x320&max_iter=200")
+    _wait_rendered(page)
+    before_window, before_query = _window(page), _query(page)
+    box = _map_canvas(page).bounding_box()
+    page.mouse.move(box["x"] + box["width"] * 0.4, box["y"] + box["height"] * 0.5)
+    page.mouse.wheel(0, -400)  # zoom in
+    page.wait_for_function(
+        "([e]) => !document.location.search.includes('e=' + e + '&')", arg=[before_query["e"]],
+        timeout=30_000)
+    _wait_rendered(page)
+    after_window, after_query = _window(page), _query(page)
+    assert after_window != before_window
+    assert after_query["e"] != before_query["e"] and after_query["u"] != before_query["u"]
+    e_lo, e_hi = map(float, after_query["e"].split(":"))
+    u_lo, u_hi = map(float, after_query["u"].split(":"))
+    assert 0 <= e_lo < e_hi <= 1 and e_hi - e_lo < 1
+    assert 0 <= u_lo < u_hi <= 1.5 and u_hi - u_lo < 1.5
+    # the window in the URL is the window shown as numbers
+    assert after_window == (after_query["e"], after_query["u"])
+    # reloading the shared URL shows the same window
+    page.goto(page.url)
+    _wait_rendered(page)
+    assert _window(page) == after_window
+    page.screenshot(path=str(ARTIFACTS / "explorer-zoomed.png"))
+
+
+def test_tap_shows_the_word_of_the_point(server, page):
+    max_iter = 500
+    page.goto(server + f"?e=0:0.4&u=0.3:1.1&size=300x300&max_iter={max_iter}&color=word_length")
+    _wait_rendered(page)
+    # pick a pixel whose word has more than one letter, and click its centre
+    es = scan.pixel_centres(0.0, 0.4, 300)
+    us = scan.pixel_centres(0.3, 1.1, 300)
+    ds = scan.scan(e=(0.0, 0.4, 300), u=(0.3, 1.1, 300), max_iter=max_iter)
+    candidates = np.argwhere(ds["word_length"].values >= 3)
+    assert len(candidates) > 0
+    i, j = candidates[len(candidates) // 2]
+    box = _map_canvas(page).bounding_box()
+    frame = _frame_box(page)
+    x = box["x"] + frame["left"] + (j + 0.5) / 300 * frame["width"]
+    y = box["y"] + frame["top"] + (1 - (i + 0.5) / 300) * frame["height"]
+    page.mouse.click(x, y)
+    word_el = page.locator(".sb-word")
+    word_el.wait_for(timeout=60_000)
+    e = float(page.locator(".sb-e").inner_text())
+    u = float(page.locator(".sb-u").inner_text())
+    assert (e, u) == (es[j], us[i])  # the tapped pixel's centre, where its colour was computed
+    assert ds["word_length"].values[i, j] == len(sliding_word(e, u, max_steps=max_iter))
+    w = sliding_word(e, u, max_steps=max_iter)
+    assert w is not None
+    assert word_el.inner_text() == w.format()
+    assert _query(page)["point"] == f"{e!r},{u!r}"
+    page.screenshot(path=str(ARTIFACTS / "explorer-tap.png"))
+
+
+def test_bad_url_gives_a_message_not_a_crash(server, page):
+    page.goto(server + "?e=1:0&size=5000x5000&max_iter=abc&color=nope")
+    _wait_rendered(page)
+    msg = page.locator(".sb-url-text").inner_text()
+    assert "e=" in msg and "size=" in msg and "pixel budget" in msg and "max_iter=" in msg
+    assert "color=" in msg
+    assert _window(page) == ("0:1", "0:1.5")  # the default window is shown instead
+    page.screenshot(path=str(ARTIFACTS / "explorer-bad-url.png"))
