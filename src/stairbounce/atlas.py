@@ -45,6 +45,7 @@ from __future__ import annotations
 import math
 import os
 import threading
+import uuid
 from pathlib import Path
 
 import numpy as np
@@ -93,13 +94,12 @@ def tiles_done(path):
         raise ValueError(f"{path} is not a tiled scan store (no tile record)") from None
 
 
-def _run_tile(path, i, j, su, se, e_values, u_values, max_iter, y0, v0, numba_threads):
+def _run_tile(path, token, i, j, su, se, e_values, u_values, max_iter, y0, v0, numba_threads):
     """Compute tile (i, j) and write it into its region of the store, then mark it done.
 
     Runs in the calling process (local scans) or on a Dask worker.
     """
     import numba
-    import zarr
 
     from .scan import scan_coords
 
@@ -112,12 +112,35 @@ def _run_tile(path, i, j, su, se, e_values, u_values, max_iter, y0, v0, numba_th
             ds = scan_coords(e_values, u_values, max_iter, y0, v0)
         finally:
             numba.set_num_threads(before)
-    root = zarr.open_group(str(path), mode="r+")
+    arrays, done = _open_store(path, token)
     for name, var in ds.data_vars.items():
-        root[name][su, se] = var.values
+        arrays[name][su, se] = var.values
     # only now: a tile killed above is recomputed on the next run
-    root[TILES_GROUP]["done"][i, j] = True
+    done[i, j] = True
     return i, j
+
+
+# Opened arrays per store, kept by each process for the tiles that follow (opening
+# costs more than writing a small tile).  The token, drawn when the store is
+# created, tells a store apart from another one later made at the same path.
+_OPEN_STORES = {}
+
+
+def _open_store(path, token):
+    key = (path, token)
+    hit = _OPEN_STORES.get(key)
+    if hit is None:
+        import zarr
+
+        root = zarr.open_group(path, mode="r+")
+        record = root[TILES_GROUP]
+        if record.attrs.get("token") != token:
+            raise RuntimeError(f"the store {path} was replaced while the scan was running")
+        hit = ({name: arr for name, arr in root.arrays() if arr.ndim == 2}, record["done"])
+        if len(_OPEN_STORES) > 16:
+            _OPEN_STORES.clear()
+        _OPEN_STORES[key] = hit
+    return hit
 
 
 def _worker_threads():
@@ -193,7 +216,7 @@ def _create(path, template, encoding, shape_tiles, tile):
         with atomic_path(path) as tmp:
             template.to_zarr(tmp, mode="w", compute=False, encoding=encoding, consolidated=False)
             record = zarr.open_group(str(tmp), mode="r+").create_group(TILES_GROUP)
-            record.attrs.update(format=FORMAT, tile=tile)
+            record.attrs.update(format=FORMAT, tile=tile, token=uuid.uuid4().hex)
             record.zeros(name="done", shape=shape_tiles, chunks=(1, 1), dtype=bool)
     except PermissionError as exc:
         raise ValueError(f"cannot write {path}: {exc.strerror.lower()} ({path.parent})") from None
@@ -343,8 +366,9 @@ def scan_to_zarr(
     if progress is not None:
         progress(total - len(todo), total)
 
+    token = _tile_record(path).attrs["token"]
     args = [
-        (str(path), i, j, rows[i], cols[j], es[cols[j]], us[rows[i]], a["max_iter"], a["y0"], a["v0"], numba_threads)
+        (str(path), token, i, j, rows[i], cols[j], es[cols[j]], us[rows[i]], a["max_iter"], a["y0"], a["v0"], numba_threads)
         for i, j in todo
     ]
     if client is None:
