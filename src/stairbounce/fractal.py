@@ -176,25 +176,19 @@ def label_boundary(labels, connectivity=4):
 # --------------------------------------------------------------------------- #
 
 
-@njit(parallel=True, cache=True)
-def _pool_count(a):
-    """One pyramid level: OR over 2 x 2 blocks (the last row/column of an odd
-    image alone) and the number of True pixels of the pooled image.
-
-    Rows of the output are independent, so ``prange`` runs them on all cores;
-    the per-row counts are summed afterwards so no thread writes shared state.
-    """
+@njit(cache=True)
+def _pool_rows(a, out, i0, i1):
+    """Rows ``i0..i1`` of one pyramid level: OR over 2 x 2 blocks of ``a``
+    into ``out`` (the last row/column of an odd image alone); returns the
+    number of True pixels written."""
     h, w = a.shape
-    ho = (h + 1) // 2
-    wo = (w + 1) // 2
+    wo = out.shape[1]
     w2 = w // 2
-    out = np.empty((ho, wo), dtype=np.uint8)
-    rowcount = np.zeros(ho, dtype=np.int64)
-    for i in prange(ho):
+    c = 0
+    for i in range(i0, i1):
         r0 = a[2 * i]
         r1 = a[min(2 * i + 1, h - 1)]
         o = out[i]
-        c = 0
         for j in range(w2):
             x = r0[2 * j] | r0[2 * j + 1] | r1[2 * j] | r1[2 * j + 1]
             o[j] = x
@@ -203,8 +197,36 @@ def _pool_count(a):
             x = r0[w - 1] | r1[w - 1]
             o[wo - 1] = x
             c += x
-        rowcount[i] = c
-    return out, rowcount.sum()
+    return c
+
+
+@njit(parallel=True, cache=True)
+def _pool_count(a):
+    """One pyramid level and its count of True pixels, bands of rows on all
+    threads (each band's count is kept apart, so no thread writes shared
+    state)."""
+    h, w = a.shape
+    ho = (h + 1) // 2
+    out = np.empty((ho, (w + 1) // 2), dtype=np.uint8)
+    band = 64
+    nb = (ho + band - 1) // band
+    counts = np.zeros(nb, dtype=np.int64)
+    for b in prange(nb):
+        counts[b] = _pool_rows(a, out, b * band, min((b + 1) * band, ho))
+    return out, counts.sum()
+
+
+@njit(cache=True)
+def _pool_count_serial(a):
+    """:func:`_pool_count` on one thread: for small levels, where a fork/join
+    costs more than the work (and waits on a busy machine)."""
+    h, w = a.shape
+    ho = (h + 1) // 2
+    out = np.empty((ho, (w + 1) // 2), dtype=np.uint8)
+    return out, _pool_rows(a, out, 0, ho)
+
+
+_PARALLEL_PIXELS = 1 << 22
 
 
 @njit(parallel=True, cache=True)
@@ -331,7 +353,8 @@ def box_counts(image, sizes=None, offsets=1, reduce="mean"):
         pyramid[1] = int(np.count_nonzero(a))
         top = max(pow2)
         while size < top:
-            level, c = _pool_count(level)
+            pool = _pool_count if level.size >= _PARALLEL_PIXELS else _pool_count_serial
+            level, c = pool(level)
             size *= 2
             pyramid[size] = c
 
