@@ -487,8 +487,8 @@ def scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0):
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 
-def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0):
-    """scan(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, y0=1.0, v0=0.0) -> xarray.Dataset
+def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *, progress=None):
+    """scan(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, y0=1.0, v0=0.0, *, progress=None) -> xarray.Dataset
 
     Periodic sliding solutions on an ``n_u x n_e`` grid of the (e, u) plane.
 
@@ -521,6 +521,10 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0):
         Steps allowed for the transient and for the period, each.
     y0, v0 : float, default 1.0, 0.0
         Initial state at a step edge (y0 >= 0).
+    progress : callable ``progress(rows_done, rows_total)``, optional
+        When given, the rows are scanned in blocks (about 1/50 of the rows
+        each; the values are the same, pixels are independent) and it is
+        called after each block, and once with 0 before the first.
 
     Raises
     ------
@@ -533,9 +537,18 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0):
     e_min, e_max, n_e = _window("e", e, 0.0, 1.0, "[0, 1]")
     u_min, u_max, n_u = _window("u", u, 0.0, math.inf, "[0, inf)")
     _check_memory(n_e, n_u)
-    ds = scan_coords(
-        pixel_centres(e_min, e_max, n_e), pixel_centres(u_min, u_max, n_u), max_iter, y0, v0
-    )
+    es = pixel_centres(e_min, e_max, n_e)
+    us = pixel_centres(u_min, u_max, n_u)
+    if progress is None:
+        ds = scan_coords(es, us, max_iter, y0, v0)
+    else:
+        progress(0, n_u)
+        block = max(1, -(-n_u // 50))
+        parts = []
+        for r in range(0, n_u, block):
+            parts.append(scan_coords(es, us[r : r + block], max_iter, y0, v0))
+            progress(min(r + block, n_u), n_u)
+        ds = xr.concat(parts, dim="u", combine_attrs="override") if len(parts) > 1 else parts[0]
     ds.attrs.update(
         e_min=e_min, e_max=e_max, n_e=n_e, u_min=u_min, u_max=u_max, n_u=n_u
     )

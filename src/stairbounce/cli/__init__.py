@@ -14,6 +14,7 @@ from . import figures_commands  # noqa: F401  (registers figures, the main job)
 from . import fractal_commands  # noqa: F401  (registers dimension)
 from . import model_commands  # noqa: F401  (registers word, map, trajectory)
 from . import orbits_commands  # noqa: F401  (registers orbit-diagram)
+from . import scan_commands  # noqa: F401  (registers scan)
 from . import explore_commands  # noqa: F401  (registers explore)
 from ._app import CLIError, app
 

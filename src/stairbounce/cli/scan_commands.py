@@ -1,0 +1,135 @@
+"""``stairbounce scan``: the (e, u) parameter plane of Section 3 (Figures 3, 4, 5)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ._app import CLIError, app, parse_range, parse_size
+
+FIELD_NAMES = ("word_length", "period", "impacts", "jumps", "status")
+OVERLAY_NAMES = ("tongues", "bound")
+
+
+def _overlays(text):
+    if not text:
+        return ()
+    names = tuple(p.strip() for p in text.split(",") if p.strip())
+    for n in names:
+        if n not in OVERLAY_NAMES:
+            raise CLIError(f"--overlay must be a comma-separated list of {', '.join(OVERLAY_NAMES)}, got {text!r}")
+    return names
+
+
+@app.command("scan")
+def scan_(
+    e: str = typer.Option(
+        "0:1", "--e",
+        help="Window along e, MIN:MAX: the image edges, within [0, 1] (pixel centres lie inside, < 1).",
+    ),
+    u: str = typer.Option(
+        "0:1.5", "--u",
+        help="Window along u, MIN:MAX: the image edges, MIN >= 0 (pixel centres lie inside, > 0).",
+    ),
+    size: str = typer.Option("500x350", "--size", help="Pixels WIDTHxHEIGHT (along e x along u)."),
+    max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
+    y0: float = typer.Option(1.0, "--y0", help="Initial height at the edge (>= 0); (1, 0) is the paper's."),
+    v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
+    out: Path = typer.Option(None, "--out", help="Also save the data: .zarr (chunked) or .nc."),
+    png: Path = typer.Option(Path("scan.png"), "--png", help="Figure to write (.png, .pdf or .svg)."),
+    field: str = typer.Option("word_length", "--field", help="Colour by: " + ", ".join(FIELD_NAMES) + "."),
+    overlay: str = typer.Option("", "--overlay", help="Comma-separated: tongues (Theorem 3.1), bound (Corollary 2.1)."),
+    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output."),
+    tile: int = typer.Option(None, "--tile", help="Tiled, resumable scan into --out (.zarr), TILE x TILE pixels a tile."),
+    scheduler: str = typer.Option(None, "--scheduler", help="Tiled scan on a running Dask scheduler (tcp://HOST:PORT)."),
+    workers: int = typer.Option(None, "--workers", help="Tiled scan on a local Dask cluster of this many workers."),
+):
+    """Scan the (e, u) plane for periodic sliding solutions and draw it (Figures 3-5).
+
+    With no options: the paper's Figure 4 view, e in [0, 1] x u in [0, 1.5],
+    500 x 350 pixels, max_iter 1000, written to scan.png.  The windows are
+    image edges; pixels are sampled at their centres, so u = 0 is never used.
+    """
+    from .. import scan as sc
+
+    e_lo, e_hi = parse_range("e", e)
+    u_lo, u_hi = parse_range("u", u)
+    n_e, n_u = parse_size(size)
+    if max_iter < 1:
+        raise CLIError(f"--max-iter must be an integer >= 1, got {max_iter}")
+    if field not in FIELD_NAMES:
+        raise CLIError(f"--field must be one of {', '.join(FIELD_NAMES)}, got {field!r}")
+    overlays = _overlays(overlay)
+    if png is not None and png.suffix.lower() not in {".png", ".pdf", ".svg"}:
+        raise CLIError(f"--png must end in .png, .pdf or .svg, got {str(png)!r}")
+    if out is not None and out.suffix not in {".zarr", ".nc"}:
+        raise CLIError(f"--out must end in .zarr or .nc, got {str(out)!r}")
+    if not (10 <= dpi <= 1200):
+        raise CLIError(f"--dpi must be in [10, 1200], got {dpi}")
+    # the library's checks name the bound that is out of range
+    sc._window("e", (e_lo, e_hi, n_e), 0.0, 1.0, "[0, 1]")
+    sc._window("u", (u_lo, u_hi, n_u), 0.0, float("inf"), "[0, inf)")
+    if y0 < 0:
+        raise CLIError(f"--y0 must be >= 0, got {y0}")
+
+    if tile is not None or scheduler is not None or workers is not None:
+        if out is None:
+            raise CLIError("a tiled scan (--tile, --scheduler, --workers) needs --out STORE.zarr")
+        from .atlas_commands import run_tiled_scan
+
+        ds = run_tiled_scan(out, (e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0,
+                            tile=tile, scheduler=scheduler, workers=workers)
+        if png is not None:
+            _draw(ds.load(), field, overlays, png, dpi)
+            typer.echo(f"wrote {png}")
+        return
+
+    ds = _scan_with_progress(sc, (e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0)
+    if out is not None:
+        sc.save(ds, out)
+        typer.echo(f"wrote {out}")
+    if png is not None:
+        _draw(ds, field, overlays, png, dpi)
+        typer.echo(f"wrote {png}")
+    found = ds["status"].values == 0
+    frac = found.mean()
+    longest = int(ds["word_length"].values.max())
+    typer.echo(
+        f"{n_e} x {n_u} pixels, e in [{e_lo:g}, {e_hi:g}], u in [{u_lo:g}, {u_hi:g}], "
+        f"max_iter {max_iter}: periodic sliding solution at {100 * frac:.1f}% of the pixels"
+        + (f", longest word {longest}" if found.any() else "")
+    )
+
+
+def _scan_with_progress(sc, e, u, max_iter, y0, v0):
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    console = Console(stderr=True)
+    with Progress(
+        TextColumn("[bold]scan rows"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+        TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=True,
+    ) as bar:
+        task = bar.add_task("scan", total=u[2])
+        return sc.scan(e, u, max_iter, y0, v0,
+                       progress=lambda done, total: bar.update(task, completed=done, total=total))
+
+
+def _draw(ds, field, overlays, png, dpi):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .._io import atomic_path
+    from ..plot import plot_scan
+
+    fig, ax = plt.subplots(figsize=(8, 6))
+    try:
+        plot_scan(ds, field=field, ax=ax, overlay=overlays)
+        fig.tight_layout()
+        with atomic_path(png) as tmp:
+            fig.savefig(tmp, dpi=dpi)
+    finally:
+        plt.close(fig)
