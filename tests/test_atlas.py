@@ -429,3 +429,170 @@ def test_downsample_leaves_small_scans_alone(reference):
     assert downsample(reference, 45 * 38) is reference
     with pytest.raises(ValueError, match="method must be one of"):
         downsample(reference, 10, "mean")
+
+
+# --------------------------------------------------------------------------- #
+# Command line: scan --tile / --scheduler / --workers, render                  #
+# --------------------------------------------------------------------------- #
+
+SCAN_ARGS = ["scan", "--e", "0.05:0.95", "--u", "0.1:1.4", "--size", "45x38", "--max-iter", "400"]
+
+
+def run(args, capsys):
+    from stairbounce.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return exc.value.code, out, err
+
+
+def test_cli_tiled_scan_writes_the_store_and_resumes(tmp_path, capsys, reference):
+    store, png = tmp_path / "atlas.zarr", tmp_path / "atlas.png"
+    code, out, err = run(SCAN_ARGS + ["--tile", 16, "--out", store, "--png", png], capsys)
+    assert code == 0, err
+    assert f"wrote {store}: 45 x 38 pixels (e x u), 9 tiles of 16, computed in this process" in out
+    xr.testing.assert_identical(xr.open_zarr(store, consolidated=False).compute(), reference)
+    assert png.stat().st_size > 0
+    code, out, err = run(SCAN_ARGS + ["--tile", 16, "--out", store, "--png", png], capsys)
+    assert code == 0 and "(9 already complete)" in out
+
+
+def test_cli_tiled_scan_on_a_scheduler(tmp_path, capsys, client, reference):
+    store = tmp_path / "atlas.zarr"
+    address = client.scheduler_info()["address"]
+    code, out, err = run(SCAN_ARGS + ["--scheduler", address, "--tile", 16, "--out", store], capsys)
+    assert code == 0, err
+    assert f"computed in scheduler {address}" in out
+    xr.testing.assert_identical(xr.open_zarr(store, consolidated=False).compute(), reference)
+
+
+@pytest.mark.slow
+def test_console_script_with_local_workers(tmp_path, reference):
+    # worker processes spawned from the installed console script
+    store = tmp_path / "atlas.zarr"
+    exe = os.path.join(os.path.dirname(sys.executable), "stairbounce")
+    r = subprocess.run(
+        [exe, *SCAN_ARGS, "--workers", "2", "--tile", "16", "--out", str(store), "--png", str(tmp_path / "a.png")],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert r.returncode == 0, r.stderr
+    assert "computed in 2 local worker(s)" in r.stdout
+    xr.testing.assert_identical(xr.open_zarr(store, consolidated=False).compute(), reference)
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--tile", 16], "needs --out STORE.zarr"),
+        (["--tile", 16, "--out", "{tmp}/a.nc"], "--out must be a .zarr store for a tiled scan"),
+        (["--tile", 0, "--out", "{tmp}/a.zarr"], "--tile must be an integer >= 1"),
+        (["--workers", 0, "--out", "{tmp}/a.zarr"], "--workers must be an integer >= 1"),
+        (["--workers", 2, "--scheduler", "tcp://h:8786", "--out", "{tmp}/a.zarr"], "not both"),
+        (["--scheduler", "somewhere", "--out", "{tmp}/a.zarr"], "--scheduler must be an address"),
+        (["--tile", 16, "--out", "{tmp}/missing/a.zarr"], "does not exist"),
+    ],
+)
+def test_cli_tiled_scan_bad_input_exits_2(tmp_path, capsys, extra, message):
+    args = SCAN_ARGS + [str(a).replace("{tmp}", str(tmp_path)) for a in extra] + ["--png", tmp_path / "p.png"]
+    code, out, err = run(args, capsys)
+    assert code == 2
+    assert err.startswith("stairbounce: error:") and message in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_cli_refuses_a_different_scan_on_the_store(tmp_path, capsys):
+    store = tmp_path / "atlas.zarr"
+    assert run(SCAN_ARGS + ["--tile", 16, "--out", store, "--png", tmp_path / "p.png"], capsys)[0] == 0
+    args = SCAN_ARGS[:-1] + ["500", "--tile", 16, "--out", store, "--png", tmp_path / "p.png"]
+    code, _, err = run(args, capsys)
+    assert code == 2 and "holds a different scan (max_iter: store 400, asked 500)" in err
+
+
+def test_cli_unreachable_scheduler_exits_2(tmp_path, capsys):
+    import dask
+
+    with dask.config.set({"distributed.comm.timeouts.connect": "1s"}):
+        code, _, err = run(
+            SCAN_ARGS + ["--scheduler", "tcp://127.0.0.1:9", "--out", tmp_path / "a.zarr", "--png", tmp_path / "p.png"],
+            capsys,
+        )
+    assert code == 2 and "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in err
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory, reference):
+    path = tmp_path_factory.mktemp("render") / "atlas.zarr"
+    scan_to_zarr(path, tile=TILE, **WINDOW)
+    return path
+
+
+def png_size(path):
+    from PIL import Image
+
+    with Image.open(path) as im:
+        return im.format, im.size
+
+
+def test_cli_render_whole_store(tmp_path, capsys, store):
+    png = tmp_path / "r.png"
+    code, out, err = run(["render", store, "--png", png, "--dpi", 50], capsys)
+    assert code == 0, err
+    assert out.strip() == f"wrote {png}: word_length, 45 x 38 pixels"
+    assert png_size(png) == ("PNG", (400, 300))
+
+
+def test_cli_render_reduces_large_stores_by_blocks(tmp_path, capsys, store):
+    png = tmp_path / "r.png"
+    code, out, err = run(["render", store, "--png", png, "--max-pixels", 200, "--field", "period"], capsys)
+    assert code == 0, err
+    assert "period, 15 x 12 pixels, blocks of 3 x 3 (mode)" in out
+    code, out, _ = run(["render", store, "--png", png, "--max-pixels", 200, "--reduce", "stride"], capsys)
+    assert code == 0 and "(stride)" in out
+
+
+def test_cli_render_window(tmp_path, capsys, store, reference):
+    png = tmp_path / "r.png"
+    code, out, err = run(["render", store, "--png", png, "--window", "0.3:0.8,0.2:0.7", "--field", "status"], capsys)
+    assert code == 0, err
+    e, u = reference["e"].values, reference["u"].values
+    n_e = int(((e >= 0.3) & (e <= 0.8)).sum())
+    n_u = int(((u >= 0.2) & (u <= 0.7)).sum())
+    assert f"status, {n_e} x {n_u} pixels" in out
+
+
+def test_cli_render_warns_about_missing_tiles(tmp_path, capsys):
+    path = tmp_path / "part.zarr"
+    with pytest.raises(StopAfter):
+        scan_to_zarr(path, tile=TILE, progress=stop_after(4), **WINDOW)
+    code, _, err = run(["render", path, "--png", tmp_path / "r.png"], capsys)
+    assert code == 0 and "warning: 5 of 9 tiles" in err
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--png", "{tmp}/r.jpg"], "--png must end in .png"),
+        (["--png", "{tmp}/r.png", "--field", "colour"], "--field must be one of"),
+        (["--png", "{tmp}/r.png", "--max-pixels", 0], "--max-pixels must be an integer >= 1"),
+        (["--png", "{tmp}/r.png", "--reduce", "mean"], "--reduce must be mode, max or stride"),
+        (["--png", "{tmp}/r.png", "--window", "0:1"], "--window must be E0:E1,U0:U1"),
+        (["--png", "{tmp}/r.png", "--window", "0:1,2:1"], "--window must have MIN < MAX"),
+        (["--png", "{tmp}/r.png", "--window", "0:1,2:3"], "holds no pixel"),
+        (["--png", "{tmp}/nowhere/r.png"], "does not exist"),
+    ],
+)
+def test_cli_render_bad_input_exits_2(tmp_path, capsys, store, extra, message):
+    args = ["render", store] + [str(a).replace("{tmp}", str(tmp_path)) for a in extra]
+    code, _, err = run(args, capsys)
+    assert code == 2 and message in err, err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_cli_render_missing_or_unreadable_store_exits_2(tmp_path, capsys):
+    code, _, err = run(["render", tmp_path / "none.zarr", "--png", tmp_path / "r.png"], capsys)
+    assert code == 2 and "no such store" in err
+    bad = tmp_path / "bad.zarr"
+    bad.mkdir()
+    code, _, err = run(["render", bad, "--png", tmp_path / "r.png"], capsys)
+    assert code == 2 and "cannot read" in err

@@ -396,7 +396,7 @@ def _run_on_dask(client, args, n_done, total, progress):
     if own:
         address = client
         try:
-            client = Client(address, timeout="30s")
+            client = Client(address)
         except OSError as exc:
             raise ValueError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     futures = []

@@ -72,16 +72,19 @@ def scan_(
     sc._window("u", (u_lo, u_hi, n_u), 0.0, float("inf"), "[0, inf)")
     if y0 < 0:
         raise CLIError(f"--y0 must be >= 0, got {y0}")
+    if tile is None and scheduler is None and workers is None:
+        sc._check_memory(n_e, n_u)  # before the progress bar draws anything
 
     if tile is not None or scheduler is not None or workers is not None:
         if out is None:
             raise CLIError("a tiled scan (--tile, --scheduler, --workers) needs --out STORE.zarr")
-        from .atlas_commands import run_tiled_scan
+        from .atlas_commands import draw_store, run_tiled_scan
 
         ds = run_tiled_scan(out, (e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0,
                             tile=tile, scheduler=scheduler, workers=workers)
         if png is not None:
-            _draw(ds.load(), field, overlays, png, dpi)
+            # never the whole store in memory: reduced by blocks first
+            draw_store(ds, field, png, dpi, overlay=overlays)
             typer.echo(f"wrote {png}")
         return
 

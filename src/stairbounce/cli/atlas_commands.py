@@ -1,0 +1,221 @@
+"""Tiled scans to Zarr (``stairbounce scan ... --tile``) and ``stairbounce render``.
+
+``scan`` itself lives in :mod:`.scan_commands`; with ``--tile``, ``--scheduler``
+or ``--workers`` it hands over to :func:`run_tiled_scan` here, which runs
+:func:`stairbounce.atlas.scan_to_zarr` locally, on a new local Dask cluster or
+on a running scheduler, with a progress bar over tiles.
+"""
+
+from __future__ import annotations
+
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import typer
+
+from ._app import CLIError, app, parse_range
+
+DEFAULT_TILE = 1024
+FIELDS = ("word_length", "period", "jumps", "impacts", "status")
+
+
+def run_tiled_scan(out, e, u, max_iter=1000, y0=1.0, v0=0.0, tile=None, scheduler=None, workers=None):
+    """Run a tiled, resumable scan into the store ``out`` and print what was done.
+
+    ``e`` and ``u`` are ``(min, max, n)``; ``tile`` None means
+    :data:`DEFAULT_TILE`; at most one of ``scheduler`` (an address such as
+    ``tcp://host:8786``) and ``workers`` (worker processes of a local Dask
+    cluster, one thread each) may be given, neither runs in this process.
+    Returns the opened (lazy) dataset.
+    """
+    from ..atlas import scan_to_zarr
+
+    out = Path(out)
+    if out.suffix != ".zarr":
+        raise CLIError(f"--out must be a .zarr store for a tiled scan, got {str(out)!r}")
+    tile = DEFAULT_TILE if tile is None else tile
+    if tile < 1:
+        raise CLIError(f"--tile must be an integer >= 1, got {tile}")
+    if scheduler is not None and workers is not None:
+        raise CLIError("give --scheduler or --workers, not both")
+    if workers is not None and workers < 1:
+        raise CLIError(f"--workers must be an integer >= 1, got {workers}")
+    if scheduler is not None and "://" not in scheduler:
+        raise CLIError(f"--scheduler must be an address such as tcp://HOST:8786, got {scheduler!r}")
+
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    console = Console(stderr=True)
+    counts = {}
+    cluster = client = None
+    try:
+        with warnings.catch_warnings():
+            # a local cluster's HTTP server moves to a free port when 8787 is taken
+            warnings.filterwarnings("ignore", message="Port .* is already in use")
+            if workers is not None:
+                cluster, client = _local_cluster(workers)
+            bar = Progress(
+                TextColumn("[bold]tiles"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+                TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=True,
+            )
+            task = bar.add_task("tiles", total=None)
+
+            def progress(done, total):
+                if not counts:  # the store is ready: bad input has been reported by now
+                    bar.start()
+                counts.setdefault("skipped", done)
+                counts["total"] = total
+                bar.update(task, completed=done, total=total)
+
+            try:
+                ds = scan_to_zarr(
+                    out, e=e, u=u, max_iter=max_iter, y0=y0, v0=v0, tile=tile,
+                    client=scheduler if scheduler is not None else client, progress=progress,
+                )
+            finally:
+                if counts:
+                    bar.stop()
+    except KeyboardInterrupt:
+        print(f"stairbounce: the complete tiles are kept in {out}; run the same command to resume",
+              file=sys.stderr)
+        raise
+    finally:
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+    where = f"scheduler {scheduler}" if scheduler else (f"{workers} local worker(s)" if workers else "this process")
+    skipped = counts.get("skipped", 0)
+    resumed = f" ({skipped} already complete)" if skipped else ""
+    typer.echo(
+        f"wrote {out}: {ds.sizes['e']} x {ds.sizes['u']} pixels (e x u), "
+        f"{counts.get('total', 0)} tiles of {tile}{resumed}, computed in {where}"
+    )
+    return ds
+
+
+def _local_cluster(workers):
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise CLIError("--workers needs Dask: pip install 'stairbounce[dask]'") from None
+    # one thread per worker process: numba then runs one thread per tile, so
+    # N workers keep N cores busy
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    try:
+        return cluster, Client(cluster)
+    except BaseException:
+        cluster.close()
+        raise
+
+
+@app.command()
+def render(
+    store: Path = typer.Argument(..., help="A scan store (.zarr) or file (.nc), e.g. from 'scan --tile'."),
+    png: Path = typer.Option(..., "--png", help="Image to write (.png)."),
+    window: str = typer.Option(None, "--window", help="Part to draw, E0:E1,U0:U1 (default: all)."),
+    field: str = typer.Option("word_length", "--field", help="Variable to draw: " + ", ".join(FIELDS) + "."),
+    max_pixels: int = typer.Option(4_000_000, "--max-pixels", help="Largest image; bigger windows are reduced by blocks."),
+    reduce: str = typer.Option("mode", "--reduce", help="Block reducer: mode (most frequent value), max or stride."),
+    dpi: int = typer.Option(150, "--dpi", help="Resolution of the figure."),
+):
+    """Draw a scan store without loading it whole: large windows are reduced by blocks first."""
+    import xarray as xr
+
+    from ..atlas import downsample, tiles_done
+
+    if png.suffix.lower() != ".png":
+        raise CLIError(f"--png must end in .png, got {str(png)!r}")
+    if field not in FIELDS:
+        raise CLIError(f"--field must be one of {', '.join(FIELDS)}, got {field!r}")
+    if max_pixels < 1:
+        raise CLIError(f"--max-pixels must be an integer >= 1, got {max_pixels}")
+    if reduce not in ("mode", "max", "stride"):
+        raise CLIError(f"--reduce must be mode, max or stride, got {reduce!r}")
+    if not (10 <= dpi <= 1200):
+        raise CLIError(f"--dpi must be in [10, 1200], got {dpi}")
+    if not store.exists():
+        raise CLIError(f"no such store: {store}")
+    try:
+        if store.suffix == ".nc":
+            ds = xr.open_dataset(store, engine="netcdf4", chunks={})
+        else:
+            ds = xr.open_zarr(store, consolidated=False)
+    except Exception as exc:  # noqa: BLE001 - any reader error is bad input here
+        raise CLIError(f"cannot read {store} as a scan: {' '.join(str(exc).split())}") from None
+    if field not in ds.data_vars or set(ds[field].dims) != {"u", "e"}:
+        raise CLIError(f"{store} has no ({'u'}, {'e'}) variable {field!r}")
+    try:
+        done = tiles_done(store)
+    except ValueError:
+        done = None  # a saved scan, complete by construction
+    if done is not None and not done.all():
+        print(
+            f"stairbounce: warning: {int((~done).sum())} of {done.size} tiles of {store} are not "
+            "computed yet; they are drawn as zeros",
+            file=sys.stderr,
+        )
+    if window:
+        parts = window.split(",")
+        if len(parts) != 2:
+            raise CLIError(f"--window must be E0:E1,U0:U1, got {window!r}")
+        window = (parse_range("window", parts[0]), parse_range("window", parts[1]))
+    small = draw_store(ds, field, png, dpi, max_pixels=max_pixels, reduce=reduce, window=window)
+    f = small.attrs.get("downsampled", 1)
+    how = f", blocks of {f} x {f} ({reduce})" if f > 1 else ""
+    typer.echo(f"wrote {png}: {field}, {small.sizes['e']} x {small.sizes['u']} pixels{how}")
+
+
+def draw_store(ds, field, png, dpi, overlay=(), max_pixels=4_000_000, reduce="mode", window=None):
+    """Draw ``field`` of a (lazy) scan dataset into ``png`` with
+    :func:`stairbounce.plot.plot_scan`, reduced by blocks to at most
+    ``max_pixels`` first (:func:`stairbounce.atlas.downsample`), so that only
+    the reduced image is ever in memory.  ``window``: ``((e0, e1), (u0, u1))``,
+    the pixels whose centres lie inside are drawn.  Returns the reduced
+    dataset that was drawn.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .._io import atomic_path
+    from ..atlas import downsample
+    from ..plot import plot_scan
+
+    # status too: it tells where there is no periodic sliding solution
+    ds = ds[list(dict.fromkeys([field, "status"]))]
+    first = {"e": 0, "u": 0}
+    if window is not None:
+        for name, (lo, hi) in zip(("e", "u"), window):
+            c = ds[name].values
+            first[name] = int(np.searchsorted(c, lo, side="left"))
+            last = int(np.searchsorted(c, hi, side="right"))
+            if last <= first[name]:
+                raise CLIError(f"--window {name} in [{lo:g}, {hi:g}] holds no pixel of the store")
+            ds = ds.isel({name: slice(first[name], last)})
+    small = downsample(ds, max_pixels, method=reduce).compute()
+    f = small.attrs.get("downsampled", 1)
+    for name in ("e", "u") if (window is not None or f > 1) else ():
+        # the image edges are those of the pixels kept (blocks trim the far edge)
+        a = small.attrs
+        keys = (f"{name}_min", f"{name}_max", f"n_{name}")
+        if all(k in a for k in keys):
+            width = (a[keys[1]] - a[keys[0]]) / a[keys[2]]
+            lo = a[keys[0]] + first[name] * width
+            a[keys[0]], a[keys[1]] = lo, lo + small.sizes[name] * f * width
+            a[keys[2]] = small.sizes[name] * f
+        else:
+            a.pop(keys[0], None), a.pop(keys[1], None)
+    fig, ax = plt.subplots(figsize=(8, 6))
+    try:
+        plot_scan(small, field=field, ax=ax, overlay=overlay)
+        fig.tight_layout()
+        with atomic_path(png) as tmp:
+            fig.savefig(tmp, dpi=dpi)
+    finally:
+        plt.close(fig)
+    return small
