@@ -25,8 +25,7 @@ def _colormap():
 
     base = colormaps["inferno"]
     cmap = mcolors.ListedColormap(base(np.linspace(0.0, 0.88, 256)), name="inferno_no_white")
-    cmap.set_bad("white")
-    return cmap
+    return cmap.with_extremes(bad="white")
 
 
 def _extent(ds):
@@ -113,8 +112,7 @@ def plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=
     none = _no_solution(ds, field)
     if field == "status":
         data = np.ma.masked_array(np.ones(none.shape), mask=none)
-        cm = mcolors.ListedColormap(["black"])
-        cm.set_bad("white")
+        cm = mcolors.ListedColormap(["black"]).with_extremes(bad="white")
         norm = mcolors.Normalize(0, 1)
     else:
         data = np.ma.masked_array(np.asarray(ds[field].values, dtype=float), mask=none)
@@ -122,8 +120,8 @@ def plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=
         if isinstance(cm, str):
             from matplotlib import colormaps
 
-            cm = colormaps[cm].copy()
-            cm.set_bad("white")
+            cm = colormaps[cm]
+        cm = cm.with_extremes(bad="white")
         # the longest words are rare: clip the colour scale at the 99.5th
         # percentile (the colour bar shows the clipping) so the bulk gets colours
         found = data.compressed()

@@ -1,0 +1,594 @@
+"""The (e, u) parameter-plane scan (Section 3, Figures 3-5): kernels against
+references, the paper's theorems, invariances, files, the CLI."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numba
+import numpy as np
+import pytest
+import xarray as xr
+
+import stairbounce
+from stairbounce import scan as sc
+from stairbounce.cli import main
+from stairbounce.model import _constants, _slide_or_steps, iterate, no_sliding_bound, tongue
+from stairbounce.scan import (
+    no_sliding_curve,
+    pixel_centres,
+    scan,
+    scan_coords,
+    tongue_mask,
+)
+from stairbounce.symbolic import sliding_word
+from tests import naive
+
+FIELDS = ("status", "word_length", "jumps", "period", "impacts")
+DATA = Path(__file__).parent / "data"
+
+
+def _plain(es, us, max_iter=1000, y0=1.0, v0=0.0):
+    """The closed-form baseline kernel on a grid, as a dict of arrays."""
+    out = {k: np.empty((len(us), len(es)), dtype=dt) for k, (dt, _) in sc._FIELDS.items()}
+    sc._scan_plain(np.asarray(es, float), np.asarray(us, float), max_iter, y0, v0,
+                   out["status"], out["word_length"], out["jumps"], out["period"], out["impacts"])
+    return out
+
+
+_naive_step = numba.njit(naive.step)
+
+
+@numba.njit
+def _naive_pixel(y, v, e, u, max_iter):
+    """tests/naive.py's impact-by-impact step, compiled: (steps, impacts, jumps)
+    up to the first slide, steps 0 when it does not slide."""
+    imp = 0
+    jmp = 0
+    for n in range(1, max_iter + 1):
+        y, v, k = _naive_step(y, v, e, u, 10_000_000)
+        if k == -1:
+            return n, imp, jmp + 1
+        if k > 0:
+            imp += k
+            jmp += 1
+    return 0, imp, jmp
+
+
+@numba.njit
+def _naive_grid(es, us, max_iter, y0, v0, out):
+    from_rest = y0 == 1.0 and v0 == 0.0
+    for i in range(us.size):
+        for j in range(es.size):
+            n = 1
+            if not from_rest:
+                n, _, _ = _naive_pixel(y0, v0, es[j], us[i], max_iter)
+            imp = 0
+            jmp = 0
+            if n != 0:
+                n, imp, jmp = _naive_pixel(1.0, 0.0, es[j], us[i], max_iter)
+            out[0, i, j] = n
+            out[1, i, j] = imp if n else 0
+            out[2, i, j] = jmp if n else 0
+
+
+def _naive(es, us, max_iter=1000, y0=1.0, v0=0.0):
+    out = np.zeros((3, len(us), len(es)), np.int64)
+    _naive_grid(np.asarray(es, float), np.asarray(us, float), max_iter, y0, v0, out)
+    return {"period": out[0], "impacts": out[1], "jumps": out[2]}
+
+
+def _random_grid(seed, n_e, n_u, u_max=1.5):
+    rng = np.random.default_rng(seed)
+    return np.sort(rng.uniform(0.0, 1.0, n_e)), np.sort(rng.uniform(1e-3, u_max, n_u))
+
+
+def _disagreements(ds, ref):
+    bad = np.zeros(ds["status"].shape, dtype=bool)
+    for k in ref:
+        bad |= ds[k].values != ref[k]
+    return bad
+
+
+def _near_boundary(e, u, answer, max_iter, rel=1e-9):
+    """Whether the scan's answer changes within a relative distance ``rel`` of
+    (e, u): the pixel then sits on a boundary up to rounding."""
+    es = np.array([e * (1 - rel), e, min(e * (1 + rel), np.nextafter(1.0, 0.0))])
+    us = np.array([u * (1 - rel), u, u * (1 + rel)])
+    d = scan_coords(es, us, max_iter)
+    vals = {(int(d.period.values[i, j]), int(d.impacts.values[i, j])) for i in range(3) for j in range(3)}
+    return len(vals) > 1 or answer not in vals
+
+
+# --------------------------------------------------------------------------- #
+# Dataset layout                                                              #
+# --------------------------------------------------------------------------- #
+
+
+def test_pixel_centres_cover_the_window():
+    c = pixel_centres(0.0, 1.5, 350)
+    step = 1.5 / 350
+    assert c.shape == (350,)
+    assert c[0] == pytest.approx(step / 2) and c[-1] == pytest.approx(1.5 - step / 2)
+    assert np.allclose(np.diff(c), step)
+    assert c.min() > 0.0
+    assert np.array_equal(pixel_centres(0.2, 0.4, 1), [0.30000000000000004])
+
+
+def test_scan_dataset_layout_and_attributes():
+    ds = scan(e=(0.1, 0.3, 7), u=(0.4, 0.9, 5), max_iter=50)
+    assert ds["status"].dims == ("u", "e")
+    assert ds.sizes == {"u": 5, "e": 7}
+    assert set(ds.data_vars) == set(FIELDS)
+    assert np.array_equal(ds.e.values, pixel_centres(0.1, 0.3, 7))
+    assert np.array_equal(ds.u.values, pixel_centres(0.4, 0.9, 5))
+    a = ds.attrs
+    assert (a["e_min"], a["e_max"], a["n_e"]) == (0.1, 0.3, 7)
+    assert (a["u_min"], a["u_max"], a["n_u"]) == (0.4, 0.9, 5)
+    assert (a["max_iter"], a["y0"], a["v0"]) == (50, 1.0, 0.0)
+    assert a["stairbounce_version"] == stairbounce.__version__
+    assert "word_length = impacts + 1" in a["convention"]
+    assert a["kernel"] == "stairbounce.scan._scan_fast"
+
+
+def test_fields_are_consistent():
+    ds = scan(e=(0.0, 0.4, 60), u=(0.0, 1.5, 60), max_iter=300)
+    s = ds.status.values
+    assert set(np.unique(s)) == {0, 1}
+    none = s == 1
+    for k in ("word_length", "jumps", "period", "impacts"):
+        assert (ds[k].values[none] == 0).all()
+    found = ~none
+    wl, imp, jmp, per = (ds[k].values[found] for k in ("word_length", "impacts", "jumps", "period"))
+    assert np.array_equal(wl, imp + 1)
+    assert (jmp >= 1).all() and (jmp <= wl).all() and (jmp <= per).all()
+    assert (per >= 1).all() and (per <= 300).all()
+
+
+# --------------------------------------------------------------------------- #
+# Kernels against references                                                  #
+# --------------------------------------------------------------------------- #
+
+
+def test_every_pixel_agrees_with_sliding_word():
+    es, us = _random_grid(3, 23, 17)
+    ds = scan_coords(es, us, max_iter=400)
+    for i, u in enumerate(us):
+        for j, e in enumerate(es):
+            w = sliding_word(e, u, max_steps=400)
+            got = {k: int(ds[k].values[i, j]) for k in FIELDS}
+            if w is None:
+                assert got == dict.fromkeys(FIELDS, 0) | {"status": 1}, (e, u)
+            else:
+                assert got == {"status": 0, "word_length": len(w), "jumps": w.jumps,
+                               "period": w.period, "impacts": w.impacts}, (e, u, str(w))
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_fast_plain_and_naive_agree_on_random_grids(seed):
+    es, us = _random_grid(seed, 120, 90)
+    ds = scan_coords(es, us, max_iter=1000)
+    plain = _plain(es, us)
+    ref = _naive(es, us)
+    n = ds.status.size
+    for name, other in (("plain", plain), ("naive", ref)):
+        bad = _disagreements(ds, {k: other[k] for k in ("period", "impacts", "jumps")})
+        # measured: no disagreement at all on 600 000 random points (see the report)
+        assert bad.sum() <= 1e-3 * n, (name, int(bad.sum()))
+        for i, j in np.argwhere(bad):
+            answer = (int(ds.period.values[i, j]), int(ds.impacts.values[i, j]))
+            assert _near_boundary(es[j], us[i], answer, 1000), (name, es[j], us[i])
+    # plain and fast evaluate the same map: their results coincide bit for bit here
+    for k in FIELDS:
+        assert np.array_equal(ds[k].values, plain[k]), k
+
+
+def test_fast_kernel_equals_model_step_iteration():
+    """Pixel by pixel, the fast kernel is model._slide_or_steps (model._step)."""
+    es, us = _random_grid(7, 40, 30)
+    ds = scan_coords(es, us, max_iter=700)
+    for i, u in enumerate(us):
+        for j, e in enumerate(es):
+            T, ratio = _constants(e, u)
+            n, imp, jmp = _slide_or_steps(1.0, 0.0, e, T, ratio, 700)
+            assert int(ds.period.values[i, j]) == n
+            if n:
+                assert (int(ds.impacts.values[i, j]), int(ds.jumps.values[i, j])) == (imp, jmp)
+
+
+def test_many_impacts_per_step():
+    """At larger e and small u many steps have several impacts: the lanes count
+    on past the first impact and fall back to the closed form past
+    model._COUNTED_IMPACTS.  Compare with the impact-by-impact loop."""
+    es = np.linspace(0.5, 0.99, 60)
+    us = np.linspace(0.01, 0.3, 60)
+    ds = scan_coords(es, us, max_iter=300)
+    ref = _naive(es, us, 300)
+    for k in ref:
+        assert np.array_equal(ds[k].values, ref[k]), k
+    # the window does exercise both paths
+    ks = np.concatenate([iterate(1.0, 0.0, e, u, 300)[2] for e in es[::3] for u in us[::3]])
+    assert (ks >= 2).sum() > 100 and (ks >= 8).sum() > 10
+
+
+@pytest.mark.parametrize("y0,v0", [(0.1, 0.0), (2.5, -0.7), (1.0, 0.4)])
+def test_transient_then_period_from_rest(y0, v0):
+    """From (y0, v0) != (1, 0): a transient up to the first slide, then the
+    period is measured from (1, 0); status 0 only if both slide."""
+    es, us = _random_grid(11, 50, 40)
+    ds = scan_coords(es, us, max_iter=300, y0=y0, v0=v0)
+    assert (ds.attrs["y0"], ds.attrs["v0"]) == (y0, v0)
+    plain = _plain(es, us, 300, y0, v0)
+    ref = _naive(es, us, 300, y0, v0)
+    for k in FIELDS:
+        assert np.array_equal(ds[k].values, plain[k]), k
+    for k in ref:
+        assert np.array_equal(ds[k].values, ref[k]), k
+    from_rest = scan_coords(es, us, max_iter=300)
+    both = (ds.status.values == 0)
+    # where the transient slides, the periodic solution is the one from (1, 0)
+    for k in ("period", "impacts", "jumps"):
+        assert np.array_equal(ds[k].values[both], from_rest[k].values[both])
+    # and a transient that does not slide leaves status 1 where (1, 0) would slide
+    assert ((from_rest.status.values == 0) | (ds.status.values == 1)).all()
+
+
+def test_transient_that_never_slides_gives_status_1():
+    # e = 0.5, u = 1.2 lies above the Corollary 2.1 curve: nothing slides
+    ds = scan_coords([0.5], [1.2], max_iter=200, y0=0.1, v0=0.0)
+    assert ds.status.values.item() == 1 and ds.period.values.item() == 0
+
+
+# --------------------------------------------------------------------------- #
+# The paper's theorems                                                        #
+# --------------------------------------------------------------------------- #
+
+
+@pytest.fixture(scope="module")
+def paper_grid():
+    """The paper's grid: 500 x 350 over (0, 1) x (0, 1.5), max_iter 1000."""
+    return scan()
+
+
+def test_word_length_one_is_the_union_of_theorem_3_1_tongues(paper_grid):
+    """Figure 3 = the word-length-1 part of Figure 4, away from a one-pixel band
+    at the tongue boundaries."""
+    ds = paper_grid
+    E, U = np.meshgrid(ds.e.values, ds.u.values)
+    mask = tongue_mask(E, U, n_max=100)
+    one = (ds.status.values == 0) & (ds.word_length.values == 1)
+    # pixels whose 3 x 3 neighbourhood straddles a tongue boundary
+    pad = np.pad(mask, 1, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(pad, (3, 3))
+    band = windows.any(axis=(2, 3)) != windows.all(axis=(2, 3))
+    assert mask.sum() > 0.15 * mask.size  # the tongues: a fifth of Figure 4's plane
+    assert np.array_equal(one[~band], mask[~band])
+    # the band is thin: a one-pixel outline of the tongues
+    assert band.sum() < 0.05 * band.size
+    # inside the band only pixels within rounding of (3.1) may differ (measured: none)
+    assert (one[band] != mask[band]).sum() <= 0.01 * band.sum()
+
+
+def test_no_sliding_above_corollary_2_1(paper_grid):
+    ds = paper_grid
+    E, U = np.meshgrid(ds.e.values, ds.u.values)
+    above = U >= no_sliding_curve(E)
+    assert above.sum() > 0.5 * above.size
+    assert (ds.status.values[above] == 1).all()
+    # and the sliding set reaches up to the curve (the bound is sharp, Section 3)
+    sliding = ds.status.values == 0
+    rows_top = np.array([U[sliding[:, j], j].max() for j in range(0, 500, 50)])
+    curve = no_sliding_curve(ds.e.values[::50])
+    assert np.all(rows_top > 0.85 * np.minimum(curve, 1.5))
+
+
+def test_paper_grid_has_the_fractal_between_tongues(paper_grid):
+    ds = paper_grid
+    found = ds.status.values == 0
+    assert 0.2 < found.mean() < 0.3
+    # words longer than 1 live between the tongues
+    assert (ds.word_length.values > 1).sum() > 1000
+    assert ds.word_length.values.max() > 100
+
+
+def test_tongue_mask_matches_model_tongue():
+    rng = np.random.default_rng(5)
+    e = rng.uniform(0, 1, 500)
+    u = rng.uniform(1e-3, 2.0, 500)
+    got = tongue_mask(e, u, n_max=4)
+    for x, y, g in zip(e, u, got):
+        want = any(lo < y <= hi for lo, hi in (tongue(n, x) for n in range(1, 5)))
+        assert g == want
+    # broadcasting
+    assert tongue_mask(np.array([0.1, 0.2]), np.array([[0.3], [0.75], [5.0]]), 3).shape == (3, 2)
+    assert tongue_mask(0.1, 0.3, 1).item() is True
+    # the boundaries: u_low excluded, u_high included
+    lo, hi = tongue(3, 0.01)
+    assert not tongue_mask(0.01, lo, 3) and tongue_mask(0.01, hi, 3)
+    with pytest.raises(ValueError, match="n_max"):
+        tongue_mask(0.1, 0.3, 0)
+
+
+def test_no_sliding_curve_matches_corollary():
+    e = np.array([0.0, 0.01, 0.3, 0.99])
+    c = no_sliding_curve(e)
+    assert c[0] == math.inf
+    assert np.allclose(c[1:], [no_sliding_bound(x) for x in e[1:]])
+
+
+# --------------------------------------------------------------------------- #
+# Invariances                                                                 #
+# --------------------------------------------------------------------------- #
+
+
+def test_thread_count_invariance():
+    before = numba.get_num_threads()
+    try:
+        results = []
+        for n in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+            numba.set_num_threads(n)
+            results.append(scan(e=(0.0, 0.4, 130), u=(0.3, 1.3, 90), max_iter=600))
+    finally:
+        numba.set_num_threads(before)
+    for k in FIELDS:
+        assert np.array_equal(results[0][k].values, results[-1][k].values), k
+
+
+def test_tiles_equal_the_whole_scan():
+    whole = scan(e=(0.0, 0.3, 97), u=(0.3, 0.7, 61), max_iter=500)
+    es, us = whole.e.values, whole.u.values
+    cuts_e, cuts_u = [0, 13, 50, 97], [0, 1, 30, 61]
+    for a, b in zip(cuts_u[:-1], cuts_u[1:]):
+        for c, d in zip(cuts_e[:-1], cuts_e[1:]):
+            tile = scan_coords(es[c:d], us[a:b], max_iter=500)
+            for k in FIELDS:
+                assert np.array_equal(tile[k].values, whole[k].values[a:b, c:d]), (k, a, c)
+
+
+def test_progress_blocks_give_the_same_scan():
+    calls = []
+    plain = scan(e=(0.0, 0.3, 40), u=(0.3, 0.7, 120), max_iter=300)
+    blocks = scan(e=(0.0, 0.3, 40), u=(0.3, 0.7, 120), max_iter=300,
+                  progress=lambda done, total: calls.append((done, total)))
+    assert plain.identical(blocks)
+    assert calls[0] == (0, 120) and calls[-1] == (120, 120) and len(calls) > 10
+    assert [c[0] for c in calls] == sorted(c[0] for c in calls)
+
+
+def test_regression_pin_figure_5e():
+    """A committed 100 x 100 scan of the Figure 5e window (tests/data/fig5e.npz,
+    picture beside it); scripts/regenerate_reference.py rewrites both."""
+    ref = np.load(DATA / "fig5e.npz")
+    ds = scan(e=(0.04, 0.065, 100), u=(0.92, 0.945, 100), max_iter=int(ref["max_iter"]))
+    assert np.array_equal(ds.e.values, ref["e"]) and np.array_equal(ds.u.values, ref["u"])
+    for k in FIELDS:
+        assert np.array_equal(ds[k].values, ref[k]), k
+    assert (DATA / "fig5e.png").exists()
+
+
+# --------------------------------------------------------------------------- #
+# Files                                                                       #
+# --------------------------------------------------------------------------- #
+
+
+@pytest.mark.parametrize("suffix", [".zarr", ".nc"])
+def test_save_load_round_trip(tmp_path, suffix):
+    ds = scan(e=(0.0, 0.5, 30), u=(0.2, 1.0, 20), max_iter=200, y0=1.5, v0=-0.25)
+    path = tmp_path / f"scan{suffix}"
+    sc.save(ds, path)
+    back = sc.load(path)
+    assert back.identical(ds)
+    for k in FIELDS:
+        assert back[k].dtype == ds[k].dtype
+    assert back.attrs == ds.attrs
+    # nothing left beside it but the file itself
+    assert [p.name for p in tmp_path.iterdir()] == [path.name]
+    # overwriting an existing file works and is atomic too
+    sc.save(ds.isel(e=slice(0, 5)), path)
+    assert sc.load(path).sizes["e"] == 5
+
+
+def test_zarr_is_chunked(tmp_path):
+    import zarr
+
+    ds = scan(e=(0.0, 0.5, 40), u=(0.2, 1.0, 30), max_iter=50)
+    sc.save(ds, tmp_path / "s.zarr", chunks=16)
+    z = zarr.open_group(str(tmp_path / "s.zarr"), mode="r")
+    assert z["word_length"].chunks == (16, 16)
+
+
+def test_save_refuses_bad_paths(tmp_path):
+    ds = scan(e=(0.0, 0.5, 4), u=(0.2, 1.0, 3), max_iter=10)
+    with pytest.raises(ValueError, match=r"\.zarr or \.nc"):
+        sc.save(ds, tmp_path / "scan.csv")
+    with pytest.raises(ValueError, match="does not exist"):
+        sc.save(ds, tmp_path / "missing" / "scan.nc")
+    with pytest.raises(ValueError, match="no such file"):
+        sc.load(tmp_path / "nothing.nc")
+
+
+# --------------------------------------------------------------------------- #
+# Validation and memory                                                       #
+# --------------------------------------------------------------------------- #
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"e": (-0.1, 0.5, 10)}, r"e window must lie in \[0, 1\]"),
+        ({"e": (0.5, 1.2, 10)}, r"e window must lie in \[0, 1\]"),
+        ({"e": (0.5, 0.5, 10)}, "e_min must be < e_max"),
+        ({"e": (0.0, 0.5, 0)}, "n_e must be an integer >= 1"),
+        ({"e": (0.0, 0.5, 2.5)}, "n_e must be an integer"),
+        ({"e": (0.0, 0.5)}, r"e must be a tuple \(e_min, e_max, n_e\)"),
+        ({"e": ("a", 0.5, 3)}, "e_min must be a real number"),
+        ({"u": (-1.0, 1.0, 10)}, r"u window must lie in \[0, inf\)"),
+        ({"u": (1.0, 0.5, 10)}, "u_min must be < u_max"),
+        ({"u": (0.0, math.inf, 10)}, "u_max must be finite"),
+        ({"u": (0.0, 1.0, -3)}, "n_u must be an integer >= 1"),
+        ({"max_iter": 0}, "max_iter must be an integer >= 1"),
+        ({"y0": -1.0}, "y0"),
+        ({"v0": math.nan}, "v0 must be finite"),
+    ],
+)
+def test_scan_validation(kwargs, match):
+    args = {"e": (0.0, 0.5, 4), "u": (0.1, 1.0, 3), "max_iter": 10} | kwargs
+    with pytest.raises(ValueError, match=match):
+        scan(**args)
+
+
+@pytest.mark.parametrize(
+    "es, us, match",
+    [
+        ([0.1, 1.0], [0.5], r"e \(restitution coefficient\) values must be in \[0, 1\)"),
+        ([-0.1], [0.5], r"e \(restitution coefficient\)"),
+        ([0.1], [0.0, 0.5], r"u \(horizontal speed\) values must be > 0"),
+        ([0.1], [np.nan], "u values must be finite"),
+        ([], [0.5], "e values must be a non-empty 1-D array"),
+        ([[0.1]], [0.5], "e values must be a non-empty 1-D array"),
+    ],
+)
+def test_scan_coords_validation(es, us, match):
+    with pytest.raises(ValueError, match=match):
+        scan_coords(es, us, max_iter=10)
+
+
+def test_memory_refusal_names_the_estimate(monkeypatch):
+    with pytest.raises(ValueError, match=r"needs about .* more than the .* of memory available"):
+        scan(e=(0.0, 1.0, 10**7), u=(0.1, 1.5, 10**7))
+    monkeypatch.setattr(sc, "_available_memory", lambda: 10_000)
+    with pytest.raises(ValueError, match=r"100 x 100 pixels needs about 245\.7 KiB"):
+        scan(e=(0.0, 1.0, 100), u=(0.1, 1.5, 100))
+    with pytest.raises(ValueError, match="needs about"):
+        scan_coords(np.linspace(0.1, 0.5, 100), np.linspace(0.1, 1, 100))
+    assert sc.estimate_bytes(100, 100) == 100 * 100 * 25 + 8 * 200
+    monkeypatch.setattr(sc, "_available_memory", lambda: None)  # unknown: allowed
+    assert scan(e=(0.0, 1.0, 3), u=(0.1, 1.5, 2), max_iter=5).sizes == {"u": 2, "e": 3}
+
+
+def test_core_module_imports_no_plotting_or_cli():
+    code = ("import sys, stairbounce.scan; "
+            "bad = [m for m in ('matplotlib', 'typer', 'bokeh', 'panel') if m in sys.modules]; "
+            "print(bad); sys.exit(1 if bad else 0)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+
+
+# --------------------------------------------------------------------------- #
+# Plotting                                                                    #
+# --------------------------------------------------------------------------- #
+
+
+def test_plot_scan(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from stairbounce.plot import plot_scan
+
+    ds = scan(e=(0.0, 0.4, 80), u=(0.2, 1.2, 60), max_iter=300)
+    for field in ("word_length", "period", "impacts", "jumps", "status"):
+        fig, ax = plt.subplots()
+        out = plot_scan(ds, field=field, ax=ax, overlay=("tongues", "bound"))
+        assert out is ax
+        im = ax.get_images()[0]
+        assert im.get_extent() == [0.0, 0.4, 0.2, 1.2]
+        data = im.get_array()
+        # white (masked) exactly where no periodic sliding solution was found
+        assert np.array_equal(np.ma.getmaskarray(data), ds.status.values == 1)
+        assert ax.get_xlabel().startswith("e") and ax.get_ylabel().startswith("u")
+        assert len(ax.get_lines()) >= 2  # tongue boundaries and the bound
+        fig.savefig(tmp_path / f"{field}.png")
+        plt.close(fig)
+    fig, ax = plt.subplots()
+    plot_scan(ds, ax=ax)
+    assert type(ax.get_images()[0].norm).__name__ == "LogNorm"
+    assert len(fig.axes) == 2  # the colour bar
+    plt.close(fig)
+    # a dataset reduced to one variable (as the atlas renderer passes) still plots
+    ax = plot_scan(ds[["word_length"]])
+    assert np.array_equal(np.ma.getmaskarray(ax.get_images()[0].get_array()), ds.status.values == 1)
+    plt.close(ax.figure)
+    with pytest.raises(ValueError, match="field must be one of"):
+        plot_scan(ds, field="colour")
+    with pytest.raises(ValueError, match="overlay must be among"):
+        plot_scan(ds, overlay=("grid",))
+
+
+# --------------------------------------------------------------------------- #
+# Command line                                                                #
+# --------------------------------------------------------------------------- #
+
+
+def _run(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    out, err = capsys.readouterr()
+    return exc.value.code, out, err
+
+
+def test_cli_scan_writes_data_and_figure(tmp_path, capsys):
+    out, png = tmp_path / "s.zarr", tmp_path / "s.png"
+    code, stdout, err = _run(["scan", "--e", "0:0.3", "--u", "0.3:0.7", "--size", "60x40",
+                              "--max-iter", "200", "--out", str(out), "--png", str(png),
+                              "--overlay", "tongues,bound", "--field", "period"], capsys)
+    assert code == 0, err
+    assert f"wrote {out}" in stdout and f"wrote {png}" in stdout
+    assert "60 x 40 pixels" in stdout and "periodic sliding solution at" in stdout
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    got = sc.load(out)
+    assert got.identical(scan(e=(0.0, 0.3, 60), u=(0.3, 0.7, 40), max_iter=200))
+
+
+def test_cli_scan_defaults_are_figure_4(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, stdout, err = _run(["scan", "--out", "fig4.nc"], capsys)
+    assert code == 0, err
+    assert (tmp_path / "scan.png").exists()
+    ds = sc.load(tmp_path / "fig4.nc")
+    a = ds.attrs
+    assert (a["e_min"], a["e_max"], a["n_e"], a["u_min"], a["u_max"], a["n_u"], a["max_iter"]) == (
+        0.0, 1.0, 500, 0.0, 1.5, 350, 1000)
+    assert ds.u.values.min() > 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig4.nc", "scan.png"]
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--e", "0:1.5"], "e window must lie in [0, 1]"),
+        (["--e", "-0.5:0.5"], "e window must lie in [0, 1]"),
+        (["--u", "-1:1"], "u window must lie in [0, inf)"),
+        (["--u", "1:1"], "--u must have MIN < MAX"),
+        (["--e", "0.5:0.2"], "--e must have MIN < MAX"),
+        (["--size", "0x10"], "--size must have WIDTH >= 1"),
+        (["--size", "ax10"], "--size must be WIDTHxHEIGHT"),
+        (["--max-iter", "0"], "--max-iter must be an integer >= 1"),
+        (["--max-iter", "x"], "max-iter"),
+        (["--e", "a:b"], "--e must be a range MIN:MAX of numbers"),
+        (["--field", "colour"], "--field must be one of"),
+        (["--overlay", "grid"], "--overlay must be a comma-separated list"),
+        (["--out", "x.csv"], "--out must end in .zarr or .nc"),
+        (["--png", "x.jpg"], "--png must end in .png, .pdf or .svg"),
+        (["--y0", "-1"], "--y0 must be >= 0"),
+        (["--size", "10000000x10000000"], "needs about"),
+    ],
+)
+def test_cli_scan_bad_input_is_one_line_and_exit_2(args, message, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = _run(["scan", *args], capsys)
+    assert code == 2
+    assert err.startswith("stairbounce: error:") and err.count("\n") == 1, err
+    assert message in err
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_console_script_exit_status(tmp_path):
+    exe = Path(sys.executable).with_name("stairbounce")
+    r = subprocess.run([str(exe), "scan", "--e", "0:1.5"], capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 2
+    assert r.stderr.strip().startswith("stairbounce: error:") and "Traceback" not in r.stderr
