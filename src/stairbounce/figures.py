@@ -272,18 +272,24 @@ DIMENSION_WINDOWS = {
 
 def _dimension(name):
     def recipe(s: Settings) -> Result:
-        from .fractal import perimeter_dimension
-        from .plot import plot_box_dimension
+        from .fractal import box_dimension, boundary
+        from .plot import plot_border, plot_box_counts
 
         (e, u), paper = DIMENSION_WINDOWS[name]
         res = s.px(500)
+        # perimeter_dimension's steps, on the cached scan: the border of the
+        # sliding region (status 0), the window's frame not counted
+        region = _scan(s, e, u, res, res).status.transpose("u", "e").values == 0
+        border = boundary(region)
         # the paper fits every box size of its 500 px picture up to an eighth of it;
         # the automatic linear-region choice is reported beside it (a heuristic)
         fit_range = (1, max(4, 2 ** round(math.log2(res / 8))))
-        est = perimeter_dimension(e, u, resolution=res, max_iter=s.max_iter, fit_range=fit_range)
-        auto = perimeter_dimension(e, u, resolution=res, max_iter=s.max_iter)
+        est = box_dimension(border, fit_range=fit_range)
+        auto = box_dimension(border)
         fig, axes = _subplots(1, 2, figsize=(12, 5.2))
-        plot_box_dimension(est, axes=axes)
+        plot_border(border, e, u, ax=axes[0],
+                    title=f"border of the sliding region, {res} x {res} px")
+        plot_box_counts(est, ax=axes[1])
         fig.suptitle(f"Fig. {name[-1]}: border of the sliding region in "
                      f"[{e[0]}, {e[1]}] x [{u[0]}, {u[1]}] and its box counting")
         fig.tight_layout()
