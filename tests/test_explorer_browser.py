@@ -15,6 +15,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 from urllib.parse import parse_qs, urlparse
 
 import numpy as np
@@ -45,12 +46,15 @@ def _free_port():
 
 
 @pytest.fixture(scope="module")
-def server():
+def server(tmp_path_factory):
+    """``stairbounce explore`` on a free port; yields its URL and its log file."""
     port = _free_port()
     exe = shutil.which("stairbounce", path=os.path.dirname(sys.executable)) or shutil.which("stairbounce")
     cmd = [exe] if exe else [sys.executable, "-c", "from stairbounce.cli import main; main()"]
-    proc = subprocess.Popen(cmd + ["explore", "--port", str(port), "--no-browser"],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    log = tmp_path_factory.mktemp("explorer") / "server.log"
+    with open(log, "w") as out:
+        proc = subprocess.Popen(cmd + ["explore", "--port", str(port), "--no-browser"],
+                                stdout=out, stderr=subprocess.STDOUT)
     deadline = time.monotonic() + 60
     while True:
         try:
@@ -59,10 +63,9 @@ def server():
         except OSError:
             if proc.poll() is not None or time.monotonic() > deadline:
                 proc.kill()
-                out = proc.stdout.read() if proc.stdout else ""
-                pytest.fail(f"stairbounce explore did not start: {out}")
+                pytest.fail(f"stairbounce explore did not start: {log.read_text()}")
             time.sleep(0.2)
-    yield f"http://127.0.0.1:{port}/"
+    yield SimpleNamespace(url=f"http://127.0.0.1:{port}/", log=log)
     proc.terminate()
     try:
         proc.wait(timeout=10)
@@ -79,14 +82,19 @@ def browser():
 
 
 @pytest.fixture
-def page(browser):
+def page(browser, server):
     ARTIFACTS.mkdir(exist_ok=True)
     page = browser.new_page(viewport={"width": 1600, "height": 1000})
     errors = []
     page.on("pageerror", lambda exc: errors.append(str(exc)))
+    start = server.log.stat().st_size
     yield page
     page.close()
     assert not errors, f"JavaScript errors on the page: {errors}"
+    with open(server.log) as f:
+        f.seek(start)
+        log = f.read()
+    assert "Traceback" not in log and "Error" not in log, f"the server logged: {log}"
 
 
 def _wait_rendered(page, timeout=90_000):
@@ -130,7 +138,7 @@ def _query(page):
 
 
 def test_page_loads_and_draws_the_map(server, page):
-    page.goto(server + "?e=0:1&u=0:1.5&size=320x320&max_iter=300")
+    page.goto(server.url + "?e=0:1&u=0:1.5&size=320x320&max_iter=300")
     text = _wait_rendered(page)
     assert "320 x 320 pixels" in text and "max_iter 300" in text
     assert _window(page) == ("0:1", "0:1.5")
@@ -144,7 +152,7 @@ def test_page_loads_and_draws_the_map(server, page):
 
 
 def test_wheel_zoom_changes_window_and_url(server, page):
-    page.goto(server + "?e=0:1&u=0:1.5&size=320x320&max_iter=200")
+    page.goto(server.url + "?e=0:1&u=0:1.5&size=320x320&max_iter=200")
     _wait_rendered(page)
     before_window, before_query = _window(page), _query(page)
     box = _map_canvas(page).bounding_box()
@@ -172,7 +180,7 @@ def test_wheel_zoom_changes_window_and_url(server, page):
 
 def test_tap_shows_the_word_of_the_point(server, page):
     max_iter = 500
-    page.goto(server + f"?e=0:0.4&u=0.3:1.1&size=300x300&max_iter={max_iter}&color=word_length")
+    page.goto(server.url + f"?e=0:0.4&u=0.3:1.1&size=300x300&max_iter={max_iter}&color=word_length")
     _wait_rendered(page)
     # pick a pixel whose word has more than one letter, and click its centre
     es = scan.pixel_centres(0.0, 0.4, 300)
@@ -200,10 +208,40 @@ def test_tap_shows_the_word_of_the_point(server, page):
 
 
 def test_bad_url_gives_a_message_not_a_crash(server, page):
-    page.goto(server + "?e=1:0&size=5000x5000&max_iter=abc&color=nope")
+    page.goto(server.url + "?e=1:0&size=5000x5000&max_iter=abc&color=nope")
     _wait_rendered(page)
     msg = page.locator(".sb-url-text").inner_text()
     assert "e=" in msg and "size=" in msg and "pixel budget" in msg and "max_iter=" in msg
     assert "color=" in msg
     assert _window(page) == ("0:1", "0:1.5")  # the default window is shown instead
     page.screenshot(path=str(ARTIFACTS / "explorer-bad-url.png"))
+
+
+def test_widgets_rerender_and_update_the_url(server, page):
+    page.goto(server.url + "?e=0:1&u=0:1.5&size=240x240&max_iter=200")
+    _wait_rendered(page)
+    box = page.locator(".sb-e-window input")
+    box.fill("0:0.3")
+    box.press("Enter")
+    page.locator(".sb-status .sb-info").get_by_text("e 0 to 0.3,").wait_for(timeout=60_000)
+    assert _query(page)["e"] == "0:0.3"
+    frame = _frame_box(page)
+    assert frame["width"] == 240 and frame["height"] == 240
+    page.locator(".sb-max-iter input").fill("350")
+    page.locator(".sb-max-iter input").press("Enter")
+    page.locator(".sb-status .sb-info").get_by_text("max_iter 350,").wait_for(timeout=60_000)
+    page.locator(".sb-color select").select_option(label="period (steps)")
+    page.wait_for_function("() => document.location.search.includes('color=period')", timeout=30_000)
+    page.locator(".sb-overlays input").first.uncheck()
+    page.wait_for_function("() => document.location.search.includes('overlays=no_sliding')",
+                           timeout=30_000)
+    q = _query(page)
+    assert (q["e"], q["max_iter"], q["color"], q["overlays"]) == ("0:0.3", "350", "period", "no_sliding")
+    # the page refuses a view over the pixel budget with a message, and keeps the last image
+    page.locator(".sb-status .sb-info").wait_for()
+    for sel, value in ((".sb-width input", "1000"), (".sb-height input", "1001")):
+        page.locator(sel).fill(value)
+        page.locator(sel).press("Enter")
+    page.locator(".sb-status .sb-error").get_by_text("pixel budget").wait_for(timeout=30_000)
+    assert "size=1000x240" in page.url or "size=240x240" in page.url
+    page.screenshot(path=str(ARTIFACTS / "explorer-widgets.png"))

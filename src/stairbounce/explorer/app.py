@@ -94,11 +94,13 @@ class Explorer:
         self._pending: View | None = None
         self._tap_gen = 0
         self._syncing = False
+        self._status_text, self._status_level, self._error_text = "", "info", ""
 
         self._build_map()
         self._build_point_figures()
         self._build_widgets(messages)
-        self.layout = pn.Row(
+        # a flex box wraps the tap panel below the map when the window is narrow
+        self.layout = pn.FlexBox(
             pn.Column(
                 pn.pane.Markdown(
                     "## stairbounce explorer\nPeriodic sliding solutions of a ball bouncing down "
@@ -114,6 +116,9 @@ class Explorer:
             ),
             pn.Column(pn.pane.Bokeh(self.map_fig), self.status),
             pn.Column(self.point_pane, pn.pane.Bokeh(self.traj_fig), pn.pane.Bokeh(self.orbit_fig)),
+            flex_wrap="wrap",
+            align_items="flex-start",
+            gap="12px",
             stylesheets=[_CSS],
         )
 
@@ -201,17 +206,21 @@ class Explorer:
 
     def _build_widgets(self, messages):
         v = self.view
-        self.color = pn.widgets.Select(label="Colour by", options=_COLOR_OPTIONS, value=v.color, width=280)
+        self.color = pn.widgets.Select(label="Colour by", options=_COLOR_OPTIONS, value=v.color, width=280,
+                                       css_classes=["sb-color"])
         self.max_iter = pn.widgets.IntInput(label=f"max_iter (1 to {MAX_ITER_LIMIT})", value=v.max_iter,
-                                            width=280)
-        self.width_in = pn.widgets.IntInput(label="width (px)", value=v.width, width=135)
-        self.height_in = pn.widgets.IntInput(label="height (px)", value=v.height, width=135)
+                                            width=280, css_classes=["sb-max-iter"])
+        self.width_in = pn.widgets.IntInput(label="width (px)", value=v.width, width=135,
+                                            css_classes=["sb-width"])
+        self.height_in = pn.widgets.IntInput(label="height (px)", value=v.height, width=135,
+                                             css_classes=["sb-height"])
         self.e_window = pn.widgets.TextInput(label="e window (LO:HI)", value=format_window(v.e_lo, v.e_hi),
                                              width=280, css_classes=["sb-e-window"])
         self.u_window = pn.widgets.TextInput(label="u window (LO:HI)", value=format_window(v.u_lo, v.u_hi),
                                              width=280, css_classes=["sb-u-window"])
         self.overlays = pn.widgets.CheckBoxGroup(
-            options=_OVERLAY_OPTIONS, value=list(v.overlays), inline=False, width=280)
+            options=_OVERLAY_OPTIONS, value=list(v.overlays), inline=False, width=280,
+            css_classes=["sb-overlays"])
         self.fig4_button = pn.widgets.Button(label="Figure 4 window (e 0:1, u 0:1.5)", width=280)
         self.png_button = pn.widgets.FileDownload(
             callback=self._png, filename="stairbounce_view.png", label="Download PNG",
@@ -227,14 +236,30 @@ class Explorer:
         self.point_pane = pn.pane.HTML(
             "<i>Tap a point of the map.</i>", css_classes=["sb-point"], width=560)
 
-        self.color.param.watch(self._on_color, "value")
-        self.max_iter.param.watch(self._on_settings, "value")
-        self.width_in.param.watch(self._on_settings, "value")
-        self.height_in.param.watch(self._on_settings, "value")
-        self.e_window.param.watch(self._on_window_text, "value")
-        self.u_window.param.watch(self._on_window_text, "value")
-        self.overlays.param.watch(self._on_overlays, "value")
-        self.fig4_button.on_click(self._on_fig4)
+        self.color.param.watch(self._locked(self._on_color), "value")
+        for w in (self.max_iter, self.width_in, self.height_in):
+            w.param.watch(self._locked(self._on_settings), "value")
+        for w in (self.e_window, self.u_window):
+            w.param.watch(self._locked(self._on_window_text), "value")
+        self.overlays.param.watch(self._locked(self._on_overlays), "value")
+        self.fig4_button.on_click(self._locked(self._on_fig4))
+
+    def _locked(self, fn):
+        """Run a widget callback under the Bokeh document lock.
+
+        Panel calls widget callbacks without the lock, and changing a raw
+        Bokeh model (the figure's ranges, its data sources) there raises; the
+        next tick callback of a Bokeh server session holds it.  Bokeh's own
+        events (pan, zoom, tap) already arrive with the lock.
+        """
+
+        def run(*args):
+            if self._doc is not None and self._doc.session_context is not None:
+                self._doc.add_next_tick_callback(partial(self._in_doc, fn, *args))
+            else:  # no server (tests)
+                fn(*args)
+
+        return run
 
     # ------------------------------------------------------------ interaction
 
@@ -247,8 +272,19 @@ class Explorer:
             self._request_point(*self.view.point)
 
     def _message(self, text, level="info"):
-        colour = {"info": "#1a5e1a", "busy": "#555555", "error": "#b00020"}[level]
-        self.status.object = f'<span class="sb-{level}" style="color:{colour}">{html.escape(text)}</span>'
+        """Status line: the render's state (info, busy) and, on a line of its
+        own, the last refusal (error), kept until a request is accepted so a
+        render finishing meanwhile does not hide it."""
+        if level == "error":
+            self._error_text = text
+        else:
+            self._status_text, self._status_level = text, level
+        colours = {"info": "#1a5e1a", "busy": "#555555", "error": "#b00020"}
+        parts = [(self._status_level, self._status_text), ("error", self._error_text)]
+        self.status.object = "<br>".join(
+            f'<span class="sb-{lv}" style="color:{colours[lv]}">{html.escape(t)}</span>'
+            for lv, t in parts if t
+        )
 
     def _on_ranges(self, event):
         if None in (event.x0, event.x1, event.y0, event.y1):
@@ -345,6 +381,7 @@ class Explorer:
             self._message(str(exc), "error")
             return
         self.view = view
+        self._error_text = ""
         self._sync_widgets(view)
         self._sync_url()
         self._draw_overlays(view)
@@ -382,10 +419,19 @@ class Explorer:
         self._next_tick(self._finish, gen, view, result)
 
     def _next_tick(self, fn, *args):
-        if self._doc is not None:
-            self._doc.add_next_tick_callback(partial(self._in_doc, fn, *args))
-        else:  # no server (tests): run here
+        if self._doc is None:  # no server (tests): run here
             fn(*args)
+            return
+        try:
+            self._doc.add_next_tick_callback(partial(self._in_doc, fn, *args))
+        except Exception:  # the page was closed meanwhile: nobody to show it to
+            pass
+
+    def close(self):
+        """The session ended: cancel what is queued or running for it."""
+        self._gen += 1
+        self._tap_gen += 1
+        self._pending = None
 
     def _in_doc(self, fn, *args):
         with set_curdoc(self._doc):
@@ -526,4 +572,5 @@ def create_app():
     view, messages = parse_query(pn.state.session_args if pn.state.curdoc else {})
     explorer = Explorer(view, messages)
     pn.state.onload(explorer.start)
+    pn.state.on_session_destroyed(lambda _ctx: explorer.close())
     return explorer.layout
