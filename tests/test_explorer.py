@@ -463,3 +463,41 @@ def test_cli_help_lists_the_options(capsys):
     assert exc.value.code == 0
     out = capsys.readouterr().out
     assert "--port" in out and "--host" in out and "--no-browser" in out
+
+
+@pytest.mark.slow
+def test_console_script_serves_the_page_and_stops_on_ctrl_c():
+    import os
+    import shutil
+    import signal
+    import subprocess
+    import sys
+    import time
+    import urllib.request
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    exe = shutil.which("stairbounce", path=os.path.dirname(sys.executable))
+    cmd = [exe] if exe else [sys.executable, "-c", "from stairbounce.cli import main; main()"]
+    proc = subprocess.Popen(cmd + ["explore", "--port", str(port), "--no-browser"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/?size=abc", timeout=30) as r:
+                    page = r.read().decode()
+                break
+            except OSError:
+                assert proc.poll() is None and time.monotonic() < deadline, "the server did not start"
+                time.sleep(0.3)
+        assert "<title>stairbounce explorer</title>" in page
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0
+    assert f"stairbounce explorer at http://127.0.0.1:{port}/" in out
+    assert "stopped" in out and "Traceback" not in out

@@ -245,3 +245,23 @@ def test_widgets_rerender_and_update_the_url(server, page):
     page.locator(".sb-status .sb-error").get_by_text("pixel budget").wait_for(timeout=30_000)
     assert "size=1000x240" in page.url or "size=240x240" in page.url
     page.screenshot(path=str(ARTIFACTS / "explorer-widgets.png"))
+
+
+def test_download_buttons_give_the_view(server, page, tmp_path):
+    page.goto(server.url + "?e=0.1:0.3&u=0.5:0.9&size=200x150&max_iter=300")
+    _wait_rendered(page)
+    with page.expect_download(timeout=60_000) as info:
+        page.get_by_text("Download .nc").click()
+    path = tmp_path / info.value.suggested_filename
+    info.value.save_as(path)
+    assert path.name == "stairbounce_e0.1-0.3_u0.5-0.9.nc"
+    ds = scan.load(path)
+    ref = scan.scan(e=(0.1, 0.3, 200), u=(0.5, 0.9, 150), max_iter=300)
+    np.testing.assert_array_equal(ds["word_length"].values, ref["word_length"].values)
+    with page.expect_download(timeout=60_000) as info:
+        page.get_by_text("Download PNG").click()
+    png = tmp_path / info.value.suggested_filename
+    info.value.save_as(png)
+    img = Image.open(png)
+    assert png.suffix == ".png" and img.width > 200 and img.height > 150
+    shutil.copy(png, ARTIFACTS / "explorer-download.png")

@@ -36,3 +36,4 @@ def explore(
         serve(port=port, host=host, show=not no_browser, on_ready=ready)
     except OSError as exc:  # port in use, address not available
         raise CLIError(f"cannot serve on {host}:{port}: {exc.strerror or exc}") from None
+    typer.echo("stairbounce explorer stopped")

@@ -7,6 +7,7 @@ downloaded is what was on screen.
 from __future__ import annotations
 
 import io
+import math
 import tempfile
 from pathlib import Path
 
@@ -45,10 +46,13 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     cmap = ListedColormap(list(key.colors)).with_extremes(bad="white")
     n = len(key.colors)
     norm = BoundaryNorm(np.arange(n + 1) - 0.5, n)
-    w, h = view.width, view.height
-    fig = plt.figure(figsize=(w / dpi + 2.6, h / dpi + 1.3), dpi=dpi)
-    ax = fig.add_axes([1.0 / (w / dpi + 2.6), 0.7 / (h / dpi + 1.3),
-                       (w / dpi) / (w / dpi + 2.6), (h / dpi) / (h / dpi + 1.3)])
+    # small views are drawn k image pixels per scan pixel, so the axes and
+    # the key stay legible and every scan pixel is still a crisp square
+    k = max(1, math.ceil(450 / min(view.width, view.height)))
+    w, h = view.width * k / dpi, view.height * k / dpi  # image size, inches
+    fw, fh = w + 2.9, h + 1.4
+    fig = plt.figure(figsize=(fw, fh), dpi=dpi)
+    ax = fig.add_axes([1.0 / fw, 0.75 / fh, w / fw, h / fh])
     im = ax.imshow(idx, origin="lower", extent=(view.e_lo, view.e_hi, view.u_lo, view.u_hi),
                    aspect="auto", interpolation="nearest", cmap=cmap, norm=norm)
     curves = overlay_curves(view)
@@ -61,15 +65,14 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     ax.set_xlabel("e (restitution coefficient)")
     ax.set_ylabel("u (horizontal speed)")
     ax.set_title(
-        f"{key.title}: e in [{view.e_lo:.10g}, {view.e_hi:.10g}], "
-        f"u in [{view.u_lo:.10g}, {view.u_hi:.10g}], max_iter {view.max_iter}",
+        f"e in [{view.e_lo:.10g}, {view.e_hi:.10g}], u in [{view.u_lo:.10g}, {view.u_hi:.10g}]\n"
+        f"{key.title}, max_iter {view.max_iter} (white: no sliding found)",
         fontsize="small",
     )
-    cax = fig.add_axes([(w / dpi + 1.25) / (w / dpi + 2.6), 0.7 / (h / dpi + 1.3),
-                        0.2 / (w / dpi + 2.6), (h / dpi) / (h / dpi + 1.3)])
+    cax = fig.add_axes([(w + 1.2) / fw, 0.75 / fh, 0.2 / fw, h / fh])
     cb = fig.colorbar(im, cax=cax, ticks=np.arange(n))
     cb.ax.set_yticklabels(list(key.labels), fontsize="small")
-    cb.set_label(f"{key.title} (white: none within max_iter)", fontsize="small")
+    cb.set_label(key.title, fontsize="small")
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
     plt.close(fig)
