@@ -26,6 +26,7 @@ from bokeh.models import (
     ColorBar,
     ColumnDataSource,
     FixedTicker,
+    HoverTool,
     Legend,
     LegendItem,
     LinearColorMapper,
@@ -146,7 +147,8 @@ class Explorer:
             dict(image=[np.zeros((1, 1), np.uint32)], x=[v.e_lo], y=[v.u_lo],
                  dw=[v.e_hi - v.e_lo], dh=[v.u_hi - v.u_lo])
         )
-        fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.img_src)
+        img = fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.img_src)
+        fig.add_tools(HoverTool(renderers=[img], tooltips=[("e", "$x{0.0000000}"), ("u", "$y{0.0000000}")]))
         self.tongue_src = ColumnDataSource(dict(xs=[], ys=[]))
         self.bound_src = ColumnDataSource(dict(xs=[], ys=[]))
         # grey outlines show on the black tongues and on the white no-sliding region alike
