@@ -411,6 +411,13 @@ def test_explorer_colour_change_reshades_without_recomputing(explorer):
     assert app.colorbar.major_label_overrides == {0: "found", 1: "none"}
 
 
+def test_every_colour_variable_is_offered():
+    from stairbounce.explorer.app import _COLOR_OPTIONS, _OVERLAY_OPTIONS
+
+    assert sorted(_COLOR_OPTIONS.values()) == sorted(V.COLOR_VARS)
+    assert sorted(_OVERLAY_OPTIONS.values()) == sorted(V.OVERLAYS)
+
+
 def test_explorer_downloads(explorer):
     app, _ = explorer
     assert app._png().getvalue()[:8] == b"\x89PNG\r\n\x1a\n"

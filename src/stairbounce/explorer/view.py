@@ -521,7 +521,6 @@ def overlay_curves(view: View, samples: int = 400, max_tongues: int = 400) -> di
     (the ones nearest the window's bottom).
     """
     e = np.linspace(view.e_lo, min(view.e_hi, np.nextafter(1.0, 0.0)), samples)
-    shrink = (1.0 - e) / (1.0 + e)
     txs, tys = [], []
     n_first = max(1, int(2.0 * view.u_lo**2))  # sqrt(n/2) <= u_lo: the tongue lies below
     n_last = min(n_first + max_tongues, int(2.0 * view.u_hi**2) + 1)
