@@ -231,9 +231,9 @@ class Explorer:
             color="primary", width=135, embed=False)
         self.status = pn.pane.HTML("", css_classes=["sb-status"], width=600)
         self.url_messages = pn.pane.Alert(
-            '<div class="sb-url-text">' + "<br>".join(html.escape(m) for m in messages) + "</div>",
+            '<div class="sb-url-text" style="overflow-wrap: anywhere">' + "<br>".join(html.escape(m) for m in messages) + "</div>",
             alert_type="warning",
-            visible=bool(messages), width=300, css_classes=["sb-url-messages"])
+            visible=bool(messages), width=290, margin=(10, 10), css_classes=["sb-url-messages"])
         self.point_pane = pn.pane.HTML(
             "<i>Tap a point of the map.</i>", css_classes=["sb-point"], width=560)
 
