@@ -130,13 +130,26 @@ def test_numba_threads_per_tile(tmp_path, reference):
     xr.testing.assert_identical(ds.compute(), reference)
 
 
-def test_a_worker_gives_a_tile_its_own_dask_threads(client):
-    # threads_per_worker=1: one numba thread per tile on these workers
-    assert client.submit(atlas._worker_threads, pure=False).result() == 1
+def test_numba_threads_one_per_tile_on_a_worker_all_outside(client):
+    import numba
+
+    # a worker's Dask threads run tiles side by side, one numba thread each
+    assert client.submit(atlas._tile_threads, pure=False).result() == 1
     with distributed.LocalCluster(
         n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
     ) as cluster, distributed.Client(cluster) as c:
-        assert c.submit(atlas._worker_threads, pure=False).result() == 2
+        assert c.submit(atlas._tile_threads, pure=False).result() == 1
+        assert c.submit(atlas._tile_threads, 2, pure=False).result() == 2
+    assert atlas._tile_threads() == numba.get_num_threads()
+
+
+def test_two_tiles_at_once_in_one_process_equal_the_scan(tmp_path, reference):
+    # one worker, two threads: concurrent kernel launches in one process
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+    ) as cluster, distributed.Client(cluster) as c:
+        ds = scan_to_zarr(tmp_path / "a.zarr", tile=8, client=c, **WINDOW)
+    assert_store_is_scan(ds, reference)
 
 
 # --------------------------------------------------------------------------- #

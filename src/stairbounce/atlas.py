@@ -27,13 +27,15 @@ atomically by Zarr's local store, so an interrupted tile is either absent or
 whole per variable, and in any case unmarked: a re-run computes it again.
 
 Dask and Numba threads: each tile runs the parallel numba kernel of
-:mod:`stairbounce.scan`.  On a Dask worker a tile takes a process-wide lock and
-uses as many numba threads as the worker has Dask threads, so one worker
-process never runs more kernel threads than it was given cores, whether it is
-started as ``--nworkers 1 --nthreads 16`` or ``--nworkers 16 --nthreads 1``.
-(The kernel holds the GIL anyway; the lock also makes concurrent launches from
-two threads of one process impossible, which numba's ``workqueue`` layer does
-not survive.)  Writing a tile happens outside the lock.
+:mod:`stairbounce.scan`, which releases the GIL.  On a Dask worker a tile uses
+one numba thread and the worker's Dask threads run tiles side by side, so a
+worker never keeps more cores busy than it has threads, whether it is started
+as ``--nworkers 1 --nthreads 16`` or ``--nworkers 16 --nthreads 1``, and many
+small single-threaded tiles balance the very uneven cost of the plane better
+than one tile split over all cores.  Outside Dask a tile gets all of numba's
+threads.  numba's ``workqueue`` layer cannot take launches from two threads at
+once: under it (and until the layer is known) tiles of one process launch one
+at a time.
 
 Dask and distributed are imported inside the functions that need them: they
 are the optional extra ``stairbounce[dask]``.  Nothing here imports
@@ -42,6 +44,7 @@ matplotlib, Typer or the web stack.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import threading
@@ -57,7 +60,7 @@ __all__ = ["scan_to_zarr", "tile_slices", "tiles_done", "downsample"]
 FORMAT = "stairbounce-atlas-1"
 TILES_GROUP = "tiles"
 
-# One kernel launch at a time per process (see the module docstring).
+# Kernel launches one at a time per process where the threading layer needs it.
 _KERNEL_LOCK = threading.Lock()
 
 
@@ -103,11 +106,10 @@ def _run_tile(path, token, i, j, su, se, e_values, u_values, max_iter, y0, v0, n
 
     from .scan import scan_coords
 
-    threads = numba_threads if numba_threads is not None else _worker_threads()
-    threads = max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS))
-    with _KERNEL_LOCK:
+    threads = max(1, min(_tile_threads(numba_threads), numba.config.NUMBA_NUM_THREADS))
+    with _KERNEL_LOCK if _serial_launches() else contextlib.nullcontext():
         before = numba.get_num_threads()
-        numba.set_num_threads(threads)
+        numba.set_num_threads(threads)  # numba's count is per calling thread
         try:
             ds = scan_coords(e_values, u_values, max_iter, y0, v0)
         finally:
@@ -143,18 +145,31 @@ def _open_store(path, token):
     return hit
 
 
-def _worker_threads():
-    """Dask threads of the worker running this task; all of numba's outside Dask."""
+def _tile_threads(numba_threads=None):
+    """Numba threads for one tile: as asked; else 1 on a Dask worker (its Dask
+    threads run tiles side by side), all of numba's outside Dask."""
     import numba
 
+    if numba_threads is not None:
+        return int(numba_threads)
     try:
         from distributed import get_worker
 
-        worker = get_worker()
+        get_worker()
     except (ImportError, ValueError):
         return numba.get_num_threads()
-    n = getattr(getattr(worker, "state", None), "nthreads", None) or getattr(worker, "nthreads", None)
-    return int(n) if n else 1
+    return 1
+
+
+def _serial_launches():
+    """Whether kernel launches must take turns: numba's workqueue layer is not
+    thread-safe, and the layer is only known after the first launch."""
+    import numba
+
+    try:
+        return numba.threading_layer() == "workqueue"
+    except ValueError:
+        return True
 
 
 # --------------------------------------------------------------------------- #
@@ -309,9 +324,9 @@ def scan_to_zarr(
         (counting tiles found complete), then after each tile.  An exception
         raised there stops the scan (tiles already complete stay complete).
     numba_threads : int >= 1 or None
-        Numba threads per tile.  None: all of numba's threads locally; on a
-        Dask worker, as many as the worker has Dask threads (tiles of one
-        worker process run one at a time).
+        Numba threads per tile.  None: all of numba's threads locally; one on
+        a Dask worker, whose Dask threads then run that many tiles at once
+        (more would oversubscribe the worker's cores).
 
     Returns
     -------
