@@ -15,5 +15,6 @@ __all__ = [
     "plot_orbit_diagram",
     "plot_poincare_section",
     "plot_scan",
+    "plot_tongues",
     "plot_trajectory",
 ]
