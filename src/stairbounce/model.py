@@ -163,7 +163,13 @@ def _step(y, v, e, T, ratio):
 
 @njit(cache=True)
 def _slide_or_steps(y, v, e, T, ratio, max_steps):
-    """Iterate the map from ``(y, v)`` until it slides, at most ``max_steps`` steps.
+    """:func:`_slide_or_steps_with` the fast map :func:`_step`."""
+    return _slide_or_steps_with(_step, y, v, e, T, ratio, max_steps)
+
+
+@njit(cache=True)
+def _slide_or_steps_with(step, y, v, e, T, ratio, max_steps):
+    """Iterate the map ``step`` from ``(y, v)`` until it slides, at most ``max_steps`` steps.
 
     Returns ``(steps, impacts, jumps)``: the number of steps up to and including
     the sliding step (0 when it did not slide), the finite impacts on the way
@@ -175,7 +181,7 @@ def _slide_or_steps(y, v, e, T, ratio, max_steps):
     impacts = 0
     jumps = 0
     for n in range(1, max_steps + 1):
-        y, v, k = _step(y, v, e, T, ratio)
+        y, v, k = step(y, v, e, T, ratio)
         if k == SLIDING:
             return n, impacts, jumps + 1
         if k > 0:

@@ -32,6 +32,7 @@ from .model import (
     _COUNTED_IMPACTS,
     SLIDING,
     _constants,
+    _slide_or_steps_with,
     _step_closed,
     check_count,
 )
@@ -78,16 +79,7 @@ _BYTES_PER_PIXEL = sum(np.dtype(dt).itemsize for dt, _ in _FIELDS.values())
 @njit(cache=True)
 def _slide_or_steps_closed(y, v, e, T, ratio, max_steps):
     """:func:`stairbounce.model._slide_or_steps` with the plain closed form."""
-    impacts = 0
-    jumps = 0
-    for n in range(1, max_steps + 1):
-        y, v, k = _step_closed(y, v, e, T, ratio)
-        if k == SLIDING:
-            return n, impacts, jumps + 1
-        if k > 0:
-            impacts += k
-            jumps += 1
-    return 0, impacts, jumps
+    return _slide_or_steps_with(_step_closed, y, v, e, T, ratio, max_steps)
 
 
 @njit(cache=True)
