@@ -6,17 +6,21 @@ against baselines run here too (so the ratios hold on a busy machine):
 
 - in-memory: :func:`stairbounce.scan.scan` on the whole window, numba on one
   thread and on all of them;
-- local tiles: :func:`stairbounce.atlas.scan_to_zarr` with no client (tile
-  after tile in this process), one numba thread and all of them;
-- Dask: a ``LocalCluster`` of 1 then 2 worker processes with one thread each
-  (one numba thread per tile), warmed up first (numba's cache loaded);
-- per-tile overhead: (tiled time - in-memory time on as many threads) / tiles,
+- local tiles: :func:`stairbounce.atlas.scan_to_zarr` with no client: on one
+  core; the default (tiles side by side in a pool of threads, one numba
+  thread each); one tile at a time on all numba threads;
+- Dask: ``LocalCluster`` s of 1 and 2 worker processes with one thread each,
+  and of 1 process with 2 threads (two tiles side by side), one numba thread
+  per tile, warmed up first (numba's cache loaded);
+- per-tile overhead: (tiled time - in-memory time on as many cores) / tiles,
   and the time per tile of the same tiled scan with ``max_iter = 1`` (no work:
   store creation, task round trip, five region writes and the done flag).
 
-Every tiled run writes a fresh store, store creation included.
+Every tiled run writes a fresh store, store creation included.  The cases run in
+turn, ``--repeat`` rounds, best of each reported, so that a change in the load
+from other jobs hits all of them alike.
 
-Run: ``python benchmarks/distributed.py [--size 512x384] [--max-iter 1000] [--tile 64] [--repeat 3]``.
+Run: ``python benchmarks/distributed.py [--size 1024x768] [--max-iter 2000] [--tile 128] [--repeat 3]``.
 """
 
 from __future__ import annotations
@@ -39,21 +43,23 @@ from stairbounce.atlas import scan_to_zarr  # noqa: E402
 from stairbounce.scan import scan  # noqa: E402
 
 
-def timed(fn, repeat):
-    """Best and median wall time of ``repeat`` calls."""
-    times = []
+def interleaved(cases, repeat):
+    """Wall times of every case, ``repeat`` rounds, the cases in turn within a
+    round (so that load from other jobs hits all of them alike)."""
+    times = {name: [] for name in cases}
     for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times), statistics.median(times)
+        for name, fn in cases.items():
+            t = time.perf_counter()
+            fn()
+            times[name].append(time.perf_counter() - t)
+    return {name: (min(ts), statistics.median(ts)) for name, ts in times.items()}
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--size", default="512x384", help="pixels along e x along u")
-    parser.add_argument("--max-iter", type=int, default=1000)
-    parser.add_argument("--tile", type=int, default=64)
+    parser.add_argument("--size", default="1024x768", help="pixels along e x along u")
+    parser.add_argument("--max-iter", type=int, default=2000)
+    parser.add_argument("--tile", type=int, default=128)
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="sb-bench-") as tmp:
@@ -73,48 +79,62 @@ def bench(args, tmp):
           f"numba {numba.__version__}, {all_threads} threads, layer ", end="")
     scan(e=(0.0, 1.0, 8), u=(0.0, 1.5, 8), max_iter=10)  # JIT warm
     print(numba.threading_layer())
-    rows = []
-
-    def row(name, best, med, ref=None):
-        rate = n_tiles / best
-        extra = "" if ref is None else f"  overhead {1e3 * (best - ref) / n_tiles:+.1f} ms/tile"
-        rows.append((name, best, med, rate))
-        print(f"{name:<42} best {best:7.3f} s  median {med:7.3f} s  {rate:7.1f} tiles/s{extra}", flush=True)
-
-    mem = {}
-    for threads in (1, all_threads):
-        numba.set_num_threads(threads)
-        mem[threads] = timed(lambda: scan(**window), args.repeat)
-        row(f"in-memory scan, {threads} numba thread(s)", *mem[threads])
-    for threads in (1, all_threads):
-        best, med = timed(
-            lambda: scan_to_zarr(fresh(), tile=args.tile, numba_threads=threads, **window), args.repeat
-        )
-        row(f"local tiles, {threads} numba thread(s)", best, med, ref=mem[threads][0])
-    numba.set_num_threads(all_threads)
-    best, med = timed(
-        lambda: scan_to_zarr(fresh(), tile=args.tile, **dict(window, max_iter=1)), args.repeat
-    )
-    row("local tiles, max_iter = 1 (overhead only)", best, med)
-
     from distributed import Client, LocalCluster
 
-    dask_best = {}
-    for workers in (1, 2):
-        with LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-        ) as cluster, Client(cluster) as client:
+    def in_memory(threads):
+        def run():
+            numba.set_num_threads(threads)
+            try:
+                scan(**window)
+            finally:
+                numba.set_num_threads(all_threads)
+        return run
+
+    def tiled(client=None, threads=None, max_iter=args.max_iter, cores=all_threads):
+        def run():
+            numba.set_num_threads(cores)
+            try:
+                scan_to_zarr(fresh(), tile=args.tile, client=client, numba_threads=threads,
+                             **dict(window, max_iter=max_iter))
+            finally:
+                numba.set_num_threads(all_threads)
+        return run
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as c1, \
+         LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as c2, \
+         LocalCluster(n_workers=1, threads_per_worker=2, processes=True, dashboard_address=None) as c3, \
+         Client(c1) as one, Client(c2) as two, Client(c3) as threaded:
+        for client in (one, two, threaded):  # numba's cache loaded in every worker
             scan_to_zarr(fresh(), e=(0.0, 1.0, 8), u=(0.0, 1.5, 8), max_iter=10, tile=4, client=client)
-            best, med = timed(lambda: scan_to_zarr(fresh(), tile=args.tile, client=client, **window), args.repeat)
-            dask_best[workers] = best
-            row(f"Dask, {workers} worker process(es) x 1 thread", best, med, ref=mem[1][0] / workers)
-            best, med = timed(
-                lambda: scan_to_zarr(fresh(), tile=args.tile, client=client, **dict(window, max_iter=1)),
-                args.repeat,
-            )
-            row(f"Dask, {workers} worker(s), max_iter = 1 (overhead)", best, med)
-    print(f"scaling 1 -> 2 workers: x{dask_best[1] / dask_best[2]:.2f} "
-          f"(in-memory 1 -> {all_threads} threads: x{mem[1][0] / mem[all_threads][0]:.2f})")
+        cases = {
+            "in-memory scan, 1 numba thread": in_memory(1),
+            f"in-memory scan, {all_threads} numba threads": in_memory(all_threads),
+            "local tiles, 1 core": tiled(cores=1),
+            f"local tiles, {all_threads} side by side (default)": tiled(),
+            f"local tiles, one at a time on {all_threads} threads": tiled(threads=all_threads),
+            "Dask, 1 worker process x 1 thread": tiled(one),
+            "Dask, 2 worker processes x 1 thread": tiled(two),
+            "Dask, 1 worker process x 2 threads": tiled(threaded),
+            "local tiles, max_iter = 1 (overhead)": tiled(max_iter=1),
+            "Dask, 1 worker, max_iter = 1 (overhead)": tiled(one, max_iter=1),
+            "Dask, 2 workers, max_iter = 1 (overhead)": tiled(two, max_iter=1),
+        }
+        res = interleaved(cases, args.repeat)
+    # the in-memory scan on as many cores is the reference of each tiled case
+    ref = {
+        "local tiles, 1 core": res["in-memory scan, 1 numba thread"][0],
+        f"local tiles, {all_threads} side by side (default)": res[f"in-memory scan, {all_threads} numba threads"][0],
+        f"local tiles, one at a time on {all_threads} threads": res[f"in-memory scan, {all_threads} numba threads"][0],
+        "Dask, 1 worker process x 1 thread": res["in-memory scan, 1 numba thread"][0],
+        "Dask, 2 worker processes x 1 thread": res[f"in-memory scan, {all_threads} numba threads"][0],
+        "Dask, 1 worker process x 2 threads": res[f"in-memory scan, {all_threads} numba threads"][0],
+    }
+    for name, (best, med) in res.items():
+        extra = f"  overhead {1e3 * (best - ref[name]) / n_tiles:+6.1f} ms/tile" if name in ref else ""
+        print(f"{name:<42} best {best:7.3f} s  median {med:7.3f} s  {n_tiles / best:7.1f} tiles/s{extra}")
+    d1, d2 = res["Dask, 1 worker process x 1 thread"][0], res["Dask, 2 worker processes x 1 thread"][0]
+    m1, m2 = res["in-memory scan, 1 numba thread"][0], res[f"in-memory scan, {all_threads} numba threads"][0]
+    print(f"scaling 1 -> 2 Dask workers: x{d1 / d2:.2f}; in-memory scan 1 -> {all_threads} threads: x{m1 / m2:.2f}")
     print(f"load average at the end: {os.getloadavg()[0]:.1f}")
 
 

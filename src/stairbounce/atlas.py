@@ -32,10 +32,10 @@ one numba thread and the worker's Dask threads run tiles side by side, so a
 worker never keeps more cores busy than it has threads, whether it is started
 as ``--nworkers 1 --nthreads 16`` or ``--nworkers 16 --nthreads 1``, and many
 small single-threaded tiles balance the very uneven cost of the plane better
-than one tile split over all cores.  Outside Dask a tile gets all of numba's
-threads.  numba's ``workqueue`` layer cannot take launches from two threads at
-once: under it (and until the layer is known) tiles of one process launch one
-at a time.
+than one tile split over all cores.  Without Dask the calling process does
+the same with a pool of as many threads as numba has.  numba's ``workqueue``
+layer cannot take launches from two threads at once: under it (and until the
+layer is known) tiles of one process launch one at a time.
 
 Dask and distributed are imported inside the functions that need them: they
 are the optional extra ``stairbounce[dask]``.  Nothing here imports
@@ -106,7 +106,8 @@ def _run_tile(path, token, i, j, su, se, e_values, u_values, max_iter, y0, v0, n
 
     from .scan import scan_coords
 
-    threads = max(1, min(_tile_threads(numba_threads), numba.config.NUMBA_NUM_THREADS))
+    # one thread by default: tiles run side by side (module docstring)
+    threads = max(1, min(numba_threads or 1, numba.config.NUMBA_NUM_THREADS))
     with _KERNEL_LOCK if _serial_launches() else contextlib.nullcontext():
         before = numba.get_num_threads()
         numba.set_num_threads(threads)  # numba's count is per calling thread
@@ -143,22 +144,6 @@ def _open_store(path, token):
             _OPEN_STORES.clear()
         _OPEN_STORES[key] = hit
     return hit
-
-
-def _tile_threads(numba_threads=None):
-    """Numba threads for one tile: as asked; else 1 on a Dask worker (its Dask
-    threads run tiles side by side), all of numba's outside Dask."""
-    import numba
-
-    if numba_threads is not None:
-        return int(numba_threads)
-    try:
-        from distributed import get_worker
-
-        get_worker()
-    except (ImportError, ValueError):
-        return numba.get_num_threads()
-    return 1
 
 
 def _serial_launches():
@@ -315,18 +300,17 @@ def scan_to_zarr(
     tile : int >= 1, default 1024
         Tile edge in pixels; also the chunk edge of the store.
     client : None, ``dask.distributed.Client`` or str, default None
-        None: compute tile after tile in this process (numba uses all its
-        threads).  A client, or a scheduler address such as
+        None: compute the tiles in this process, in a pool of threads.  A client, or a scheduler address such as
         ``"tcp://10.0.0.1:8786"`` (connected for this call and closed): every
         tile is a task; the worker computes it and writes its region itself.
     progress : callable ``progress(done, total)`` or None
         Called with the number of complete tiles: once before any work
         (counting tiles found complete), then after each tile.  An exception
         raised there stops the scan (tiles already complete stay complete).
-    numba_threads : int >= 1 or None
-        Numba threads per tile.  None: all of numba's threads locally; one on
-        a Dask worker, whose Dask threads then run that many tiles at once
-        (more would oversubscribe the worker's cores).
+    numba_threads : int >= 1 or None, default None (1)
+        Numba threads per tile.  Locally, ``numba.get_num_threads() //
+        numba_threads`` tiles run at once; on a Dask worker as many as it has
+        Dask threads (keep their product at most the worker's cores).
 
     Returns
     -------
@@ -387,10 +371,7 @@ def scan_to_zarr(
         for i, j in todo
     ]
     if client is None:
-        for n, arg in enumerate(args, start=total - len(todo) + 1):
-            _run_tile(*arg)
-            if progress is not None:
-                progress(n, total)
+        _run_here(args, numba_threads, total - len(todo), total, progress)
     else:
         _run_on_dask(client, args, total - len(todo), total, progress)
     return xr.open_zarr(str(path), consolidated=False)
@@ -402,6 +383,35 @@ def _triple(name, spec):
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a tuple ({name}_min, {name}_max, n_{name}), got {spec!r}") from None
     return lo, hi, n
+
+
+def _run_here(args, numba_threads, n_done, total, progress):
+    """The tiles in this process: side by side in a pool of threads."""
+    import numba
+    from concurrent.futures import ThreadPoolExecutor, as_completed
+
+    args = [arg[:-1] + (numba_threads or 1,) for arg in args]
+    side_by_side = max(1, numba.get_num_threads() // (numba_threads or 1))
+    if side_by_side == 1 or len(args) == 1:
+        for arg in args:
+            _run_tile(*arg)
+            n_done += 1
+            if progress is not None:
+                progress(n_done, total)
+        return
+    with ThreadPoolExecutor(side_by_side, thread_name_prefix="stairbounce-tile") as pool:
+        futures = [pool.submit(_run_tile, *arg) for arg in args]
+        try:
+            for future in as_completed(futures):
+                future.result()
+                n_done += 1
+                if progress is not None:
+                    progress(n_done, total)
+        finally:
+            # on an error or an interrupt: tiles not started are dropped, the
+            # running ones finish (and are marked) before this returns
+            for future in futures:
+                future.cancel()
 
 
 def _run_on_dask(client, args, n_done, total, progress):
