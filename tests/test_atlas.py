@@ -69,6 +69,15 @@ def assert_store_is_scan(ds, reference):
 # --------------------------------------------------------------------------- #
 
 
+def test_core_import_needs_no_dask_plotting_or_cli():
+    code = (
+        "import sys, stairbounce, stairbounce.atlas; "
+        "print(sorted(m for m in ('dask', 'distributed', 'matplotlib', 'typer') if m in sys.modules))"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert r.stdout.strip() == "[]"
+
+
 def test_tile_slices_cover_the_range_once():
     s = tile_slices(45, 16)
     assert [(t.start, t.stop) for t in s] == [(0, 16), (16, 32), (32, 45)]
