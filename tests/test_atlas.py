@@ -310,6 +310,28 @@ def test_killed_process_resumes_to_the_same_store(tmp_path):
     xr.testing.assert_identical(ds.load(), scan(**WINDOW))
 
 
+@pytest.mark.slow
+def test_killed_dask_worker_its_tiles_are_done_again(tmp_path):
+    # long orbits (max_iter 1e5) so that tiles are still running when a worker
+    # process is killed after the first tile; Dask reschedules its tasks
+    kw = dict(e=(0.05, 0.95, 45), u=(0.1, 1.4, 38), max_iter=100_000)
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster, distributed.Client(cluster) as c:
+        pids = list(c.run(os.getpid).values())
+        killed = []
+
+        def progress(done, total):
+            if done >= 1 and not killed:
+                os.kill(pids[0], signal.SIGKILL)
+                killed.append(done)
+
+        ds = scan_to_zarr(tmp_path / "a.zarr", tile=8, client=c, progress=progress, **kw)
+        assert killed and killed[0] < 30
+        assert pids[0] not in c.run(os.getpid).values()
+    xr.testing.assert_identical(ds.compute(), scan(**kw))
+
+
 # --------------------------------------------------------------------------- #
 # Refusals and errors                                                          #
 # --------------------------------------------------------------------------- #

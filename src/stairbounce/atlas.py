@@ -15,8 +15,8 @@ Layout of a store (Zarr, one chunk per tile and variable)::
       tiles/done                                     bool per tile, chunks 1 x 1
       tiles (group attributes)                       tile size, format
 
-The root group is exactly what :func:`stairbounce.scan.save` writes (the tile
-record lives in a sub-group that xarray does not read), so
+The root group holds what :func:`stairbounce.scan.save` writes, chunked by
+tile (the tile record lives in a sub-group that xarray does not read), so
 :func:`stairbounce.scan.load` and ``xarray.open_zarr`` read an atlas like any
 saved scan.
 
