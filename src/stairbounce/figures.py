@@ -139,10 +139,12 @@ def fig1(s: Settings) -> Result:
     from .symbolic import sliding_word
     from .trajectory import trajectory
 
-    e, u, steps = 0.05, 0.93, 6
-    traj = trajectory(e, u, 1.0, 0.0, steps)
+    # one period of a periodic sliding solution whose slide is long enough to see
+    e, u = 0.1, 0.65
     word = sliding_word(e, u)
-    fig, ax = _subplots(figsize=(8, 5))
+    steps = word.period
+    traj = trajectory(e, u, 1.0, 0.0, steps)
+    fig, ax = _subplots(figsize=(9, 6))
     plot_trajectory(traj, ax=ax)
     ax.set_title(f"Fig. 1: e = {e}, u = {u}, the periodic sliding solution {word}")
     acc = traj.accumulations[0] if traj.accumulations else None
