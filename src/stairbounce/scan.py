@@ -32,6 +32,7 @@ from .model import (
     _COUNTED_IMPACTS,
     SLIDING,
     _constants,
+    _finite,
     _slide_or_steps_with,
     _step_closed,
     check_count,
@@ -322,23 +323,13 @@ def _chunking(npix, threads):
 # --------------------------------------------------------------------------- #
 
 
-def _real(name, x):
-    try:
-        x = float(x)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {x!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"{name} must be finite, got {x}")
-    return x
-
-
 def _window(name, spec, lo_min, hi_max, lo_text):
     try:
         lo, hi, n = spec
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a tuple ({name}_min, {name}_max, n_{name}), got {spec!r}") from None
-    lo = _real(f"{name}_min", lo)
-    hi = _real(f"{name}_max", hi)
+    lo = _finite(f"{name}_min", lo)
+    hi = _finite(f"{name}_max", hi)
     n = check_count(f"n_{name}", n, 1)
     if lo < lo_min or hi > hi_max:
         raise ValueError(f"{name} window must lie in {lo_text}, got [{lo}, {hi}]")
@@ -419,8 +410,8 @@ def pixel_centres(lo, hi, n):
     must be cut out of this array (not recomputed from their own bounds) to be
     bit-identical to the whole scan.
     """
-    lo = _real("lo", lo)
-    hi = _real("hi", hi)
+    lo = _finite("lo", lo)
+    hi = _finite("hi", hi)
     n = check_count("n", n, 1)
     return lo + (np.arange(n) + 0.5) * (hi - lo) / n
 
@@ -446,8 +437,8 @@ def scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0):
     max_iter = check_count("max_iter", max_iter, 1)
     if max_iter > 2**31 - 1:
         raise ValueError(f"max_iter must be an integer in [1, 2**31 - 1], got {max_iter}")
-    y0 = _real("y0", y0)
-    v0 = _real("v0", v0)
+    y0 = _finite("y0", y0)
+    v0 = _finite("v0", v0)
     if y0 < 0.0:
         raise ValueError(f"y0 (initial height above the step's floor) must be >= 0, got {y0}")
     _check_memory(es.size, us.size)
