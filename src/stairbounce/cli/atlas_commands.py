@@ -177,14 +177,8 @@ def draw_store(ds, field, png, dpi, overlay=(), max_pixels=4_000_000, reduce="mo
     the pixels whose centres lie inside are drawn.  Returns the reduced
     dataset that was drawn.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .._io import atomic_path
     from ..atlas import downsample
-    from ..plot import plot_scan
+    from .scan_commands import _draw
 
     # status too: it tells where there is no periodic sliding solution
     ds = ds[list(dict.fromkeys([field, "status"]))]
@@ -210,12 +204,5 @@ def draw_store(ds, field, png, dpi, overlay=(), max_pixels=4_000_000, reduce="mo
             a[keys[2]] = small.sizes[name] * f
         else:
             a.pop(keys[0], None), a.pop(keys[1], None)
-    fig, ax = plt.subplots(figsize=(8, 6))
-    try:
-        plot_scan(small, field=field, ax=ax, overlay=overlay)
-        fig.tight_layout()
-        with atomic_path(png) as tmp:
-            fig.savefig(tmp, dpi=dpi)
-    finally:
-        plt.close(fig)
+    _draw(small, field, overlay, png, dpi)
     return small
