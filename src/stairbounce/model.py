@@ -95,8 +95,10 @@ def _impact_number_closed(y, v, e, T):
     if arg <= 0.0:
         return SLIDING
     kf = math.floor(math.log(arg) / math.log(e))
-    if kf > 1.0e6:  # the geometric series has converged to T in float64
-        kf = 1.0e6
+    # e within ~1e-16 of 1 gives up to ~1e18 impacts on one step: cap k where
+    # int64 and e**k are still exact enough, far above any float64-resolved count
+    if kf > 1.0e15:
+        kf = 1.0e15
     k = max(int(kf), 1)
     # rounding of log/pow: move k until t_k <= T < t_{k+1}, a few steps at most
     for _ in range(4):
@@ -127,7 +129,10 @@ def _step_closed(y, v, e, T, ratio):
         return y + v * T - 0.5 * T * T + 1.0, v - T, 0
     tk = _impact_time(v, s, e, k)
     vk = e**k * s
-    d = T - tk
+    # k is defined by t_k <= T < t_{k+1} = t_k + 2 v_k; where rounding of
+    # eq. (2.2) (e near 1: 1 + e - 2e^k cancels) breaks that, keep the state on
+    # the k-th bounce, so the ball is never below the edge
+    d = min(max(T - tk, 0.0), 2.0 * vk)
     return -0.5 * d * d + vk * d + 1.0, vk - d, k
 
 

@@ -128,7 +128,7 @@ class Trajectory:
                 arg = (vb - tb) * (1.0 - e) / (2.0 * sb) + 0.5 * (1.0 + e)
                 with np.errstate(divide="ignore", invalid="ignore"):
                     kf = np.floor(np.log(np.maximum(arg, 1e-300)) / math.log(e))
-                k = np.clip(np.nan_to_num(kf, nan=1.0), 1, 100_000).astype(np.int64)
+                k = np.clip(np.nan_to_num(kf, nan=1.0), 1, 1e15).astype(np.int64)
 
                 def tk(n):
                     return vb + (1.0 + e - 2.0 * e ** n.astype(float)) / (1.0 - e) * sb
@@ -136,8 +136,8 @@ class Trajectory:
                 for _ in range(3):  # rounding of log: t_k <= tau < t_{k+1}
                     k = np.where((k > 1) & (tk(k) > tb), k - 1, k)
                     k = np.where(tk(k + 1) <= tb, k + 1, k)
-                d = tb - tk(k)
                 vk = e ** k.astype(float) * sb
+                d = np.clip(tb - tk(k), 0.0, 2.0 * vk)  # on the k-th bounce (model._step_closed)
                 y[b] = -0.5 * d * d + vk * d
                 v[b] = vk - d
             elif np.any(b):  # e = 0 sticks at the first contact: it slides
