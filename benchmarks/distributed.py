@@ -4,7 +4,7 @@ The paper's window (e in [0, 1], u in [0, 1.5]) at ``--size`` pixels and
 ``--max-iter`` steps, cut into ``--tile`` tiles.  Measured in this process,
 against baselines run here too (so the ratios hold on a busy machine):
 
-- in-memory: :func:`stairbounce.scan.scan` on the whole window, numba on one
+- in-memory: :func:`stairbounce.plane.scan` on the whole window, numba on one
   thread and on all of them;
 - local tiles: :func:`stairbounce.atlas.scan_to_zarr` with no client: on one
   core; the default (tiles side by side in a pool of threads, one numba
@@ -40,7 +40,7 @@ sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _HERE]
 import numba  # noqa: E402
 
 from stairbounce.atlas import scan_to_zarr  # noqa: E402
-from stairbounce.scan import scan  # noqa: E402
+from stairbounce.plane import scan  # noqa: E402
 
 
 def interleaved(cases, repeat):

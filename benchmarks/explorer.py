@@ -10,7 +10,7 @@ Server side, JIT warm, best of ``--repeat``:
 - windows where nothing slides (every pixel runs all max_iter steps, the
   worst case at that size): high u (flights), the middle of the plane, and e
   near 1 just above Corollary 2.1's bound (many impacts per step);
-- the same views as one ``scan.scan`` call, to show what the bands cost;
+- the same views as one ``plane.scan`` call, to show what the bands cost;
 - the event loop's latency while a render runs on the app's worker thread
   (the largest gap between 5 ms ticks of the main thread): the numba kernels
   release the GIL, so the page's server keeps answering.
@@ -32,7 +32,7 @@ import time
 
 import numpy as np
 
-from stairbounce import scan
+from stairbounce import plane
 from stairbounce.explorer.view import View, compute_view, shade
 
 CASES = [
@@ -79,7 +79,7 @@ def server_side(repeat):
     print(f"{'case':<52} {'render':>8} {'one scan':>9} {'slides':>7} {'M steps/s':>10} {'loop gap':>9}")
     for name, view in CASES:
         t_render, ds = best(lambda v=view: render(v), repeat)
-        t_scan, _ = best(lambda v=view: scan.scan(e=(v.e_lo, v.e_hi, v.width), u=(v.u_lo, v.u_hi, v.height),
+        t_scan, _ = best(lambda v=view: plane.scan(e=(v.e_lo, v.e_hi, v.width), u=(v.u_lo, v.u_hi, v.height),
                                                   max_iter=v.max_iter), repeat)
         sliding = ds["status"].values == 0
         # steps actually taken: a period for sliding pixels, max_iter for the rest

@@ -32,7 +32,7 @@ import numba
 import numpy as np
 
 from stairbounce.model import _COUNTED_IMPACTS
-from stairbounce.scan import _FIELDS, _scan_plain, pixel_centres, scan, scan_coords
+from stairbounce.plane import _FIELDS, _scan_plain, pixel_centres, scan, scan_coords
 
 
 def useful_iterations(ds):

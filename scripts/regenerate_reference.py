@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from stairbounce._io import atomic_path
-from stairbounce.scan import scan
+from stairbounce.plane import scan
 
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data"
 WINDOW = {"e": (0.04, 0.065, 100), "u": (0.92, 0.945, 100), "max_iter": 1000}

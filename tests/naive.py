@@ -61,7 +61,7 @@ def orbit_until_slide(y, v, e, u, max_steps):
 
 
 def word(e, u, max_steps=1000):
-    """Letters of the periodic sliding solution through (1, 0) (DESIGN.md), or None."""
+    """Letters of the periodic sliding solution through (1, 0) (docs/design.md), or None."""
     ks = orbit_until_slide(1.0, 0.0, e, u, max_steps)
     if ks is None:
         return None

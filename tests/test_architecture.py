@@ -1,11 +1,11 @@
-"""DESIGN.md's one-way data flow: the core imports no plotting, CLI or web code."""
+"""docs/design.md's one-way data flow: the core imports no plotting, CLI or web code."""
 
 import subprocess
 import sys
 
 import pytest
 
-CORE = ["model", "symbolic", "trajectory", "units", "scan", "orbits", "fractal", "atlas"]
+CORE = ["model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

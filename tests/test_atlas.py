@@ -17,7 +17,7 @@ import zarr
 
 from stairbounce import atlas
 from stairbounce.atlas import downsample, scan_to_zarr, tile_slices, tiles_done
-from stairbounce.scan import load, save, scan
+from stairbounce.plane import load, save, scan
 
 # the scheduler's HTTP server (no dashboard) falls back to a free port when 8787 is taken
 pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")
@@ -135,9 +135,9 @@ def concurrency(monkeypatch, expected):
     time (a barrier), and the most tiles seen running at once is recorded."""
     import threading
 
-    import stairbounce.scan
+    import stairbounce.plane
 
-    original = stairbounce.scan.scan_coords
+    original = stairbounce.plane.scan_coords
     state = {"now": 0, "max": 0, "calls": 0}
     lock = threading.Lock()
     barrier = threading.Barrier(expected, timeout=20)
@@ -158,7 +158,7 @@ def concurrency(monkeypatch, expected):
             with lock:
                 state["now"] -= 1
 
-    monkeypatch.setattr(stairbounce.scan, "scan_coords", wrapped)
+    monkeypatch.setattr(stairbounce.plane, "scan_coords", wrapped)
     return state
 
 

@@ -21,7 +21,7 @@ import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from stairbounce import no_sliding_bound, scan, sliding_word, tongue
+from stairbounce import no_sliding_bound, plane, sliding_word, tongue
 from stairbounce.cli import main
 from stairbounce.explorer import view as V
 from tests import naive
@@ -138,7 +138,7 @@ def test_url_query_string():
 
 def test_pixel_budget_refuses_without_computing(monkeypatch):
     calls = []
-    monkeypatch.setattr(scan, "scan_coords", lambda *a, **k: calls.append(a))
+    monkeypatch.setattr(plane, "scan_coords", lambda *a, **k: calls.append(a))
     big = replace(V.DEFAULT_VIEW, width=1001, height=1000, max_iter=10)
     with pytest.raises(ValueError, match="pixel budget of 1000000"):
         V.compute_view(big)
@@ -163,7 +163,7 @@ def test_check_view_limits():
 
 def test_compute_view_is_the_scan_bit_for_bit():
     view = V.View(0.0, 1.0, 0.0, 1.5, 120, 90, max_iter=400)
-    ref = scan.scan(e=(0.0, 1.0, 120), u=(0.0, 1.5, 90), max_iter=400)
+    ref = plane.scan(e=(0.0, 1.0, 120), u=(0.0, 1.5, 90), max_iter=400)
     for band_work in (10**12, 120 * 400 * 7):  # one band, bands of 7 rows
         old = V._BAND_WORK
         V._BAND_WORK = band_work
@@ -208,8 +208,8 @@ def test_map_agrees_with_sliding_word_at_pixel_centres():
 
 def test_pixel_of_inverts_pixel_centres():
     view = V.View(0.1, 0.3, 0.5, 0.9, 37, 23)
-    es = scan.pixel_centres(0.1, 0.3, 37)
-    us = scan.pixel_centres(0.5, 0.9, 23)
+    es = plane.pixel_centres(0.1, 0.3, 37)
+    us = plane.pixel_centres(0.5, 0.9, 23)
     for i in range(23):
         for j in range(37):
             assert V.pixel_of(view, es[j], us[i]) == (i, j)
@@ -298,7 +298,7 @@ def test_point_details_match_the_word_and_the_trajectory():
 def test_orbit_along_u_is_the_orbit_diagram():
     ds = V.orbit_along_u(0.1, 0.5, 1.0, n=20, transient=50, keep=10)
     assert ds.sizes == {"u": 20, "iterate": 10}
-    np.testing.assert_array_equal(ds.u.values, scan.pixel_centres(0.5, 1.0, 20))
+    np.testing.assert_array_equal(ds.u.values, plane.pixel_centres(0.5, 1.0, 20))
     assert float(ds.e) == 0.1
 
 
@@ -322,7 +322,7 @@ def test_exports_png_and_netcdf():
     with tempfile.TemporaryDirectory() as tmp:
         p = Path(tmp) / "v.nc"
         p.write_bytes(data)
-        loaded = scan.load(p)
+        loaded = plane.load(p)
     xr.testing.assert_identical(loaded.drop_attrs(), ds.drop_attrs())
     assert export_name(view, ".nc") == "stairbounce_e0-1_u0-1.5.nc"
 

@@ -21,7 +21,7 @@ from urllib.parse import parse_qs, urlparse
 import numpy as np
 import pytest
 
-from stairbounce import scan, sliding_word
+from stairbounce import plane, sliding_word
 
 pytestmark = pytest.mark.browser
 
@@ -183,9 +183,9 @@ def test_tap_shows_the_word_of_the_point(server, page):
     page.goto(server.url + f"?e=0:0.4&u=0.3:1.1&size=300x300&max_iter={max_iter}&color=word_length")
     _wait_rendered(page)
     # pick a pixel whose word has more than one letter, and click its centre
-    es = scan.pixel_centres(0.0, 0.4, 300)
-    us = scan.pixel_centres(0.3, 1.1, 300)
-    ds = scan.scan(e=(0.0, 0.4, 300), u=(0.3, 1.1, 300), max_iter=max_iter)
+    es = plane.pixel_centres(0.0, 0.4, 300)
+    us = plane.pixel_centres(0.3, 1.1, 300)
+    ds = plane.scan(e=(0.0, 0.4, 300), u=(0.3, 1.1, 300), max_iter=max_iter)
     candidates = np.argwhere(ds["word_length"].values >= 3)
     assert len(candidates) > 0
     i, j = candidates[len(candidates) // 2]
@@ -255,8 +255,8 @@ def test_download_buttons_give_the_view(server, page, tmp_path):
     path = tmp_path / info.value.suggested_filename
     info.value.save_as(path)
     assert path.name == "stairbounce_e0.1-0.3_u0.5-0.9.nc"
-    ds = scan.load(path)
-    ref = scan.scan(e=(0.1, 0.3, 200), u=(0.5, 0.9, 150), max_iter=300)
+    ds = plane.load(path)
+    ref = plane.scan(e=(0.1, 0.3, 200), u=(0.5, 0.9, 150), max_iter=300)
     np.testing.assert_array_equal(ds["word_length"].values, ref["word_length"].values)
     with page.expect_download(timeout=60_000) as info:
         page.get_by_text("Download PNG").click()

@@ -12,7 +12,7 @@ from PIL import Image
 from stairbounce import figures as F
 from stairbounce.cli import main
 from stairbounce.fractal import box_dimension, boundary
-from stairbounce.scan import scan, tongue_mask
+from stairbounce.plane import scan, tongue_mask
 
 SCALE = 0.12  # 60 x 42 for Fig. 4, 60 px for Figs. 6/7, 360 orbit columns
 

@@ -370,7 +370,7 @@ def test_replicates_figs_6_and_7_of_campos_et_al(window, paper):
 
 
 def test_perimeter_dimension_measures_the_border_of_the_scanned_region():
-    from stairbounce.scan import scan
+    from stairbounce.plane import scan
 
     est = perimeter_dimension(**FIG7, resolution=96, max_iter=300, fit_range=(1, 16))
     ds = scan(e=(*FIG7["e"], 96), u=(*FIG7["u"], 96), max_iter=300)

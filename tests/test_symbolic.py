@@ -1,4 +1,4 @@
-"""Words of periodic sliding solutions (DESIGN.md's convention)."""
+"""Words of periodic sliding solutions (docs/design.md's convention)."""
 
 from __future__ import annotations
 

@@ -2,9 +2,9 @@
 
 A scan too large for one sitting (a deep zoom, a 32768 x 32768 atlas at a high
 ``max_iter``) is cut into square tiles.  Every tile is computed with
-:func:`stairbounce.scan.scan_coords` on its slice of the
-:func:`stairbounce.scan.pixel_centres` grid, so the assembled store is the same,
-bit for bit, as :func:`stairbounce.scan.scan` on the whole window, and it has
+:func:`stairbounce.plane.scan_coords` on its slice of the
+:func:`stairbounce.plane.pixel_centres` grid, so the assembled store is the same,
+bit for bit, as :func:`stairbounce.plane.scan` on the whole window, and it has
 the same variables, coordinates and attributes.
 
 Layout of a store (Zarr, one chunk per tile and variable)::
@@ -15,9 +15,9 @@ Layout of a store (Zarr, one chunk per tile and variable)::
       tiles/done                                     bool per tile, chunks 1 x 1
       tiles (group attributes)                       tile size, format
 
-The root group holds what :func:`stairbounce.scan.save` writes, chunked by
+The root group holds what :func:`stairbounce.plane.save` writes, chunked by
 tile (the tile record lives in a sub-group that xarray does not read), so
-:func:`stairbounce.scan.load` and ``xarray.open_zarr`` read an atlas like any
+:func:`stairbounce.plane.load` and ``xarray.open_zarr`` read an atlas like any
 saved scan.
 
 Resuming: the store is created up front (atomically: it exists complete with
@@ -27,7 +27,7 @@ atomically by Zarr's local store, so an interrupted tile is either absent or
 whole per variable, and in any case unmarked: a re-run computes it again.
 
 Dask and Numba threads: each tile runs the parallel numba kernel of
-:mod:`stairbounce.scan`, which releases the GIL.  On a Dask worker a tile uses
+:mod:`stairbounce.plane`, which releases the GIL.  On a Dask worker a tile uses
 one numba thread and the worker's Dask threads run tiles side by side, so a
 worker never keeps more cores busy than it has threads, whether it is started
 as ``--nworkers 1 --nthreads 16`` or ``--nworkers 16 --nthreads 1``, and many
@@ -104,7 +104,7 @@ def _run_tile(path, token, i, j, su, se, e_values, u_values, max_iter, y0, v0, n
     """
     import numba
 
-    from .scan import scan_coords
+    from .plane import scan_coords
 
     # one thread by default: tiles run side by side (module docstring)
     threads = max(1, min(numba_threads or 1, numba.config.NUMBA_NUM_THREADS))
@@ -277,12 +277,12 @@ def scan_to_zarr(
 ):
     """scan_to_zarr(path, e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, y0=1.0, v0=0.0, tile=1024, client=None, progress=None, numba_threads=None) -> xarray.Dataset
 
-    :func:`stairbounce.scan.scan` cut into tiles, computed locally or on Dask, written to Zarr.
+    :func:`stairbounce.plane.scan` cut into tiles, computed locally or on Dask, written to Zarr.
 
     The ``n_u x n_e`` grid of pixel centres is cut into ``tile x tile`` blocks
     (shorter at the far edges).  Each block is computed by
-    :func:`stairbounce.scan.scan_coords` on its slice of the grid (so the
-    result equals the whole :func:`~stairbounce.scan.scan`, bit for bit) and
+    :func:`stairbounce.plane.scan_coords` on its slice of the grid (so the
+    result equals the whole :func:`~stairbounce.plane.scan`, bit for bit) and
     written into its own region, one Zarr chunk per variable, of a store
     created up front with the full coordinates and attributes.  A tile is
     marked complete only after its data is written; running the same call
@@ -296,7 +296,7 @@ def scan_to_zarr(
         The store.  Its folder must exist and be writable; with a Dask
         cluster it must be on a file system every worker sees at the same path.
     e, u, max_iter, y0, v0 :
-        As in :func:`stairbounce.scan.scan` (same defaults, same checks).
+        As in :func:`stairbounce.plane.scan` (same defaults, same checks).
     tile : int >= 1, default 1024
         Tile edge in pixels; also the chunk edge of the store.
     client : None, ``dask.distributed.Client`` or str, default None
@@ -328,7 +328,7 @@ def scan_to_zarr(
     """
     import xarray as xr
 
-    from .scan import pixel_centres, scan
+    from .plane import pixel_centres, scan
 
     path = _check_path(path)
     tile = check_count("tile", tile, 1)

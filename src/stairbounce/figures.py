@@ -103,7 +103,7 @@ def _cached(settings, kind, inputs, compute):
 
 
 def _scan(settings, e, u, n_e, n_u):
-    from .scan import scan
+    from .plane import scan
 
     inputs = {"e": list(e), "u": list(u), "n_e": n_e, "n_u": n_u, "max_iter": settings.max_iter}
     return _cached(
@@ -209,7 +209,7 @@ def fig3(s: Settings) -> Result:
 def fig4(s: Settings) -> Result:
     """Fig. 4: the fractal pattern coloured by word length, tongues overlaid."""
     from .plot import plot_scan
-    from .scan import no_sliding_curve, tongue_mask
+    from .plane import no_sliding_curve, tongue_mask
 
     e, u = (0.0, 1.0), (0.0, 1.5)
     n_e, n_u = s.px(500), s.px(350)

@@ -20,7 +20,7 @@ replaced (as in FractalDimensions.jl):
     of sizes given or chosen by a documented heuristic;
 ``box_dimension``
     the three above composed; ``perimeter_dimension`` scans a window of the
-    ``(e, u)`` plane first (:func:`stairbounce.scan.scan`).
+    ``(e, u)`` plane first (:func:`stairbounce.plane.scan`).
 
 A raster estimate depends on the resolution, on ``max_iter`` of the scan and on
 the fit range; ``benchmarks/dimension_convergence.py`` measures how much.
@@ -40,7 +40,7 @@ import numpy as np
 from numba import njit, prange
 
 from .model import check_count
-from .scan import pixel_centres, scan, scan_coords
+from .plane import pixel_centres, scan, scan_coords
 
 __all__ = [
     "BoxDimension",
@@ -718,7 +718,7 @@ def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64):
     """``status`` and ``word_length`` of the scan of the window, rows along u.
 
     With a ``progress`` callback the rows are scanned in bands cut out of the
-    whole grid of pixel centres, which :mod:`stairbounce.scan` guarantees to
+    whole grid of pixel centres, which :mod:`stairbounce.plane` guarantees to
     be bit-identical to one scan of the window.
     """
     if progress is None:
@@ -762,7 +762,7 @@ def perimeter_dimension(
     Figs. 6 and 7).
 
     Scans the window on ``resolution x resolution`` pixel centres
-    (:func:`stairbounce.scan.scan`; status 0: the orbit of ``(y0, v0)``
+    (:func:`stairbounce.plane.scan`; status 0: the orbit of ``(y0, v0)``
     slides again within ``max_iter`` steps), takes the border of the status-0
     region (:func:`boundary`, ``image_edge="ignore"``: the frame of the
     window is not part of the perimeter) and measures it
@@ -789,11 +789,11 @@ def perimeter_dimension(
         automatic range leaves out the pixel scale and gives larger values
         (README, "Fractal dimension: how far to trust one number").
     y0, v0 : float, default 1, 0
-        Initial state of the scan (DESIGN.md: ``(1, 0)`` is the state after
+        Initial state of the scan (docs/design.md: ``(1, 0)`` is the state after
         sliding).
     progress : callable(done, total) or None, default None
         Called after each band of rows of the scan (the scan then runs in
-        bands of :func:`stairbounce.scan.scan_coords`, bit-identical to one
+        bands of :func:`stairbounce.plane.scan_coords`, bit-identical to one
         call); for a progress bar.
 
     The paper reports 1.324 (Fig. 6) and 1.403 (Fig. 7) with r > 0.99.

@@ -1,11 +1,11 @@
 """The paper's closed forms: one step of the staircase, edge to edge.
 
-Normalised units (DESIGN.md): step height = step length = g = 1, restitution
+Normalised units (docs/design.md): step height = step length = g = 1, restitution
 ``e`` in [0, 1), horizontal speed ``u > 0``, so one step takes ``T = 1/u``.
 The state at a step edge is ``(y, v)``: the height above the floor of the step
 the ball is entering and the vertical velocity.
 
-Everything the numba kernels of :mod:`stairbounce.scan` and
+Everything the numba kernels of :mod:`stairbounce.plane` and
 :mod:`stairbounce.orbits` need is a ``@njit`` scalar function here (names with a
 leading underscore, taking the per-parameter constants ``T = 1/u`` and
 ``ratio = (1+e)/(1-e)`` precomputed).  The public functions validate their
@@ -66,7 +66,7 @@ def _impact_speed(y, v):
 def _slides(y, v, T, ratio):
     """Prop. 2.1 in the form (2.4): ``v + (1+e)/(1-e) sqrt(v^2+2y) <= T``.
 
-    Equality counts as sliding (DESIGN.md).
+    Equality counts as sliding (docs/design.md).
     """
     return v + ratio * math.sqrt(v * v + 2.0 * y) <= T
 
@@ -82,7 +82,7 @@ def _impact_number_closed(y, v, e, T):
     """Prop. 2.2, ``k = E[log_e(((v - T)(1-e)) / (2 s) + (1+e)/2)]``.
 
     Returns ``SLIDING`` when the argument of the logarithm is not positive
-    (the solution slides, DESIGN.md).  The floor of a rounded logarithm can be
+    (the solution slides, docs/design.md).  The floor of a rounded logarithm can be
     one off; the result is corrected so that ``t_k <= T < t_{k+1}`` holds with
     the impact times of eq. (2.2), which is the definition in the proof.
     """
@@ -181,7 +181,7 @@ def _slide_or_steps_with(step, y, v, e, T, ratio, max_steps):
     and the number of non-zero jump numbers (steps with at least one impact,
     the sliding step included).  From ``(1, 0)`` these are the period, the
     impacts per period and the non-zero letters of the periodic sliding
-    solution's word; its length is ``impacts + 1`` (DESIGN.md).
+    solution's word; its length is ``impacts + 1`` (docs/design.md).
     """
     impacts = 0
     jumps = 0

@@ -8,7 +8,7 @@ sliding tongue of Theorem 3.1 the orbit settles on the period-``n`` sliding
 solution ``(n, 0^inf)``, so the diagram has ``n`` branches there; the paper's
 Fig. 8 (``e = 0.001``) and Fig. 9 (``e = 0.1``) are of this kind.
 
-Layout (DESIGN.md): a private numba kernel iterates all parameter values,
+Layout (docs/design.md): a private numba kernel iterates all parameter values,
 :func:`orbit_diagram` validates, allocates, calls it and labels the result as
 an :class:`xarray.Dataset`; :func:`orbit_density` bins the kept points into a
 2-D histogram so that millions of them render as an image.  Nothing here

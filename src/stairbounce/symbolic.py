@@ -1,4 +1,4 @@
-"""Words of periodic sliding solutions (Section 3 of the paper, DESIGN.md).
+"""Words of periodic sliding solutions (Section 3 of the paper, docs/design.md).
 
 A word lists the jump numbers between consecutive impacts, starting from the
 ball's departure at ``(1, 0)`` (it has just slid off an edge).  Landing on the
@@ -106,7 +106,7 @@ def _impacts_until_slide(y, v, e, T, ratio, max_steps, ks):
 
 def word_from_impacts(impacts) -> Word:
     """The word of one period from the impact numbers of its steps, the last
-    one ``SLIDING`` (DESIGN.md's convention)."""
+    one ``SLIDING`` (docs/design.md's convention)."""
     letters = []
     jump = 0
     for k in impacts:

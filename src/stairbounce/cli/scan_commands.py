@@ -51,7 +51,7 @@ def scan_(
     500 x 350 pixels, max_iter 1000, written to scan.png.  The windows are
     image edges; pixels are sampled at their centres, so u = 0 is never used.
     """
-    from .. import scan as sc
+    from .. import plane as sc
 
     e_lo, e_hi = parse_range("e", e)
     u_lo, u_hi = parse_range("u", u)

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import scan
+from .. import plane
 from .view import View, classes, color_key, overlay_curves
 
 __all__ = ["view_png", "view_netcdf", "export_name"]
@@ -83,10 +83,10 @@ def view_netcdf(ds) -> bytes:
     """view_netcdf(ds) -> bytes
 
     The scan of the view as a netCDF4 file, written by
-    :func:`stairbounce.scan.save` (same variables and attributes as
+    :func:`stairbounce.plane.save` (same variables and attributes as
     ``stairbounce scan --out view.nc``).
     """
     with tempfile.TemporaryDirectory(prefix="stairbounce-") as tmp:
         path = Path(tmp) / "view.nc"
-        scan.save(ds, path)
+        plane.save(ds, path)
         return path.read_bytes()

@@ -10,8 +10,8 @@ the server side of the app can be tested by calling these functions directly:
   malformed or out-of-range value replaced by its default and reported;
 - :func:`check_view`: the limits of one render (the pixel and work budgets,
   float64 resolution), raising :class:`ValueError` with the reason;
-- :func:`compute_view`: the scan of a view (:func:`stairbounce.scan.scan_coords`
-  on the view's :func:`~stairbounce.scan.pixel_centres`, in bands of rows so a
+- :func:`compute_view`: the scan of a view (:func:`stairbounce.plane.scan_coords`
+  on the view's :func:`~stairbounce.plane.pixel_centres`, in bands of rows so a
   newer request can cancel it between bands);
 - :func:`shade`, :func:`color_key`: the colours of the map (datashader's split:
   compute the labelled grid first, shade it as a separate step);
@@ -28,7 +28,7 @@ from urllib.parse import urlencode
 import numpy as np
 import xarray as xr
 
-from .. import orbits, scan
+from .. import orbits, plane
 from ..model import check_e, check_u, tongue
 from ..symbolic import sliding_word
 from ..trajectory import trajectory
@@ -60,7 +60,7 @@ __all__ = [
 ]
 
 COLOR_VARS = ("word_length", "period", "impacts", "jumps", "status")
-"""Data variables of :func:`stairbounce.scan.scan` that can colour the map."""
+"""Data variables of :func:`stairbounce.plane.scan` that can colour the map."""
 
 OVERLAYS = ("tongues", "no_sliding")
 """Curves drawn over the map: the (n, 0^inf) tongues of Theorem 3.1 and the
@@ -370,10 +370,10 @@ def check_view(view: View) -> View:
 def compute_view(view: View, cancelled=None, progress=None) -> xr.Dataset:
     """compute_view(view, cancelled=None, progress=None) -> xarray.Dataset
 
-    The scan of a view: :func:`stairbounce.scan.scan` on its window and pixels.
+    The scan of a view: :func:`stairbounce.plane.scan` on its window and pixels.
 
-    The rows (u) are computed in bands with :func:`stairbounce.scan.scan_coords`
-    on slices of :func:`stairbounce.scan.pixel_centres`, which gives the same
+    The rows (u) are computed in bands with :func:`stairbounce.plane.scan_coords`
+    on slices of :func:`stairbounce.plane.pixel_centres`, which gives the same
     values bit for bit as one call of ``scan`` (pixels are independent); the
     dataset carries the same attributes.  Between bands ``cancelled()`` is
     asked whether a newer request superseded this one (then
@@ -383,14 +383,14 @@ def compute_view(view: View, cancelled=None, progress=None) -> xr.Dataset:
     Raises :class:`ValueError` from :func:`check_view` for a view over budget.
     """
     check_view(view)
-    es = scan.pixel_centres(view.e_lo, view.e_hi, view.width)
-    us = scan.pixel_centres(view.u_lo, view.u_hi, view.height)
+    es = plane.pixel_centres(view.e_lo, view.e_hi, view.width)
+    us = plane.pixel_centres(view.u_lo, view.u_hi, view.height)
     rows = max(1, min(view.height, _BAND_WORK // max(1, view.width * view.max_iter)))
     parts = []
     for start in range(0, view.height, rows):
         if cancelled is not None and cancelled():
             raise Cancelled
-        parts.append(scan.scan_coords(es, us[start : start + rows], max_iter=view.max_iter))
+        parts.append(plane.scan_coords(es, us[start : start + rows], max_iter=view.max_iter))
         if progress is not None:
             progress(min(view.height, start + rows), view.height)
     ds = parts[0] if len(parts) == 1 else xr.concat(parts, dim="u", combine_attrs="override")
@@ -516,7 +516,7 @@ def overlay_curves(view: View, samples: int = 400, max_tongues: int = 400) -> di
     meets the window, ``sqrt((n-1)/2) < u <= sqrt(n/2) (1-e)/(1+e)`` (bounds
     from :func:`stairbounce.tongue`), closed at the e where the two bounds
     meet; ``"no_sliding"``: Corollary 2.1's ``u = (1-e)/(2 sqrt(2e))``
-    (:func:`stairbounce.scan.no_sliding_curve`).  Each value is
+    (:func:`stairbounce.plane.no_sliding_curve`).  Each value is
     ``(xs, ys)``, two lists of 1-D arrays; at most ``max_tongues`` tongues
     (the ones nearest the window's bottom).
     """
@@ -541,7 +541,7 @@ def overlay_curves(view: View, samples: int = 400, max_tongues: int = 400) -> di
         txs.append(xs)
         tys.append(ys)
     with np.errstate(divide="ignore"):
-        ns = scan.no_sliding_curve(e)
+        ns = plane.no_sliding_curve(e)
     ok = np.isfinite(ns)
     return {"tongues": (txs, tys), "no_sliding": ([e[ok]], [ns[ok]])}
 
@@ -587,5 +587,5 @@ def orbit_along_u(e: float, u_lo: float, u_hi: float, n: int = 300, transient: i
     pixel centres of ``[u_lo, u_hi]``: :func:`stairbounce.orbits.orbit_diagram`
     from the paper's ``(y0, v0) = (0.1, 0)``.
     """
-    us = scan.pixel_centres(u_lo, u_hi, n)
+    us = plane.pixel_centres(u_lo, u_hi, n)
     return orbits.orbit_diagram(e, us, y0=0.1, v0=0.0, transient=transient, keep=keep)

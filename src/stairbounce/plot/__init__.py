@@ -3,7 +3,7 @@ them; they never compute dynamics.  Kept out of the core's import path."""
 
 from .fractal import plot_border, plot_box_counts, plot_box_dimension
 from .orbits import plot_orbit_diagram
-from .scan import plot_scan
+from .plane import plot_scan
 from .tongues import plot_tongues
 from .trajectory import animate_trajectory, plot_poincare_section, plot_trajectory
 

@@ -34,7 +34,7 @@ def plot_tongues(n_max=12, e=(0.0, 1.0), u=(0.0, 1.5), ax=None, samples=2000, bo
                 ax.annotate(f"n = {n}", (es[ok][0], mid), xytext=(3, -3),
                             textcoords="offset points", color="w", fontsize=7, va="center")
     if bound:
-        from ..scan import no_sliding_curve
+        from ..plane import no_sliding_curve
 
         curve = no_sliding_curve(es)
         ax.plot(es, curve, color="C3", lw=1.5, label="Corollary 2.1: u = (1-e)/(2\u221a(2e))")

@@ -14,10 +14,10 @@ import pytest
 import xarray as xr
 
 import stairbounce
-from stairbounce import scan as sc
+from stairbounce import plane as sc
 from stairbounce.cli import main
 from stairbounce.model import _constants, _slide_or_steps, iterate, no_sliding_bound, tongue
-from stairbounce.scan import (
+from stairbounce.plane import (
     no_sliding_curve,
     pixel_centres,
     scan,
@@ -131,7 +131,7 @@ def test_scan_dataset_layout_and_attributes():
     assert (a["max_iter"], a["y0"], a["v0"]) == (50, 1.0, 0.0)
     assert a["stairbounce_version"] == stairbounce.__version__
     assert "word_length = impacts + 1" in a["convention"]
-    assert a["kernel"] == "stairbounce.scan._scan_fast"
+    assert a["kernel"] == "stairbounce.plane._scan_fast"
 
 
 def test_fields_are_consistent():
@@ -470,7 +470,7 @@ def test_memory_refusal_names_the_estimate(monkeypatch):
 
 
 def test_core_module_imports_no_plotting_or_cli():
-    code = ("import sys, stairbounce.scan; "
+    code = ("import sys, stairbounce.plane; "
             "bad = [m for m in ('matplotlib', 'typer', 'bokeh', 'panel') if m in sys.modules]; "
             "print(bad); sys.exit(1 if bad else 0)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

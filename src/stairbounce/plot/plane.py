@@ -29,7 +29,7 @@ def _colormap():
 
 
 def _extent(ds):
-    """Image edges: the window stored by :func:`stairbounce.scan.scan`, else
+    """Image edges: the window stored by :func:`stairbounce.plane.scan`, else
     half a pixel beyond the outer coordinates."""
     a = ds.attrs
     if all(k in a for k in ("e_min", "e_max", "u_min", "u_max")):
@@ -78,7 +78,7 @@ def plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=
 
     Draw a scan of the (e, u) plane: the paper's Figure 4 and its blow-ups.
 
-    Each pixel of ``ds`` (from :func:`stairbounce.scan.scan`) is coloured by
+    Each pixel of ``ds`` (from :func:`stairbounce.plane.scan`) is coloured by
     ``field`` on a perceptually uniform colour map, on a log scale for word
     length, period and jumps (impacts: symmetric log, it is 0 in the
     tongues), clipped at the 99.5th percentile; white where there is no

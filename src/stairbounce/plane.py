@@ -462,7 +462,7 @@ def scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0):
         "max_iter": max_iter,
         "y0": y0,
         "v0": v0,
-        "kernel": "stairbounce.scan._scan_fast",
+        "kernel": "stairbounce.plane._scan_fast",
         "stairbounce_version": __version__,
         "convention": CONVENTION,
         "reference": "Campos, Romero-Valles, Torres, A fractal structure in a bouncing ball model, Section 3",
