@@ -3,10 +3,31 @@
 The model of Campos, Romero-Valles and Torres, "A fractal structure in a
 bouncing ball model" (and its reference [1], Chaos, Solitons & Fractals 32
 (2007) 415-426), in normalised units (step height = step length = g = 1).
+
+Every public function is a name of this package (``sb.scan``,
+``sb.box_dimension``, ...; the list is ``__all__`` and the API reference in
+the documentation).  Three submodules are loaded only when first used,
+because they bring heavy dependencies: ``sb.plot`` (matplotlib renderers),
+``sb.figures`` (the paper's figures as recipes) and ``sb.explorer`` (the
+Panel app, the ``web`` extra).
 """
 
+from importlib import import_module as _import_module
 from importlib.metadata import PackageNotFoundError, version
 
+from .atlas import downsample, scan_to_zarr, tiles_done
+from .fractal import (
+    BoxDimension,
+    PerimeterDimension,
+    SlopeFit,
+    boundary,
+    box_counts,
+    box_dimension,
+    label_boundary,
+    linear_region,
+    perimeter_dimension,
+    slope_fit,
+)
 from .model import (
     SLIDING,
     impact_number,
@@ -18,33 +39,86 @@ from .model import (
     tongue,
 )
 from .orbits import orbit_density, orbit_diagram
+from .plane import (
+    estimate_bytes,
+    load,
+    no_sliding_curve,
+    pixel_centres,
+    save,
+    scan_coords,
+    tongue_mask,
+)
+from .plane import scan as _scan_function
 from .symbolic import Word, parse_word, sliding_word
-from .trajectory import Trajectory, trajectory
+from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import normalized_speed, physical_speed, time_scale
+from ._compat import register_alias as _register_alias
 
 try:
     __version__ = version("stairbounce")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0+unknown"
 
+# ``sb.scan`` is the function; it doubles as the old module ``stairbounce.scan``
+# (now ``stairbounce.plane``) so that old imports keep working, with a warning.
+scan = _register_alias(__name__ + ".scan", __name__ + ".plane", _scan_function, "scan")
+
 __all__ = [
+    "Accumulation",
+    "BoxDimension",
+    "Flight",
+    "Impact",
+    "PerimeterDimension",
     "SLIDING",
+    "Slide",
+    "SlopeFit",
     "Trajectory",
     "Word",
     "__version__",
+    "boundary",
+    "box_counts",
+    "box_dimension",
+    "downsample",
+    "estimate_bytes",
     "impact_number",
     "impact_times",
     "iterate",
+    "label_boundary",
+    "linear_region",
+    "load",
     "no_sliding_bound",
+    "no_sliding_curve",
     "normalized_speed",
     "orbit_density",
     "orbit_diagram",
     "parse_word",
+    "perimeter_dimension",
     "physical_speed",
+    "pixel_centres",
     "poincare_map",
+    "save",
+    "scan",
+    "scan_coords",
+    "scan_to_zarr",
     "sliding_word",
     "slides",
+    "slope_fit",
+    "tiles_done",
     "time_scale",
     "tongue",
+    "tongue_mask",
     "trajectory",
 ]
+
+# heavy submodules, imported on first use (PEP 562)
+_LAZY_SUBMODULES = ("plot", "figures", "explorer", "cli")
+
+
+def __getattr__(name):
+    if name in _LAZY_SUBMODULES:
+        return _import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY_SUBMODULES))
