@@ -194,3 +194,41 @@ def test_plot_box_dimension_needs_only_the_result(plt):
 def test_plot_trajectory_needs_only_the_trajectory(plt):
     ax = sb.plot.plot_trajectory(sb.trajectory(0.5, 0.9, steps=3))
     assert ax.get_lines()
+
+
+# --------------------------------------------------------------------------- #
+# the explorer inside Jupyter                                                  #
+# --------------------------------------------------------------------------- #
+
+
+def test_explorer_inline_builds_renders_and_agrees_with_the_scan():
+    pytest.importorskip("panel")
+    import panel as pn
+    from bokeh.models import Model
+
+    from stairbounce.explorer.view import shade
+
+    layout = sb.explorer.inline(e=(0.0, 0.4), u=(0.3, 1.1), width=60, height=50, max_iter=200,
+                             point=(0.1, 0.5))
+    assert isinstance(layout, pn.viewable.Viewable)
+    ex = layout.explorer
+    # the first view was computed before app() returned, and is the scan of that window
+    ds = sb.scan((0.0, 0.4, 60), (0.3, 1.1, 50), max_iter=200)
+    np.testing.assert_array_equal(ex.ds.word_length.values, ds.word_length.values)
+    np.testing.assert_array_equal(ex.img_src.data["image"][0], shade(ds, "word_length"))
+    # (0.1, 0.5) lies in the first tongue of Thm 3.1 (u^2 <= (1/2)(0.9/1.1)^2): word (1, 0^inf)
+    assert "(1, 0^" in ex.point_pane.object
+    # it renders to a Bokeh document without a browser or a server
+    root = layout.get_root()
+    assert isinstance(root, Model)
+
+
+@pytest.mark.parametrize(
+    "kwargs, words",
+    [({"e": (0.5, 0.2)}, "e"), ({"width": 10**5}, "pixel"), ({"color": "hue"}, "color must be one of"),
+     ({"u": 3}, "pairs")],
+)
+def test_explorer_inline_refuses_bad_views(kwargs, words):
+    pytest.importorskip("panel")
+    with pytest.raises(ValueError, match=words):
+        sb.explorer.inline(**kwargs)

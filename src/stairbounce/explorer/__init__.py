@@ -3,7 +3,8 @@
 The only part of the package that imports the web stack (Panel with Bokeh,
 the ``web`` extra).  :mod:`.view` holds everything the page computes or
 validates as plain functions (tested without a browser); :mod:`.app` is the
-Panel page; :func:`serve` starts a Panel server for it.
+Panel page; :func:`serve` starts a Panel server for it; :func:`inline` returns
+the page as a Panel object for a Jupyter notebook.
 """
 
 from __future__ import annotations
@@ -18,12 +19,14 @@ from .view import (
     parse_query,
     view_query,
 )
+from ._inline import inline
 
 __all__ = [
     "DEFAULT_VIEW",
     "PIXEL_BUDGET",
     "WORK_BUDGET",
     "View",
+    "inline",
     "check_view",
     "compute_view",
     "parse_query",
