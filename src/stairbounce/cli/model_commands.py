@@ -12,19 +12,27 @@ from .._io import atomic_path
 from ..model import SLIDING, iterate
 from ..symbolic import sliding_word, terminal_can_print_infinity
 from ..trajectory import trajectory
+from . import _staircase as st
 from ._app import CLIError, app
 
 E_HELP = "Restitution coefficient, in [0, 1)."
-U_HELP = "Horizontal speed in normalised units (u > 0); one step takes 1/u."
+U_HELP = "Horizontal speed in normalised units (u > 0); one step takes 1/u. Or --speed with --step-height, --step-length."
 
 
 @app.command()
 def word(
     e: float = typer.Option(..., "--e", help=E_HELP),
-    u: float = typer.Option(..., "--u", help=U_HELP),
+    u: float = typer.Option(None, "--u", help=U_HELP),
+    speed: float = st.speed_option(),
+    step_height: float = st.step_height_option(),
+    step_length: float = st.step_length_option(),
+    g: float = st.g_option(),
     max_steps: int = typer.Option(1000, "--max-steps", help="Steps to iterate before giving up (>= 1)."),
 ):
     """Print the word of the periodic sliding solution through (1, 0), its period and impacts."""
+    u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
+    if stairs is not None:
+        typer.echo(st.describe(u, stairs))
     w = sliding_word(e, u, max_steps=max_steps)
     if w is None:
         typer.echo(
@@ -36,37 +44,55 @@ def word(
     typer.echo(f"e = {e:g}, u = {u:g}")
     typer.echo(f"word:    {text}")
     typer.echo(f"length:  {len(w)}")
-    typer.echo(f"period:  {w.period} steps")
+    typer.echo(f"period:  {w.period} steps"
+               + ("" if stairs is None else f" = {w.period * stairs.b / stairs.speed(u):.6g} s"))
     typer.echo(f"impacts: {w.impacts} per period (plus the accumulation)")
 
 
 @app.command("map")
 def map_(
     e: float = typer.Option(..., "--e", help=E_HELP),
-    u: float = typer.Option(..., "--u", help=U_HELP),
+    u: float = typer.Option(None, "--u", help=U_HELP),
+    speed: float = st.speed_option(),
+    step_height: float = st.step_height_option(),
+    step_length: float = st.step_length_option(),
+    g: float = st.g_option(),
     y0: float = typer.Option(1.0, "--y0", help="Initial height above the step's floor (>= 0)."),
     v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
     steps: int = typer.Option(10, "--steps", help="Number of steps (>= 0)."),
     as_csv: bool = typer.Option(False, "--csv", help="Write CSV to stdout instead of a table."),
 ):
-    """Print the Poincare iterates (Prop. 2.3): the state at each step edge and the step's impacts."""
+    """Print the Poincare iterates (Prop. 2.3): the state at each step edge and the step's impacts.
+    With a physical staircase, also the height in m and the velocity in m/s."""
+    u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
     ys, vs, ks = iterate(y0, v0, e, u, steps)
+    # (y, v) normalised, then (y a, v sqrt(a g)) in SI units when a staircase was given
+    si = () if stairs is None else (stairs.a, stairs.velocity_unit)
     if as_csv:
         w = csv.writer(sys.stdout, lineterminator="\n")
-        w.writerow(["n", "y", "v", "impacts"])
+        w.writerow(["n", "y", "v", "impacts"] + (["y_m", "v_m_per_s"] if si else []))
         for n, (y, v, k) in enumerate(zip(ys, vs, ks)):
-            w.writerow([n, repr(float(y)), repr(float(v)), "" if n == 0 else int(k)])
+            w.writerow([n, repr(float(y)), repr(float(v)), "" if n == 0 else int(k)]
+                       + ([repr(float(y * si[0])), repr(float(v * si[1]))] if si else []))
         return
-    typer.echo(f"{'n':>6}  {'y':>22}  {'v':>22}  impacts")
+    if stairs is not None:
+        typer.echo(st.describe(u, stairs))
+    extra = f"  {'y (m)':>14}  {'v (m/s)':>14}" if si else ""
+    typer.echo(f"{'n':>6}  {'y':>22}  {'v':>22}  impacts{extra}")
     for n, (y, v, k) in enumerate(zip(ys, vs, ks)):
         label = "" if n == 0 else ("sliding" if k == SLIDING else str(int(k)))
-        typer.echo(f"{n:>6}  {y:>22.15g}  {v:>22.15g}  {label}")
+        extra = f"  {y * si[0]:>14.8g}  {v * si[1]:>14.8g}" if si else ""
+        typer.echo(f"{n:>6}  {y:>22.15g}  {v:>22.15g}  {label:7s}{extra}".rstrip())
 
 
 @app.command("trajectory")
 def trajectory_(
     e: float = typer.Option(..., "--e", help=E_HELP),
-    u: float = typer.Option(..., "--u", help=U_HELP),
+    u: float = typer.Option(None, "--u", help=U_HELP),
+    speed: float = st.speed_option(),
+    step_height: float = st.step_height_option(),
+    step_length: float = st.step_length_option(),
+    g: float = st.g_option(),
     y0: float = typer.Option(1.0, "--y0", help="Initial height above the step's floor (>= 0)."),
     v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
     steps: int = typer.Option(8, "--steps", help="Number of steps (>= 1)."),
@@ -74,7 +100,9 @@ def trajectory_(
     animate: Path = typer.Option(None, "--animate", help="Also write an animation of the ball (.gif)."),
     dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output."),
 ):
-    """Draw the ball's path on the staircase (Fig. 1) beside its Poincare section (Fig. 2)."""
+    """Draw the ball's path on the staircase (Fig. 1) beside its Poincare section (Fig. 2).
+    With a physical staircase the axes are in metres, m/s and seconds."""
+    u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
     if steps < 1:
         raise CLIError(f"--steps must be an integer >= 1, got {steps}")
     if out.suffix.lower() not in {".png", ".pdf", ".svg"}:
@@ -93,6 +121,9 @@ def trajectory_(
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.8), gridspec_kw={"width_ratios": [1.6, 1]})
     plot_trajectory(traj, ax=a1)
     plot_poincare_section(traj.edge_y, traj.edge_v, traj.edge_impacts, ax=a2)
+    if stairs is not None:
+        typer.echo(st.describe(u, stairs))
+        st.physical_trajectory_axes(a1, a2, stairs, u)
     fig.tight_layout()
     with atomic_path(out) as tmp:
         fig.savefig(tmp, dpi=dpi)

@@ -9,6 +9,7 @@ import typer
 
 from .._io import atomic_path
 from ..model import check_count
+from . import _staircase as st
 from ._app import CLIError, app, parse_range
 
 # Above this many map steps (about a second of work) the sweep runs in slices
@@ -73,7 +74,11 @@ def _write_data(ds, path: Path) -> None:
 @app.command("orbit-diagram")
 def orbit_diagram_(
     e: str = typer.Option(..., "--e", help="Restitution coefficient in [0, 1): a number, or a range MIN:MAX to sweep."),
-    u: str = typer.Option(..., "--u", help="Horizontal speed u > 0: a number, or a range MIN:MAX to sweep."),
+    u: str = typer.Option(None, "--u", help="Horizontal speed u > 0: a number, or a range MIN:MAX to sweep."),
+    speed: str = st.speed_option("Horizontal speed in m/s, a number or a range MIN:MAX (instead of --u)."),
+    step_height: float = st.step_height_option(),
+    step_length: float = st.step_length_option(),
+    g: float = st.g_option(),
     n: int = typer.Option(3000, "--n", help="Number of values of the swept parameter (>= 2)."),
     transient: int = typer.Option(2000, "--transient", help="Iterates discarded at each value (>= 0)."),
     keep: int = typer.Option(200, "--keep", help="Iterates kept at each value (>= 1)."),
@@ -92,6 +97,9 @@ def orbit_diagram_(
     """Orbit (bifurcation) diagram: iterate the Poincare map at each value of the swept parameter
     and plot the kept iterates (Section 4, Figs. 8 and 9). Exactly one of --e, --u is a range."""
     n = check_count("--n", n, 2)
+    u, stairs = st.resolve_u_text(u, speed, step_height, step_length, g)
+    if stairs is not None:
+        typer.echo(f"speed {speed} m/s on {stairs.describe()}: u = {u}")
     if component not in ("y", "v"):
         raise CLIError(f"--component must be y or v, got {component!r}")
     for name in overlay:

@@ -1,0 +1,190 @@
+"""A real staircase on the command line: ``--speed U --step-height a
+--step-length b [--g 9.81]`` (SI units) instead of the paper's ``--u``.
+
+The paper's normalised units (Section 1) set ``a = b = g = 1``; a staircase
+in metres maps to ``u = U sqrt(a/g) / b`` (:func:`stairbounce.normalized_speed`),
+heights scale by ``a``, horizontal lengths by ``b``, time by ``sqrt(a/g)`` and
+vertical velocities by ``sqrt(a g)``.  Commands take exactly one of ``--u``
+and the physical set; they print both descriptions of the staircase.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import typer
+
+from ..units import normalized_speed, time_scale
+from ._app import CLIError, parse_range
+
+SPEED_HELP = "Horizontal speed of the ball in m/s (with --step-height and --step-length; instead of --u)."
+HEIGHT_HELP = "Step height a in metres (with --speed)."
+LENGTH_HELP = "Step length b in metres (with --speed)."
+G_HELP = "Gravity in m/s^2 (with --speed; default 9.81)."
+
+
+def speed_option(help=SPEED_HELP):
+    return typer.Option(None, "--speed", help=help)
+
+
+def step_height_option():
+    return typer.Option(None, "--step-height", help=HEIGHT_HELP)
+
+
+def step_length_option():
+    return typer.Option(None, "--step-length", help=LENGTH_HELP)
+
+
+def g_option():
+    return typer.Option(None, "--g", help=G_HELP)
+
+
+@dataclass(frozen=True)
+class Staircase:
+    """A staircase in SI units: step height ``a``, step length ``b`` (m), gravity ``g`` (m/s^2)."""
+
+    a: float
+    b: float
+    g: float
+
+    @property
+    def time_unit(self) -> float:
+        """Seconds per normalised time unit, ``sqrt(a/g)``."""
+        return time_scale(self.a, self.g)
+
+    @property
+    def velocity_unit(self) -> float:
+        """m/s per normalised vertical velocity, ``sqrt(a g)``."""
+        return math.sqrt(self.a * self.g)
+
+    def u(self, speed: float) -> float:
+        return normalized_speed(speed, self.a, self.b, self.g)
+
+    def speed(self, u: float) -> float:
+        """m/s of the normalised horizontal speed ``u`` (the inverse of :meth:`u`)."""
+        return u * self.b / self.time_unit
+
+    def describe(self) -> str:
+        return f"steps a = {self.a:g} m high, b = {self.b:g} m long, g = {self.g:g} m/s^2"
+
+
+def _number(name: str, value) -> float:
+    if value is None:
+        return None
+    x = float(value)
+    if not math.isfinite(x) or x <= 0.0:
+        raise CLIError(f"--{name} must be a finite number > 0, got {value!r}")
+    return x
+
+
+def _staircase(speed, step_height, step_length, g, u):
+    """Check the combination; the :class:`Staircase` or None when ``--u`` is used."""
+    physical = {"--speed": speed, "--step-height": step_height, "--step-length": step_length, "--g": g}
+    given = [name for name, value in physical.items() if value is not None]
+    if u is not None and given:
+        raise CLIError(
+            f"give either --u or --speed with --step-height and --step-length, not both "
+            f"(got --u and {', '.join(given)})"
+        )
+    if u is None and speed is None:
+        if given:
+            raise CLIError(f"{', '.join(given)} needs --speed (the ball's horizontal speed in m/s)")
+        raise CLIError("give the horizontal speed: --u (normalised) or --speed with --step-height "
+                       "and --step-length (m/s, m)")
+    if u is not None:
+        return None
+    missing = [name for name in ("--step-height", "--step-length") if physical[name] is None]
+    if missing:
+        raise CLIError(f"--speed needs {' and '.join(missing)} (in metres)")
+    return Staircase(_number("step-height", step_height), _number("step-length", step_length),
+                     9.81 if g is None else _number("g", g))
+
+
+def resolve_u(u, speed, step_height, step_length, g):
+    """``(u, staircase)`` from exactly one of ``--u`` or the physical set.
+
+    ``staircase`` is None when ``--u`` was given.  Raises :class:`CLIError`
+    (one line, exit status 2) on a missing, mixed or non-positive value.
+    """
+    stairs = _staircase(speed, step_height, step_length, g, u)
+    if stairs is None:
+        return u, None
+    return stairs.u(_number("speed", speed)), stairs
+
+
+def resolve_u_text(u, speed, step_height, step_length, g):
+    """As :func:`resolve_u` for options that take a number or a range ``MIN:MAX``:
+    returns the ``--u`` text (normalised; a range maps to a range, the
+    conversion being linear) and the staircase or None."""
+    stairs = _staircase(speed, step_height, step_length, g, u)
+    if stairs is None:
+        return u, None
+    if ":" in speed:
+        lo, hi = parse_range("speed", speed)
+        return f"{stairs.u(_number('speed', lo))!r}:{stairs.u(_number('speed', hi))!r}", stairs
+    try:
+        value = float(speed)
+    except ValueError:
+        raise CLIError(f"--speed must be a number or a range MIN:MAX in m/s, got {speed!r}") from None
+    return repr(stairs.u(_number("speed", value))), stairs
+
+
+def describe(u: float, stairs: Staircase | None) -> str:
+    """One line: the speed in both units (only ``u`` without a staircase)."""
+    if stairs is None:
+        return f"u = {u:g}"
+    return (f"speed U = {stairs.speed(u):g} m/s on {stairs.describe()}: u = U sqrt(a/g) / b = {u:.6g} "
+            f"(one step takes {stairs.b / stairs.speed(u):.4g} s)")
+
+
+# --------------------------------------------------------------------------- #
+# figures in metres and seconds                                               #
+# --------------------------------------------------------------------------- #
+
+
+def _scaled_axis(axis, factor):
+    """Tick ``axis`` (drawn in normalised units) at round values of ``factor`` times them."""
+    from matplotlib.ticker import FuncFormatter, Locator, MaxNLocator
+
+    class ScaledLocator(Locator):
+        def __init__(self):
+            self._inner = MaxNLocator(nbins="auto", steps=[1, 2, 2.5, 5, 10])
+
+        def set_axis(self, axis):
+            super().set_axis(axis)
+            self._inner.set_axis(axis)
+
+        def __call__(self):
+            lo, hi = self.axis.get_view_interval()
+            return self.tick_values(lo, hi)
+
+        def tick_values(self, vmin, vmax):
+            return [t / factor for t in self._inner.tick_values(vmin * factor, vmax * factor)]
+
+    axis.set_major_locator(ScaledLocator())
+    axis.set_major_formatter(FuncFormatter(lambda x, _pos: f"{x * factor:.4g}"))
+
+
+def physical_trajectory_axes(ax_path, ax_section, stairs: Staircase, u: float):
+    """Relabel the trajectory figure (Fig. 1 and the Poincare section) in SI units.
+
+    The data stay in the paper's units; ticks are placed at round metres
+    (``x b``, ``y a``), m/s (``v sqrt(a g)``) and seconds (``t = x / u`` time
+    units, on the top axis), and the path keeps the staircase's true aspect.
+    """
+    _scaled_axis(ax_path.xaxis, stairs.b)
+    _scaled_axis(ax_path.yaxis, stairs.a)
+    ax_path.set_xlabel("x (m)")
+    ax_path.set_ylabel("height (m)")
+    ax_path.set_aspect(stairs.a / stairs.b, adjustable="box")
+    # horizontal motion is uniform: the x axis is also a clock, t = x / u time units
+    seconds_per_x = stairs.time_unit / u
+    top = ax_path.secondary_xaxis("top", functions=(lambda x: x * seconds_per_x, lambda t: t / seconds_per_x))
+    top.set_xlabel("t (s)")
+    ax_path.set_title(f"{ax_path.get_title()}  (U = {stairs.speed(u):.3g} m/s, a = {stairs.a:g} m, "
+                      f"b = {stairs.b:g} m)", fontsize="medium", pad=28)
+    _scaled_axis(ax_section.xaxis, stairs.a)
+    _scaled_axis(ax_section.yaxis, stairs.velocity_unit)
+    ax_section.set_xlabel("height at the edge (m)")
+    ax_section.set_ylabel("vertical velocity at the edge (m/s)")

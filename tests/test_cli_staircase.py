@@ -1,0 +1,155 @@
+"""A real staircase on the command line: ``--speed U --step-height a
+--step-length b [--g]`` in SI units instead of ``--u``.
+
+The conversion is the paper's rescaling (Section 1; docs/design.md): lengths
+by ``a`` (vertical) and ``b`` (horizontal), time by ``sqrt(a/g)``, so
+``u = U sqrt(a/g) / b`` and vertical velocities scale by ``sqrt(a g)``.  The
+expected values below are computed from that formula directly, not through
+the package's units module.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import stairbounce as sb
+from stairbounce.cli import main
+
+# a household staircase: 17 cm risers, 29 cm treads
+A, B, G = 0.17, 0.29, 9.81
+
+
+def run(args, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(args)
+    out, err = capsys.readouterr()
+    return exc.value.code, out, err
+
+
+def u_of(speed, a=A, b=B, g=G):
+    return speed * math.sqrt(a / g) / b
+
+
+def test_word_of_a_physical_staircase_is_the_word_at_its_u(capsys):
+    speed = 1.2
+    code, out, _ = run(["word", "--e", "0.05", "--speed", str(speed), "--step-height", str(A),
+                        "--step-length", str(B)], capsys)
+    assert code == 0
+    w = sb.sliding_word(0.05, u_of(speed))
+    assert w is not None and f"period:  {w.period} steps" in out
+    # both descriptions are printed: the speed in m/s and the normalised u
+    assert "U = 1.2 m/s" in out and f"u = U sqrt(a/g) / b = {u_of(speed):.6g}" in out
+    # a period of n steps lasts n b / U seconds
+    assert f"= {w.period * B / speed:.6g} s" in out
+
+
+def test_gravity_option_changes_u_as_the_formula_says(capsys):
+    # on a staircase with a = g (in its units) the time unit is 1 s and u = U / b;
+    # U = 0.5 b lies in the first tongue of Thm 3.1 for e = 0.1 (u^2 <= (1/2)(0.9/1.1)^2)
+    code, out, _ = run(["word", "--e", "0.1", "--speed", "0.25", "--step-height", "2",
+                        "--step-length", "0.5", "--g", "2"], capsys)
+    assert code == 0
+    assert "u = U sqrt(a/g) / b = 0.5 " in out
+    assert "word:    (1, 0" in out
+
+
+def test_map_prints_si_columns(capsys):
+    speed = 1.0
+    code, out, _ = run(["map", "--e", "0.3", "--speed", str(speed), "--step-height", str(A),
+                        "--step-length", str(B), "--steps", "6", "--csv"], capsys)
+    assert code == 0
+    rows = list(csv.DictReader(io.StringIO(out)))
+    ys, vs, _ = sb.iterate(1.0, 0.0, 0.3, u_of(speed), 6)
+    np.testing.assert_allclose([float(r["y"]) for r in rows], ys, rtol=1e-15)
+    np.testing.assert_allclose([float(r["y_m"]) for r in rows], ys * A, rtol=1e-12)
+    np.testing.assert_allclose([float(r["v_m_per_s"]) for r in rows], vs * math.sqrt(A * G), rtol=1e-12)
+
+
+def test_map_table_with_a_staircase(capsys):
+    code, out, _ = run(["map", "--e", "0.3", "--speed", "1", "--step-height", str(A),
+                        "--step-length", str(B), "--steps", "2"], capsys)
+    assert code == 0
+    assert "y (m)" in out and "v (m/s)" in out and "U = 1 m/s" in out
+
+
+def test_orbit_diagram_speed_range_is_the_u_range(tmp_path, capsys):
+    common = ["orbit-diagram", "--e", "0.1", "--n", "30", "--transient", "40", "--keep", "10"]
+    code, _, _ = run(common + ["--speed", "0.5:2.5", "--step-height", str(A), "--step-length", str(B),
+                               "--out", str(tmp_path / "si.nc")], capsys)
+    assert code == 0
+    code, _, _ = run(common + ["--u", f"{u_of(0.5)!r}:{u_of(2.5)!r}", "--out", str(tmp_path / "u.nc")],
+                     capsys)
+    assert code == 0
+    with xr.open_dataset(tmp_path / "si.nc") as a, xr.open_dataset(tmp_path / "u.nc") as b:
+        np.testing.assert_allclose(a.u.values, b.u.values, rtol=1e-15)
+        np.testing.assert_array_equal(a.y.values, b.y.values)
+
+
+def test_trajectory_axes_in_metres_and_seconds(tmp_path, capsys):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from stairbounce.cli import _staircase as st
+
+    speed = 1.2
+    u = u_of(speed)
+    traj = sb.trajectory(0.5, u, steps=4)
+    fig, (a1, a2) = plt.subplots(1, 2)
+    sb.plot.plot_trajectory(traj, ax=a1)
+    sb.plot.plot_poincare_section(traj.edge_y, traj.edge_v, traj.edge_impacts, ax=a2)
+    st.physical_trajectory_axes(a1, a2, st.Staircase(A, B, G), u)
+    fig.canvas.draw()
+    assert a1.get_xlabel() == "x (m)" and a1.get_ylabel() == "height (m)"
+    assert a2.get_ylabel().endswith("(m/s)")
+    # ticks sit at round physical values: x b, y a, v sqrt(a g) on a 1-2-2.5-5 grid
+    for ticks, factor in ((a1.get_xticks(), B), (a1.get_yticks(), A), (a2.get_yticks(), math.sqrt(A * G))):
+        values = np.asarray(ticks) * factor
+        step = np.min(np.diff(values))
+        np.testing.assert_allclose(values / step, np.round(values / step), atol=1e-9)
+        mantissa = step / 10 ** math.floor(math.log10(step) + 1e-12)
+        assert min(abs(mantissa - m) for m in (1, 2, 2.5, 5, 10)) < 1e-9
+    # the top axis is a clock: one step length b is crossed in b / U seconds
+    top = [c for c in a1.child_axes if c.get_xlabel() == "t (s)"]
+    assert len(top) == 1
+    forward, _ = top[0]._functions
+    assert forward(1.0) == pytest.approx(B / speed, rel=1e-12)
+    plt.close(fig)
+    code, out, _ = run(["trajectory", "--e", "0.5", "--speed", "1.2", "--step-height", str(A),
+                        "--step-length", str(B), "--steps", "3", "--out", str(tmp_path / "t.png")], capsys)
+    assert code == 0 and (tmp_path / "t.png").stat().st_size > 0 and "U = 1.2 m/s" in out
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["word", "--e", "0.1", "--u", "0.5", "--speed", "1"], "either --u or --speed"),
+        (["word", "--e", "0.1", "--u", "0.5", "--step-height", "0.2"], "not both"),
+        (["word", "--e", "0.1"], "give the horizontal speed"),
+        (["word", "--e", "0.1", "--speed", "1", "--step-height", "0.2"], "--speed needs --step-length"),
+        (["word", "--e", "0.1", "--speed", "1"], "--step-height and --step-length"),
+        (["word", "--e", "0.1", "--g", "9.8"], "--g needs --speed"),
+        (["map", "--e", "0.1", "--speed", "-1", "--step-height", "0.2", "--step-length", "0.3"],
+         "--speed must be a finite number > 0"),
+        (["map", "--e", "0.1", "--speed", "1", "--step-height", "0", "--step-length", "0.3"],
+         "--step-height must be a finite number > 0"),
+        (["trajectory", "--e", "0.1", "--speed", "1", "--step-height", "0.2", "--step-length", "nan"],
+         "--step-length must be a finite number > 0"),
+        (["orbit-diagram", "--e", "0.1", "--speed", "2:1", "--step-height", "0.2", "--step-length", "0.3",
+          "--out", "x.nc"], "--speed must have MIN < MAX"),
+        (["orbit-diagram", "--e", "0.1", "--speed", "fast", "--step-height", "0.2", "--step-length", "0.3",
+          "--out", "x.nc"], "--speed must be a number or a range"),
+    ],
+)
+def test_bad_or_mixed_input_is_one_line_and_status_2(args, needle, capsys):
+    code, _, err = run(args, capsys)
+    assert code == 2
+    assert err.count("\n") == 1 and err.startswith("stairbounce: error:")
+    assert needle in err
