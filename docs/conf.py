@@ -34,7 +34,7 @@ extensions = [
 
 source_suffix = {".md": "markdown"}
 root_doc = "index"
-exclude_patterns = ["_build", "_gallery", "**.ipynb_checkpoints", "tutorial.ipynb"]
+exclude_patterns = ["_build", "**.ipynb_checkpoints", "tutorial.ipynb"]
 myst_enable_extensions = ["dollarmath", "colon_fence"]
 myst_heading_anchors = 3
 suppress_warnings = ["myst.header"]

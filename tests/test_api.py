@@ -17,7 +17,7 @@ import stairbounce as sb
 from stairbounce import plane
 
 API_PAGE = Path(__file__).resolve().parents[1] / "docs" / "api.md"
-_DIRECTIVE = re.compile(r"^```\{auto(?:function|class|data)\} (stairbounce(?:\.plot)?)\.(\w+)\s*$", re.M)
+_DIRECTIVE = re.compile(r"^\.\. auto(?:function|class|data):: (stairbounce(?:\.plot)?)\.(\w+)\s*$", re.M)
 
 
 def _documented(module):

@@ -1,8 +1,8 @@
 """The ``{sb-gallery}`` directive: the paper's figures, made while the docs build.
 
 Each recipe of :data:`stairbounce.figures.FIGURES` runs at a small scale
-(``sb_gallery_scale`` times its pixel counts, ``sb_gallery_max_iter``) into
-``docs/_gallery/`` (ignored by git), and the page shows every image with the
+(``sb_gallery_scale`` times its pixel counts, ``sb_gallery_max_iter``) into the build's own scratch folder (beside its
+doctrees, never the source tree), and the page shows every image with the
 recipe's title and its comparison with the paper.  A failing recipe fails the
 build (a warning, and the build runs with ``-W``).  Only the HTML-like
 builders make the figures; the doctest builder skips them.
@@ -10,6 +10,7 @@ builders make the figures; the doctest builder skips them.
 
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 
@@ -32,7 +33,7 @@ class GalleryDirective(SphinxDirective):
             return [nodes.paragraph(text="(the gallery is made by the HTML build)")]
         from stairbounce.figures import Settings, make_figures
 
-        out = Path(self.env.srcdir) / "_gallery"
+        out = Path(app.doctreedir) / "sb_gallery"
         settings = Settings(out=out, fmt="png", dpi=70, scale=app.config.sb_gallery_scale,
                             max_iter=app.config.sb_gallery_max_iter, cache_dir=None)
         t0 = time.perf_counter()
@@ -52,7 +53,8 @@ class GalleryDirective(SphinxDirective):
             sec = nodes.section(ids=[nodes.make_id(f"gallery-{res.name}")])
             sec += nodes.title(text=f"{res.name}: {res.title}")
             for name in res.files:
-                uri = f"/_gallery/{name}"
+                # "/..." is relative to the source folder in Sphinx
+                uri = "/" + os.path.relpath(out / name, self.env.srcdir).replace(os.sep, "/")
                 self.env.note_dependency(str(out / name))
                 sec += nodes.image(uri=uri, alt=f"{res.name} ({name})", width="90%")
             rows = [r for r in res.rows]
