@@ -23,6 +23,28 @@ class _Here:
         fn(*args)
 
 
+def _run_here():
+    """The keyword that makes an :class:`~.app.Explorer` run its work on the
+    calling thread: an executor for the page that takes one, a scheduler run to
+    completion on submission for the page that shares a scheduler between
+    sessions (the explorer's newer internals)."""
+    try:
+        from .scheduler import Scheduler
+    except ImportError:
+        return {"executor": _Here()}
+
+    class _Now(Scheduler):
+        def __init__(self):
+            super().__init__(thread=False)
+
+        def submit(self, *args, **kwargs):
+            job = super().submit(*args, **kwargs)
+            self.run_all()
+            return job
+
+    return {"scheduler": _Now()}
+
+
 def inline(e=(0.0, 1.0), u=(0.0, 1.5), width=400, height=400, max_iter=1000, color="word_length", point=None):
     """inline(e=(0, 1), u=(0, 1.5), width=400, height=400, max_iter=1000, color="word_length", point=None) -> panel.layout.FlexBox
 
@@ -60,7 +82,7 @@ def inline(e=(0.0, 1.0), u=(0.0, 1.5), width=400, height=400, max_iter=1000, col
                 max_iter=max_iter, color=color, overlays=DEFAULT_VIEW.overlays,
                 point=None if point is None else (float(point[0]), float(point[1])))
     check_view(view)  # ValueError naming the limit
-    explorer = Explorer(view, executor=_Here())
+    explorer = Explorer(view, **_run_here())
     explorer._doc = None  # no server session: results are shown where they are computed
     explorer.start()
     layout = explorer.layout
