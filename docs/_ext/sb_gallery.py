@@ -43,7 +43,7 @@ class GalleryDirective(SphinxDirective):
         note = nodes.paragraph(text=(
             f"Made by stairbounce {app.config.release} while this page was built: "
             f"every pixel count of the paper's grids times {settings.scale:g}, "
-            f"max_iter = {settings.max_iter}. `stairbounce figures` makes them full size."))
+            f"max_iter = {settings.max_iter}. The command stairbounce figures makes them full size."))
         section_nodes.append(note)
         for res in results:
             if res.error:
