@@ -91,6 +91,15 @@ def test_calling_scan_does_not_warn():
         sb.scan((0.0, 1.0, 4), (0.0, 1.5, 3), max_iter=10)
 
 
+def test_help_on_scan_shows_the_function_and_warns_nothing():
+    import pydoc
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        text = pydoc.render_doc(sb.scan, renderer=pydoc.plaintext)
+    assert "Periodic sliding solutions" in text and "max_iter=1000" in text
+
+
 def test_old_path_from_module_import_warns_and_forwards():
     with pytest.warns(DeprecationWarning, match="stairbounce.plane"):
         from stairbounce.scan import scan_coords

@@ -57,8 +57,8 @@ class DeprecatedModuleAlias(types.ModuleType):
         return function(*args, **kwargs)
 
     def __getattr__(self, name):
-        if name.startswith("__") and name.endswith("__"):
-            raise AttributeError(name)
+        if name.startswith("_"):  # dunders probed by tools; private names were never API
+            raise AttributeError(f"module {self.__name__!r} has no attribute {name!r}")
         new = self.__dict__["_alias_new"]
         warnings.warn(
             f"the module {self.__name__} is deprecated: use {new} "
@@ -67,9 +67,6 @@ class DeprecatedModuleAlias(types.ModuleType):
             stacklevel=2,
         )
         return getattr(importlib.import_module(new), name)
-
-    def __dir__(self):
-        return sorted(set(dir(importlib.import_module(self.__dict__["_alias_new"]))))
 
     def __repr__(self):
         function = self.__dict__["_alias_function"]
