@@ -506,7 +506,9 @@ def test_plot_scan(tmp_path):
         plt.close(fig)
     fig, ax = plt.subplots()
     plot_scan(ds, ax=ax)
-    assert type(ax.get_images()[0].norm).__name__ == "LogNorm"
+    # the fixed discrete word-length classes (1, 2, 3, 4, 5, 6-7, ...), not a scale fitted to the data
+    assert type(ax.get_images()[0].norm).__name__ == "BoundaryNorm"
+    assert list(ax.get_images()[0].norm.boundaries[:7]) == [1, 2, 3, 4, 5, 6, 8]
     assert len(fig.axes) == 2  # the colour bar
     plt.close(fig)
     # a dataset reduced to one variable (as the atlas renderer passes) still plots
