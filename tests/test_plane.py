@@ -573,7 +573,7 @@ def test_cli_scan_defaults_are_figure_4(tmp_path, capsys, monkeypatch):
         (["--max-iter", "x"], "max-iter"),
         (["--e", "a:b"], "--e must be a range MIN:MAX of numbers"),
         (["--field", "colour"], "--field must be one of"),
-        (["--overlay", "grid"], "--overlay must be a comma-separated list"),
+        (["--overlay", "grid"], "--overlay must be among tongues, bound (comma-separated or repeated)"),
         (["--out", "x.csv"], "--out must end in .zarr or .nc"),
         (["--png", "x.jpg"], "--png must end in .png, .pdf or .svg"),
         (["--y0", "-1"], "--y0 must be >= 0"),

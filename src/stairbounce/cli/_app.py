@@ -79,3 +79,40 @@ def progress_bar(console, description, total, unit=""):
     task = bar.add_task(description, total=total)
     with bar:
         yield bar, task
+
+
+def parse_overlays(values, allowed) -> tuple[str, ...]:
+    """``--overlay`` as every command takes it: a comma-separated list, or the
+    option repeated, or both (``--overlay tongues,bound`` = ``--overlay
+    tongues --overlay bound``); each name one of ``allowed``."""
+    if isinstance(values, str):
+        values = [values]
+    names = []
+    for text in values or ():
+        for part in str(text).split(","):
+            part = part.strip()
+            if not part:
+                continue
+            if part not in allowed:
+                raise CLIError(f"--overlay must be among {', '.join(allowed)} (comma-separated "
+                               f"or repeated), got {part!r}")
+            if part not in names:
+                names.append(part)
+    return tuple(names)
+
+
+def tile_for_workers(n_e: int, n_u: int, workers: int, largest: int = 1024, smallest: int = 64):
+    """tile_for_workers(n_e, n_u, workers) -> (tile, tiles)
+
+    The largest square tile (a power of two from ``largest`` down to
+    ``smallest`` px) that cuts an ``n_e x n_u`` grid into at least
+    ``2 * workers`` tiles, so that every worker has work and a slow tile
+    (high u runs all max_iter steps) can be balanced by two quick ones.
+    Below ``smallest`` px the per-tile overhead would cost more than the
+    parallelism gains; then fewer tiles than workers may result."""
+    tile = largest
+    while True:
+        tiles = math.ceil(n_e / tile) * math.ceil(n_u / tile)
+        if tiles >= 2 * workers or tile // 2 < smallest:
+            return tile, tiles
+        tile //= 2
