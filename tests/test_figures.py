@@ -449,3 +449,14 @@ def test_fig9_one_colour_bar_and_legible_sparse_cells(drawn):
     assert 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2] < 0.75  # not pale yellow on white
     for k, ax in enumerate(fig.axes[1:4], start=1):
         assert ax.get_ylabel() == f"(y - 1) / $10^{{-{2 * k}}}$"
+
+
+def test_a_long_figure_says_what_it_is_doing(tmp_path):
+    """`figures --only fig4 --scale 2` shows progress inside the figure, not a
+    bar stuck at 0/1: the recipe reports its scan rows and its drawing."""
+    notes = []
+    settings = F.Settings(out=tmp_path, scale=SCALE, dpi=40, progress=notes.append)
+    (res,) = F.make_figures(settings, only=["fig4"])
+    assert res.error is None
+    assert any(n.startswith("fig4: scan 60 x 42, row ") for n in notes)
+    assert "fig4: drawing" in notes and notes[-1] == "fig4: writing fig4.png"

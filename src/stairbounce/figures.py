@@ -546,7 +546,7 @@ def _dimension(name):
             f"scale): D = {auto.dimension:.3f}",
             study_line,
         ]
-        fig.text(0.07, 0.025, "\n".join(lines), fontsize=9, va="bottom", ha="left")
+        fig.text(0.07, 0.05, "\n".join(lines), fontsize=9, va="bottom", ha="left")
         v1, w1 = _compare(est.dimension, paper, tol=0.08)
         v2, w2 = _compare(auto.dimension, paper, ci=auto.ci)
         rows = [
