@@ -460,3 +460,30 @@ def test_a_long_figure_says_what_it_is_doing(tmp_path):
     assert res.error is None
     assert any(n.startswith("fig4: scan 60 x 42, row ") for n in notes)
     assert "fig4: drawing" in notes and notes[-1] == "fig4: writing fig4.png"
+
+
+def test_no_legend_entry_for_a_curve_outside_the_window():
+    """A window above every tongue and right of the Corollary 2.1 curve gets no
+    legend; the same renderer names both curves where they cross the window."""
+    import matplotlib.pyplot as plt
+
+    from stairbounce.orbits import orbit_diagram
+    from stairbounce.plane import scan
+    from stairbounce.plot import plot_orbit_diagram, plot_scan
+
+    # u in [1.2, 1.5] at e in [0.5, 1]: tongue n reaches u = 1.2 only below e = 0.03,
+    # and the curve (1-e)/(2 sqrt(2e)) is below 0.5 there
+    ds = scan(e=(0.5, 1.0, 20), u=(1.2, 1.5, 20), max_iter=50)
+    fig, ax = plt.subplots()
+    plot_scan(ds, ax=ax, overlay=("tongues", "bound"))
+    assert ax.get_legend() is None
+    ds = scan(e=(0.0, 0.3, 20), u=(0.3, 0.9, 20), max_iter=50)
+    fig, ax = plt.subplots()
+    plot_scan(ds, ax=ax, overlay=("tongues", "bound"))
+    assert len(ax.get_legend().get_texts()) == 2
+    # inside one tongue at e = 0.1, u in [0.75, 0.8]: neither a tongue start nor an end
+    od = orbit_diagram(0.1, np.linspace(0.75, 0.8, 20), transient=20, keep=5)
+    fig, ax = plt.subplots()
+    plot_orbit_diagram(od, ax=ax, overlay=("tongues",))
+    assert ax.get_legend() is None
+    plt.close("all")
