@@ -3,11 +3,17 @@ beside what the paper states.
 
 Every recipe uses only the public API (``trajectory``, ``scan``, ``fractal``,
 ``orbits`` and the ``plot`` renderers) and returns a :class:`Result`: the files
-it wrote, rows of "paper says / we measured" for the report, its parameters
-and how long it took.  :func:`make_figures` runs a selection, keeps going when
-one fails, and caches the expensive datasets on disk keyed by their inputs;
-:func:`write_report` writes ``report.md``, ``report.html`` and
-``manifest.json``.
+it wrote, a caption (what is drawn, the colours, which parameters are the
+paper's and which are ours), rows of "paper says / we measured" each with a
+verdict (:class:`Row`: agrees, differs by how much, or not comparable and
+why), its parameters and how long it took.  :func:`make_figures` runs a
+selection, keeps going when one fails, and caches the expensive datasets on
+disk keyed by their inputs; :func:`write_report` writes ``report.md``,
+``report.html`` and ``manifest.json``, keeping the figures of an earlier run
+in the same folder that this run did not make (merged by figure).
+
+Recipes added by other parts of the project return the same :class:`Result`
+and fill :attr:`Row.verdict` and :attr:`Row.why`.
 """
 
 from __future__ import annotations
@@ -109,6 +115,8 @@ class Row:
 
 @dataclass
 class Result:
+    """What a recipe made: its files, caption, report rows and parameters."""
+
     name: str
     title: str
     files: list[str] = field(default_factory=list)
