@@ -556,7 +556,7 @@ def test_console_script_with_local_workers(tmp_path, reference):
         capture_output=True, text=True, timeout=300,
     )
     assert r.returncode == 0, r.stderr
-    assert "computed in 2 local worker(s)" in r.stdout
+    assert "computed in 2 local workers" in r.stdout
     xr.testing.assert_identical(xr.open_zarr(store, consolidated=False).compute(), reference)
 
 

@@ -77,7 +77,7 @@ def test_fig8_rows_count_branches(made):
     row = next(f for f in manifest["figures"] if f["name"] == "fig8")["rows"][0]
     counts = [int(c) for c in re.findall(r"n=\d+: (\d+)", row["measured"])]
     assert counts == [1, 2, 3, 4, 5, 6]
-    assert row["agrees"] is True
+    assert row["agrees"] is True and row["verdict"] == "agrees"
 
 
 def test_rerun_reads_the_cache(made, tmp_path, monkeypatch):
@@ -134,3 +134,356 @@ def test_bad_input(args, needle, tmp_path, capsys):
         main(["figures", "--out", str(tmp_path / "x"), *args])
     err = capsys.readouterr().err
     assert exc.value.code == 2 and needle in err and len(err.strip().splitlines()) == 1
+
+
+# --------------------------------------------------------------------------- #
+# The report: a verdict on every row, captions, partial runs merged            #
+# --------------------------------------------------------------------------- #
+
+
+def test_every_row_has_a_verdict_and_every_figure_a_caption(made):
+    """No blank verdict: a blank cell reads as "not checked" (issue 15)."""
+    out, _, manifest = made
+    report = (out / "report.md").read_text()
+    for f in manifest["figures"]:
+        assert len(f["caption"]) > 80, f["name"]
+        assert f["rows"], f["name"]
+        for row in f["rows"]:
+            assert row["verdict"] in F.VERDICTS, (f["name"], row)
+            if row["verdict"] != "agrees":
+                assert row["why"], (f["name"], row)  # by how much, or why not comparable
+    assert "no verdict" not in report
+    for line in report.splitlines():
+        if line.startswith("| ") and not line.startswith("| quantity"):
+            assert "|  |" not in line and not line.rstrip().endswith("| |"), line
+    # the automatic-range rows: "differs" exactly when the paper's value is
+    # outside their interval (at the paper's 500 px it is, for both windows:
+    # README), and they say which scale they leave out
+    by_name = {f["name"]: f for f in manifest["figures"]}
+    for name in ("fig6", "fig7"):
+        auto = next(r for r in by_name[name]["rows"] if "automatic" in r["quantity"])
+        lo, hi = (float(x) for x in re.search(r"95% CI (\S+?)\.\.(\S+?)\)", auto["measured"]).groups())
+        paper = F.DIMENSION_WINDOWS[name][1]
+        assert auto["verdict"] == ("agrees" if lo <= paper <= hi else "differs")
+        assert "pixel scale" in auto["why"]
+
+
+def test_row_verdicts():
+    assert F.Row("q", "p", "m", True).verdict == "agrees"
+    assert F.Row("q", "p", "m", False).verdict == "differs"
+    assert F.Row("q", "p", "m", verdict="differs", why="+0.1").agrees is False
+    assert F.Row("q", "p", "m").verdict_text() == "no verdict"
+    with pytest.raises(ValueError, match="verdict must be one of"):
+        F.Row("q", "p", "m", verdict="maybe")
+    # the paper's value inside the interval agrees; outside it differs by the signed gap
+    assert F._compare(1.40, 1.324, ci=(1.30, 1.50))[0] == "agrees"
+    assert F._compare(1.53, 1.403, ci=(1.52, 1.55)) == (
+        "differs", "+0.127 (the paper's value is outside our 95% CI)")
+
+
+def test_partial_run_keeps_the_full_report(made, tmp_path, capsys):
+    """`figures --only fig3` into a folder with a full run merges by figure."""
+    import shutil
+
+    out, cache, manifest = made
+    folder = tmp_path / "figs"
+    shutil.copytree(out, folder)
+    with pytest.raises(SystemExit) as exc:
+        main(["figures", "--out", str(folder), "--only", "fig3", "--dpi", "40",
+              "--cache-dir", str(cache)])
+    assert exc.value.code == 0
+    said = capsys.readouterr().out
+    assert "keeps 12 figures of the earlier run" in said and "merged by figure" in said
+    merged = json.loads((folder / "manifest.json").read_text())
+    assert [f["name"] for f in merged["figures"]] == list(F.FIGURES)
+    assert len(merged["kept_from_earlier_run"]) == 12 and "fig3" not in merged["kept_from_earlier_run"]
+    report = (folder / "report.md").read_text()
+    assert "## fig9:" in report and "kept from an earlier run" in report
+    # an empty folder: nothing to keep, nothing said
+    with pytest.raises(SystemExit):
+        main(["figures", "--out", str(tmp_path / "new"), "--only", "fig3", "--dpi", "40"])
+    assert "the report keeps" not in capsys.readouterr().out
+
+
+def test_no_blank_line_on_stderr_when_not_a_terminal(tmp_path):
+    import subprocess
+    import sys
+
+    exe = [sys.executable, "-c", "from stairbounce.cli import main; main()"]
+    run = subprocess.run([*exe, "figures", "--out", str(tmp_path), "--only", "fig3", "--dpi", "40",
+                          "--no-cache"], capture_output=True, text=True)
+    assert run.returncode == 0
+    assert run.stderr.strip() and "" not in run.stderr.splitlines(), repr(run.stderr)
+    assert "wrote 1 figure and" in run.stdout  # singular
+
+
+# --------------------------------------------------------------------------- #
+# The figures themselves: the defects a referee saw, where a test can see them #
+# --------------------------------------------------------------------------- #
+
+
+@pytest.fixture(scope="module")
+def drawn(tmp_path_factory):
+    """Every figure, kept as a matplotlib Figure after it is saved at 60 dpi."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    out = tmp_path_factory.mktemp("drawn")
+    study = out / "border_dimension.json"
+    # a made-up study result (not a measurement): the figure must show what the file says
+    study.write_text(json.dumps({
+        "fig6": {"dimension": 1.4567, "ci95": [1.41, 1.50], "method": "test fixture",
+                 "details": "-"}}))
+    figs = {}
+    real = F._save
+
+    def keep(fig, settings, name):
+        figs[name] = fig
+        return real(fig, settings, name)
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(F, "_save", keep)
+    try:
+        settings = F.Settings(out=out, scale=SCALE, dpi=60, border_dimension=study)
+        results = F.make_figures(settings)
+    finally:
+        mp.undo()
+    assert [r.error for r in results] == [None] * len(F.FIGURES)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    for fig in figs.values():
+        FigureCanvasAgg(fig)  # closed by pyplot: an Agg canvas to measure the text on
+        fig.canvas.draw()
+    return figs, {r.name: r for r in results}
+
+
+def _texts(fig):
+    return [t for t in fig.findobj(matplotlib_text()) if t.get_visible() and t.get_text().strip()]
+
+
+def matplotlib_text():
+    from matplotlib.text import Text
+
+    return Text
+
+
+def test_no_text_outside_the_figure_and_no_offset_notation(drawn):
+    figs, _ = drawn
+    for name, fig in figs.items():
+        r = fig.canvas.get_renderer()
+        w, h = fig.get_size_inches()
+        tight = fig.get_tightbbox(r)  # everything drawn, in inches
+        assert tight.x0 >= -0.01 and tight.y0 >= -0.01, (name, tight)
+        assert tight.x1 <= w + 0.01 and tight.y1 <= h + 0.01, (name, tight, (w, h))
+        for t in fig.texts:
+            ext = t.get_window_extent(r)
+            assert fig.bbox.contains(ext.x0, ext.y0) and fig.bbox.contains(ext.x1, ext.y1), name
+        for ax in fig.axes:
+            # "1e-5+1" above an axis: matplotlib's offset text
+            assert not ax.yaxis.get_offset_text().get_text(), (name, ax.get_title())
+            assert not ax.xaxis.get_offset_text().get_text(), (name, ax.get_title())
+
+
+def test_infinity_is_a_real_superscript(drawn):
+    """(n, 0^inf) is written with mathtext's raised infinity, never a caret."""
+    figs, _ = drawn
+    seen = 0
+    for name, fig in figs.items():
+        for t in _texts(fig):
+            s = t.get_text()
+            assert "\u221e" not in s and "0^inf" not in s, (name, s)
+            if "\\infty" in s:
+                assert s.count("$") >= 2 and ("0^\\infty" in s or "0^{\\infty}" in s), (name, s)
+                seen += 1
+    assert seen >= 3  # Fig. 1's word, Fig. 3's title and legend, the tongue legends
+
+
+def test_figs_4_and_5_share_one_discrete_colour_scale(drawn):
+    """The same word length has the same colour in all six panels, and
+    lengths 1..6 are told apart (they were near-identical purples)."""
+    figs, _ = drawn
+    names = ["fig4", "fig5a", "fig5b", "fig5c", "fig5d", "fig5e"]
+    lengths = np.array([1, 2, 3, 4, 5, 6, 7, 8, 11, 40, 600])
+    colours = []
+    for name in names:
+        im = figs[name].axes[0].get_images()[0]
+        colours.append(im.to_rgba(lengths.astype(float)))  # through the image's own norm
+        bar = figs[name].axes[1]
+        assert "white: no periodic sliding solution within max_iter = 1000" in bar.get_ylabel()
+    for c in colours[1:]:
+        assert np.array_equal(c, colours[0])
+    first = [tuple(c) for c in colours[0][:6]]  # 1, 2, 3, 4, 5, 6
+    assert len(set(first)) == 6
+    assert tuple(colours[0][5]) == tuple(colours[0][6])  # 6 and 7: one class
+    assert tuple(colours[0][0][:3]) == (0.0, 0.0, 0.0)  # length 1 black, as in the paper
+
+
+def test_fig5_titles_and_legend_off_the_data(drawn):
+    figs, _ = drawn
+    for letter in "abcde":
+        fig = figs[f"fig5{letter}"]
+        ax = fig.axes[0]
+        assert ax.get_title().startswith(f"Fig. 5{letter}: [")
+        legend = ax.get_legend()
+        if legend is not None:
+            r = fig.canvas.get_renderer()
+            assert legend.get_window_extent(r).y1 <= ax.get_window_extent(r).y0  # below the axes
+
+
+def test_fig3_labels_sit_on_white_inside_the_axes(drawn):
+    from stairbounce.plane import tongue_mask
+
+    figs, _ = drawn
+    fig = figs["fig3"]
+    ax = fig.axes[0]
+    r = fig.canvas.get_renderer()
+    labels = [t for t in ax.texts if t.get_text().startswith("n = ")]
+    assert {t.get_text() for t in labels} >= {"n = 1", "n = 2", "n = 3", "n = 4", "n = 5"}
+    inv = ax.transData.inverted()
+    for t in labels:
+        ext = t.get_window_extent(r)
+        assert ax.get_window_extent(r).contains(ext.x0, ext.y0)
+        assert ax.get_window_extent(r).contains(ext.x1, ext.y1), t.get_text()
+        if t.get_text() == "n = 1":
+            continue
+        # every corner and the centre of the label's box lie outside the tongues
+        pts = inv.transform([(ext.x0, ext.y0), (ext.x1, ext.y1), (ext.x0, ext.y1),
+                             (ext.x1, ext.y0), ((ext.x0 + ext.x1) / 2, (ext.y0 + ext.y1) / 2)])
+        assert not tongue_mask(pts[:, 0], pts[:, 1], 50).any(), t.get_text()
+        assert sum(matplotlib_colour(t.get_color())) < 1.0  # dark text on white
+
+
+def matplotlib_colour(c):
+    from matplotlib.colors import to_rgb
+
+    return to_rgb(c)
+
+
+def test_fig2_colour_bar_legend_and_y1(drawn):
+    figs, results = drawn
+    fig = figs["fig2"]
+    ax = fig.axes[0]
+    assert len(fig.axes) == 2 and fig.axes[1].get_ylabel() == "iterate index n"
+    labels = ax.get_legend_handles_labels()[1]
+    assert any(label.startswith("y = 1") for label in labels)
+    handle = ax.get_legend_handles_labels()[0][labels.index("iterates (colour: index n)")]
+    assert matplotlib_colour(handle.get_color()) == pytest.approx((0.45, 0.45, 0.45))
+    assert "schematics" in results["fig2"].caption and "schematics" in results["fig1"].caption
+
+
+def test_figs_6_and_7_square_and_unaliased_with_the_study(drawn):
+    figs, results = drawn
+    for name in ("fig6", "fig7"):
+        fig = figs[name]
+        ax = fig.axes[0]
+        r = fig.canvas.get_renderer()
+        box = ax.get_window_extent(r)
+        (e0, e1), (u0, u1) = F.DIMENSION_WINDOWS[name][0]
+        # drawn with the window's own proportions (both windows are square to 2%)
+        assert box.width / box.height == pytest.approx((e1 - e0) / (u1 - u0), rel=0.02)
+        shown = ax.get_images()[0].get_array()
+        assert shown.shape[0] <= box.height + 1 and shown.shape[1] <= box.width + 1
+        text = "\n".join(t.get_text() for t in fig.texts)
+        assert "fit range: boxes 1-" in text and "our reading of the paper" in text
+        assert f"paper: D = {F.DIMENSION_WINDOWS[name][1]}" in text
+    assert "D = 1.457 [1.410, 1.500], test fixture" in "\n".join(t.get_text() for t in figs["fig6"].texts)
+    assert "no study result" in "\n".join(t.get_text() for t in figs["fig7"].texts)
+    row = results["fig6"].rows[-1]
+    assert row.verdict == "differs" and row.why.startswith("+0.133")
+
+
+def test_plot_border_keeps_a_one_pixel_line_connected():
+    """An image with more pixels than the axes is reduced by "any" blocks:
+    a one-pixel diagonal stays a connected chain, no gaps."""
+    import matplotlib.pyplot as plt
+
+    from stairbounce.plot import plot_border
+
+    img = np.eye(600, dtype=bool)
+    fig, ax = plt.subplots(figsize=(2, 2), dpi=100)
+    plot_border(img, ax=ax)
+    shown = ax.get_images()[0].get_array()
+    assert shown.shape[0] < 600 and np.array_equal(np.asarray(shown), np.eye(shown.shape[0], dtype=bool))
+    plt.close(fig)
+
+
+def test_border_dimension_loader(tmp_path):
+    assert F.load_border_dimension(tmp_path / "absent.json") is None
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"fig6": {"dimension": 1.4, "ci95": [1.5, 1.3], "method": "m"}}))
+    with pytest.raises(ValueError, match="border_dimension: .*bad.json"):
+        F.load_border_dimension(bad)
+    bad.write_text("{not json")
+    with pytest.raises(ValueError, match="is not a dimension study result"):
+        F.load_border_dimension(bad)
+
+
+def test_fig8_legend_clear_of_the_first_grazing_and_labels_inside(drawn):
+    import math
+
+    figs, _ = drawn
+    fig = figs["fig8"]
+    ax = fig.axes[0]
+    r = fig.canvas.get_renderer()
+    legend = ax.get_legend().get_window_extent(r)
+    x, y = ax.transData.transform((math.sqrt(0.5), 1.0))
+    assert not legend.contains(x, y)
+    labels = [t for t in ax.texts if t.get_text().startswith("n=")]
+    assert [t.get_text() for t in labels][:3] == ["n=1", "n=2", "n=3"]
+    axbox = ax.get_window_extent(r)
+    for t in labels:
+        ext = t.get_window_extent(r)
+        assert axbox.x0 <= ext.x0 and ext.x1 <= axbox.x1, t.get_text()  # not under the colour bar
+        assert not ext.overlaps(legend), t.get_text()
+
+
+def test_fig9_one_colour_bar_and_legible_sparse_cells(drawn):
+    from matplotlib.colors import to_rgb
+
+    figs, _ = drawn
+    fig = figs["fig9"]
+    images = [im for ax in fig.axes for im in ax.get_images()]
+    assert len(images) == 4 and len(fig.axes) == 5  # four panels, one colour bar
+    assert len({(im.norm.vmin, im.norm.vmax) for im in images}) == 1
+    rgb = to_rgb(images[0].cmap(images[0].norm(1.0)))
+    assert 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2] < 0.75  # not pale yellow on white
+    for k, ax in enumerate(fig.axes[1:4], start=1):
+        assert ax.get_ylabel() == f"(y - 1) / $10^{{-{2 * k}}}$"
+
+
+def test_a_long_figure_says_what_it_is_doing(tmp_path):
+    """`figures --only fig4 --scale 2` shows progress inside the figure, not a
+    bar stuck at 0/1: the recipe reports its scan rows and its drawing."""
+    notes = []
+    settings = F.Settings(out=tmp_path, scale=SCALE, dpi=40, progress=notes.append)
+    (res,) = F.make_figures(settings, only=["fig4"])
+    assert res.error is None
+    assert any(n.startswith("fig4: scan 60 x 42, row ") for n in notes)
+    assert "fig4: drawing" in notes and notes[-1] == "fig4: writing fig4.png"
+
+
+def test_no_legend_entry_for_a_curve_outside_the_window():
+    """A window above every tongue and right of the Corollary 2.1 curve gets no
+    legend; the same renderer names both curves where they cross the window."""
+    import matplotlib.pyplot as plt
+
+    from stairbounce.orbits import orbit_diagram
+    from stairbounce.plane import scan
+    from stairbounce.plot import plot_orbit_diagram, plot_scan
+
+    # u in [1.2, 1.5] at e in [0.5, 1]: tongue n reaches u = 1.2 only below e = 0.03,
+    # and the curve (1-e)/(2 sqrt(2e)) is below 0.5 there
+    ds = scan(e=(0.5, 1.0, 20), u=(1.2, 1.5, 20), max_iter=50)
+    fig, ax = plt.subplots()
+    plot_scan(ds, ax=ax, overlay=("tongues", "bound"))
+    assert ax.get_legend() is None
+    ds = scan(e=(0.0, 0.3, 20), u=(0.3, 0.9, 20), max_iter=50)
+    fig, ax = plt.subplots()
+    plot_scan(ds, ax=ax, overlay=("tongues", "bound"))
+    assert len(ax.get_legend().get_texts()) == 2
+    # inside one tongue at e = 0.1, u in [0.75, 0.8]: neither a tongue start nor an end
+    od = orbit_diagram(0.1, np.linspace(0.75, 0.8, 20), transient=20, keep=5)
+    fig, ax = plt.subplots()
+    plot_orbit_diagram(od, ax=ax, overlay=("tongues",))
+    assert ax.get_legend() is None
+    plt.close("all")

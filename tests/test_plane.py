@@ -506,7 +506,9 @@ def test_plot_scan(tmp_path):
         plt.close(fig)
     fig, ax = plt.subplots()
     plot_scan(ds, ax=ax)
-    assert type(ax.get_images()[0].norm).__name__ == "LogNorm"
+    # the fixed discrete word-length classes (1, 2, 3, 4, 5, 6-7, ...), not a scale fitted to the data
+    assert type(ax.get_images()[0].norm).__name__ == "BoundaryNorm"
+    assert list(ax.get_images()[0].norm.boundaries[:7]) == [1, 2, 3, 4, 5, 6, 8]
     assert len(fig.axes) == 2  # the colour bar
     plt.close(fig)
     # a dataset reduced to one variable (as the atlas renderer passes) still plots
@@ -571,7 +573,7 @@ def test_cli_scan_defaults_are_figure_4(tmp_path, capsys, monkeypatch):
         (["--max-iter", "x"], "max-iter"),
         (["--e", "a:b"], "--e must be a range MIN:MAX of numbers"),
         (["--field", "colour"], "--field must be one of"),
-        (["--overlay", "grid"], "--overlay must be a comma-separated list"),
+        (["--overlay", "grid"], "--overlay must be among tongues, bound (comma-separated or repeated)"),
         (["--out", "x.csv"], "--out must end in .zarr or .nc"),
         (["--png", "x.jpg"], "--png must end in .png, .pdf or .svg"),
         (["--y0", "-1"], "--y0 must be >= 0"),

@@ -3,11 +3,17 @@ beside what the paper states.
 
 Every recipe uses only the public API (``trajectory``, ``scan``, ``fractal``,
 ``orbits`` and the ``plot`` renderers) and returns a :class:`Result`: the files
-it wrote, rows of "paper says / we measured" for the report, its parameters
-and how long it took.  :func:`make_figures` runs a selection, keeps going when
-one fails, and caches the expensive datasets on disk keyed by their inputs;
-:func:`write_report` writes ``report.md``, ``report.html`` and
-``manifest.json``.
+it wrote, a caption (what is drawn, the colours, which parameters are the
+paper's and which are ours), rows of "paper says / we measured" each with a
+verdict (:class:`Row`: agrees, differs by how much, or not comparable and
+why), its parameters and how long it took.  :func:`make_figures` runs a
+selection, keeps going when one fails, and caches the expensive datasets on
+disk keyed by their inputs; :func:`write_report` writes ``report.md``,
+``report.html`` and ``manifest.json``, keeping the figures of an earlier run
+in the same folder that this run did not make (merged by figure).
+
+Recipes added by other parts of the project return the same :class:`Result`
+and fill :attr:`Row.verdict` and :attr:`Row.why`.
 """
 
 from __future__ import annotations
@@ -27,7 +33,8 @@ import numpy as np
 from . import __version__
 from ._io import atomic_path
 
-__all__ = ["FIGURES", "Settings", "Result", "make_figures", "write_report", "BLOWUPS"]
+__all__ = ["FIGURES", "Settings", "Row", "Result", "VERDICTS", "make_figures", "write_report",
+           "read_manifest", "load_border_dimension", "BLOWUPS"]
 
 # Figure 5 of the paper: a) .. e)
 BLOWUPS = {
@@ -41,7 +48,12 @@ BLOWUPS = {
 
 @dataclass
 class Settings:
-    """What every recipe needs: where to write, how, and how big."""
+    """What every recipe needs: where to write, how, and how big.
+
+    ``progress(text)``, when given, is told what a recipe is doing (its
+    scans, its drawing), so that a long figure is never silent;
+    ``border_dimension`` is the dimension study's JSON file (None: the one
+    shipped in ``stairbounce/data``)."""
 
     out: Path
     fmt: str = "png"
@@ -49,24 +61,62 @@ class Settings:
     scale: float = 1.0
     max_iter: int = 1000
     cache_dir: Path | None = None  # None: no cache
+    progress: object = field(default=None, repr=False, compare=False)
+    border_dimension: Path | None = None
 
     def px(self, n):
         """A pixel count of the default set, scaled (at least 16)."""
         return max(16, int(round(n * self.scale)))
 
+    def note(self, text):
+        if self.progress is not None:
+            self.progress(text)
+
+    def record(self):
+        """The settings as they go into the manifest (paths as text)."""
+        return {"fmt": self.fmt, "dpi": self.dpi, "scale": self.scale, "max_iter": self.max_iter}
+
+
+VERDICTS = ("agrees", "differs", "not comparable")
+"""What a report row can conclude; "differs" says by how much and
+"not comparable" says why, in :attr:`Row.why`."""
+
 
 @dataclass
 class Row:
-    """One line of the report: a quantity, the paper's statement, ours."""
+    """One line of the report: a quantity, the paper's statement, ours, and the verdict.
+
+    ``verdict`` is one of :data:`VERDICTS`; ``why`` says by how much a row
+    differs, why it is not comparable, or on what margin it agrees.  Rows
+    made with only ``agrees`` (True/False) get "agrees"/"differs"; a row with
+    neither is printed as "no verdict", which the tests do not let through.
+    """
 
     quantity: str
     paper: str
     measured: str
-    agrees: bool | None = None  # None: nothing to compare
+    agrees: bool | None = None
+    verdict: str | None = None
+    why: str = ""
+
+    def __post_init__(self):
+        if self.verdict is None and self.agrees is not None:
+            self.verdict = "agrees" if self.agrees else "differs"
+        if self.verdict is not None and self.verdict not in VERDICTS:
+            raise ValueError(f"verdict must be one of {', '.join(VERDICTS)}, got {self.verdict!r}")
+        if self.agrees is None and self.verdict in ("agrees", "differs"):
+            self.agrees = self.verdict == "agrees"
+
+    def verdict_text(self) -> str:
+        if self.verdict is None:
+            return "no verdict"
+        return self.verdict + (f": {self.why}" if self.why else "")
 
 
 @dataclass
 class Result:
+    """What a recipe made: its files, caption, report rows and parameters."""
+
     name: str
     title: str
     files: list[str] = field(default_factory=list)
@@ -74,6 +124,55 @@ class Result:
     params: dict = field(default_factory=dict)
     seconds: float = 0.0
     error: str | None = None
+    caption: str = ""
+
+
+def _compare(value, paper, ci=None, tol=None, unit=""):
+    """A verdict on a measured ``value`` against the paper's: "agrees" when
+    ``paper`` lies in the 95% interval ``ci`` (or within ``tol``), else
+    "differs" by ``value - paper``."""
+    delta = value - paper
+    if tol is not None:
+        ok = abs(delta) <= tol
+        how = f"{'within' if ok else 'outside'} {tol:g}"
+    else:
+        ok = ci[0] <= paper <= ci[1]
+        how = f"the paper's value is {'inside' if ok else 'outside'} our 95% CI"
+    return ("agrees" if ok else "differs"), f"{delta:+.3f}{unit} ({how})"
+
+
+STUDY_FILE = Path(__file__).parent / "data" / "border_dimension.json"
+"""The dimension study's best estimate per window (written by the study of
+the border's dimension; see README, 'Fractal dimension')."""
+
+
+def load_border_dimension(path=None):
+    """load_border_dimension(path=None) -> dict or None
+
+    The dimension study's result, ``{"fig6": {"dimension": D, "ci95": [lo,
+    hi], "method": str, "details": str}, "fig7": {...}}``, read from ``path``
+    (default :data:`STUDY_FILE`); None when the file is absent, so that a
+    figure says "no study result" rather than show a number nobody measured.
+
+    Raises ValueError naming the file when it is malformed.
+    """
+    path = STUDY_FILE if path is None else Path(path)
+    if not path.exists():
+        return None
+    try:
+        data = json.loads(path.read_text())
+        out = {}
+        for name, entry in data.items():
+            lo, hi = (float(x) for x in entry["ci95"])
+            d = float(entry["dimension"])
+            if not (math.isfinite(d) and lo <= hi):
+                raise ValueError("dimension must be finite and ci95 = [lo, hi] with lo <= hi")
+            out[name] = {"dimension": d, "ci95": [lo, hi], "method": str(entry["method"]),
+                         "details": str(entry.get("details", ""))}
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise ValueError(f"border_dimension: {path} is not a dimension study result "
+                         f"({type(exc).__name__}: {exc})") from None
+    return out
 
 
 # --------------------------------------------------------------------------- #
@@ -102,19 +201,25 @@ def _cached(settings, kind, inputs, compute):
     return ds
 
 
-def _scan(settings, e, u, n_e, n_u):
+def _scan(settings, label, e, u, n_e, n_u):
     from .plane import scan
 
+    def rows(done, total):
+        settings.note(f"{label}: scan {n_e} x {n_u}, row {done}/{total}")
+
+    settings.note(f"{label}: scan {n_e} x {n_u}")
     inputs = {"e": list(e), "u": list(u), "n_e": n_e, "n_u": n_u, "max_iter": settings.max_iter}
     return _cached(
         settings, "scan", inputs,
-        lambda: scan(e=(e[0], e[1], n_e), u=(u[0], u[1], n_u), max_iter=settings.max_iter),
+        lambda: scan(e=(e[0], e[1], n_e), u=(u[0], u[1], n_u), max_iter=settings.max_iter,
+                     progress=rows),
     )
 
 
 def _save(fig, settings, name):
     import matplotlib.pyplot as plt
 
+    settings.note(f"{name}: writing {name}.{settings.fmt}")
     path = Path(settings.out) / f"{name}.{settings.fmt}"
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=settings.dpi, format=settings.fmt)
@@ -122,19 +227,25 @@ def _save(fig, settings, name):
     return path.name
 
 
-def _subplots(*args, **kwargs):
+def _subplots(settings, *args, **kwargs):
+    """A new figure at the dpi it will be saved at, so that what a renderer
+    measures in pixels (the border of Figs. 6/7) is what the file holds."""
     import matplotlib.pyplot as plt
 
-    return plt.subplots(*args, **kwargs)
+    return plt.subplots(*args, dpi=settings.dpi, **kwargs)
 
 
 # --------------------------------------------------------------------------- #
 # recipes                                                                     #
 # --------------------------------------------------------------------------- #
 
+_SCHEMATIC = ("The paper's Figs. 1 and 2 are schematics; here they are drawn from a real "
+              "orbit computed exactly (ours).")
+
 
 def fig1(s: Settings) -> Result:
     """Fig. 1: the staircase and a trajectory with impacts, accumulation, slide."""
+    from .model import SLIDING, iterate
     from .plot import plot_trajectory
     from .symbolic import sliding_word
     from .trajectory import trajectory
@@ -144,42 +255,92 @@ def fig1(s: Settings) -> Result:
     word = sliding_word(e, u)
     steps = word.period
     traj = trajectory(e, u, 1.0, 0.0, steps)
-    fig, ax = _subplots(figsize=(9, 6))
+    fig, ax = _subplots(s, figsize=(9, 6))
     plot_trajectory(traj, ax=ax)
-    ax.set_title(f"Fig. 1: e = {e}, u = {u}, the periodic sliding solution {word}")
-    acc = traj.accumulations[0] if traj.accumulations else None
+    ax.set_title(f"Fig. 1: e = {e}, u = {u}: one period of the periodic sliding solution "
+                 f"${_math_word(word)}$", fontsize="medium")
+    fig.tight_layout()
+    ys, vs, ks = iterate(1.0, 0.0, e, u, steps)
+    back = (ys[-1], vs[-1]) == (1.0, 0.0) and ks[-1] == SLIDING and not (ks[1:-1] == SLIDING).any()
     rows = [
-        Row("model", "a ball bouncing down a staircase under gravity (1.3)-(1.4)",
-            f"{len(traj.impacts)} impacts drawn, {len(traj.accumulations)} accumulation, "
-            f"{len(traj.slides)} slide over {steps} steps"),
-        Row("word of the solution drawn", "-", f"{word} (period {word.period}, "
-            f"{word.impacts} finite impacts)"),
+        Row("the drawn solution is periodic", "a periodic sliding solution returns to (1, 0) "
+            "by sliding (Section 3)",
+            f"{word}: from (1, 0), the first slide is on step {steps}, back at "
+            f"({ys[-1]:g}, {vs[-1]:g})", verdict="agrees" if back else "differs",
+            why="exactly (1, 0) after one period" if back else "it does not return"),
     ]
+    acc = traj.accumulations[0] if traj.accumulations else None
     if acc is not None:
-        rows.append(Row("accumulation time (sum of the series of eq. 2.2)", "finite",
-                        f"t = {acc.time:.12g} on step {acc.step}"))
+        # the series of eq. (2.2) from the first impact on that step, summed in closed form
+        first = next(i for i in traj.impacts if i.step == acc.step)
+        w = first.v_after
+        t_sum = first.time + 2.0 * w / (1.0 - e)
+        gap = abs(t_sum - acc.time)
+        rows.append(Row("accumulation time (eq. 2.2)", "the impacts accumulate in finite time",
+                        f"t = {acc.time:.12g} on step {acc.step}; first impact + "
+                        f"2w/(1-e) = {t_sum:.12g}", verdict="agrees" if gap < 1e-12 else "differs",
+                        why=f"the two differ by {gap:.1e}"))
+    caption = (f"{_SCHEMATIC} The ball (blue) leaves an edge at (1, 0), bounces (red dots), its "
+               f"impacts accumulate (star) and it slides (green) to the next edge; grey: the "
+               f"staircase, step height = step length = 1. e = {e}, u = {u} are ours, chosen "
+               f"for a slide long enough to see.")
     return Result("fig1", "The staircase model", [_save(fig, s, "fig1")], rows,
-                  {"e": e, "u": u, "y0": 1.0, "v0": 0.0, "steps": steps})
+                  {"e": e, "u": u, "y0": 1.0, "v0": 0.0, "steps": steps}, caption=caption)
+
+
+def _math_word(word):
+    """A word as mathtext: ``(1, 1, 2, 0^{\\infty})``."""
+    return "(" + ", ".join([*map(str, word.letters), r"0^{\infty}"]) + ")"
+
+
+def _min_pair_distance(points, chunk=512):
+    """The least distance between two of ``points`` (rows), in chunks of rows."""
+    best = math.inf
+    for i in range(0, len(points), chunk):
+        block = points[i:i + chunk]
+        d = np.sqrt(((block[:, None, :] - points[None, :, :]) ** 2).sum(axis=-1))
+        later = np.arange(i, i + len(block))[:, None] < np.arange(len(points))[None, :]
+        if later.any():
+            best = min(best, float(d[later].min()))
+    return best
 
 
 def fig2(s: Settings) -> Result:
     """Fig. 2: the Poincare map, as the section of a long orbit."""
-    from .model import iterate
+    from .model import SLIDING, iterate
     from .plot import plot_poincare_section
 
-    e, u, y0, v0, steps = 0.1, 0.9, 1.0, 0.0, 3000
+    e, u, y0, v0, steps, skip = 0.1, 0.9, 1.0, 0.0, 3000, 100
     ys, vs, ks = iterate(y0, v0, e, u, steps)
-    fig, ax = _subplots(figsize=(7, 5))
+    fig, ax = _subplots(s, figsize=(8, 5))
     plot_poincare_section(ys, vs, ks, ax=ax)
-    ax.set_title(f"Fig. 2: Poincare section, e = {e}, u = {u}, {steps} steps from ({y0}, {v0})")
+    ax.plot([y0], [v0], "s", ms=6, color="C3", mec="k", mew=0.5, zorder=4,
+            label=f"start ({y0:g}, {v0:g})")
+    ax.legend(loc="center", fontsize="small")
+    ax.set_title(f"Fig. 2: Poincare section, e = {e}, u = {u}, {steps} steps from ({y0}, {v0})",
+                 fontsize="medium")
+    fig.tight_layout()
+    d = _min_pair_distance(np.stack([ys[skip:], vs[skip:]], axis=1))
+    slides = int((ks[1:] == SLIDING).sum())
+    quasi = d > 1e-9 and slides == 0
     rows = [
-        Row("domain of P", "[1, +inf) x R", f"min y over {steps} iterates = {ys[1:].min():.6f}",
-            bool(ys[1:].min() >= 1.0)),
-        Row("sliding from (1, 0)", "-",
-            "never (quasi-periodic orbit)" if not (ks == -1).any() else "slides"),
+        Row("the orbit drawn does not return (quasi-periodic)", "- (the paper's Fig. 2 is a "
+            "schematic of P)",
+            f"{slides} slides in {steps} steps; least distance between two of iterates "
+            f"{skip}..{steps}: {d:.2e} (> 1e-9: no return within {steps - skip} steps)"
+            if quasi else f"{slides} slides; least distance between two iterates {d:.2e}",
+            verdict="not comparable",
+            why="the paper names no orbit; the claim is ours, measured "
+                + ("and holds" if quasi else "and FAILS")
+                + " (the zero maximal Lyapunov exponent comes with issue 13)"),
     ]
+    caption = (f"{_SCHEMATIC} Each point is the state (y, v) at a step edge, coloured by its "
+               f"index n (colour bar); dashed: y = 1, where the map's domain [1, inf) x R "
+               f"begins; red square: the starting state (1, 0). e = {e}, u = {u}, {steps} steps are "
+               f"ours.")
     return Result("fig2", "The Poincare map", [_save(fig, s, "fig2")], rows,
-                  {"e": e, "u": u, "y0": y0, "v0": v0, "steps": steps})
+                  {"e": e, "u": u, "y0": y0, "v0": v0, "steps": steps,
+                   "min_distance": d}, caption=caption)
 
 
 def fig3(s: Settings) -> Result:
@@ -188,9 +349,10 @@ def fig3(s: Settings) -> Result:
     from .plot import plot_tongues
 
     n_max = 12
-    fig, ax = _subplots(figsize=(7, 5.5))
+    fig, ax = _subplots(s, figsize=(7, 5.5))
     plot_tongues(n_max=n_max, e=(0.0, 1.0), u=(0.0, 1.5), ax=ax)
-    ax.set_title("Fig. 3: the (n, 0^\u221e) sliding tongues (Theorem 3.1)")
+    ax.set_title(r"Fig. 3: the $(n, 0^\infty)$ sliding tongues (Theorem 3.1)")
+    fig.tight_layout()
     # the tongues end on the Corollary 2.1 curve: at the tip u_low = u_high
     gaps = []
     for n in range(2, n_max + 1):
@@ -200,23 +362,37 @@ def fig3(s: Settings) -> Result:
     worst = max(gaps)
     rows = [
         Row("tongue tips on the Corollary 2.1 curve", "the tongues finish on u = (1-e)/(2 sqrt(2e))",
-            f"largest gap between tip and curve, n = 2..{n_max}: {worst:.1e}", worst < 1e-12),
+            f"largest gap between tip and curve, n = 2..{n_max}: {worst:.1e}",
+            verdict="agrees" if worst < 1e-12 else "differs", why=f"to {worst:.0e}"),
     ]
+    caption = ("Black: the (n, 0^inf) tongues sqrt((n-1)/2) < u <= sqrt(n/2)(1-e)/(1+e) of "
+               f"Theorem 3.1, n = 1..{n_max}, drawn from the formula (the paper's window "
+               "[0, 1] x [0, 1.5]); red: the Corollary 2.1 curve u = (1-e)/(2 sqrt(2e)), no "
+               "sliding above it. Each label sits just right of its tongue's tip.")
     return Result("fig3", "The (n, 0^inf)-sliding tongues", [_save(fig, s, "fig3")], rows,
-                  {"n_max": n_max})
+                  {"n_max": n_max}, caption=caption)
+
+
+def _key_caption(s):
+    return (f"Colours: one fixed scale shared by Figs. 4 and 5a-e, word length 1 (black, the "
+            f"tongues), 2, 3, 4, 5, 6-7, 8-10, 11-15, ... (the explorer's classes); white: no "
+            f"periodic sliding solution within max_iter = {s.max_iter}. Magenta: the tongue "
+            f"boundaries of Theorem 3.1 (ours, overlaid).")
 
 
 def fig4(s: Settings) -> Result:
     """Fig. 4: the fractal pattern coloured by word length, tongues overlaid."""
-    from .plot import plot_scan
     from .plane import no_sliding_curve, tongue_mask
+    from .plot import plot_scan
 
     e, u = (0.0, 1.0), (0.0, 1.5)
     n_e, n_u = s.px(500), s.px(350)
-    ds = _scan(s, e, u, n_e, n_u)
-    fig, ax = _subplots(figsize=(8, 6))
-    plot_scan(ds, field="word_length", ax=ax, overlay=("tongues", "bound"))
-    ax.set_title(f"Fig. 4: word length of the periodic sliding solution ({n_e} x {n_u})")
+    ds = _scan(s, "fig4", e, u, n_e, n_u)
+    s.note("fig4: drawing")
+    fig, ax = _subplots(s, figsize=(8.5, 6))
+    plot_scan(ds, field="word_length", ax=ax, overlay=("tongues", "bound"),
+              title=f"Fig. 4: word length of the periodic sliding solution ({n_e} x {n_u} px)")
+    fig.tight_layout()
     E, U = np.meshgrid(ds.e.values, ds.u.values)
     wl1 = ds.word_length.values == 1
     inside = tongue_mask(E, U, 200)
@@ -224,18 +400,44 @@ def fig4(s: Settings) -> Result:
     frac_wl1 = inside[wl1].mean() if wl1.any() else float("nan")
     sliding = ds.status.values == 0
     above = sliding & (U >= no_sliding_curve(E))
+    ok = bool(frac_wl1 > 0.99 and frac_in > 0.99)
     rows = [
         Row("word length 1 = the tongues of Fig. 3", "the black region coincides with Figure 3",
             f"{100 * frac_wl1:.2f}% of word-length-1 pixels lie inside the analytic tongues; "
             f"{100 * frac_in:.2f}% of tongue pixels have word length 1",
-            bool(frac_wl1 > 0.99 and frac_in > 0.99)),
+            verdict="agrees" if ok else "differs",
+            why=f"{100 * (1 - min(frac_wl1, frac_in)):.2f}% of pixels disagree"),
         Row("no sliding above Corollary 2.1", "u >= (1-e)/(2 sqrt(2e)): no sliding solutions",
-            f"{int(above.sum())} sliding pixels above the curve", bool(above.sum() == 0)),
-        Row("periodic sliding solutions", "-",
-            f"{100 * sliding.mean():.1f}% of pixels; word lengths 1..{int(ds.word_length.max())}"),
+            f"{int(above.sum())} sliding pixels above the curve",
+            verdict="agrees" if above.sum() == 0 else "differs",
+            why="none" if above.sum() == 0 else f"{int(above.sum())} pixels"),
     ]
+    caption = (f"Every pixel centre of the paper's window [0, 1] x [0, 1.5] on the paper's "
+               f"{500} x {350} grid (here {n_e} x {n_u}), iterated from (1, 0) as in the paper, "
+               f"coloured by the length of the word of its periodic sliding solution "
+               f"({100 * sliding.mean():.1f}% of pixels have one). {_key_caption(s)} Grey "
+               f"dashed: the Corollary 2.1 curve.")
     return Result("fig4", "The fractal pattern in the (e, u) plane", [_save(fig, s, "fig4")], rows,
-                  {"e": e, "u": u, "size": [n_e, n_u], "max_iter": s.max_iter})
+                  {"e": e, "u": u, "size": [n_e, n_u], "max_iter": s.max_iter}, caption=caption)
+
+
+def _bands(s):
+    """Self-similarity of Figs. 5a-c, measured: in band n, sqrt((n-1)/2) < u <=
+    sqrt(n/2) (Fig. 5a, b, c lie in bands 1, 2, 3), the largest e of a pixel
+    with word length >= 2, against the tip of tongue n (Theorem 3.1), where
+    the band meets the Corollary 2.1 curve."""
+    found = []
+    n_e, n_u = s.px(600), s.px(300)
+    for n in range(2, 6):
+        lo, hi = math.sqrt((n - 1) / 2.0), math.sqrt(n / 2.0)
+        ds = _scan(s, f"fig5 band {n}", (0.0, 0.3), (lo, hi), n_e, n_u)
+        mask = (ds.status.values == 0) & (ds.word_length.values >= 2)
+        cols = np.where(mask.any(axis=0))[0]
+        e_max = float(ds.e.values[cols.max()]) if cols.size else 0.0
+        c = math.sqrt((n - 1) / n)
+        found.append((n, e_max, (1 - c) / (1 + c)))
+    pixel = 0.3 / n_e
+    return found, pixel
 
 
 def _blowup(name):
@@ -246,19 +448,45 @@ def _blowup(name):
 
         e, u = BLOWUPS[name]
         n = s.px(400)
-        ds = _scan(s, e, u, n, n)
-        fig, ax = _subplots(figsize=(6.5, 5.5))
-        plot_scan(ds, field="word_length", ax=ax, overlay=("tongues",))
-        ax.set_title(f"Fig. 5{letter}): [{e[0]}, {e[1]}] x [{u[0]}, {u[1]}]")
+        ds = _scan(s, name, e, u, n, n)
+        s.note(f"{name}: drawing")
+        fig, ax = _subplots(s, figsize=(7, 6.2))
+        plot_scan(ds, field="word_length", ax=ax, overlay=("tongues",), legend="below",
+                  title=f"Fig. 5{letter}: [{e[0]:g}, {e[1]:g}] x [{u[0]:g}, {u[1]:g}]")
+        fig.tight_layout()
         sliding = ds.status.values == 0
         lengths = np.unique(ds.word_length.values[sliding])
+        from .plot.plane import class_bounds
+
+        classes = np.unique(np.searchsorted(class_bounds("word_length"), lengths, side="right"))
         rows = [
-            Row("self-similar structure", "the same complex structure repeated at smaller scales",
+            Row("complex structure in the window",
+                "the same complex structure repeated at smaller scales",
                 f"{100 * sliding.mean():.1f}% sliding; {lengths.size} distinct word lengths "
-                f"(up to {int(lengths.max()) if lengths.size else 0})"),
+                f"(up to {int(lengths.max()) if lengths.size else 0}) in {classes.size} colour "
+                f"classes", verdict="agrees" if classes.size >= 5 else "differs",
+                why=f"{classes.size} of the 14 classes present (at least 5 asked)"),
         ]
+        if name == "fig5c":
+            found, pixel = _bands(s)
+            ends = ", ".join(f"{x:.4f}" for _, x, _ in found)
+            tips = ", ".join(f"{t:.4f}" for _, _, t in found)
+            factors = ", ".join(f"{found[i + 1][1] / found[i][1]:.3f}"
+                                for i in range(len(found) - 1) if found[i][1] > 0)
+            worst = max(abs(x - t) for _, x, t in found)
+            rows.append(Row(
+                "self-similarity across the bands of Figs. 5a-c",
+                "the same complex structure repeated at smaller and smaller scales",
+                f"bands n = 2..5 (sqrt((n-1)/2) < u <= sqrt(n/2)): word lengths >= 2 reach "
+                f"e = {ends}; the tips of tongue n (Theorem 3.1) are at {tips}; measured scale "
+                f"factor between successive bands {factors}",
+                verdict="agrees" if worst <= 3 * pixel else "differs",
+                why=f"each band's structure fills it up to the tongue tip within {worst:.4f} "
+                    f"(pixel {pixel:.4f}); the paper gives no scale factor"))
+        caption = (f"Blow-up {letter}) of Fig. 4: the paper's window [{e[0]:g}, {e[1]:g}] x "
+                   f"[{u[0]:g}, {u[1]:g}], {n} x {n} px (ours). {_key_caption(s)}")
         return Result(name, f"Blow-up {letter})", [_save(fig, s, name)], rows,
-                      {"e": e, "u": u, "size": [n, n], "max_iter": s.max_iter})
+                      {"e": e, "u": u, "size": [n, n], "max_iter": s.max_iter}, caption=caption)
 
     recipe.__name__ = name
     recipe.__doc__ = f"Fig. 5{letter}): blow-up of {BLOWUPS[name]}."
@@ -271,45 +499,100 @@ DIMENSION_WINDOWS = {
     "fig7": (((0.155, 0.2138), (0.6, 0.658)), 1.403),
 }
 
+_FIT_WHY = ("every power-of-two box from 1 px to an eighth of the picture: our reading of the "
+            "paper's 'standard box-counting algorithm on the pictures' (it states no range); "
+            "it includes the pixel scale")
+
+
+_FIT_WHY_SHORT = (
+    "every power-of-two box from 1 px to an eighth of the picture:",
+    "our reading of the paper's 'standard box-counting algorithm' (it states no range); "
+    "it includes the pixel scale.",
+)
+
 
 def _dimension(name):
     def recipe(s: Settings) -> Result:
-        from .fractal import box_dimension, boundary
+        from .fractal import boundary, box_dimension
         from .plot import plot_border, plot_box_counts
 
         (e, u), paper = DIMENSION_WINDOWS[name]
         res = s.px(500)
         # perimeter_dimension's steps, on the cached scan: the border of the
         # sliding region (status 0), the window's frame not counted
-        region = _scan(s, e, u, res, res).status.transpose("u", "e").values == 0
+        region = _scan(s, name, e, u, res, res).status.transpose("u", "e").values == 0
+        s.note(f"{name}: box counting")
         border = boundary(region)
-        # the paper fits every box size of its 500 px picture up to an eighth of it;
-        # the automatic linear-region choice is reported beside it (a heuristic)
         fit_range = (1, max(4, 2 ** round(math.log2(res / 8))))
         est = box_dimension(border, fit_range=fit_range)
         auto = box_dimension(border)
-        fig, axes = _subplots(1, 2, figsize=(12, 5.2))
-        plot_border(border, e, u, ax=axes[0],
-                    title=f"border of the sliding region, {res} x {res} px")
-        plot_box_counts(est, ax=axes[1])
+        study = load_border_dimension(s.border_dimension)
+        best = None if study is None else study.get(name)
+        # fixed panels: the border's panel square (the window is square), and at
+        # least as many screen pixels as the picture has, at the file's dpi
+        import matplotlib.pyplot as plt
+
+        width, height, side = 13.0, 7.6, 4.4
+        fig = plt.figure(figsize=(width, height), dpi=s.dpi)
+        ax0 = fig.add_axes([0.07, 0.27, side / width, side / height])
+        ax1 = fig.add_axes([0.55, 0.27, 0.42, side / height])
+        plot_border(border, e, u, ax=ax0, title=f"border of the sliding region, {res} x {res} px")
+        plot_box_counts(est, ax=ax1)
         fig.suptitle(f"Fig. {name[-1]}: border of the sliding region in "
-                     f"[{e[0]}, {e[1]}] x [{u[0]}, {u[1]}] and its box counting")
-        fig.tight_layout()
+                     f"[{e[0]:g}, {e[1]:g}] x [{u[0]:g}, {u[1]:g}] and its box counting")
         lo, hi = est.ci
+        if best is not None:
+            study_line = (f"dimension study (best estimate): D = {best['dimension']:.3f} "
+                          f"[{best['ci95'][0]:.3f}, {best['ci95'][1]:.3f}], {best['method']}")
+        else:
+            study_line = "dimension study (best estimate): no study result"
+        lines = [
+            f"fit range: boxes {fit_range[0]}-{fit_range[1]} px, {_FIT_WHY_SHORT[0]}",
+            _FIT_WHY_SHORT[1],
+            f"paper: D = {paper}    this fit: D = {est.dimension:.3f} [{lo:.3f}, {hi:.3f}]    "
+            f"automatic range ({auto.fit_range[0]}-{auto.fit_range[1]} px, excludes the pixel "
+            f"scale): D = {auto.dimension:.3f}",
+            study_line,
+        ]
+        fig.text(0.07, 0.05, "\n".join(lines), fontsize=9, va="bottom", ha="left")
+        v1, w1 = _compare(est.dimension, paper, tol=0.08)
+        v2, w2 = _compare(auto.dimension, paper, ci=auto.ci)
         rows = [
             Row(f"box-counting dimension, boxes {fit_range[0]}..{fit_range[1]} px",
                 f"D = {paper}, r > 0.99",
                 f"D = {est.dimension:.3f} (95% CI {lo:.3f}..{hi:.3f}), r = {est.r:.4f}",
-                bool(abs(est.dimension - paper) < 0.08 and est.r > 0.99)),
+                verdict=v1 if est.r > 0.99 else "differs",
+                why=w1 + ("" if est.r > 0.99 else f"; r = {est.r:.4f} <= 0.99")),
             Row("box-counting dimension, automatic linear range (heuristic)", f"D = {paper}",
                 f"D = {auto.dimension:.3f} (95% CI {auto.ci[0]:.3f}..{auto.ci[1]:.3f}), "
-                f"r = {auto.r:.4f}, boxes {auto.fit_range[0]}..{auto.fit_range[1]} px"),
+                f"r = {auto.r:.4f}, boxes {auto.fit_range[0]}..{auto.fit_range[1]} px",
+                verdict=v2, why=w2 + "; this range leaves out the pixel scale the paper's "
+                "fit includes (README, 'Fractal dimension')"),
         ]
+        if best is not None:
+            v3, w3 = _compare(best["dimension"], paper, ci=best["ci95"])
+            rows.append(Row("dimension study, best estimate", f"D = {paper}",
+                            f"D = {best['dimension']:.3f} [{best['ci95'][0]:.3f}, "
+                            f"{best['ci95'][1]:.3f}] ({best['method']})", verdict=v3, why=w3))
+        else:
+            rows.append(Row("dimension study, best estimate", f"D = {paper}", "no study result",
+                            verdict="not comparable",
+                            why="stairbounce/data/border_dimension.json is absent"))
+        caption = (f"Left: the border of the region with a periodic sliding solution (status 0, "
+                   f"max_iter = {s.max_iter}) in the paper's window [{e[0]:g}, {e[1]:g}] x "
+                   f"[{u[0]:g}, {u[1]:g}] at the paper's 500 px (here {res} px), black on white, "
+                   f"square pixels. Right: log N(s) against log(1/s); filled: the fitted box "
+                   f"sizes, hollow: not fitted, shaded: the fit range {fit_range[0]}-"
+                   f"{fit_range[1]} px ({_FIT_WHY}); red: the fitted line. Under the panels: the "
+                   f"paper's D, this fit, the automatic range, and the dimension study's best "
+                   f"estimate.")
         return Result(name, f"Box-counting dimension of the border (Fig. {name[-1]})",
                       [_save(fig, s, name)], rows,
                       {"e": e, "u": u, "resolution": res, "max_iter": s.max_iter,
                        "fit_range": fit_range, "D": est.dimension, "r": est.r,
-                       "ci": list(est.ci), "D_auto": auto.dimension})
+                       "ci": list(est.ci), "D_auto": auto.dimension,
+                       "D_study": None if best is None else best["dimension"]},
+                      caption=caption)
 
     recipe.__name__ = name
     recipe.__doc__ = f"Fig. {name[-1]}: border and box counting of {DIMENSION_WINDOWS[name][0]}."
@@ -324,6 +607,7 @@ FIG9_WINDOWS = [(0.3, 1.0), (0.57, 0.72), (0.578, 0.592), (0.5785, 0.5797)]
 def _orbits(settings, e, u_window, n):
     from .orbits import orbit_diagram
 
+    settings.note(f"orbit diagram e = {e:g}, u in [{u_window[0]:g}, {u_window[1]:g}], {n} values")
     inputs = {"e": e, "u": list(u_window), "n": n, "y0": 0.1, "v0": 0.0, "transient": 2000,
               "keep": 200}
     return _cached(
@@ -344,9 +628,12 @@ def fig8(s: Settings) -> Result:
 
     e, window, n = 0.001, (0.3, 2.0), s.px(3000)
     ds = _orbits(s, e, window, n)
-    fig, ax = _subplots(figsize=(9, 5.5))
-    plot_orbit_diagram(ds, ax=ax, overlay=("tongues",))
+    fig, ax = _subplots(s, figsize=(10, 5.8))
+    # left of the first grazing at u = sqrt(1/2) there is one branch, at y = 1:
+    # the legend goes above it, clear of the bifurcation and of the tongue numbers
+    plot_orbit_diagram(ds, ax=ax, overlay=("tongues",), legend="center left")
     ax.set_title(f"Fig. 8: orbit diagram, e = {e} (iterates 2001-2200 from (0.1, 0))")
+    fig.tight_layout()
     counts, ok = [], True
     for k in range(1, 7):
         lo, hi = tongue(k, e)
@@ -357,11 +644,19 @@ def fig8(s: Settings) -> Result:
     rows = [
         Row("branches inside the n-th tongue", "new branches arise when u enters a new "
             "(n, 0^inf) tongue (grazing bifurcations)",
-            "distinct values at the tongue centres: " + ", ".join(counts), bool(ok)),
+            "distinct values at the tongue centres: " + ", ".join(counts),
+            verdict="agrees" if ok else "differs",
+            why="n branches in tongue n, n = 1..6" if ok else "a count is not n"),
     ]
+    caption = (f"Heights y of the Poincare iterates 2001-2200 from (0.1, 0) at {n} values of u "
+               f"(ours; the paper does not state its u range, start or counts), binned into "
+               f"cells coloured by how many iterates fall in each (white: none). e = {e} is the "
+               f"paper's. Dashed/dotted lines: where tongue n of Theorem 3.1 begins "
+               f"(u = sqrt((n-1)/2), a grazing bifurcation) and ends; at this e the two nearly "
+               f"coincide; each tongue is numbered at its middle.")
     return Result("fig8", "Orbit diagram, e = 0.001", [_save(fig, s, "fig8")], rows,
                   {"e": e, "u": window, "n": n, "y0": 0.1, "v0": 0.0, "transient": 2000,
-                   "keep": 200})
+                   "keep": 200}, caption=caption)
 
 
 def fig9(s: Settings) -> Result:
@@ -369,31 +664,59 @@ def fig9(s: Settings) -> Result:
     from .plot import plot_orbit_diagram
 
     e, n = 0.1, s.px(3000)
-    fig, axes = _subplots(2, 2, figsize=(12, 8))
+    fig, axes = _subplots(s, 2, 2, figsize=(13, 8.6))
+    data = [_orbits(s, e, window, n) for window in FIG9_WINDOWS]
     heights = []
-    for k, (window, ax) in enumerate(zip(FIG9_WINDOWS, axes.flat)):
-        ds = _orbits(s, e, window, n)
-        plot_orbit_diagram(ds, ax=ax, overlay=("tongues",) if k == 0 else ())
-        ax.set_title("e = 0.1" if k == 0 else f"zoom {k}: u in [{window[0]}, {window[1]}]")
-        if k:  # typical height of the branches above y = 1, in the gap below sqrt(1/2)
-            gap = ds.u.values < math.sqrt(0.5)
-            heights.append(float(np.median(ds.y.values[gap].max(axis=1) - 1.0)))
+    for k, ds in enumerate(data[1:], start=1):
+        # typical height of the branches above y = 1, in the gap below sqrt(1/2)
+        gap = ds.u.values < math.sqrt(0.5)
+        heights.append(float(np.median(ds.y.values[gap].max(axis=1) - 1.0)))
+    s.note("fig9: drawing")
+    images = []
+    for k, (window, ax, ds) in enumerate(zip(FIG9_WINDOWS, axes.flat, data)):
+        if k == 0:
+            plot_orbit_diagram(ds, ax=ax, overlay=("tongues",), colorbar=False, vmax=200,
+                               legend="center left")
+            ax.set_title(f"e = {e}, u in [{window[0]:g}, {window[1]:g}]", fontsize="medium")
+        else:
+            # zoom k in units of e^(2k): the branches' height shrinks by about e^2
+            # per zoom (measured below), so the three zooms read alike
+            unit = e ** (2 * k)
+            plot_orbit_diagram(ds, ax=ax, colorbar=False, vmax=200, offset=1.0, unit=unit,
+                               range=(1.0 - 0.1 * unit, 1.0 + 1.3 * unit),
+                               label=f"(y - 1) / $10^{{-{2 * k}}}$")
+            ax.set_title(f"zoom {k}: u in [{window[0]:g}, {window[1]:g}]", fontsize="medium")
+        images += ax.get_images()
         if k < len(FIG9_WINDOWS) - 1:
             nxt = FIG9_WINDOWS[k + 1]
             ax.axvspan(nxt[0], nxt[1], color="C0", alpha=0.12, lw=0)
-    fig.suptitle("Fig. 9: orbit diagrams for e = 0.1 (iterates 2001-2200); shaded: the next zoom")
-    fig.tight_layout()
+    fig.suptitle("Fig. 9: orbit diagrams for e = 0.1 (iterates 2001-2200 from (0.1, 0)); "
+                 "shaded: the next zoom")
+    fig.tight_layout(rect=(0, 0, 0.92, 1))
+    cax = fig.add_axes([0.93, 0.12, 0.015, 0.76])
+    cb = fig.colorbar(images[0], cax=cax)
+    cb.set_label("iterates per cell (all panels)")
     ratios = [heights[i + 1] / heights[i] for i in range(len(heights) - 1) if heights[i] > 0]
+    same = len(ratios) == 2 and abs(ratios[1] / ratios[0] - 1) < 0.05
     rows = [
         Row("self-similar scheme", "an autosimilar bifurcation diagram at smaller and smaller "
             "scales", "median height of the branches above y = 1 in zooms 1-3: "
             + ", ".join(f"{h:.2e}" for h in heights)
-            + "; successive ratios " + ", ".join(f"{r:.4f}" for r in ratios)
-            + f" (e^2 = {e * e:.4f}; the paper gives no ratio)"),
+            + "; measured scale factor between nested zooms " + ", ".join(f"{r:.4f}" for r in ratios)
+            + f" (e^2 = {e * e:.4f})",
+            verdict="agrees" if same else "differs",
+            why=("one scale factor for both zoom steps, within "
+                 f"{100 * abs(ratios[1] / ratios[0] - 1):.1f}%; the paper gives no number")
+            if len(ratios) == 2 else "too few zooms measured"),
     ]
+    caption = (f"As Fig. 8 at the paper's e = {e}, {n} values of u per panel. The zoom windows "
+               f"(ours: the paper gives none) sit inside each other, shaded in the panel "
+               f"before; zoom k shows (y - 1) in units of 10^(-2k) = e^(2k), so that the three "
+               f"read alike if the scheme is self-similar with factor e^2. One colour scale "
+               f"(iterates per cell) for all four panels.")
     return Result("fig9", "Orbit diagrams, e = 0.1, with zooms", [_save(fig, s, "fig9")], rows,
                   {"e": e, "windows": FIG9_WINDOWS, "n": n, "y0": 0.1, "v0": 0.0,
-                   "transient": 2000, "keep": 200})
+                   "transient": 2000, "keep": 200, "heights": heights}, caption=caption)
 
 
 FIGURES = {
@@ -467,32 +790,90 @@ def make_figures(settings: Settings, only=None, on_start=None, on_done=None) -> 
     return results
 
 
+def _cell(text):
+    """Markdown table cell: never blank, no bar breaking the row."""
+    text = str(text).replace("|", "\\|").strip()
+    return text or "-"
+
+
 def _md_table(rows):
-    lines = ["| quantity | paper | here | agrees |", "|---|---|---|---|"]
+    lines = ["| quantity | paper | here | verdict |", "|---|---|---|---|"]
     for r in rows:
-        ok = "" if r.agrees is None else ("yes" if r.agrees else "**no**")
-        lines.append(f"| {r.quantity} | {r.paper} | {r.measured} | {ok} |")
+        v = r.verdict_text()
+        v = f"**{v}**" if r.verdict != "agrees" else v
+        lines.append(f"| {_cell(r.quantity)} | {_cell(r.paper)} | {_cell(r.measured)} | {_cell(v)} |")
     return lines
 
 
-def write_report(results, settings: Settings, total_seconds=None):
-    """write_report(results, settings) -> list of paths
+def read_manifest(out):
+    """read_manifest(out) -> list[Result]
+
+    The results recorded in ``out/manifest.json`` by an earlier run (each
+    with the settings it was made with in ``params["settings"]``); [] when
+    there is none or it cannot be read."""
+    path = Path(out) / "manifest.json"
+    try:
+        data = json.loads(path.read_text())
+        results = []
+        for f in data["figures"]:
+            rows = [Row(**x) for x in f.get("rows", [])]
+            keep = {k: f[k] for k in ("name", "title", "files", "params", "seconds", "error",
+                                      "caption") if k in f}
+            results.append(Result(rows=rows, **keep))
+        return results
+    except (OSError, ValueError, KeyError, TypeError):
+        return []
+
+
+def merge_results(earlier, results):
+    """``results`` with the figures of ``earlier`` that this run did not
+    make, in the paper's order: a partial run (``--only``) into a folder that
+    holds a full one keeps the other figures' rows."""
+    made = {r.name for r in results}
+    kept = [r for r in earlier if r.name not in made and r.name in FIGURES]
+    order = {name: i for i, name in enumerate(FIGURES)}
+    every = sorted(kept + list(results), key=lambda r: order.get(r.name, len(order)))
+    return every, [r.name for r in kept]
+
+
+def write_report(results, settings: Settings, total_seconds=None, merge=True):
+    """write_report(results, settings, total_seconds=None, merge=True) -> (paths, kept)
 
     ``report.md`` and ``report.html`` (figures linked by relative path, so the
     folder reads offline) and ``manifest.json`` (every input, the package
-    version, timings), all written atomically.
+    version, timings), all written atomically.  With ``merge`` the figures
+    of an earlier run in the same folder that this run did not make are kept
+    (merged by figure, each with the settings it was made with); ``kept``
+    names them.
     """
     out = Path(settings.out)
-    summary = [Row(f"{r.name}: {x.quantity}", x.paper, x.measured, x.agrees)
+    for r in results:
+        r.params.setdefault("settings", settings.record())
+    kept = []
+    if merge:
+        results, kept = merge_results(read_manifest(out), results)
+    summary = [Row(f"{r.name}: {x.quantity}", x.paper, x.measured, x.agrees, x.verdict, x.why)
                for r in results for x in r.rows]
+    counts = {v: sum(x.verdict == v for x in summary) for v in VERDICTS}
+    tally = ", ".join(f"{n} {v}" for v, n in counts.items())
+    mixed = len({json.dumps(r.params.get("settings"), sort_keys=True) for r in results}) > 1
     md = [
         "# stairbounce: the paper reproduced",
         "",
         f"Campos, Romero-Valles, Torres, *A fractal structure in a bouncing ball model*. "
-        f"stairbounce {__version__}; format {settings.fmt}, dpi {settings.dpi}, "
+        f"stairbounce {__version__}; this run: format {settings.fmt}, dpi {settings.dpi}, "
         f"scale {settings.scale}, max_iter {settings.max_iter}.",
         "",
+    ]
+    if kept:
+        md += [f"Figures {', '.join(kept)} are kept from an earlier run in this folder "
+               f"(merged by figure){'; their settings differ, see each section' if mixed else ''}.",
+               ""]
+    md += [
         "## Summary",
+        "",
+        f"Every row states a verdict: agrees, differs (by how much), or not comparable (why). "
+        f"Here: {tally}.",
         "",
         *_md_table(summary),
         "",
@@ -503,22 +884,26 @@ def write_report(results, settings: Settings, total_seconds=None):
             md += [f"**failed**: {r.error}", ""]
         for f in r.files:
             md += [f"![{r.name}]({f})" if not f.endswith(".pdf") else f"[{f}]({f})", ""]
+        if r.caption:
+            md += [f"*{r.caption}*", ""]
         md += _md_table(r.rows) + [""]
         params = {k: v for k, v in r.params.items() if k != "traceback"}
         md += [f"Parameters: `{json.dumps(params, default=_jsonable)}`; time {r.seconds:.2f} s.", ""]
     if total_seconds is not None:
-        md += [f"Total time: {total_seconds:.1f} s.", ""]
+        md += [f"Total time of this run: {total_seconds:.1f} s.", ""]
     paths = []
     with atomic_path(out / "report.md") as tmp:
         tmp.write_text("\n".join(md))
     paths.append(out / "report.md")
     with atomic_path(out / "report.html") as tmp:
-        tmp.write_text(_html(results, settings, summary, total_seconds))
+        tmp.write_text(_html(results, settings, summary, total_seconds, kept, tally))
     paths.append(out / "report.html")
     manifest = {
         "stairbounce_version": __version__,
-        "settings": {k: str(v) if isinstance(v, Path) else v for k, v in asdict(settings).items()},
+        "settings": {k: str(v) if isinstance(v, Path) else v for k, v in asdict(settings).items()
+                     if k != "progress"},
         "total_seconds": total_seconds,
+        "kept_from_earlier_run": kept,
         "figures": [
             {**{k: v for k, v in asdict(r).items() if k != "rows"},
              "rows": [asdict(x) for x in r.rows]}
@@ -528,7 +913,7 @@ def write_report(results, settings: Settings, total_seconds=None):
     with atomic_path(out / "manifest.json") as tmp:
         tmp.write_text(json.dumps(manifest, indent=2, default=_jsonable))
     paths.append(out / "manifest.json")
-    return paths
+    return paths, kept
 
 
 def _jsonable(x):
@@ -539,42 +924,54 @@ def _jsonable(x):
     return str(x)
 
 
-def _html(results, settings, summary, total_seconds):
+def _html(results, settings, summary, total_seconds, kept, tally):
     esc = html.escape
 
     def table(rows):
         cells = "".join(
             f"<tr><td>{esc(r.quantity)}</td><td>{esc(r.paper)}</td><td>{esc(r.measured)}</td>"
-            f"<td>{'' if r.agrees is None else ('yes' if r.agrees else '<b>no</b>')}</td></tr>"
+            f"<td class='{esc((r.verdict or 'none').replace(' ', '-'))}'>"
+            f"{esc(r.verdict_text())}</td></tr>"
             for r in rows
         )
-        return ("<table><tr><th>quantity</th><th>paper</th><th>here</th><th>agrees</th></tr>"
+        return ("<table><tr><th>quantity</th><th>paper</th><th>here</th><th>verdict</th></tr>"
                 f"{cells}</table>")
 
     parts = [
         "<!doctype html><html><head><meta charset='utf-8'><title>stairbounce report</title>",
         "<style>body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
         "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 6px;"
-        "vertical-align:top}img{max-width:100%}</style></head><body>",
+        "vertical-align:top}img{max-width:100%}.differs,.none{font-weight:bold;color:#a00}"
+        ".not-comparable{color:#555}figcaption{font-style:italic;margin:.3em 0 .8em}</style>"
+        "</head><body>",
         "<h1>stairbounce: the paper reproduced</h1>",
-        f"<p>stairbounce {esc(__version__)}; scale {settings.scale}, max_iter {settings.max_iter}.</p>",
-        "<h2>Summary</h2>", table(summary),
+        f"<p>stairbounce {esc(__version__)}; this run: scale {settings.scale}, "
+        f"max_iter {settings.max_iter}, dpi {settings.dpi}.</p>",
     ]
+    if kept:
+        parts.append(f"<p>Figures {esc(', '.join(kept))} are kept from an earlier run in this "
+                     "folder (merged by figure).</p>")
+    parts += ["<h2>Summary</h2>", f"<p>Every row states a verdict. Here: {esc(tally)}.</p>",
+              table(summary)]
     for r in results:
         parts.append(f"<h2>{esc(r.name)}: {esc(r.title)}</h2>")
         if r.error:
             parts.append(f"<p><b>failed</b>: {esc(r.error)}</p>")
+        parts.append("<figure>")
         for f in r.files:
             if f.endswith(".pdf"):
                 parts.append(f"<p><a href='{esc(f)}'>{esc(f)}</a></p>")
             else:
                 parts.append(f"<img src='{esc(f)}' alt='{esc(r.name)}'>")
+        if r.caption:
+            parts.append(f"<figcaption>{esc(r.caption)}</figcaption>")
+        parts.append("</figure>")
         parts.append(table(r.rows))
         params = {k: v for k, v in r.params.items() if k != "traceback"}
         parts.append(f"<p>Parameters: <code>{esc(json.dumps(params, default=_jsonable))}</code>; "
                      f"time {r.seconds:.2f} s.</p>")
     if total_seconds is not None:
-        parts.append(f"<p>Total time: {total_seconds:.1f} s.</p>")
+        parts.append(f"<p>Total time of this run: {total_seconds:.1f} s.</p>")
     parts.append("</body></html>")
     return "\n".join(parts)
 

@@ -8,6 +8,7 @@ line on stderr and exit status 2.
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 
 import typer
 
@@ -18,6 +19,9 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    # plain click help: Typer's rich help shows every flag with a "<bool>"
+    # value it does not take
+    rich_markup_mode=None,
 )
 
 
@@ -51,3 +55,64 @@ def parse_size(text: str) -> tuple[int, int]:
     if w < 1 or h < 1:
         raise CLIError(f"--size must have WIDTH >= 1 and HEIGHT >= 1, got {text!r}")
     return w, h
+
+
+def plural(n: int, word: str, many: str | None = None) -> str:
+    """``plural(1, "tile")`` -> "1 tile", ``plural(3, "tile")`` -> "3 tiles"."""
+    return f"{n} {word if n == 1 else (many or word + 's')}"
+
+
+@contextmanager
+def progress_bar(console, description, total, unit=""):
+    """A transient progress bar on ``console`` (stderr): ``(bar, task)``.
+
+    When stderr is not a terminal nothing is drawn, not even the blank line
+    a stopped live display leaves behind; the calls on ``bar`` still work."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    bar = Progress(
+        TextColumn("[bold]{task.description}"), BarColumn(),
+        TextColumn("{task.completed}/{task.total}" + (f" {unit}" if unit else "")),
+        TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=True,
+        disable=not console.is_terminal,
+    )
+    task = bar.add_task(description, total=total)
+    with bar:
+        yield bar, task
+
+
+def parse_overlays(values, allowed) -> tuple[str, ...]:
+    """``--overlay`` as every command takes it: a comma-separated list, or the
+    option repeated, or both (``--overlay tongues,bound`` = ``--overlay
+    tongues --overlay bound``); each name one of ``allowed``."""
+    if isinstance(values, str):
+        values = [values]
+    names = []
+    for text in values or ():
+        for part in str(text).split(","):
+            part = part.strip()
+            if not part:
+                continue
+            if part not in allowed:
+                raise CLIError(f"--overlay must be among {', '.join(allowed)} (comma-separated "
+                               f"or repeated), got {part!r}")
+            if part not in names:
+                names.append(part)
+    return tuple(names)
+
+
+def tile_for_workers(n_e: int, n_u: int, workers: int, largest: int = 1024, smallest: int = 64):
+    """tile_for_workers(n_e, n_u, workers) -> (tile, tiles)
+
+    The largest square tile (a power of two from ``largest`` down to
+    ``smallest`` px) that cuts an ``n_e x n_u`` grid into at least
+    ``2 * workers`` tiles, so that every worker has work and a slow tile
+    (high u runs all max_iter steps) can be balanced by two quick ones.
+    Below ``smallest`` px the per-tile overhead would cost more than the
+    parallelism gains; then fewer tiles than workers may result."""
+    tile = largest
+    while True:
+        tiles = math.ceil(n_e / tile) * math.ceil(n_u / tile)
+        if tiles >= 2 * workers or tile // 2 < smallest:
+            return tile, tiles
+        tile //= 2

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from ._app import CLIError, app, parse_range
+from ._app import CLIError, app, parse_range, plural
 
 DEFAULT_TILE = 1024
 FIELDS = ("word_length", "period", "jumps", "impacts", "status")
@@ -60,6 +60,7 @@ def run_tiled_scan(out, e, u, max_iter=1000, y0=1.0, v0=0.0, tile=None, schedule
             bar = Progress(
                 TextColumn("[bold]tiles"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
                 TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=True,
+                disable=not console.is_terminal,  # no blank line left on a redirected stderr
             )
             task = bar.add_task("tiles", total=None)
 
@@ -87,12 +88,12 @@ def run_tiled_scan(out, e, u, max_iter=1000, y0=1.0, v0=0.0, tile=None, schedule
             client.close()
         if cluster is not None:
             cluster.close()
-    where = f"scheduler {scheduler}" if scheduler else (f"{workers} local worker(s)" if workers else "this process")
+    where = f"scheduler {scheduler}" if scheduler else (plural(workers, "local worker") if workers else "this process")
     skipped = counts.get("skipped", 0)
     resumed = f" ({skipped} already complete)" if skipped else ""
     typer.echo(
         f"wrote {out}: {ds.sizes['e']} x {ds.sizes['u']} pixels (e x u), "
-        f"{counts.get('total', 0)} tiles of {tile}{resumed}, computed in {where}"
+        f"{plural(counts.get('total', 0), 'tile')} of {tile}{resumed}, computed in {where}"
     )
     return ds
 

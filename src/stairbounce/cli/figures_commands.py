@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from ._app import CLIError, app
+from ._app import CLIError, app, plural, progress_bar
 
 
 @app.command()
@@ -21,9 +21,11 @@ def figures(
     no_cache: bool = typer.Option(False, "--no-cache", help="Recompute the scans instead of reading the cache."),
     cache_dir: Path = typer.Option(None, "--cache-dir", help="Where scans are cached (default ~/.cache/stairbounce)."),
 ):
-    """Reproduce the paper's Figures 1-9 and write report.md, report.html and manifest.json."""
+    """Reproduce the paper's Figures 1-9 and write report.md, report.html and manifest.json.
+
+    With --only into a folder that holds an earlier run, the report keeps the
+    other figures of that run (merged by figure) and says so."""
     from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from ..figures import Settings, default_cache_dir, make_figures, select, write_report
 
@@ -40,26 +42,30 @@ def figures(
     )
     console = Console(stderr=True)
     t0 = time.perf_counter()
-    with Progress(
-        TextColumn("[bold]{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-        TimeElapsedColumn(), console=console, transient=True,
-    ) as bar:
-        task = bar.add_task("figures", total=len(names))
+    with progress_bar(console, "figures", len(names)) as (bar, task):
 
         def start(name):
-            bar.update(task, description=f"making {name}")
+            bar.update(task, description=f"{name}")
+
+        def note(text):
+            bar.update(task, description=text)
 
         def done(res):
             status = f"[red]failed: {res.error}" if res.error else ", ".join(res.files)
-            bar.console.print(f"{res.name:6s} {res.seconds:6.2f} s  {status}")
+            console.print(f"{res.name:6s} {res.seconds:6.2f} s  {status}", highlight=False)
             bar.advance(task)
 
+        settings.progress = note
         results = make_figures(settings, names, on_start=start, on_done=done)
     total = time.perf_counter() - t0
-    paths = write_report(results, settings, total_seconds=total)
+    paths, kept = write_report(results, settings, total_seconds=total)
     failed = [r.name for r in results if r.error]
-    typer.echo(f"wrote {len(results) - len(failed)} figures and {', '.join(p.name for p in paths)} "
+    made = len(results) - len(failed)
+    typer.echo(f"wrote {plural(made, 'figure')} and {', '.join(p.name for p in paths)} "
                f"to {out} in {total:.1f} s")
+    if kept:
+        typer.echo(f"the report keeps {plural(len(kept), 'figure')} of the earlier run in {out} "
+                   f"({', '.join(kept)}), merged by figure")
     if failed:
         typer.echo(f"failed: {', '.join(failed)} (see {out / 'report.md'})", err=True)
         raise typer.Exit(1)

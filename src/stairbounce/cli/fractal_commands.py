@@ -8,7 +8,7 @@ import numpy as np
 import typer
 
 from .._io import atomic_path
-from ._app import CLIError, app, parse_range
+from ._app import CLIError, app, parse_range, progress_bar
 
 # Scans with more pixel-steps than this show a progress bar.
 _PROGRESS_WORK = 2e8
@@ -46,13 +46,8 @@ def _scan_with_progress(kwargs):
     if n * n * kwargs["max_iter"] < _PROGRESS_WORK:
         return perimeter_dimension(**kwargs)
     from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    with Progress(
-        TextColumn("scanning"), BarColumn(), TextColumn("{task.completed}/{task.total} rows"),
-        TimeElapsedColumn(), console=Console(stderr=True), transient=True,
-    ) as bar:
-        task = bar.add_task("scan", total=n)
+    with progress_bar(Console(stderr=True), "scanning", n, unit="rows") as (bar, task):
         return perimeter_dimension(**kwargs, progress=lambda done, total: bar.update(task, completed=done))
 
 

@@ -13,7 +13,7 @@ from ..model import SLIDING, iterate
 from ..symbolic import sliding_word, terminal_can_print_infinity
 from ..trajectory import trajectory
 from . import _staircase as st
-from ._app import CLIError, app
+from ._app import CLIError, app, plural, progress_bar
 
 E_HELP = "Restitution coefficient, in [0, 1)."
 U_HELP = "Horizontal speed in normalised units (u > 0); one step takes 1/u. Or --speed with --step-height, --step-length."
@@ -129,10 +129,16 @@ def trajectory_(
         fig.savefig(tmp, dpi=dpi)
     plt.close(fig)
     typer.echo(
-        f"wrote {out}: {len(traj.impacts)} impacts listed, "
-        f"{len(traj.accumulations)} accumulation points, {len(traj.slides)} slides"
+        f"wrote {out}: {plural(len(traj.impacts), 'impact')} listed, "
+        f"{plural(len(traj.accumulations), 'accumulation point')}, "
+        f"{plural(len(traj.slides), 'slide')}"
     )
     if animate is not None:
-        with atomic_path(animate) as tmp:
-            animate_trajectory(traj, tmp)
+        from rich.console import Console
+
+        # Pillow encodes a frame at a time: about 12 s for 8 steps
+        with progress_bar(Console(stderr=True), "animation frames", None) as (bar, task), \
+                atomic_path(animate) as tmp:
+            animate_trajectory(traj, tmp, progress=lambda done, total: bar.update(
+                task, completed=done, total=total))
         typer.echo(f"wrote {animate}")

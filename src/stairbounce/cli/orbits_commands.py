@@ -10,7 +10,7 @@ import typer
 from .._io import atomic_path
 from ..model import check_count
 from . import _staircase as st
-from ._app import CLIError, app, parse_range
+from ._app import CLIError, app, parse_overlays, parse_range, progress_bar
 
 # Above this many map steps (about a second of work) the sweep runs in slices
 # behind a progress bar.
@@ -44,11 +44,12 @@ def _sweep(e, u, varied, y0, v0, transient, keep, warm_start):
     if values.size * (transient + keep) < _PROGRESS_STEPS or values.size < 2 * _SLICES:
         return orbit_diagram(e, u, y0, v0, transient, keep, warm_start)
 
-    from rich.progress import Progress
+    from rich.console import Console
 
     parts = []
-    with Progress(transient=True) as progress:
-        task = progress.add_task(f"orbit diagram over {varied}", total=values.size)
+    with progress_bar(Console(stderr=True), f"orbit diagram over {varied}", values.size) as (
+        progress, task
+    ):
         for chunk in np.array_split(values, _SLICES):
             args = (chunk, u) if varied == "e" else (e, chunk)
             ds = orbit_diagram(*args, y0, v0, transient, keep, warm_start)
@@ -87,7 +88,7 @@ def orbit_diagram_(
     warm_start: bool = typer.Option(False, "--warm-start", help="Start each value from the previous value's last state."),
     component: str = typer.Option("y", "--component", help="Component to plot: y or v."),
     points: bool = typer.Option(False, "--points", help="Draw every point instead of a density image."),
-    overlay: list[str] = typer.Option([], "--overlay", help="Draw extra lines: 'tongues' (Theorem 3.1). Repeatable."),
+    overlay: list[str] = typer.Option([], "--overlay", help="Curves to draw, comma-separated or repeated: tongues (Theorem 3.1)."),
     bins: int = typer.Option(400, "--bins", help="Density image rows along the component (>= 1)."),
     value_range: str = typer.Option(None, "--range", help="Plotted range MIN:MAX of the component (a zoom)."),
     png: Path = typer.Option(None, "--png", help="Figure file (.png, .pdf or .svg)."),
@@ -102,9 +103,7 @@ def orbit_diagram_(
         typer.echo(f"speed {speed} m/s on {stairs.describe()}: u = {u}")
     if component not in ("y", "v"):
         raise CLIError(f"--component must be y or v, got {component!r}")
-    for name in overlay:
-        if name != "tongues":
-            raise CLIError(f"--overlay must be 'tongues', got {name!r}")
+    overlays = parse_overlays(overlay, ("tongues",))
     check_count("--bins", bins, 1)
     check_count("--dpi", dpi, 1)
     if png is None and out is None:
@@ -144,7 +143,7 @@ def orbit_diagram_(
 
         fig, ax = plt.subplots(figsize=(10, 5.5))
         plot_orbit_diagram(ds, component=component, density=not points, ax=ax,
-                           overlay=tuple(overlay), bins=bins, range=shown)
+                           overlay=overlays, bins=bins, range=shown)
         fig.tight_layout()
         with atomic_path(png) as tmp:
             fig.savefig(tmp, dpi=dpi)

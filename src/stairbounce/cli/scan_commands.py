@@ -6,20 +6,19 @@ from pathlib import Path
 
 import typer
 
-from ._app import CLIError, app, parse_range, parse_size
+from ._app import (
+    CLIError,
+    app,
+    parse_overlays,
+    parse_range,
+    parse_size,
+    plural,
+    progress_bar,
+    tile_for_workers,
+)
 
 FIELD_NAMES = ("word_length", "period", "impacts", "jumps", "status")
 OVERLAY_NAMES = ("tongues", "bound")
-
-
-def _overlays(text):
-    if not text:
-        return ()
-    names = tuple(p.strip() for p in text.split(",") if p.strip())
-    for n in names:
-        if n not in OVERLAY_NAMES:
-            raise CLIError(f"--overlay must be a comma-separated list of {', '.join(OVERLAY_NAMES)}, got {text!r}")
-    return names
 
 
 @app.command("scan")
@@ -39,7 +38,7 @@ def scan_(
     out: Path = typer.Option(None, "--out", help="Also save the data: .zarr (chunked) or .nc."),
     png: Path = typer.Option(Path("scan.png"), "--png", help="Figure to write (.png, .pdf or .svg)."),
     field: str = typer.Option("word_length", "--field", help="Colour by: " + ", ".join(FIELD_NAMES) + "."),
-    overlay: str = typer.Option("", "--overlay", help="Comma-separated: tongues (Theorem 3.1), bound (Corollary 2.1)."),
+    overlay: list[str] = typer.Option([], "--overlay", help="Curves to draw, comma-separated or repeated: tongues (Theorem 3.1), bound (Corollary 2.1)."),
     dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output."),
     tile: int = typer.Option(None, "--tile", help="Tiled, resumable scan into --out (.zarr), TILE x TILE pixels a tile."),
     scheduler: str = typer.Option(None, "--scheduler", help="Tiled scan on a running Dask scheduler (tcp://HOST:PORT)."),
@@ -60,7 +59,7 @@ def scan_(
         raise CLIError(f"--max-iter must be an integer >= 1, got {max_iter}")
     if field not in FIELD_NAMES:
         raise CLIError(f"--field must be one of {', '.join(FIELD_NAMES)}, got {field!r}")
-    overlays = _overlays(overlay)
+    overlays = parse_overlays(overlay, OVERLAY_NAMES)
     if png is not None and png.suffix.lower() not in {".png", ".pdf", ".svg"}:
         raise CLIError(f"--png must end in .png, .pdf or .svg, got {str(png)!r}")
     if out is not None and out.suffix not in {".zarr", ".nc"}:
@@ -80,6 +79,15 @@ def scan_(
             raise CLIError("a tiled scan (--tile, --scheduler, --workers) needs --out STORE.zarr")
         from .atlas_commands import draw_store, run_tiled_scan
 
+        if tile is None and workers is not None and workers >= 1 and scheduler is None:
+            # the default 1024 px tile makes one tile of the Fig. 4 view: one
+            # worker busy, the others idle behind the cluster's start-up
+            tile, tiles = tile_for_workers(n_e, n_u, workers)
+            typer.echo(f"tiles of {tile} px: {plural(tiles, 'tile')} for "
+                       f"{plural(workers, 'worker')}"
+                       + ("" if tiles >= workers else
+                          f" (tiles under 64 px cost more than they share; "
+                          f"{plural(workers - tiles, 'worker')} idle)"), err=True)
         ds = run_tiled_scan(out, (e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0,
                             tile=tile, scheduler=scheduler, workers=workers)
         if png is not None:
@@ -107,14 +115,8 @@ def scan_(
 
 def _scan_with_progress(sc, e, u, max_iter, y0, v0):
     from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-    console = Console(stderr=True)
-    with Progress(
-        TextColumn("[bold]scan rows"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-        TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=True,
-    ) as bar:
-        task = bar.add_task("scan", total=u[2])
+    with progress_bar(Console(stderr=True), "scan rows", u[2]) as (bar, task):
         return sc.scan(e, u, max_iter, y0, v0,
                        progress=lambda done, total: bar.update(task, completed=done, total=total))
 

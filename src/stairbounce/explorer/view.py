@@ -415,60 +415,9 @@ def pixel_of(view: View, e: float, u: float) -> tuple[int, int] | None:
 # Colours                                                                     #
 # --------------------------------------------------------------------------- #
 
-# Lower bounds of the colour classes, counted from the least value a variable
-# takes on a sliding pixel (1 for word length, period and jumps; 0 for
-# impacts): the first class holds the (n, 0^inf) solutions for word length,
-# impacts and jumps (black, as the paper's tongues in Fig. 4); classes widen
-# because the counts fall off roughly geometrically.
-_CLASS_STARTS = (0, 1, 2, 3, 4, 5, 7, 10, 15, 25, 50, 100, 250, 500)
-_LEAST = {"word_length": 1, "period": 1, "impacts": 0, "jumps": 1}
-NO_SLIDING_COLOR = "#ffffff"
-_LABELS = {
-    "word_length": "word length",
-    "period": "period (steps)",
-    "impacts": "impacts per period",
-    "jumps": "non-zero letters",
-    "status": "periodic sliding solution",
-}
-
-
-@dataclass(frozen=True)
-class ColorKey:
-    """The colour classes of a variable: ``colors[i]`` paints values in class
-    ``i`` (labelled ``labels[i]``); pixels without a sliding solution get
-    ``NO_SLIDING_COLOR``."""
-
-    var: str
-    title: str
-    labels: tuple[str, ...]
-    colors: tuple[str, ...]
-
-
-def _palette(n):
-    """Black, then ``n - 1`` well separated colours of the turbo map."""
-    from matplotlib import colormaps
-    from matplotlib.colors import to_hex
-
-    cmap = colormaps["turbo"]
-    return ("#000000",) + tuple(to_hex(cmap(x)) for x in np.linspace(0.1, 0.95, n - 1))
-
-
-def color_key(var: str) -> ColorKey:
-    """color_key(var) -> ColorKey: the classes and colours used for ``var``."""
-    if var == "status":
-        return ColorKey(var, _LABELS[var], ("found", "none"), ("#000000", NO_SLIDING_COLOR))
-    if var not in _LEAST:
-        raise ValueError(f"color must be one of {', '.join(COLOR_VARS)}, got {var!r}")
-    b = _LEAST[var]
-    labels = []
-    for lo, hi in zip(_CLASS_STARTS, _CLASS_STARTS[1:] + (None,)):
-        if hi is None:
-            labels.append(f">= {b + lo}")
-        elif hi - lo == 1:
-            labels.append(str(b + lo))
-        else:
-            labels.append(f"{b + lo}-{b + hi - 1}")
-    return ColorKey(var, _LABELS[var], tuple(labels), _palette(len(labels)))
+# One colour scale for the explorer and the figures (Figs. 4 and 5): the
+# classes and their colours live with the matplotlib renderer of the plane.
+from ..plot.plane import _CLASS_STARTS, _LEAST, NO_SLIDING_COLOR, ColorKey, color_key  # noqa: E402
 
 
 def _rgba32(hex_colors):

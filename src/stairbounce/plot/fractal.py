@@ -56,11 +56,31 @@ def plot_box_counts(result, ax=None):
     return ax
 
 
+def _pool_any(img, f):
+    """``f x f`` blocks -> one pixel, set when any pixel of the block is set
+    (the edge blocks padded with unset pixels)."""
+    if f <= 1:
+        return img
+    h, w = img.shape
+    H, W = -(-h // f) * f, -(-w // f) * f
+    padded = np.zeros((H, W), dtype=bool)
+    padded[:h, :w] = img
+    return padded.reshape(H // f, f, W // f, f).any(axis=(1, 3))
+
+
 def plot_border(border, e=None, u=None, ax=None, title=None):
-    """Draw a border image (black on white), rows upwards.
+    """plot_border(border, e=None, u=None, ax=None, title=None) -> Axes
+
+    Draw a border image (black on white), rows upwards, with square pixels:
+    a square window is drawn square.
 
     With ``e = (e_min, e_max)`` and ``u = (u_min, u_max)`` the axes are the
     parameter plane (e across, u up, as in Figs. 6 and 7); without, pixels.
+    When the image has more pixels than the axes have on the figure (at the
+    figure's dpi, which should be the dpi it is saved at), it is first
+    reduced by ``f x f`` blocks, a block black when any of its pixels is:
+    a one-pixel border then stays a connected line instead of aliasing into
+    dotted fragments, as resampling would make it.
     """
     if ax is None:
         import matplotlib.pyplot as plt
@@ -74,10 +94,20 @@ def plot_border(border, e=None, u=None, ax=None, title=None):
     else:
         extent = (0, img.shape[1], 0, img.shape[0])
         ax.set_xlabel("pixels")
-    # interpolation="antialiased" would thin a one-pixel border away when
-    # the image has more pixels than the axes
-    ax.imshow(img, cmap="gray_r", origin="lower", extent=extent, aspect="auto",
-              interpolation="none" if img.shape[0] <= 1024 else "antialiased", vmin=0, vmax=1)
+    # square pixels: one pixel's height on screen equals its width
+    aspect = ((extent[1] - extent[0]) / img.shape[1]) / ((extent[3] - extent[2]) / img.shape[0])
+    ax.set_aspect(aspect, adjustable="box")
+    ax.apply_aspect()
+    box = ax.get_window_extent()
+    f = int(np.ceil(max(img.shape[0] / max(box.height, 1.0), img.shape[1] / max(box.width, 1.0))))
+    shown = _pool_any(img, f)
+    if f > 1:  # the padded blocks reach past the window: extend the image to match
+        extent = (extent[0], extent[0] + (extent[1] - extent[0]) * shown.shape[1] * f / img.shape[1],
+                  extent[2], extent[2] + (extent[3] - extent[2]) * shown.shape[0] * f / img.shape[0])
+    ax.imshow(shown, cmap="gray_r", origin="lower", extent=extent, aspect=aspect,
+              interpolation="nearest", vmin=0, vmax=1)
+    ax.set_xlim(extent[0], e[1] if e is not None and u is not None else img.shape[1])
+    ax.set_ylim(extent[2], u[1] if e is not None and u is not None else img.shape[0])
     if title:
         ax.set_title(title, fontsize="medium")
     return ax

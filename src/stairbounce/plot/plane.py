@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["plot_scan", "FIELDS"]
+__all__ = ["plot_scan", "FIELDS", "ColorKey", "color_key", "NO_SLIDING_COLOR", "class_bounds"]
 
 FIELDS = {
     "word_length": "word length",
@@ -15,17 +17,77 @@ FIELDS = {
 }
 OVERLAYS = ("tongues", "bound")
 
+# --------------------------------------------------------------------------- #
+# The colour classes, shared by the figures and the browser explorer          #
+# --------------------------------------------------------------------------- #
 
-def _colormap():
-    """inferno without its palest tenth: perceptually uniform, black at the
-    bottom (word length 1 is black, as in the paper's Figure 4) and no colour
-    that could be mistaken for the white of "no periodic sliding solution"."""
-    import matplotlib.colors as mcolors
+# Lower bounds of the colour classes, counted from the least value a variable
+# takes on a sliding pixel (1 for word length, period and jumps; 0 for
+# impacts): the first class holds the (n, 0^inf) solutions for word length,
+# impacts and jumps (black, as the paper's tongues in Fig. 4); classes widen
+# because the counts fall off roughly geometrically.
+_CLASS_STARTS = (0, 1, 2, 3, 4, 5, 7, 10, 15, 25, 50, 100, 250, 500)
+_LEAST = {"word_length": 1, "period": 1, "impacts": 0, "jumps": 1}
+NO_SLIDING_COLOR = "#ffffff"
+_LABELS = {
+    "word_length": "word length",
+    "period": "period (steps)",
+    "impacts": "impacts per period",
+    "jumps": "non-zero letters",
+    "status": "periodic sliding solution",
+}
+
+
+@dataclass(frozen=True)
+class ColorKey:
+    """The colour classes of a variable: ``colors[i]`` paints values in class
+    ``i`` (labelled ``labels[i]``); pixels without a sliding solution get
+    ``NO_SLIDING_COLOR``."""
+
+    var: str
+    title: str
+    labels: tuple[str, ...]
+    colors: tuple[str, ...]
+
+
+def _palette(n):
+    """Black, then ``n - 1`` well separated colours of the turbo map."""
     from matplotlib import colormaps
+    from matplotlib.colors import to_hex
 
-    base = colormaps["inferno"]
-    cmap = mcolors.ListedColormap(base(np.linspace(0.0, 0.88, 256)), name="inferno_no_white")
-    return cmap.with_extremes(bad="white")
+    cmap = colormaps["turbo"]
+    return ("#000000",) + tuple(to_hex(cmap(x)) for x in np.linspace(0.1, 0.95, n - 1))
+
+
+def color_key(var: str) -> ColorKey:
+    """color_key(var) -> ColorKey: the classes and colours used for ``var``.
+
+    One fixed, discrete scale per variable (word length: 1, 2, 3, 4, 5, 6-7,
+    8-10, 11-15, ..., >= 501), the same in every figure and in the explorer,
+    so a word length has the same colour in every window."""
+    if var == "status":
+        return ColorKey(var, _LABELS[var], ("found", "none"), ("#000000", NO_SLIDING_COLOR))
+    if var not in _LEAST:
+        raise ValueError(f"color must be one of {', '.join(FIELDS)}, got {var!r}")
+    b = _LEAST[var]
+    labels = []
+    for lo, hi in zip(_CLASS_STARTS, _CLASS_STARTS[1:] + (None,)):
+        if hi is None:
+            labels.append(f">= {b + lo}")
+        elif hi - lo == 1:
+            labels.append(str(b + lo))
+        else:
+            labels.append(f"{b + lo}-{b + hi - 1}")
+    return ColorKey(var, _LABELS[var], tuple(labels), _palette(len(labels)))
+
+
+def class_bounds(var: str) -> np.ndarray:
+    """Edges of the colour classes of ``var`` in its own units: class ``i``
+    holds ``bounds[i] <= value < bounds[i + 1]`` (the last edge is 2**62,
+    beyond any count a scan stores)."""
+    if var not in _LEAST:
+        raise ValueError(f"var must be one of {', '.join(_LEAST)}, got {var!r}")
+    return np.array([_LEAST[var] + s for s in _CLASS_STARTS] + [2**62], dtype=float)
 
 
 def _extent(ds):
@@ -54,11 +116,17 @@ def _no_solution(ds, field):
     return np.zeros(ds[field].shape, dtype=bool)
 
 
+TONGUE_COLOR = "#ff00ff"
+"""Colour of the tongue boundaries over the map: magenta is in no colour class."""
+BOUND_COLOR = "0.35"
+
+
 def _draw_tongues(ax, e_lo, e_hi, u_lo, u_hi, color):
-    """Boundaries of the (n, 0^inf) tongues of Theorem 3.1 crossing the view."""
+    """Boundaries of the (n, 0^inf) tongues of Theorem 3.1 crossing the view;
+    returns whether any of them is inside the view."""
     e = np.linspace(e_lo, e_hi, 600)
     n_top = int(2.0 * u_hi**2) + 2
-    first = True
+    seen = False
     for n in range(1, n_top + 1):
         # Theorem 3.1, as stairbounce.tongue(n, e) evaluates it, vectorised
         lows = np.full_like(e, np.sqrt((n - 1) / 2.0))
@@ -67,22 +135,42 @@ def _draw_tongues(ax, e_lo, e_hi, u_lo, u_hi, color):
         if not inside.any():
             continue
         kw = dict(color=color, lw=0.9, ls="-")
-        ax.plot(e[inside], highs[inside], label="Theorem 3.1 tongues" if first else None, **kw)
-        if n > 1:
-            ax.plot(e[inside], lows[inside], **kw)
-        first = False
+        curves = [highs] + ([lows] if n > 1 else [])
+        for c in curves:
+            ax.plot(e[inside], c[inside], **kw)
+            seen |= bool(((c[inside] >= u_lo) & (c[inside] <= u_hi)).any())
+    return seen
 
 
-def plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=True, title=None):
-    """plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=True, title=None) -> Axes
+def _legend(ax, where, handles=None):
+    """A legend ``where`` = a matplotlib location, ``"below"`` (outside the
+    axes, under the e label: for windows whose data fill every corner) or None."""
+    if where is None:
+        return
+    if handles is None:
+        handles = ax.get_legend_handles_labels()[0]
+    if not handles:
+        return
+    if where == "below":
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13),
+                  ncol=2, fontsize="small", frameon=False)
+    else:
+        ax.legend(handles=handles, loc=where, fontsize="small")
+
+
+def plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=True, title=None,
+              legend="upper right"):
+    """plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=True, title=None, legend="upper right") -> Axes
 
     Draw a scan of the (e, u) plane: the paper's Figure 4 and its blow-ups.
 
     Each pixel of ``ds`` (from :func:`stairbounce.plane.scan`) is coloured by
-    ``field`` on a perceptually uniform colour map, on a log scale for word
-    length, period and jumps (impacts: symmetric log, it is 0 in the
-    tongues), clipped at the 99.5th percentile; white where there is no
-    periodic sliding solution (``status == 1``).  ``field="status"`` draws the sliding set in black.
+    the class of its ``field`` value on one fixed, discrete scale
+    (:func:`color_key`: word length 1, 2, 3, 4, 5, 6-7, 8-10, ..., >= 501,
+    black for 1 as in the paper's Fig. 4), the same in every window, so that
+    panels drawn separately compare colour for colour; white where there is
+    no periodic sliding solution within max_iter (``status == 1``).
+    ``field="status"`` draws the sliding set in black.
 
     Parameters
     ----------
@@ -90,10 +178,13 @@ def plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=
     field : one of "word_length", "period", "impacts", "jumps", "status".
     ax : matplotlib Axes, default a new figure.
     overlay : iterable of "tongues" (boundaries of the (n, 0^inf) tongues,
-        Theorem 3.1) and "bound" (the no-sliding bound of Corollary 2.1).
-    cmap : colour map, default inferno without its palest tenth.
-    colorbar : draw a colour bar (a legend for ``status``).
+        Theorem 3.1, magenta) and "bound" (the no-sliding bound of
+        Corollary 2.1, grey dashed).  A curve outside the window gets no
+        legend entry.
+    cmap : list of colours, one per class, default :func:`color_key`'s.
+    colorbar : draw the colour key (a legend for ``status``).
     title : default names the window and max_iter.
+    legend : location of the overlay legend, ``"below"`` the axes, or None.
 
     The extent is the scan's window: axes labelled e and u, origin lower left.
     """
@@ -110,60 +201,58 @@ def plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=
         _, ax = plt.subplots(figsize=(8, 6))
     e_lo, e_hi, u_lo, u_hi = _extent(ds)
     none = _no_solution(ds, field)
+    key = color_key(field)
     if field == "status":
         data = np.ma.masked_array(np.ones(none.shape), mask=none)
         cm = mcolors.ListedColormap(["black"]).with_extremes(bad="white")
         norm = mcolors.Normalize(0, 1)
     else:
         data = np.ma.masked_array(np.asarray(ds[field].values, dtype=float), mask=none)
-        cm = cmap if cmap is not None else _colormap()
-        if isinstance(cm, str):
-            from matplotlib import colormaps
-
-            cm = colormaps[cm]
-        cm = cm.with_extremes(bad="white")
-        # the longest words are rare: clip the colour scale at the 99.5th
-        # percentile (the colour bar shows the clipping) so the bulk gets colours
-        found = data.compressed()
-        top = float(np.percentile(found, 99.5)) if found.size else 1.0
-        extend = "max" if found.size and found.max() > top else "neither"
-        if field == "impacts":
-            norm = mcolors.SymLogNorm(linthresh=1.0, vmin=0.0, vmax=max(top, 1.0), base=10)
-        else:
-            norm = mcolors.LogNorm(vmin=1.0, vmax=max(top, 2.0))
+        colors = key.colors if cmap is None else tuple(cmap)
+        if len(colors) != len(key.colors):
+            raise ValueError(f"cmap must list {len(key.colors)} colours, one per class, "
+                             f"got {len(colors)}")
+        cm = mcolors.ListedColormap(colors).with_extremes(bad=NO_SLIDING_COLOR)
+        norm = mcolors.BoundaryNorm(class_bounds(field), len(colors))
     im = ax.imshow(
         data, origin="lower", extent=(e_lo, e_hi, u_lo, u_hi), aspect="auto",
         interpolation="nearest", cmap=cm, norm=norm,
     )
-    if "tongues" in overlay:
-        _draw_tongues(ax, e_lo, e_hi, u_lo, u_hi, "#22c8e5")
+    handles = []
+    if "tongues" in overlay and _draw_tongues(ax, e_lo, e_hi, u_lo, u_hi, TONGUE_COLOR):
+        handles.append(plt.Line2D([], [], color=TONGUE_COLOR, lw=0.9,
+                                  label=r"$(n, 0^\infty)$ tongues, Theorem 3.1"))
     if "bound" in overlay:
         e = np.linspace(max(e_lo, 1e-6), e_hi, 600)
-        ax.plot(e, (1.0 - e) / (2.0 * np.sqrt(2.0 * e)), color="#2a9d3a", lw=1.4, ls="--",
-                label="Corollary 2.1: no sliding above")
+        curve = (1.0 - e) / (2.0 * np.sqrt(2.0 * e))
+        ax.plot(e, curve, color=BOUND_COLOR, lw=1.4, ls="--")
+        if ((curve >= u_lo) & (curve <= u_hi)).any():
+            handles.append(plt.Line2D([], [], color=BOUND_COLOR, lw=1.4, ls="--",
+                                      label="Corollary 2.1: no sliding above"))
     ax.set_xlim(e_lo, e_hi)
     ax.set_ylim(u_lo, u_hi)
     ax.set_xlabel("e (restitution coefficient)")
     ax.set_ylabel("u (horizontal speed)")
+    mi = ds.attrs.get("max_iter")
     if title is None:
-        mi = ds.attrs.get("max_iter")
         title = f"e in [{e_lo:g}, {e_hi:g}], u in [{u_lo:g}, {u_hi:g}]" + (
             f", max_iter {mi}" if mi is not None else ""
         )
     ax.set_title(title)
-    if colorbar:
-        if field == "status":
-            from matplotlib.patches import Patch
+    within = f" within max_iter = {mi}" if mi is not None else ""
+    if colorbar and field == "status":
+        from matplotlib.patches import Patch
 
-            handles = [Patch(color="black", label="periodic sliding solution"),
-                       Patch(facecolor="white", edgecolor="0.5", label="none within max_iter")]
-            handles += ax.get_legend_handles_labels()[0]
-            ax.legend(handles=handles, loc="upper right", fontsize="small")
-        else:
-            cb = ax.figure.colorbar(im, ax=ax, extend=extend)
-            cb.set_label(FIELDS[field] + " (white: no periodic sliding solution)")
-            if overlay:
-                ax.legend(loc="upper right", fontsize="small")
-    elif overlay:
-        ax.legend(loc="upper right", fontsize="small")
+        handles = [Patch(color="black", label="periodic sliding solution"),
+                   Patch(facecolor="white", edgecolor="0.5", label=f"none{within}")] + handles
+    elif colorbar:
+        cb = ax.figure.colorbar(im, ax=ax, spacing="uniform", pad=0.02)
+        bounds = class_bounds(field)
+        # a tick in the middle of each class, labelled with the class
+        cb.set_ticks(0.5 * (bounds[:-1] + bounds[1:]), labels=list(key.labels))
+        cb.ax.tick_params(labelsize="small", length=0)
+        cb.ax.minorticks_off()
+        cb.set_label(f"{FIELDS[field]}  (white: no periodic sliding solution{within})",
+                     fontsize="small")
+    _legend(ax, legend, handles)
     return ax

@@ -58,23 +58,33 @@ def plot_trajectory(traj, ax=None, samples_per_step=400, show_impacts=True):
     return ax
 
 
-def plot_poincare_section(ys, vs, impacts=None, ax=None):
-    """Draw Poincare iterates ``(y_n, v_n)`` at consecutive step edges (Fig. 2).
+def plot_poincare_section(ys, vs, impacts=None, ax=None, colorbar=True):
+    """plot_poincare_section(ys, vs, impacts=None, ax=None, colorbar=True) -> Axes
+
+    Draw Poincare iterates ``(y_n, v_n)`` at consecutive step edges (Fig. 2),
+    coloured by the index n (with a colour bar saying so).
 
     Iterates reached by sliding (``impacts == SLIDING``), which are all the
-    point (1, 0), are drawn as a larger marker.
+    point (1, 0), are drawn as a larger marker.  The dashed line ``y = 1`` is
+    the edge of the map's domain ``[1, inf) x R``: the height of the step
+    just left.
     """
     ax = _axes(ax)
     ys, vs = np.asarray(ys), np.asarray(vs)
     if len(ys) <= 40:  # the order of a few iterates helps; of many it is clutter
         ax.plot(ys, vs, color="0.7", lw=0.6, zorder=1)
-    ax.scatter(ys, vs, c=np.arange(len(ys)), cmap="viridis", s=14, zorder=2, label="iterates")
+    sc = ax.scatter(ys, vs, c=np.arange(len(ys)), cmap="viridis", s=10, lw=0, zorder=2)
+    # the legend's marker in a neutral colour: the colour itself is the index
+    ax.plot([], [], "o", ms=4, color="0.45", label="iterates (colour: index n)")
+    if colorbar:
+        cb = ax.figure.colorbar(sc, ax=ax, pad=0.02)
+        cb.set_label("iterate index n")
     if impacts is not None:
         sl = np.asarray(impacts) == SLIDING
         if sl.any():
             ax.plot(ys[sl], vs[sl], "*", ms=12, color="C1", mec="k", mew=0.5,
                     label="after sliding (1, 0)", zorder=3)
-    ax.axvline(1.0, color="0.5", lw=0.8, ls="--")
+    ax.axvline(1.0, color="0.5", lw=0.8, ls="--", label="y = 1: edge of the domain of P")
     ax.set_xlabel("y (height at the edge)")
     ax.set_ylabel("v (vertical velocity at the edge)")
     ax.set_title("Poincare section")
@@ -82,8 +92,11 @@ def plot_poincare_section(ys, vs, impacts=None, ax=None):
     return ax
 
 
-def animate_trajectory(traj, path, fps=30, seconds_per_step=0.6):
-    """Write an animation of the ball (GIF through Pillow) to ``path``."""
+def animate_trajectory(traj, path, fps=30, seconds_per_step=0.6, progress=None):
+    """animate_trajectory(traj, path, fps=30, seconds_per_step=0.6, progress=None)
+
+    Write an animation of the ball (GIF through Pillow) to ``path``;
+    ``progress(done, total)`` is told about every frame written."""
     import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation, PillowWriter
 
@@ -99,5 +112,6 @@ def animate_trajectory(traj, path, fps=30, seconds_per_step=0.6):
         return (ball,)
 
     anim = FuncAnimation(fig, update, frames=frames, blit=True)
-    anim.save(str(path), writer=PillowWriter(fps=fps))
+    anim.save(str(path), writer=PillowWriter(fps=fps),
+              progress_callback=None if progress is None else (lambda i, n: progress(i + 1, n)))
     plt.close(fig)
