@@ -257,3 +257,56 @@ def test_not_callable_and_too_few_uncertain_points():
         uncertainty_dimension(disk, UNIT, eps=[1e-6, 1e-5, 1e-4], n_points=1000)
     with pytest.raises(ValueError, match="fit_range"):
         uncertainty_dimension(disk, UNIT, n_points=1000, fit_range=(0.1, 2.0))
+
+
+# --------------------------------------------------------------------------- #
+# The model's classifier                                                      #
+# --------------------------------------------------------------------------- #
+
+
+@pytest.mark.parametrize("which, field", [("sliding", "status"), ("words", "word_length")])
+def test_sliding_classifier_labels_are_the_scans(which, field):
+    from stairbounce.fractal import sliding_classifier
+    from stairbounce.plane import scan
+
+    ds = scan(e=(0.155, 0.2138, 40), u=(0.6, 0.658, 30), max_iter=300)
+    ee, uu = np.meshgrid(ds["e"].values, ds["u"].values)
+    labels = sliding_classifier(max_iter=300, which=which)(ee.ravel(), uu.ravel())
+    np.testing.assert_array_equal(labels, ds[field].transpose("u", "e").values.ravel())
+    assert len(np.unique(labels)) > 1
+
+
+def test_model_dimension_is_the_same_on_one_thread_and_on_all():
+    import numba
+
+    from stairbounce.fractal import sliding_classifier
+
+    classify = sliding_classifier(max_iter=200, which="words")
+    w = ((0.155, 0.2138), (0.6, 0.658))
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = uncertainty_dimension(classify, w, eps=np.logspace(-4, -1, 4), n_points=3000, seed=1)
+    finally:
+        numba.set_num_threads(before)
+    many = uncertainty_dimension(classify, w, eps=np.logspace(-4, -1, 4), n_points=3000, seed=1)
+    np.testing.assert_array_equal(one.uncertain, many.uncertain)
+    assert one.dimension == many.dimension
+
+
+def test_model_bad_input():
+    from stairbounce.fractal import perimeter_dimension, sliding_classifier
+
+    with pytest.raises(ValueError, match="max_iter must be an integer >= 1"):
+        sliding_classifier(max_iter=0)
+    with pytest.raises(ValueError, match="which must be one of"):
+        sliding_classifier(which="borders")
+    with pytest.raises(ValueError, match="method must be one of"):
+        perimeter_dimension(method="mass")
+    with pytest.raises(ValueError, match="u must be a finite window"):
+        perimeter_dimension(u=(0.7, 0.7), method="uncertainty")
+    with pytest.raises(ValueError, match="n_points must be an integer >= 100"):
+        perimeter_dimension(method="uncertainty", n_points=50)
+    # the model refuses e >= 1 itself, naming it
+    with pytest.raises(ValueError, match="e"):
+        uncertain_fraction(sliding_classifier(10), ((0.5, 1.5), (0.1, 1.0)), 1e-3, n_points=200)
