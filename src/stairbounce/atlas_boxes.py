@@ -46,7 +46,7 @@ from .fractal import (
     label_boundary,
 )
 
-__all__ = ["store_box_counts", "store_box_dimension"]
+__all__ = ["store_box_counts", "store_box_dimension", "store_info"]
 
 # The OR-reduced image of the box sides that do not divide the tile is held by
 # the caller: refuse sides that would make it as large as the store.
@@ -70,6 +70,18 @@ def _open(path):
     root = zarr.open_group(str(p), mode="r")
     tile = int(root["tiles"].attrs["tile"])
     return root, tile
+
+
+def store_info(path):
+    """store_info(path) -> dict
+
+    The scan attributes of a finished atlas store (window ``e_min``,
+    ``e_max``, ``u_min``, ``u_max``, sizes ``n_e``, ``n_u``, ``max_iter``,
+    ...) and its ``tile`` size.  Raises ``ValueError`` for a path that is not
+    a tiled scan store or a store with missing tiles.
+    """
+    root, tile = _open(path)
+    return dict(root.attrs, tile=tile)
 
 
 def _check_args(which, connectivity):
