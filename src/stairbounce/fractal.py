@@ -48,6 +48,7 @@ __all__ = [
     "SlopeFit",
     "UncertainFraction",
     "UncertaintyDimension",
+    "border_dimension_estimates",
     "boundary",
     "box_counts",
     "box_dimension",
@@ -1387,3 +1388,20 @@ def sliding_classifier(max_iter=1000, which="sliding", y0=1.0, v0=0.0):
     if which not in _WHICH:
         raise ValueError(f"which must be one of {_WHICH}, got {which!r}")
     return SlidingClassifier(max_iter, which, _finite("y0", y0), _finite("v0", v0))
+
+
+def border_dimension_estimates():
+    """border_dimension_estimates() -> dict
+
+    The measured dimension of the border of the sliding region in the
+    paper's Fig. 6 and Fig. 7 windows, as written by
+    ``benchmarks/dimension_study.py --json`` into the package's
+    ``data/border_dimension.json``: per window (``"fig6"``, ``"fig7"``) the
+    best estimate (``dimension``, ``ci95``, ``method``, ``details``), the
+    paper's value, the uncertainty-exponent results per ``max_iter`` and the
+    tiled box count; plus ``generated_by`` and ``date``.
+    """
+    import json
+    from importlib.resources import files
+
+    return json.loads(files("stairbounce").joinpath("data", "border_dimension.json").read_text())
