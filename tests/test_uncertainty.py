@@ -327,10 +327,14 @@ def test_answer_file_schema_and_claims():
         lo, hi = best["ci95"]
         assert lo < best["dimension"] < hi and hi - lo <= 0.04  # the +-0.02 goal of issue 12
         assert best["paper"] == paper and isinstance(best["method"], str) and best["details"]
-        # the README's claim: the two estimators agree within their intervals
-        blo, bhi = best["boxes"]["ci95"]
-        assert max(lo, blo) <= min(hi, bhi)
-        assert best["boxes"]["fit_range_px"][0] >= 8  # away from the pixel scale
+        # the README's claim: where both estimators measure, they agree within their intervals
+        same = best["same_scales"]
+        ulo, uhi = same["uncertainty"]["ci95"]
+        blo, bhi = same["boxes"]["ci95"]
+        assert max(ulo, blo) <= min(uhi, bhi)
+        assert same["boxes"]["fit_range_px"][0] >= 8  # away from the pixel scale
+        assert same["boxes"]["resolution"] >= 32768 and same["uncertainty"]["n_points"] >= 10**6
+        assert set(best["uncertainty_by_max_iter"]) >= {"1000", "4000", "16000"}
 
 
 def test_figures_report_row_carries_paper_reproduction_and_estimate():
@@ -346,3 +350,15 @@ def test_figures_report_row_carries_paper_reproduction_and_estimate():
     assert "reproduced 1.332" in row.measured
     assert f"best estimate {best['dimension']:.3f}" in row.measured
     assert f"{best['ci95'][0]:.3f}..{best['ci95'][1]:.3f}" in row.measured and best["method"] in row.measured
+
+
+def test_fit_of_a_stored_measurement_is_the_same_fit():
+    from stairbounce.fractal import uncertainty_dimension_from_counts
+
+    eps = np.logspace(-4, -1, 7)
+    est = uncertainty_dimension(disk, UNIT, eps=eps, n_points=20_000, seed=4, fit_range=(1e-3, 0.1))
+    uf = uncertain_fraction(disk, UNIT, eps, n_points=20_000, seed=4)
+    again = uncertainty_dimension_from_counts(uf, fit_range=(1e-3, 0.1))
+    assert again.dimension == est.dimension and again.ci == est.ci and again.seed == 4
+    with pytest.raises(ValueError, match="fit_range must have 0 < eps_min"):
+        uncertainty_dimension_from_counts(uf, fit_range=(0.0, 0.1))

@@ -325,7 +325,7 @@ def _best_estimate_row(name, paper, reproduction):
 
     best = border_dimension_estimates()[name]
     lo, hi = best["ci95"]
-    boxes = best.get("boxes")
+    boxes = best.get("same_scales", {}).get("boxes")
     also = ""
     if boxes:
         blo, bhi = boxes["ci95"]

@@ -61,6 +61,7 @@ __all__ = [
     "slope_fit",
     "uncertain_fraction",
     "uncertainty_dimension",
+    "uncertainty_dimension_from_counts",
 ]
 
 
@@ -1276,30 +1277,57 @@ def uncertainty_dimension(
     (border dimension 1) and on a border ``C x [0, 1]`` with ``C`` the
     middle-thirds Cantor set (dimension ``1 + log 2 / log 3``).
     """
+    eps = DEFAULT_EPS if eps is None else eps
+    _check_fit_range_eps(fit_range)
+    check_count("min_uncertain", min_uncertain, 1)
+    uf = uncertain_fraction(classify, window, eps, n_points, seed, direction, progress=progress)
+    return uncertainty_dimension_from_counts(
+        uf, fit_range=fit_range, min_uncertain=min_uncertain, label=label
+    )
+
+
+def _check_fit_range_eps(fit_range):
+    if fit_range is None:
+        return None
+    try:
+        flo, fhi = (float(v) for v in fit_range)
+    except (TypeError, ValueError):
+        raise ValueError(f"fit_range must be a pair (eps_min, eps_max), got {fit_range!r}") from None
+    if not (0.0 < flo <= fhi < 1.0):
+        raise ValueError(f"fit_range must have 0 < eps_min <= eps_max < 1, got {fit_range!r}")
+    return flo, fhi
+
+
+def uncertainty_dimension_from_counts(measured, fit_range=None, min_uncertain=25, label=""):
+    """uncertainty_dimension_from_counts(measured, fit_range=None, min_uncertain=25, label="") -> UncertaintyDimension
+
+    The fit step of :func:`uncertainty_dimension` alone, on a measured
+    :class:`UncertainFraction` (or any object with ``eps``, ``uncertain``,
+    ``n_points`` and optionally ``seed``, ``direction``, ``window``): for
+    instance to fit another range of eps of a stored measurement without
+    classifying again.  Same fit, same interval, same parameters.
+    """
     from scipy import stats
 
-    eps = DEFAULT_EPS if eps is None else eps
+    rng = _check_fit_range_eps(fit_range)
     min_uncertain = check_count("min_uncertain", min_uncertain, 1)
-    if fit_range is not None:
-        try:
-            flo, fhi = (float(v) for v in fit_range)
-        except (TypeError, ValueError):
-            raise ValueError(f"fit_range must be a pair (eps_min, eps_max), got {fit_range!r}") from None
-        if not (0.0 < flo <= fhi < 1.0):
-            raise ValueError(f"fit_range must have 0 < eps_min <= eps_max < 1, got {fit_range!r}")
-    uf = uncertain_fraction(classify, window, eps, n_points, seed, direction, progress=progress)
-    n = uf.n_points
-    usable = (uf.uncertain >= min_uncertain) & (uf.uncertain < n)
-    fitted = usable if fit_range is None else usable & (uf.eps >= flo) & (uf.eps <= fhi)
+    eps = np.asarray(measured.eps, dtype=float)
+    uncertain = np.asarray(measured.uncertain, dtype=np.int64)
+    n = check_count("n_points", measured.n_points, 1)
+    if eps.ndim != 1 or eps.shape != uncertain.shape:
+        raise ValueError(f"eps and uncertain must be 1-D of one length, got {eps.shape} and {uncertain.shape}")
+    fraction = uncertain / n
+    usable = (uncertain >= min_uncertain) & (uncertain < n)
+    fitted = usable if rng is None else usable & (eps >= rng[0]) & (eps <= rng[1])
     if fitted.sum() < 3:
-        rows = ", ".join(f"{e:.3g}: {int(c)}" for e, c in zip(uf.eps, uf.uncertain))
+        rows = ", ".join(f"{e:.3g}: {int(c)}" for e, c in zip(eps, uncertain))
         raise ValueError(
             f"fewer than 3 eps with at least {min_uncertain} uncertain points (and not all {n}) in the "
             f"fit range; uncertain points per eps: {rows}. Use more points, larger eps or a wider fit_range"
         )
     idx = np.flatnonzero(fitted)
-    x = np.log(uf.eps[fitted])
-    f = uf.fraction[fitted]
+    x = np.log(eps[fitted])
+    f = fraction[fitted]
     y = np.log(f)
     w = n * f / (1.0 - f)
     alpha, intercept, se_binom, se_fit, r = _weighted_line(x, y, w)
@@ -1323,19 +1351,19 @@ def uncertainty_dimension(
         stderr=float(stderr),
         ci=(dim - half, dim + half),
         r=float(r),
-        eps=uf.eps,
-        fraction=uf.fraction,
-        uncertain=uf.uncertain,
+        eps=eps,
+        fraction=fraction,
+        uncertain=uncertain,
         usable=usable,
-        fit_range=(float(uf.eps[idx[0]]), float(uf.eps[idx[-1]])),
+        fit_range=(float(eps[idx[0]]), float(eps[idx[-1]])),
         fit=fit,
         alpha=float(alpha),
         stderr_binomial=float(se_binom),
         stderr_fit=float(se_fit),
         n_points=n,
-        seed=uf.seed,
-        direction=uf.direction,
-        window=uf.window,
+        seed=getattr(measured, "seed", 0),
+        direction=getattr(measured, "direction", "random"),
+        window=getattr(measured, "window", ()),
         label=label,
     )
 
