@@ -210,7 +210,7 @@ def draw(results, png):
                     continue
                 d = case[which]
                 if case["method"] == "uncertainty":
-                    lab = f"max_iter {case['max_iter']}, {which}"
+                    lab = f"max_iter {case['max_iter']}, {which}, {case['n_points']:.0e} pts from eps {min(d['eps']):.0e}"
                     ax_f.loglog(d["eps"], d["fraction"], style, marker="o", ms=3, label=lab)
                     ax_l.semilogx(d["local_eps"], d["local_dimension"], style, marker="o", ms=3,
                                   label=f"uncertainty, {lab}")
