@@ -714,7 +714,7 @@ def _check_window(name, window):
     return lo, hi
 
 
-def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64):
+def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64, prune=True):
     """``status`` and ``word_length`` of the scan of the window, rows along u.
 
     With a ``progress`` callback the rows are scanned in bands cut out of the
@@ -722,7 +722,8 @@ def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64):
     be bit-identical to one scan of the window.
     """
     if progress is None:
-        ds = scan(e=(e[0], e[1], resolution), u=(u[0], u[1], resolution), max_iter=max_iter, y0=y0, v0=v0)
+        ds = scan(e=(e[0], e[1], resolution), u=(u[0], u[1], resolution), max_iter=max_iter, y0=y0, v0=v0,
+                  prune=prune)
         return ds["status"].transpose("u", "e").values, ds["word_length"].transpose("u", "e").values
     es = pixel_centres(e[0], e[1], resolution)
     us = pixel_centres(u[0], u[1], resolution)
@@ -731,7 +732,7 @@ def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64):
     progress(0, resolution)
     for i0 in range(0, resolution, band):
         i1 = min(i0 + band, resolution)
-        ds = scan_coords(es, us[i0:i1], max_iter=max_iter, y0=y0, v0=v0)
+        ds = scan_coords(es, us[i0:i1], max_iter=max_iter, y0=y0, v0=v0, prune=prune)
         status[i0:i1] = ds["status"].transpose("u", "e").values
         word_length[i0:i1] = ds["word_length"].transpose("u", "e").values
         progress(i1, resolution)
@@ -754,6 +755,7 @@ def perimeter_dimension(
     y0=1.0,
     v0=0.0,
     progress=None,
+    prune=True,
 ):
     """perimeter_dimension(e=(0, 0.333), u=(0.4, 0.733), resolution=512, max_iter=1000, which="sliding", ...) -> PerimeterDimension
 
@@ -795,6 +797,9 @@ def perimeter_dimension(
         Called after each band of rows of the scan (the scan then runs in
         bands of :func:`stairbounce.plane.scan_coords`, bit-identical to one
         call); for a progress bar.
+    prune : bool, default True
+        As in :func:`stairbounce.plane.scan` (same answer; False iterates
+        the pixels above the Corollary 2.1 curve too).
 
     The paper reports 1.324 (Fig. 6) and 1.403 (Fig. 7) with r > 0.99.
     """
@@ -804,7 +809,7 @@ def perimeter_dimension(
     max_iter = check_count("max_iter", max_iter, 1)
     if which not in _WHICH:
         raise ValueError(f"which must be one of {_WHICH}, got {which!r}")
-    status, word_length = _scan_window(e, u, resolution, max_iter, y0, v0, progress)
+    status, word_length = _scan_window(e, u, resolution, max_iter, y0, v0, progress, prune=prune)
     region = status == 0
     if not region.any():
         raise ValueError(
