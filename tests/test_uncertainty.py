@@ -362,3 +362,14 @@ def test_fit_of_a_stored_measurement_is_the_same_fit():
     assert again.dimension == est.dimension and again.ci == est.ci and again.seed == 4
     with pytest.raises(ValueError, match="fit_range must have 0 < eps_min"):
         uncertainty_dimension_from_counts(uf, fit_range=(0.0, 0.1))
+
+
+def test_pruning_changes_no_label_of_the_classifier():
+    # the Fig. 6 window straddles the Corollary 2.1 curve, where pruning skips work
+    from stairbounce.fractal import sliding_classifier
+
+    x, y, _ = random_points(((0.0, 0.333), (0.4, 0.733)), 3000, seed=5)
+    for which in ("sliding", "words"):
+        a = sliding_classifier(300, which=which)(x, y)
+        b = sliding_classifier(300, which=which, prune=False)(x, y)
+        np.testing.assert_array_equal(a, b)

@@ -748,7 +748,7 @@ def _check_window(name, window):
     return lo, hi
 
 
-def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64):
+def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64, prune=True):
     """``status`` and ``word_length`` of the scan of the window, rows along u.
 
     With a ``progress`` callback the rows are scanned in bands cut out of the
@@ -756,7 +756,8 @@ def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64):
     be bit-identical to one scan of the window.
     """
     if progress is None:
-        ds = scan(e=(e[0], e[1], resolution), u=(u[0], u[1], resolution), max_iter=max_iter, y0=y0, v0=v0)
+        ds = scan(e=(e[0], e[1], resolution), u=(u[0], u[1], resolution), max_iter=max_iter, y0=y0, v0=v0,
+                  prune=prune)
         return ds["status"].transpose("u", "e").values, ds["word_length"].transpose("u", "e").values
     es = pixel_centres(e[0], e[1], resolution)
     us = pixel_centres(u[0], u[1], resolution)
@@ -765,7 +766,7 @@ def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64):
     progress(0, resolution)
     for i0 in range(0, resolution, band):
         i1 = min(i0 + band, resolution)
-        ds = scan_coords(es, us[i0:i1], max_iter=max_iter, y0=y0, v0=v0)
+        ds = scan_coords(es, us[i0:i1], max_iter=max_iter, y0=y0, v0=v0, prune=prune)
         status[i0:i1] = ds["status"].transpose("u", "e").values
         word_length[i0:i1] = ds["word_length"].transpose("u", "e").values
         progress(i1, resolution)
@@ -792,6 +793,7 @@ def perimeter_dimension(
     n_points=100_000,
     eps=None,
     seed=0,
+    prune=True,
 ):
     """perimeter_dimension(e=(0, 0.333), u=(0.4, 0.733), resolution=512, max_iter=1000, which="sliding", ..., method="boxes") -> PerimeterDimension or UncertaintyDimension
 
@@ -844,6 +846,9 @@ def perimeter_dimension(
     n_points, eps, seed :
         Only for ``method="uncertainty"``: as in :func:`uncertainty_dimension`
         (default 100_000 points, :data:`DEFAULT_EPS`, seed 0).
+    prune : bool, default True
+        As in :func:`stairbounce.plane.scan` (same answer; False iterates
+        the pixels above the Corollary 2.1 curve too).
 
     The paper reports 1.324 (Fig. 6) and 1.403 (Fig. 7) with r > 0.99.
     """
@@ -857,12 +862,12 @@ def perimeter_dimension(
     if method == "uncertainty":
         what = "sliding region" if which == "sliding" else "word-length regions"
         return uncertainty_dimension(
-            sliding_classifier(max_iter=max_iter, which=which, y0=y0, v0=v0), (e, u), eps=eps,
+            sliding_classifier(max_iter=max_iter, which=which, y0=y0, v0=v0, prune=prune), (e, u), eps=eps,
             n_points=n_points, seed=seed, fit_range=fit_range, progress=progress,
             label=f"border of the {what}, max_iter {max_iter}",
         )
     resolution = check_count("resolution", resolution, 8)
-    status, word_length = _scan_window(e, u, resolution, max_iter, y0, v0, progress)
+    status, word_length = _scan_window(e, u, resolution, max_iter, y0, v0, progress, prune=prune)
     region = status == 0
     if not region.any():
         raise ValueError(
@@ -1373,24 +1378,24 @@ class SlidingClassifier:
     made by :func:`sliding_classifier`.  A plain object (not a closure), so it
     can be sent to Dask workers."""
 
-    def __init__(self, max_iter, which, y0, v0):
-        self.max_iter, self.which, self.y0, self.v0 = max_iter, which, y0, v0
+    def __init__(self, max_iter, which, y0, v0, prune=True):
+        self.max_iter, self.which, self.y0, self.v0, self.prune = max_iter, which, y0, v0, prune
 
     def __call__(self, e, u):
         from .plane import scan_points
 
         ds = scan_points(np.asarray(e, dtype=float), np.asarray(u, dtype=float),
-                         max_iter=self.max_iter, y0=self.y0, v0=self.v0)
+                         max_iter=self.max_iter, y0=self.y0, v0=self.v0, prune=self.prune)
         name = "status" if self.which == "sliding" else "word_length"
         return np.asarray(ds[name])
 
     def __repr__(self):
         return (f"sliding_classifier(max_iter={self.max_iter}, which={self.which!r}, "
-                f"y0={self.y0}, v0={self.v0})")
+                f"y0={self.y0}, v0={self.v0}, prune={self.prune})")
 
 
-def sliding_classifier(max_iter=1000, which="sliding", y0=1.0, v0=0.0):
-    """sliding_classifier(max_iter=1000, which="sliding", y0=1.0, v0=0.0) -> classify(e, u)
+def sliding_classifier(max_iter=1000, which="sliding", y0=1.0, v0=0.0, prune=True):
+    """sliding_classifier(max_iter=1000, which="sliding", y0=1.0, v0=0.0, prune=True) -> classify(e, u)
 
     The model's classification of ``(e, u)`` points, for
     :func:`uncertain_fraction` and :func:`uncertainty_dimension`.
@@ -1409,13 +1414,16 @@ def sliding_classifier(max_iter=1000, which="sliding", y0=1.0, v0=0.0):
     which : "sliding" or "words", default "sliding"
     y0, v0 : float, default 1, 0
         As in :func:`stairbounce.plane.scan` (checked when the points are).
+    prune : bool, default True
+        As in :func:`stairbounce.plane.scan_points`: the same labels, without
+        iterating points above the Corollary 2.1 curve.
     """
     from .model import _finite
 
     max_iter = check_count("max_iter", max_iter, 1)
     if which not in _WHICH:
         raise ValueError(f"which must be one of {_WHICH}, got {which!r}")
-    return SlidingClassifier(max_iter, which, _finite("y0", y0), _finite("v0", v0))
+    return SlidingClassifier(max_iter, which, _finite("y0", y0), _finite("v0", v0), bool(prune))
 
 
 def border_dimension_estimates():

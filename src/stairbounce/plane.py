@@ -15,6 +15,14 @@ The public wrappers validate, allocate and call a private numba kernel:
 - ``_scan_plain``: the baseline, one pixel at a time with the plain closed
   form :func:`stairbounce.model._step_closed`, ``prange`` over rows.
 
+Pruning: above the curve of Corollary 2.1 no state with ``y >= 1`` slides,
+so those pixels are status 1 whatever max_iter; ``_scan_fast`` stores that
+without iterating (``prune=True``, the default), which leaves the arrays
+unchanged bit for bit (``_never_slides`` has the proof, with its margin for
+rounding).  On the paper's grid that is 98 % of the map steps.  The
+Theorem 3.1 tongues are not short-cut: their answer, (n, 0^inf), costs
+n <= 5 steps on the paper's plane, nothing to save.
+
 Nothing here imports matplotlib, Typer or the web stack.
 """
 
@@ -126,49 +134,75 @@ def _scan_plain(es, us, max_iter, y0, v0, status, word_length, jumps, period, im
             _store(j, n, imp, jmp, status[i], word_length[i], jumps[i], period[i], impacts[i])
 
 
-# Relative margin of the pruning test: a pixel is pruned only when
-# T = 1/u is below the Corollary 2.1 threshold by more than this (plus the
-# rounding of the sliding test itself), see _never_slides.
+# The pruning test (_never_slides) wants T = 1/u below the Corollary 2.1
+# threshold by a relative _PRUNE_MARGIN, plus _PRUNE_ROUNDING times the size of
+# the numbers the map handles at that pixel: room for every rounding error.
 _PRUNE_MARGIN = 2.0**-30
+_PRUNE_ROUNDING = 2.0**-44
 
 
 @njit(cache=True)
-def _never_slides(e, T, ratio):
-    """Whether Corollary 2.1 proves that no orbit slides at ``(e, u = 1/T)``, with room for rounding.
+def _never_slides(e, T, ratio, energy0):
+    """Whether Corollary 2.1 proves that no step of the scan slides at ``(e, u = 1/T)``.
 
-    The proof (Corollary 2.1, redone for the computed test).  The kernels test
-    (2.4), ``v + r s <= T`` with ``s = sqrt(v^2 + 2y)`` and ``r = ratio``, the
-    float ``(1+e)/(1-e)``.  Over all ``v``, ``v + r s`` is smallest at
-    ``v = -s/r``, where it equals ``sqrt(2y (r^2 - 1))``; so for ``y >= 1``
-    no state passes the exact test when ``T < sqrt(2 (r^2 - 1))``, which for
-    the exact ``r`` is ``u > (1-e)/(2 sqrt(2e))``: the paper's bound, strict.
-    At equality ``u = (1-e)/(2 sqrt(2e))`` the state ``(1, -T/(r^2-1))``
-    satisfies (2.4) with equality, which our convention (docs/design.md)
-    counts as sliding, so equality is not pruned (the paper's corollary,
-    "u >= ...", holds with the strict test only).
+    ``energy0 = y0 + v0^2`` of the start.  When True, iterating the pixel
+    gives status 1 (no periodic sliding solution within any max_iter), and the
+    kernels store that without iterating.
 
-    Rounding: every state the map returns is at an edge, ``y >= 1`` up to
-    the rounding of the map (far below the margin); the computed ``v + r s``
-    is at least ``(v + r s)(1 - 5 eps r/(r-1))`` (``v + r s >= (r-1) s``
-    bounds the cancellation); ``sqrt(2 (r-1)(r+1))`` is computed with
-    ``r - 1`` exact and relative error below ``3 eps``.  The test below
-    demands ``T`` smaller than the threshold by a relative
-    ``_PRUNE_MARGIN + 2**-46 r/(r-1)``, many times these errors, so a pruned
-    pixel's computed test fails on every state it can reach: iteration would
-    give status 1 after max_iter steps, which is what pruning stores.
+    The proof, redone for the computed test.  The kernels test (2.4),
+    ``v + r s <= T`` with ``s = sqrt(v^2 + 2y)``, ``r = ratio``, the float
+    ``(1+e)/(1-e)``.  Over all ``v``, ``v + r s`` is smallest at ``v = -s/r``,
+    where it equals ``sqrt(2y (r^2-1))``.  Every state the map returns sits
+    at an edge, ``y >= 1``; so no state passes the exact test when
+    ``T < sqrt(2 (r^2-1))``, which for the exact ``r`` is
+    ``u > (1-e)/(2 sqrt(2e))``: the paper's bound, strict.
+
+    Equality: at ``u = (1-e)/(2 sqrt(2e))`` the state ``(1, -T/(r^2-1))``
+    meets (2.4) with equality, which our convention counts as sliding
+    (docs/design.md); the paper's "u >= ..." holds only for a strict test.
+    So the curve itself is on the side that is iterated, never pruned.
+
+    Rounding, on the safe side by a wide factor:
+
+    - ``sqrt(2 (r-1)(r+1))``: ``r - 1`` is exact (``r >= 1``), the rest
+      rounds by at most 3 eps (eps = 2**-53).
+    - The computed ``v + r s`` is at least ``(v + r s)(1 - 5 eps r/(r-1))``
+      (``v + r s >= (r-1) s`` bounds the cancellation).
+    - A computed state can sit below the edge, ``y = 1 - delta``, by a few
+      eps times the terms of the step, ``y + |v| T + T^2/2 + 1``.  Measured
+      along orbits (``tests/test_prune.py``) these stay below a small
+      multiple (< 16) of ``size = T^2 + (1/T^2 + 1 + y0 + v0^2)(r + r/(r-1))``:
+      energy grows by one per step flown over (about ``2/T^2`` steps in a
+      flight when ``T`` is small), impacts take a share ``1 - e^2`` of it
+      (slowly when ``r`` is large).
+
+    The test demands ``T`` smaller than the threshold by the relative
+    ``_PRUNE_MARGIN + _PRUNE_ROUNDING * size`` (``2**-44 size`` is about 2**9
+    times ``delta / 2``, the relative change of ``T`` that a height error
+    ``delta`` is worth): a pruned pixel's computed test fails on every state
+    the map reaches.
 
     Any start: the first step from ``(y0, v0)`` (``y0 < 1`` allowed) may
     slide, and then the orbit of ``(1, 0)`` never does; or it does not, and
     no later state slides.  Either way the answer is status 1.
 
-    ``e = 0``: ``r = 1``, the threshold is 0 (the bound is infinite): never
-    pruned.
+    ``e = 0``: ``r = 1``, the bound is infinite: never pruned (nor where
+    ``T^2`` underflows or anything overflows: the test is then False).
     """
     rm1 = ratio - 1.0  # exact for ratio >= 1
-    if not rm1 > 0.0:
+    TT = T * T
+    if not (rm1 > 0.0 and TT > 0.0):  # e = 0, or u so large that T^2 underflows
         return False
     threshold = math.sqrt(2.0 * (rm1 * (ratio + 1.0)))
-    return T * (1.0 + _PRUNE_MARGIN + 2.0**-46 * ratio / rm1) < threshold
+    size = TT + (1.0 / TT + 1.0 + energy0) * (ratio + ratio / rm1)
+    return T * (1.0 + _PRUNE_MARGIN + _PRUNE_ROUNDING * size) < threshold
+
+
+@njit(cache=True)
+def _prunable(es, us, energy0, out):
+    for p in range(es.shape[0]):
+        T, ratio = _constants(es[p], us[p])
+        out[p] = _never_slides(es[p], T, ratio, energy0)
 
 
 # The fast kernel runs LANES pixels in lockstep.  The lane loops below are
@@ -220,6 +254,7 @@ def _run_chunk(es, us, grid, max_iter, y0, v0, prune, start, stop,
     """
     L = LANES
     from_rest = y0 == 1.0 and v0 == 0.0
+    energy0 = y0 + v0 * v0
     Y = np.ones(L)
     V = np.zeros(L)
     E = np.zeros(L)
@@ -246,7 +281,7 @@ def _run_chunk(es, us, grid, max_iter, y0, v0, prune, start, stop,
     pruned = 0
     for l in range(L):
         if prune:
-            nxt, npr = _skip_proven(es, us, grid, nxt, stop, status, word_length, jumps, period, impacts)
+            nxt, npr = _skip_proven(es, us, grid, energy0, nxt, stop, status, word_length, jumps, period, impacts)
             pruned += npr
         if nxt < stop:
             _load_lane(l, nxt, es, us, grid, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX)
@@ -326,7 +361,7 @@ def _run_chunk(es, us, grid, max_iter, y0, v0, prune, start, stop,
             IMP[l] = 0
             JMP[l] = 0
             if prune:
-                nxt, npr = _skip_proven(es, us, grid, nxt, stop, status, word_length, jumps, period, impacts)
+                nxt, npr = _skip_proven(es, us, grid, energy0, nxt, stop, status, word_length, jumps, period, impacts)
                 pruned += npr
             if nxt < stop:
                 _load_lane(l, nxt, es, us, grid, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX)
@@ -348,7 +383,7 @@ def _pixel(p, es, us, grid):
 
 
 @njit(cache=True)
-def _skip_proven(es, us, grid, p, stop, status, word_length, jumps, period, impacts):
+def _skip_proven(es, us, grid, energy0, p, stop, status, word_length, jumps, period, impacts):
     """Give status 1 to the pixels from ``p`` on that :func:`_never_slides`
     proves, up to the first that needs iterating; returns its index (or
     ``stop``) and the number given."""
@@ -356,7 +391,7 @@ def _skip_proven(es, us, grid, p, stop, status, word_length, jumps, period, impa
     while p < stop:
         e, u = _pixel(p, es, us, grid)
         T, ratio = _constants(e, u)
-        if not _never_slides(e, T, ratio):
+        if not _never_slides(e, T, ratio, energy0):
             break
         _store(p, 0, 0, 0, status, word_length, jumps, period, impacts)
         n += 1
@@ -552,7 +587,8 @@ def _check_run(max_iter, y0, v0):
 
 
 def _run(es, us, grid, max_iter, y0, v0, prune):
-    """Allocate flat outputs and run :func:`_scan_fast`; returns them and the pruned count."""
+    """Allocate flat outputs and run :func:`_scan_fast`; returns them and the
+    number of pixels pruned (the kernel's own count, for tests and benchmarks)."""
     npix = es.size * us.size if grid else es.size
     out = {k: np.empty(npix, dtype=dt) for k, (dt, _) in _FIELDS.items()}
     chunk, order = _chunking(npix, numba.get_num_threads())
@@ -565,7 +601,7 @@ def _run(es, us, grid, max_iter, y0, v0, prune):
     return out, int(pruned)
 
 
-def _attrs(max_iter, y0, v0, prune, pruned):
+def _attrs(max_iter, y0, v0):
     from . import __version__
 
     return {
@@ -574,8 +610,6 @@ def _attrs(max_iter, y0, v0, prune, pruned):
         "y0": y0,
         "v0": v0,
         "kernel": "stairbounce.plane._scan_fast",
-        "prune": int(bool(prune)),
-        "pruned": pruned,
         "stairbounce_version": __version__,
         "convention": CONVENTION,
         "reference": "Campos, Romero-Valles, Torres, A fractal structure in a bouncing ball model, Section 3",
@@ -606,14 +640,14 @@ def scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0, *, prune=True
     us = _coords("u", u_values)
     max_iter, y0, v0 = _check_run(max_iter, y0, v0)
     _check_memory(es.size, us.size)
-    out, pruned = _run(es, us, True, max_iter, y0, v0, prune)
+    out, _ = _run(es, us, True, max_iter, y0, v0, prune)
     shape = (us.size, es.size)
     data_vars = {
         k: (("u", "e"), out[k].reshape(shape), {"long_name": desc})
         for k, (_, desc) in _FIELDS.items()
     }
     coords = {"e": ("e", es, _E_ATTRS), "u": ("u", us, _U_ATTRS)}
-    return xr.Dataset(data_vars, coords=coords, attrs=_attrs(max_iter, y0, v0, prune, pruned))
+    return xr.Dataset(data_vars, coords=coords, attrs=_attrs(max_iter, y0, v0))
 
 
 def scan_points(e, u, max_iter=1000, y0=1.0, v0=0.0, *, prune=True):
@@ -649,10 +683,10 @@ def scan_points(e, u, max_iter=1000, y0=1.0, v0=0.0, *, prune=True):
         raise ValueError(f"e and u must have the same length, got {es.size} and {us.size}")
     max_iter, y0, v0 = _check_run(max_iter, y0, v0)
     _check_need(estimate_points_bytes(es.size), f"a scan of {es.size} points")
-    out, pruned = _run(es, us, False, max_iter, y0, v0, prune)
+    out, _ = _run(es, us, False, max_iter, y0, v0, prune)
     data_vars = {k: (("point",), out[k], {"long_name": desc}) for k, (_, desc) in _FIELDS.items()}
     coords = {"e": ("point", es, _E_ATTRS), "u": ("point", us, _U_ATTRS)}
-    return xr.Dataset(data_vars, coords=coords, attrs=_attrs(max_iter, y0, v0, prune, pruned))
+    return xr.Dataset(data_vars, coords=coords, attrs=_attrs(max_iter, y0, v0))
 
 
 def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *, prune=True,
@@ -677,8 +711,10 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
     package version and the word convention.
 
     Kernel: ``_scan_fast`` (the fast map of :func:`stairbounce.model._step`,
-    several pixels in lockstep, interleaved over threads); ``_scan_plain`` is
-    the closed-form baseline it is tested and benchmarked against.
+    several pixels in lockstep, interleaved over threads, pixels above the
+    Corollary 2.1 curve answered without iterating); ``_scan_plain`` is the
+    closed-form baseline, every pixel iterated, it is tested and benchmarked
+    against.
 
     Parameters
     ----------
@@ -690,6 +726,13 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
         Steps allowed for the transient and for the period, each.
     y0, v0 : float, default 1.0, 0.0
         Initial state at a step edge (y0 >= 0).
+    prune : bool, default True
+        Give status 1 without iterating to the pixels where Corollary 2.1
+        proves it (:func:`prunable`: above the curve by a margin for
+        rounding).  The dataset is the same, bit for bit, either way (so
+        nothing in it records the choice); pass False only to iterate every
+        pixel (e.g. timing the kernel, or code that wants the orbits' work
+        done).
     progress : callable ``progress(rows_done, rows_total)``, optional
         When given, the rows are scanned in blocks (about 1/50 of the rows
         each; the values are the same, pixels are independent) and it is
@@ -717,9 +760,7 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
         for r in range(0, n_u, block):
             parts.append(scan_coords(es, us[r : r + block], max_iter, y0, v0, prune=prune))
             progress(min(r + block, n_u), n_u)
-        pruned = sum(p.attrs["pruned"] for p in parts)
         ds = xr.concat(parts, dim="u", combine_attrs="override") if len(parts) > 1 else parts[0]
-        ds.attrs["pruned"] = pruned
     ds.attrs.update(
         e_min=e_min, e_max=e_max, n_e=n_e, u_min=u_min, u_max=u_max, n_u=n_u
     )
@@ -758,6 +799,34 @@ def no_sliding_curve(e):
     e = np.asarray(e, dtype=float)
     with np.errstate(divide="ignore"):
         return (1.0 - e) / (2.0 * np.sqrt(2.0 * e))
+
+
+def prunable(e, u, y0=1.0, v0=0.0):
+    """prunable(e, u, y0=1.0, v0=0.0) -> np.ndarray of bool
+
+    The pixels a scan with ``prune=True`` answers without iterating: status 1 by Corollary 2.1.
+
+    True where ``u`` lies above the bound ``(1-e)/(2 sqrt(2e))`` of
+    Corollary 2.1 by more than the relative margin that covers rounding
+    (``_never_slides``: ``2**-30`` plus ``2**-44`` times the size of the
+    numbers the map handles, so about 1e-9 on the paper's plane).  Never on
+    the curve itself (equality in (2.4) slides, docs/design.md), never at
+    ``e = 0``.  For any start ``(y0, v0)``: its first step may slide (when
+    ``y0 < 1``), but the orbit of ``(1, 0)`` cannot.  ``e`` and ``u``
+    broadcast.
+    """
+    y0 = _finite("y0", y0)
+    v0 = _finite("v0", v0)
+    e, u = np.broadcast_arrays(np.asarray(e, dtype=np.float64), np.asarray(u, dtype=np.float64))
+    shape = e.shape
+    es = np.ascontiguousarray(e.ravel())
+    us = np.ascontiguousarray(u.ravel())
+    if es.size:
+        _check_values("e", es)
+        _check_values("u", us)
+    out = np.empty(es.size, dtype=np.bool_)
+    _prunable(es, us, y0 + v0 * v0, out)
+    return out.reshape(shape)
 
 
 # --------------------------------------------------------------------------- #
