@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-CORE = ["model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas"]
+CORE = ["model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas", "atlas_boxes"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

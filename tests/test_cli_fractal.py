@@ -39,7 +39,7 @@ def disk(n, radius=0.35):
 
 
 def test_scan_prints_the_api_result(capsys):
-    code, out, err = run([*FIG7, "--resolution", "128", "--max-iter", "300", "--fit-range", "1:32"], capsys)
+    code, out, err = run([*FIG7, "--method", "boxes", "--resolution", "128", "--max-iter", "300", "--fit-range", "1:32"], capsys)
     assert code == 0, err
     ref = perimeter_dimension(e=(0.155, 0.2138), u=(0.6, 0.658), resolution=128, max_iter=300, fit_range=(1, 32))
     assert number(r"D = ([\d.]+)", out) == pytest.approx(ref.dimension, abs=5e-5)
@@ -51,7 +51,7 @@ def test_scan_prints_the_api_result(capsys):
 
 def test_png_draws_border_and_loglog_plot(tmp_path, capsys):
     png = tmp_path / "fig7.png"
-    code, out, err = run([*FIG7, "--resolution", "96", "--max-iter", "200", "--png", str(png)], capsys)
+    code, out, err = run([*FIG7, "--method", "boxes", "--resolution", "96", "--max-iter", "200", "--png", str(png)], capsys)
     assert code == 0, err
     with Image.open(png) as im:
         assert im.format == "PNG" and im.width > im.height > 200
@@ -114,11 +114,11 @@ def test_bad_pictures_exit_2_with_one_line(tmp_path, capsys, picture, message):
     [
         (["--image", "{tmp}/missing.png"], "no such file"),
         (["--image", "{tmp}/text.png"], "cannot read"),
-        (["--e", "0.5:0.6", "--u", "1.0:1.2", "--resolution", "16", "--max-iter", "20"], "region is empty"),
+        (["--method", "boxes", "--e", "0.5:0.6", "--u", "1.0:1.2", "--resolution", "16", "--max-iter", "20"], "region is empty"),
         (["--e", "0.3:0.2"], "MIN < MAX"),
-        (["--resolution", "4"], "--resolution"),
-        (["--fit-range", "0:8"], "--fit-range"),
-        (["--fit-range", "64:128", *FIG7, "--resolution", "64", "--max-iter", "50"], "fit_range"),
+        (["--method", "boxes", "--resolution", "4"], "--resolution"),
+        (["--method", "boxes", "--fit-range", "0:8"], "--fit-range"),
+        (["--method", "boxes", "--fit-range", "64:128", *FIG7, "--resolution", "64", "--max-iter", "50"], "fit_range"),
         (["--which", "both"], "--which"),
         (["--connectivity", "6"], "--connectivity"),
         (["--region", "red", "--image", "x.png"], "--region"),
@@ -145,3 +145,86 @@ def test_console_script(tmp_path):
     )
     assert proc.returncode == 0, proc.stderr
     assert abs(number(r"D = ([\d.]+)", proc.stdout) - 1.0) < 0.1  # the outline of a rectangle
+
+
+# --------------------------------------------------------------------------- #
+# --method uncertainty (the default for a window) and --store (issue 12)      #
+# --------------------------------------------------------------------------- #
+
+
+def test_uncertainty_is_the_default_for_a_window_and_prints_the_api_result(tmp_path, capsys):
+    from stairbounce.fractal import sliding_classifier, uncertainty_dimension
+
+    png = tmp_path / "u.png"
+    code, out, err = run([*FIG7, "--max-iter", "200", "--points", "2000", "--eps", "1e-3:0.1:5",
+                          "--seed", "3", "--png", str(png)], capsys)
+    assert code == 0, err
+    ref = uncertainty_dimension(sliding_classifier(200), ((0.155, 0.2138), (0.6, 0.658)),
+                                eps=np.logspace(-3, -1, 5), n_points=2000, seed=3)
+    assert number(r"D = ([\d.]+)", out) == pytest.approx(ref.dimension, abs=5e-5)
+    assert "uncertainty exponent of 2000 random points (seed 3" in out
+    assert "uncertain" in out and png.exists()
+
+
+@pytest.fixture(scope="module")
+def small_store(tmp_path_factory):
+    from stairbounce.atlas import scan_to_zarr
+
+    path = tmp_path_factory.mktemp("store") / "s.zarr"
+    scan_to_zarr(path, e=(0.155, 0.2138, 96), u=(0.6, 0.658, 96), max_iter=200, tile=32)
+    return path
+
+
+def test_store_is_box_counted_tile_by_tile(small_store, capsys):
+    from stairbounce.atlas_boxes import store_box_dimension
+
+    code, out, err = run(["--store", str(small_store), "--fit-range", "2:16"], capsys)
+    assert code == 0, err
+    ref = store_box_dimension(small_store, fit_range=(2, 16))
+    assert number(r"D = ([\d.]+)", out) == pytest.approx(ref.dimension, abs=5e-5)
+    assert "96 x 96 px" in out and "tile by tile" in out
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--method", "mass"], "--method must be boxes or uncertainty"),
+        (["--method", "uncertainty", "--store", "{tmp}/x.zarr"], "--method uncertainty classifies points"),
+        (["--points", "99"], "--points must be an integer >= 100"),
+        (["--eps", "0:0.1:5"], "--eps must have 0 < MIN < MAX < 1"),
+        (["--eps", "1e-3:1.5:5"], "--eps must have 0 < MIN < MAX < 1"),
+        (["--eps", "1e-3"], "--eps must be MIN:MAX:N"),
+        (["--e", "0.2:0.2"], "MIN < MAX"),
+        (["--fit-range", "0.5:2"], "--fit-range with --method uncertainty"),
+        (["--store", "{tmp}/missing.zarr"], "no such store"),
+        (["--store", "{tmp}/text.png"], "not a tiled scan store"),
+        (["--store", "{store}", "--png", "{tmp}/a.png"], "--png draws a picture in memory"),
+        (["--scheduler", "tcp://127.0.0.1:1"], "--scheduler counts the tiles of a --store"),
+        (["--image", "{tmp}/a.png", "--store", "{tmp}/x.zarr"], "give one of them"),
+    ],
+)
+def test_uncertainty_and_store_bad_input_exit_2(tmp_path, capsys, small_store, argv, message):
+    (tmp_path / "text.png").write_text("not a store")
+    argv = [a.format(tmp=tmp_path, store=small_store) for a in argv]
+    code, out, err = run(argv, capsys)
+    assert code == 2, out
+    assert err.startswith("stairbounce: error: ") and message in err
+    assert err.count("\n") == 1
+
+
+def test_incomplete_store_exits_2(tmp_path, capsys):
+    from stairbounce.atlas import scan_to_zarr
+
+    class Stop(Exception):
+        pass
+
+    def stop(done, total):
+        if done >= 1:
+            raise Stop
+
+    path = tmp_path / "part.zarr"
+    with pytest.raises(Stop):
+        scan_to_zarr(path, e=(0.155, 0.2138, 64), u=(0.6, 0.658, 64), max_iter=50, tile=16, progress=stop,
+                     numba_threads=2)
+    code, out, err = run(["--store", str(path)], capsys)
+    assert code == 2 and "is not complete" in err and err.count("\n") == 1

@@ -416,6 +416,16 @@ def test_border_dimension_loader(tmp_path):
     bad.write_text("{not json")
     with pytest.raises(ValueError, match="is not a dimension study result"):
         F.load_border_dimension(bad)
+    # provenance keys beside the windows are not windows
+    good = tmp_path / "good.json"
+    good.write_text(json.dumps({"fig6": {"dimension": 1.5, "ci95": [1.49, 1.51], "method": "m"},
+                                "generated_by": "a script", "date": "2026-11-22"}))
+    assert set(F.load_border_dimension(good)) == {"fig6"}
+    # the study shipped with the package loads, and its CI holds its estimate
+    shipped = F.load_border_dimension()
+    assert shipped is not None and {"fig6", "fig7"} <= set(shipped)
+    for entry in shipped.values():
+        assert entry["ci95"][0] <= entry["dimension"] <= entry["ci95"][1]
 
 
 def test_fig8_legend_clear_of_the_first_grazing_and_labels_inside(drawn):

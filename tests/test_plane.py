@@ -22,6 +22,7 @@ from stairbounce.plane import (
     pixel_centres,
     scan,
     scan_coords,
+    scan_points,
     tongue_mask,
 )
 from stairbounce.symbolic import sliding_word
@@ -335,6 +336,102 @@ def test_thread_count_invariance():
         numba.set_num_threads(before)
     for k in FIELDS:
         assert np.array_equal(results[0][k].values, results[-1][k].values), k
+
+
+# --------------------------------------------------------------------------- #
+# scan_points: the same kernel on a list of points                            #
+# --------------------------------------------------------------------------- #
+
+
+def _assert_points_equal_grid(pts, grid, rows, cols):
+    for k in FIELDS:
+        assert pts[k].dtype == grid[k].dtype, k
+        assert np.array_equal(pts[k].values, grid[k].values[rows, cols]), k
+
+
+def test_scan_points_equals_scan_on_a_flattened_grid():
+    # straddles the Corollary 2.1 curve and the first tongues: pruned,
+    # sliding and non-sliding pixels, transients from a start y0 < 1
+    for y0, v0 in ((1.0, 0.0), (0.3, -0.7)):
+        grid = scan(e=(0.0, 0.6, 53), u=(0.0, 1.5, 47), max_iter=400, y0=y0, v0=v0)
+        E, U = np.meshgrid(grid.e.values, grid.u.values)
+        pts = scan_points(E.ravel(), U.ravel(), max_iter=400, y0=y0, v0=v0)
+        assert pts.sizes == {"point": E.size}
+        assert np.array_equal(pts.e.values, E.ravel()) and np.array_equal(pts.u.values, U.ravel())
+        rows, cols = np.divmod(np.arange(E.size), E.shape[1])
+        _assert_points_equal_grid(pts, grid, rows, cols)
+        same = {k: v for k, v in grid.attrs.items() if not k.startswith(("e_", "u_", "n_"))}
+        assert pts.attrs == same
+
+
+def test_scan_points_random_points_equal_scan_coords():
+    # shuffled points of a random (unevenly spaced) grid: each point's answer
+    # is scan_coords' at its (e, u), whatever its neighbours in the list
+    es, us = _random_grid(7, 61, 43)
+    grid = scan_coords(es, us, max_iter=700)
+    rng = np.random.default_rng(8)
+    rows = rng.integers(0, us.size, 5000)
+    cols = rng.integers(0, es.size, 5000)
+    pts = scan_points(es[cols], us[rows], max_iter=700)
+    _assert_points_equal_grid(pts, grid, rows, cols)
+    # and against the closed-form baseline, point by point (a 1 x 1 grid each)
+    ref = _plain(es[cols[:200]], us[rows[:200]], max_iter=700)
+    for k in ("status", "period", "impacts"):
+        assert np.array_equal(np.diag(ref[k]), pts[k].values[:200]), k
+
+
+def test_scan_points_thread_count_invariance():
+    rng = np.random.default_rng(3)
+    e = rng.uniform(0.0, 0.5, 6000)
+    u = rng.uniform(0.05, 1.3, 6000)
+    before = numba.get_num_threads()
+    try:
+        results = []
+        for n in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+            numba.set_num_threads(n)
+            results.append(scan_points(e, u, max_iter=500))
+    finally:
+        numba.set_num_threads(before)
+    for k in FIELDS:
+        assert np.array_equal(results[0][k].values, results[-1][k].values), k
+
+
+def test_scan_points_empty_and_scalar_like_inputs():
+    ds = scan_points([], [], max_iter=10)
+    assert ds.sizes == {"point": 0} and set(ds.data_vars) == set(FIELDS)
+    one = scan_points([0.2], (0.5,), max_iter=300)
+    ref = scan_coords([0.2], [0.5], max_iter=300)
+    for k in FIELDS:
+        assert one[k].values[0] == ref[k].values[0, 0], k
+
+
+@pytest.mark.parametrize(
+    "e, u, kwargs, match",
+    [
+        ([0.1, 0.2], [0.5], {}, "e and u must have the same length, got 2 and 1"),
+        ([[0.1]], [0.5], {}, r"e must be a 1-D array, got shape \(1, 1\)"),
+        (0.1, [0.5], {}, r"e must be a 1-D array, got shape \(\)"),
+        ([0.1], [[0.5]], {}, r"u must be a 1-D array"),
+        (["a"], [0.5], {}, "e must be a 1-D array of real numbers"),
+        ([1.0], [0.5], {}, r"e \(restitution coefficient\) values must be in \[0, 1\)"),
+        ([0.1], [0.0], {}, r"u \(horizontal speed\) values must be > 0"),
+        ([np.nan], [0.5], {}, "e values must be finite"),
+        ([0.1], [0.5], {"max_iter": 0}, "max_iter must be an integer >= 1"),
+        ([0.1], [0.5], {"y0": -0.5}, r"y0 \(initial height"),
+        ([0.1], [0.5], {"v0": math.inf}, "v0 must be finite"),
+    ],
+)
+def test_scan_points_validation(e, u, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        scan_points(e, u, **kwargs)
+
+
+def test_scan_points_memory_refusal(monkeypatch):
+    monkeypatch.setattr(sc, "_available_memory", lambda: 10_000)
+    with pytest.raises(ValueError, match=r"a scan of 1000 points needs about 40\.0 KiB"):
+        scan_points(np.full(1000, 0.2), np.full(1000, 0.5), max_iter=5)
+    assert sc.estimate_points_bytes(1000) == 1000 * (25 + 16)
+    assert scan_points(np.full(10, 0.2), np.full(10, 0.5), max_iter=5).sizes == {"point": 10}
 
 
 def test_tiles_equal_the_whole_scan():

@@ -97,7 +97,7 @@ def tiles_done(path):
         raise ValueError(f"{path} is not a tiled scan store (no tile record)") from None
 
 
-def _run_tile(path, token, i, j, su, se, e_values, u_values, max_iter, y0, v0, numba_threads):
+def _run_tile(path, token, i, j, su, se, e_values, u_values, max_iter, y0, v0, prune, numba_threads):
     """Compute tile (i, j) and write it into its region of the store, then mark it done.
 
     Runs in the calling process (local scans) or on a Dask worker.
@@ -112,7 +112,7 @@ def _run_tile(path, token, i, j, su, se, e_values, u_values, max_iter, y0, v0, n
         before = numba.get_num_threads()
         numba.set_num_threads(threads)  # numba's count is per calling thread
         try:
-            ds = scan_coords(e_values, u_values, max_iter, y0, v0)
+            ds = scan_coords(e_values, u_values, max_iter, y0, v0, prune=prune)
         finally:
             numba.set_num_threads(before)
     arrays, done = _open_store(path, token)
@@ -274,8 +274,9 @@ def scan_to_zarr(
     client=None,
     progress=None,
     numba_threads=None,
+    prune=True,
 ):
-    """scan_to_zarr(path, e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, y0=1.0, v0=0.0, tile=1024, client=None, progress=None, numba_threads=None) -> xarray.Dataset
+    """scan_to_zarr(path, e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, y0=1.0, v0=0.0, tile=1024, client=None, progress=None, numba_threads=None, prune=True) -> xarray.Dataset
 
     :func:`stairbounce.plane.scan` cut into tiles, computed locally or on Dask, written to Zarr.
 
@@ -295,8 +296,9 @@ def scan_to_zarr(
     path : str or path-like ending in ``.zarr``
         The store.  Its folder must exist and be writable; with a Dask
         cluster it must be on a file system every worker sees at the same path.
-    e, u, max_iter, y0, v0 :
-        As in :func:`stairbounce.plane.scan` (same defaults, same checks).
+    e, u, max_iter, y0, v0, prune :
+        As in :func:`stairbounce.plane.scan` (same defaults, same checks;
+        ``prune`` changes no value, so a store may be resumed either way).
     tile : int >= 1, default 1024
         Tile edge in pixels; also the chunk edge of the store.
     client : None, ``dask.distributed.Client`` or str, default None
@@ -367,7 +369,7 @@ def scan_to_zarr(
 
     token = _tile_record(path).attrs["token"]
     args = [
-        (str(path), token, i, j, rows[i], cols[j], es[cols[j]], us[rows[i]], a["max_iter"], a["y0"], a["v0"], numba_threads)
+        (str(path), token, i, j, rows[i], cols[j], es[cols[j]], us[rows[i]], a["max_iter"], a["y0"], a["v0"], bool(prune), numba_threads)
         for i, j in todo
     ]
     if client is None:

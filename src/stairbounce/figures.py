@@ -163,6 +163,8 @@ def load_border_dimension(path=None):
         data = json.loads(path.read_text())
         out = {}
         for name, entry in data.items():
+            if not isinstance(entry, dict):  # "generated_by", "date": provenance, not a window
+                continue
             lo, hi = (float(x) for x in entry["ci95"])
             d = float(entry["dimension"])
             if not (math.isfinite(d) and lo <= hi):
@@ -573,7 +575,8 @@ def _dimension(name):
             v3, w3 = _compare(best["dimension"], paper, ci=best["ci95"])
             rows.append(Row("dimension study, best estimate", f"D = {paper}",
                             f"D = {best['dimension']:.3f} [{best['ci95'][0]:.3f}, "
-                            f"{best['ci95'][1]:.3f}] ({best['method']})", verdict=v3, why=w3))
+                            f"{best['ci95'][1]:.3f}] ({best['method']}){_same_scales(name)}",
+                            verdict=v3, why=w3))
         else:
             rows.append(Row("dimension study, best estimate", f"D = {paper}", "no study result",
                             verdict="not comparable",
@@ -597,6 +600,22 @@ def _dimension(name):
     recipe.__name__ = name
     recipe.__doc__ = f"Fig. {name[-1]}: border and box counting of {DIMENSION_WINDOWS[name][0]}."
     return recipe
+
+
+def _same_scales(name):
+    """The tiled box count beside the best estimate, at the scales both
+    estimators measure (benchmarks/dimension_study.py; README "Fractal
+    dimension"), or "" when the packaged study has none."""
+    from .fractal import border_dimension_estimates
+
+    try:
+        boxes = border_dimension_estimates()[name]["same_scales"]["boxes"]
+    except (FileNotFoundError, KeyError):
+        return ""
+    lo, hi = boxes["ci95"]
+    a, b = boxes["fit_range_px"]
+    return (f"; box counting {boxes['resolution']}^2 px, boxes {a}..{b} px: "
+            f"{boxes['dimension']:.3f} (95% CI {lo:.3f}..{hi:.3f})")
 
 
 # Figure 9 and its zooms: each window sits inside the previous one, at the

@@ -15,6 +15,14 @@ The public wrappers validate, allocate and call a private numba kernel:
 - ``_scan_plain``: the baseline, one pixel at a time with the plain closed
   form :func:`stairbounce.model._step_closed`, ``prange`` over rows.
 
+Pruning: above the curve of Corollary 2.1 no state with ``y >= 1`` slides,
+so those pixels are status 1 whatever max_iter; ``_scan_fast`` stores that
+without iterating (``prune=True``, the default), which leaves the arrays
+unchanged bit for bit (``_never_slides`` has the proof, with its margin for
+rounding).  On the paper's grid that is 98 % of the map steps.  The
+Theorem 3.1 tongues are not short-cut: their answer, (n, 0^inf), costs
+n <= 5 steps on the paper's plane, nothing to save.
+
 Nothing here imports matplotlib, Typer or the web stack.
 """
 
@@ -42,11 +50,14 @@ __all__ = [
     "pixel_centres",
     "scan",
     "scan_coords",
+    "scan_points",
+    "prunable",
     "tongue_mask",
     "no_sliding_curve",
     "save",
     "load",
     "estimate_bytes",
+    "estimate_points_bytes",
 ]
 
 CONVENTION = (
@@ -84,27 +95,29 @@ def _slide_or_steps_closed(y, v, e, T, ratio, max_steps):
 
 
 @njit(cache=True)
-def _store(i, j, n, imp, jmp, status, word_length, jumps, period, impacts):
+def _store(p, n, imp, jmp, status, word_length, jumps, period, impacts):
+    """Write the answer of pixel ``p`` (flat index) into the flat outputs."""
     if n == 0:
-        status[i, j] = 1
-        word_length[i, j] = 0
-        jumps[i, j] = 0
-        period[i, j] = 0
-        impacts[i, j] = 0
+        status[p] = 1
+        word_length[p] = 0
+        jumps[p] = 0
+        period[p] = 0
+        impacts[p] = 0
     else:
-        status[i, j] = 0
-        word_length[i, j] = imp + 1
-        jumps[i, j] = jmp
-        period[i, j] = n
-        impacts[i, j] = imp
+        status[p] = 0
+        word_length[p] = imp + 1
+        jumps[p] = jmp
+        period[p] = n
+        impacts[p] = imp
 
 
 @njit(cache=True, parallel=True)
 def _scan_plain(es, us, max_iter, y0, v0, status, word_length, jumps, period, impacts):
     """Baseline kernel: per pixel, the closed form of Prop. 2.2/2.3, prange over rows.
 
-    A transient from ``(y0, v0)`` up to its first slide, then one period from
-    ``(1, 0)``; the transient is skipped when ``(y0, v0) = (1, 0)``.
+    Outputs are ``n_u x n_e`` arrays.  A transient from ``(y0, v0)`` up to its
+    first slide, then one period from ``(1, 0)``; the transient is skipped
+    when ``(y0, v0) = (1, 0)``.  No pruning: every pixel is iterated.
     """
     from_rest = y0 == 1.0 and v0 == 0.0
     for i in prange(us.shape[0]):
@@ -118,7 +131,78 @@ def _scan_plain(es, us, max_iter, y0, v0, status, word_length, jumps, period, im
             jmp = 0
             if n != 0:
                 n, imp, jmp = _slide_or_steps_closed(1.0, 0.0, e, T, ratio, max_iter)
-            _store(i, j, n, imp, jmp, status, word_length, jumps, period, impacts)
+            _store(j, n, imp, jmp, status[i], word_length[i], jumps[i], period[i], impacts[i])
+
+
+# The pruning test (_never_slides) wants T = 1/u below the Corollary 2.1
+# threshold by a relative _PRUNE_MARGIN, plus _PRUNE_ROUNDING times the size of
+# the numbers the map handles at that pixel: room for every rounding error.
+_PRUNE_MARGIN = 2.0**-30
+_PRUNE_ROUNDING = 2.0**-44
+
+
+@njit(cache=True)
+def _never_slides(e, T, ratio, energy0):
+    """Whether Corollary 2.1 proves that no step of the scan slides at ``(e, u = 1/T)``.
+
+    ``energy0 = y0 + v0^2`` of the start.  When True, iterating the pixel
+    gives status 1 (no periodic sliding solution within any max_iter), and the
+    kernels store that without iterating.
+
+    The proof, redone for the computed test.  The kernels test (2.4),
+    ``v + r s <= T`` with ``s = sqrt(v^2 + 2y)``, ``r = ratio``, the float
+    ``(1+e)/(1-e)``.  Over all ``v``, ``v + r s`` is smallest at ``v = -s/r``,
+    where it equals ``sqrt(2y (r^2-1))``.  Every state the map returns sits
+    at an edge, ``y >= 1``; so no state passes the exact test when
+    ``T < sqrt(2 (r^2-1))``, which for the exact ``r`` is
+    ``u > (1-e)/(2 sqrt(2e))``: the paper's bound, strict.
+
+    Equality: at ``u = (1-e)/(2 sqrt(2e))`` the state ``(1, -T/(r^2-1))``
+    meets (2.4) with equality, which our convention counts as sliding
+    (docs/design.md); the paper's "u >= ..." holds only for a strict test.
+    So the curve itself is on the side that is iterated, never pruned.
+
+    Rounding, on the safe side by a wide factor:
+
+    - ``sqrt(2 (r-1)(r+1))``: ``r - 1`` is exact (``r >= 1``), the rest
+      rounds by at most 3 eps (eps = 2**-53).
+    - The computed ``v + r s`` is at least ``(v + r s)(1 - 5 eps r/(r-1))``
+      (``v + r s >= (r-1) s`` bounds the cancellation).
+    - A computed state can sit below the edge, ``y = 1 - delta``, by a few
+      eps times the terms of the step, ``y + |v| T + T^2/2 + 1``.  Measured
+      along orbits (``tests/test_prune.py``) these stay below a small
+      multiple (< 16) of ``size = T^2 + (1/T^2 + 1 + y0 + v0^2)(r + r/(r-1))``:
+      energy grows by one per step flown over (about ``2/T^2`` steps in a
+      flight when ``T`` is small), impacts take a share ``1 - e^2`` of it
+      (slowly when ``r`` is large).
+
+    The test demands ``T`` smaller than the threshold by the relative
+    ``_PRUNE_MARGIN + _PRUNE_ROUNDING * size`` (``2**-44 size`` is about 2**9
+    times ``delta / 2``, the relative change of ``T`` that a height error
+    ``delta`` is worth): a pruned pixel's computed test fails on every state
+    the map reaches.
+
+    Any start: the first step from ``(y0, v0)`` (``y0 < 1`` allowed) may
+    slide, and then the orbit of ``(1, 0)`` never does; or it does not, and
+    no later state slides.  Either way the answer is status 1.
+
+    ``e = 0``: ``r = 1``, the bound is infinite: never pruned (nor where
+    ``T^2`` underflows or anything overflows: the test is then False).
+    """
+    rm1 = ratio - 1.0  # exact for ratio >= 1
+    TT = T * T
+    if not (rm1 > 0.0 and TT > 0.0):  # e = 0, or u so large that T^2 underflows
+        return False
+    threshold = math.sqrt(2.0 * (rm1 * (ratio + 1.0)))
+    size = TT + (1.0 / TT + 1.0 + energy0) * (ratio + ratio / rm1)
+    return T * (1.0 + _PRUNE_MARGIN + _PRUNE_ROUNDING * size) < threshold
+
+
+@njit(cache=True)
+def _prunable(es, us, energy0, out):
+    for p in range(es.shape[0]):
+        T, ratio = _constants(es[p], us[p])
+        out[p] = _never_slides(es[p], T, ratio, energy0)
 
 
 # The fast kernel runs LANES pixels in lockstep.  The lane loops below are
@@ -158,16 +242,19 @@ def _lane_step(y, v, e, T, ratio, half_TT):
 
 
 @njit(cache=True)
-def _run_chunk(es, us, max_iter, y0, v0, start, stop, status, word_length, jumps, period, impacts):
-    """Pixels ``start..stop-1`` (row-major) of the grid, LANES at a time.
+def _run_chunk(es, us, grid, max_iter, y0, v0, prune, start, stop,
+               status, word_length, jumps, period, impacts):
+    """Pixels ``start..stop-1`` (flat indices, :func:`_pixel`), LANES at a time.
 
     A lane takes the next pixel as soon as its own finishes, so lanes stay busy
     whatever the mix of cheap and expensive pixels.  Each pixel sees exactly
-    the sequence of operations of ``_slide_or_steps`` with ``model._step``.
+    the sequence of operations of ``_slide_or_steps`` with ``model._step``,
+    except pixels where :func:`_never_slides` proves the answer (``prune``):
+    they get status 1 without a step.  Returns the number of those.
     """
     L = LANES
-    ne = es.shape[0]
     from_rest = y0 == 1.0 and v0 == 0.0
+    energy0 = y0 + v0 * v0
     Y = np.ones(L)
     V = np.zeros(L)
     E = np.zeros(L)
@@ -191,9 +278,13 @@ def _run_chunk(es, us, max_iter, y0, v0, start, stop, status, word_length, jumps
 
     nxt = start
     active = 0
+    pruned = 0
     for l in range(L):
+        if prune:
+            nxt, npr = _skip_proven(es, us, grid, energy0, nxt, stop, status, word_length, jumps, period, impacts)
+            pruned += npr
         if nxt < stop:
-            _load_lane(l, nxt, es, us, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX)
+            _load_lane(l, nxt, es, us, grid, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX)
             LIVE[l] = 1
             nxt += 1
             active += 1
@@ -264,25 +355,54 @@ def _run_chunk(es, us, max_iter, y0, v0, start, stop, status, word_length, jumps
                 IMP[l] = 0
                 JMP[l] = 0
                 continue
-            p = PIX[l]
             n = N[l] if K[l] == SLIDING else 0
-            _store(p // ne, p % ne, n, IMP[l], JMP[l], status, word_length, jumps, period, impacts)
+            _store(PIX[l], n, IMP[l], JMP[l], status, word_length, jumps, period, impacts)
             N[l] = 0
             IMP[l] = 0
             JMP[l] = 0
+            if prune:
+                nxt, npr = _skip_proven(es, us, grid, energy0, nxt, stop, status, word_length, jumps, period, impacts)
+                pruned += npr
             if nxt < stop:
-                _load_lane(l, nxt, es, us, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX)
+                _load_lane(l, nxt, es, us, grid, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX)
                 nxt += 1
             else:
                 LIVE[l] = 0
                 active -= 1
+    return pruned
+
+
+@njit(cache=True, inline="always")
+def _pixel(p, es, us, grid):
+    """Parameters ``(e, u)`` of pixel ``p``: of the row-major ``n_u x n_e`` grid
+    ``us x es`` when ``grid``, else of the point list ``(es[p], us[p])``."""
+    if grid:
+        ne = es.shape[0]
+        return es[p % ne], us[p // ne]
+    return es[p], us[p]
 
 
 @njit(cache=True)
-def _load_lane(l, p, es, us, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX):
-    ne = es.shape[0]
-    e = es[p % ne]
-    T, ratio = _constants(e, us[p // ne])
+def _skip_proven(es, us, grid, energy0, p, stop, status, word_length, jumps, period, impacts):
+    """Give status 1 to the pixels from ``p`` on that :func:`_never_slides`
+    proves, up to the first that needs iterating; returns its index (or
+    ``stop``) and the number given."""
+    n = 0
+    while p < stop:
+        e, u = _pixel(p, es, us, grid)
+        T, ratio = _constants(e, u)
+        if not _never_slides(e, T, ratio, energy0):
+            break
+        _store(p, 0, 0, 0, status, word_length, jumps, period, impacts)
+        n += 1
+        p += 1
+    return p, n
+
+
+@njit(cache=True)
+def _load_lane(l, p, es, us, grid, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX):
+    e, u = _pixel(p, es, us, grid)
+    T, ratio = _constants(e, u)
     E[l] = e
     TT[l] = T
     RATIO[l] = ratio
@@ -294,14 +414,23 @@ def _load_lane(l, p, es, us, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PER
 
 
 @njit(cache=True, parallel=True)
-def _scan_fast(es, us, max_iter, y0, v0, order, chunk, status, word_length, jumps, period, impacts):
+def _scan_fast(es, us, grid, max_iter, y0, v0, prune, order, chunk,
+               status, word_length, jumps, period, impacts):
     """Fast kernel: chunks of ``chunk`` pixels in the order ``order``, LANES
-    pixels of a chunk in lockstep (:func:`_run_chunk`)."""
-    npix = es.shape[0] * us.shape[0]
+    pixels of a chunk in lockstep (:func:`_run_chunk`).
+
+    ``grid``: the pixels are the row-major ``n_u x n_e`` grid ``us x es``;
+    otherwise the points ``(es[p], us[p])``.  Outputs are flat, one entry per
+    pixel.  ``prune``: skip the pixels :func:`_never_slides` proves.  Returns
+    the number of pixels pruned.
+    """
+    npix = es.shape[0] * us.shape[0] if grid else es.shape[0]
+    pruned = np.zeros(order.shape[0], np.int64)
     for c in prange(order.shape[0]):
         s = order[c] * chunk
-        _run_chunk(es, us, max_iter, y0, v0, s, min(s + chunk, npix),
-                   status, word_length, jumps, period, impacts)
+        pruned[c] = _run_chunk(es, us, grid, max_iter, y0, v0, prune, s, min(s + chunk, npix),
+                               status, word_length, jumps, period, impacts)
+    return pruned.sum()
 
 
 def _chunking(npix, threads):
@@ -314,6 +443,8 @@ def _chunking(npix, threads):
     """
     chunk = int(min(_CHUNK_MAX, max(4 * LANES, -(-npix // (16 * max(threads, 1))))))
     n = -(-npix // chunk)
+    if n == 0:
+        return chunk, np.zeros(0, np.int64)
     order = np.concatenate([np.arange(k, n, 16) for k in range(min(16, n))]).astype(np.int64)
     return chunk, order
 
@@ -342,6 +473,22 @@ def _coords(name, values):
     a = np.asarray(values, dtype=np.float64)
     if a.ndim != 1 or a.size == 0:
         raise ValueError(f"{name} values must be a non-empty 1-D array, got shape {a.shape}")
+    return _check_values(name, a)
+
+
+def _point_coords(name, values):
+    try:
+        a = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a 1-D array of real numbers") from None
+    if a.ndim != 1:
+        raise ValueError(f"{name} must be a 1-D array, got shape {a.shape}")
+    if a.size == 0:
+        return np.ascontiguousarray(a)
+    return _check_values(name, a)
+
+
+def _check_values(name, a):
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} values must be finite")
     if name == "e" and not np.all((a >= 0.0) & (a < 1.0)):
@@ -377,12 +524,24 @@ def _available_memory():
         return None
 
 
+def estimate_points_bytes(n):
+    """estimate_points_bytes(n) -> int
+
+    Memory the outputs of :func:`scan_points` on ``n`` points take: 25 bytes
+    per point for the fields plus 16 for the two coordinates.
+    """
+    return int(n) * (_BYTES_PER_PIXEL + 16)
+
+
 def _check_memory(n_e, n_u):
-    need = estimate_bytes(n_e, n_u)
+    return _check_need(estimate_bytes(n_e, n_u), f"a scan of {n_e} x {n_u} pixels")
+
+
+def _check_need(need, what):
     avail = _available_memory()
     if avail is not None and need > avail:
         raise ValueError(
-            f"a scan of {n_e} x {n_u} pixels needs about {_human(need)} for its outputs, "
+            f"{what} needs about {_human(need)} for its outputs, "
             f"more than the {_human(avail)} of memory available: reduce the size or scan tiles"
         )
     return need
@@ -416,8 +575,53 @@ def pixel_centres(lo, hi, n):
     return lo + (np.arange(n) + 0.5) * (hi - lo) / n
 
 
-def scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0):
-    """scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0) -> xarray.Dataset
+def _check_run(max_iter, y0, v0):
+    max_iter = check_count("max_iter", max_iter, 1)
+    if max_iter > 2**31 - 1:
+        raise ValueError(f"max_iter must be an integer in [1, 2**31 - 1], got {max_iter}")
+    y0 = _finite("y0", y0)
+    v0 = _finite("v0", v0)
+    if y0 < 0.0:
+        raise ValueError(f"y0 (initial height above the step's floor) must be >= 0, got {y0}")
+    return max_iter, y0, v0
+
+
+def _run(es, us, grid, max_iter, y0, v0, prune):
+    """Allocate flat outputs and run :func:`_scan_fast`; returns them and the
+    number of pixels pruned (the kernel's own count, for tests and benchmarks)."""
+    npix = es.size * us.size if grid else es.size
+    out = {k: np.empty(npix, dtype=dt) for k, (dt, _) in _FIELDS.items()}
+    chunk, order = _chunking(npix, numba.get_num_threads())
+    pruned = 0
+    if npix:
+        pruned = _scan_fast(
+            es, us, grid, max_iter, y0, v0, bool(prune), order, chunk,
+            out["status"], out["word_length"], out["jumps"], out["period"], out["impacts"],
+        )
+    return out, int(pruned)
+
+
+def _attrs(max_iter, y0, v0):
+    from . import __version__
+
+    return {
+        "title": "periodic sliding solutions in the (e, u) plane",
+        "max_iter": max_iter,
+        "y0": y0,
+        "v0": v0,
+        "kernel": "stairbounce.plane._scan_fast",
+        "stairbounce_version": __version__,
+        "convention": CONVENTION,
+        "reference": "Campos, Romero-Valles, Torres, A fractal structure in a bouncing ball model, Section 3",
+    }
+
+
+_E_ATTRS = {"long_name": "restitution coefficient e"}
+_U_ATTRS = {"long_name": "horizontal speed u (normalised units)"}
+
+
+def scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0, *, prune=True):
+    """scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0, *, prune=True) -> xarray.Dataset
 
     The scan of :func:`scan` on arbitrary 1-D coordinate arrays.
 
@@ -430,48 +634,64 @@ def scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0):
     ----------
     e_values : 1-D array of floats in [0, 1)
     u_values : 1-D array of floats > 0
-    max_iter, y0, v0 : as in :func:`scan`.
+    max_iter, y0, v0, prune : as in :func:`scan`.
     """
     es = _coords("e", e_values)
     us = _coords("u", u_values)
-    max_iter = check_count("max_iter", max_iter, 1)
-    if max_iter > 2**31 - 1:
-        raise ValueError(f"max_iter must be an integer in [1, 2**31 - 1], got {max_iter}")
-    y0 = _finite("y0", y0)
-    v0 = _finite("v0", v0)
-    if y0 < 0.0:
-        raise ValueError(f"y0 (initial height above the step's floor) must be >= 0, got {y0}")
+    max_iter, y0, v0 = _check_run(max_iter, y0, v0)
     _check_memory(es.size, us.size)
-    out = {k: np.empty((us.size, es.size), dtype=dt) for k, (dt, _) in _FIELDS.items()}
-    chunk, order = _chunking(es.size * us.size, numba.get_num_threads())
-    _scan_fast(
-        es, us, max_iter, y0, v0, order, chunk,
-        out["status"], out["word_length"], out["jumps"], out["period"], out["impacts"],
-    )
-    from . import __version__
-
+    out, _ = _run(es, us, True, max_iter, y0, v0, prune)
+    shape = (us.size, es.size)
     data_vars = {
-        k: (("u", "e"), out[k], {"long_name": desc}) for k, (_, desc) in _FIELDS.items()
+        k: (("u", "e"), out[k].reshape(shape), {"long_name": desc})
+        for k, (_, desc) in _FIELDS.items()
     }
-    coords = {
-        "e": ("e", es, {"long_name": "restitution coefficient e"}),
-        "u": ("u", us, {"long_name": "horizontal speed u (normalised units)"}),
-    }
-    attrs = {
-        "title": "periodic sliding solutions in the (e, u) plane",
-        "max_iter": max_iter,
-        "y0": y0,
-        "v0": v0,
-        "kernel": "stairbounce.plane._scan_fast",
-        "stairbounce_version": __version__,
-        "convention": CONVENTION,
-        "reference": "Campos, Romero-Valles, Torres, A fractal structure in a bouncing ball model, Section 3",
-    }
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    coords = {"e": ("e", es, _E_ATTRS), "u": ("u", us, _U_ATTRS)}
+    return xr.Dataset(data_vars, coords=coords, attrs=_attrs(max_iter, y0, v0))
 
 
-def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *, progress=None):
-    """scan(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, y0=1.0, v0=0.0, *, progress=None) -> xarray.Dataset
+def scan_points(e, u, max_iter=1000, y0=1.0, v0=0.0, *, prune=True):
+    """scan_points(e, u, max_iter=1000, y0=1.0, v0=0.0, *, prune=True) -> xarray.Dataset
+
+    The scan of :func:`scan` at a list of arbitrary points ``(e[i], u[i])``.
+
+    Same kernel (``_scan_fast``, its index-free path), same data variables,
+    attributes and answers, bit for bit, as :func:`scan` and
+    :func:`scan_coords` at the same coordinates, with one dimension
+    ``point`` instead of ``("u", "e")``; ``e`` and ``u`` are coordinates
+    along it.  Empty arrays give an empty dataset.
+
+    Parameters
+    ----------
+    e : 1-D array of floats in [0, 1)
+        Restitution coefficients of the points.
+    u : 1-D array of floats > 0, the same length as ``e``
+        Horizontal speeds of the points.
+    max_iter, y0, v0, prune : as in :func:`scan`.
+
+    Raises
+    ------
+    ValueError
+        Arrays that are not 1-D or differ in length, a value out of range
+        (naming it), outputs that would not fit in memory.
+
+    Reference: Section 3 of the paper (the scheme of Figures 4 and 5, point by point).
+    """
+    es = _point_coords("e", e)
+    us = _point_coords("u", u)
+    if es.size != us.size:
+        raise ValueError(f"e and u must have the same length, got {es.size} and {us.size}")
+    max_iter, y0, v0 = _check_run(max_iter, y0, v0)
+    _check_need(estimate_points_bytes(es.size), f"a scan of {es.size} points")
+    out, _ = _run(es, us, False, max_iter, y0, v0, prune)
+    data_vars = {k: (("point",), out[k], {"long_name": desc}) for k, (_, desc) in _FIELDS.items()}
+    coords = {"e": ("point", es, _E_ATTRS), "u": ("point", us, _U_ATTRS)}
+    return xr.Dataset(data_vars, coords=coords, attrs=_attrs(max_iter, y0, v0))
+
+
+def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *, prune=True,
+         progress=None):
+    """scan(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, y0=1.0, v0=0.0, *, prune=True, progress=None) -> xarray.Dataset
 
     Periodic sliding solutions on an ``n_u x n_e`` grid of the (e, u) plane.
 
@@ -491,8 +711,10 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
     package version and the word convention.
 
     Kernel: ``_scan_fast`` (the fast map of :func:`stairbounce.model._step`,
-    several pixels in lockstep, interleaved over threads); ``_scan_plain`` is
-    the closed-form baseline it is tested and benchmarked against.
+    several pixels in lockstep, interleaved over threads, pixels above the
+    Corollary 2.1 curve answered without iterating); ``_scan_plain`` is the
+    closed-form baseline, every pixel iterated, it is tested and benchmarked
+    against.
 
     Parameters
     ----------
@@ -504,6 +726,13 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
         Steps allowed for the transient and for the period, each.
     y0, v0 : float, default 1.0, 0.0
         Initial state at a step edge (y0 >= 0).
+    prune : bool, default True
+        Give status 1 without iterating to the pixels where Corollary 2.1
+        proves it (:func:`prunable`: above the curve by a margin for
+        rounding).  The dataset is the same, bit for bit, either way (so
+        nothing in it records the choice); pass False only to iterate every
+        pixel (e.g. timing the kernel, or code that wants the orbits' work
+        done).
     progress : callable ``progress(rows_done, rows_total)``, optional
         When given, the rows are scanned in blocks (about 1/50 of the rows
         each; the values are the same, pixels are independent) and it is
@@ -523,13 +752,13 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
     es = pixel_centres(e_min, e_max, n_e)
     us = pixel_centres(u_min, u_max, n_u)
     if progress is None:
-        ds = scan_coords(es, us, max_iter, y0, v0)
+        ds = scan_coords(es, us, max_iter, y0, v0, prune=prune)
     else:
         progress(0, n_u)
         block = max(1, -(-n_u // 50))
         parts = []
         for r in range(0, n_u, block):
-            parts.append(scan_coords(es, us[r : r + block], max_iter, y0, v0))
+            parts.append(scan_coords(es, us[r : r + block], max_iter, y0, v0, prune=prune))
             progress(min(r + block, n_u), n_u)
         ds = xr.concat(parts, dim="u", combine_attrs="override") if len(parts) > 1 else parts[0]
     ds.attrs.update(
@@ -570,6 +799,34 @@ def no_sliding_curve(e):
     e = np.asarray(e, dtype=float)
     with np.errstate(divide="ignore"):
         return (1.0 - e) / (2.0 * np.sqrt(2.0 * e))
+
+
+def prunable(e, u, y0=1.0, v0=0.0):
+    """prunable(e, u, y0=1.0, v0=0.0) -> np.ndarray of bool
+
+    The pixels a scan with ``prune=True`` answers without iterating: status 1 by Corollary 2.1.
+
+    True where ``u`` lies above the bound ``(1-e)/(2 sqrt(2e))`` of
+    Corollary 2.1 by more than the relative margin that covers rounding
+    (``_never_slides``: ``2**-30`` plus ``2**-44`` times the size of the
+    numbers the map handles, so about 1e-9 on the paper's plane).  Never on
+    the curve itself (equality in (2.4) slides, docs/design.md), never at
+    ``e = 0``.  For any start ``(y0, v0)``: its first step may slide (when
+    ``y0 < 1``), but the orbit of ``(1, 0)`` cannot.  ``e`` and ``u``
+    broadcast.
+    """
+    y0 = _finite("y0", y0)
+    v0 = _finite("v0", v0)
+    e, u = np.broadcast_arrays(np.asarray(e, dtype=np.float64), np.asarray(u, dtype=np.float64))
+    shape = e.shape
+    es = np.ascontiguousarray(e.ravel())
+    us = np.ascontiguousarray(u.ravel())
+    if es.size:
+        _check_values("e", es)
+        _check_values("u", us)
+    out = np.empty(es.size, dtype=np.bool_)
+    _prunable(es, us, y0 + v0 * v0, out)
+    return out.reshape(shape)
 
 
 # --------------------------------------------------------------------------- #

@@ -1,4 +1,5 @@
-"""``stairbounce dimension``: box-counting dimension of a border (Figs. 6 and 7)."""
+"""``stairbounce dimension``: fractal dimension of a border (Figs. 6 and 7), by the uncertainty
+exponent or by box counting of a scan, a picture or a tiled store."""
 
 from __future__ import annotations
 
@@ -51,23 +52,99 @@ def _scan_with_progress(kwargs):
         return perimeter_dimension(**kwargs, progress=lambda done, total: bar.update(task, completed=done))
 
 
+def _parse_eps(text):
+    parts = text.split(":")
+    try:
+        lo, hi, n = float(parts[0]), float(parts[1]), int(parts[2])
+        if len(parts) != 3:
+            raise ValueError
+    except (ValueError, IndexError):
+        raise CLIError(f"--eps must be MIN:MAX:N (N values log-spaced), got {text!r}") from None
+    if not (0 < lo < hi < 1) or n < 3:
+        raise CLIError(f"--eps must have 0 < MIN < MAX < 1 (fractions of the window) and N >= 3, got {text!r}")
+    return np.logspace(np.log10(lo), np.log10(hi), n)
+
+
+def _bar(total_label):
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    return Progress(
+        TextColumn(total_label), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+        TimeElapsedColumn(), console=Console(stderr=True), transient=True,
+    )
+
+
+def _uncertainty_with_progress(kwargs, work):
+    from ..fractal import perimeter_dimension
+
+    if work < _PROGRESS_WORK:
+        return perimeter_dimension(**kwargs)
+    with _bar("classifying") as bar:
+        task = bar.add_task("points", total=None)
+        return perimeter_dimension(
+            **kwargs, progress=lambda done, total: bar.update(task, completed=done, total=total))
+
+
+def _store_dimension(store, which, connectivity, fit_range, scheduler):
+    """Box counting of a finished atlas store, tile by tile."""
+    from ..atlas_boxes import store_box_dimension, store_info
+
+    if not store.exists():
+        raise CLIError(f"--store: no such store: {store}")
+    try:
+        attrs = store_info(store)  # before the progress bar: a refusal is one line
+    except ValueError as exc:
+        raise CLIError(f"--store: {exc}") from None
+    n = min(int(attrs.get("n_e", 0)), int(attrs.get("n_u", 0)))
+    if fit_range is None and n // 32 >= 64:
+        # the study's range: away from the pixel scale (1-2 px see the raster
+        # staircase), below the sizes dominated by the window's extent
+        fit_range = (16, n // 32)
+    with _bar("counting tiles") as bar:
+        task = bar.add_task("tiles", total=None)
+        result = store_box_dimension(
+            store, which=which, connectivity=connectivity, fit_range=fit_range, client=scheduler,
+            progress=lambda done, total: bar.update(task, completed=done, total=total),
+        )
+    what = "sliding region" if which == "sliding" else "word-length regions"
+    typer.echo(
+        f"{store}: border of the {what} in [{attrs.get('e_min'):g}, {attrs.get('e_max'):g}] x "
+        f"[{attrs.get('u_min'):g}, {attrs.get('u_max'):g}], {attrs.get('n_e')} x {attrs.get('n_u')} px, "
+        f"max_iter {attrs.get('max_iter')}, counted tile by tile"
+    )
+    return result, fit_range
+
+
 @app.command()
 def dimension(
     e: str = typer.Option("0:0.333", "--e", help="Window along e, MIN:MAX (default: the paper's Fig. 6)."),
     u: str = typer.Option("0.4:0.733", "--u", help="Window along u, MIN:MAX (default: the paper's Fig. 6)."),
-    resolution: int = typer.Option(512, "--resolution", help="Pixels along each axis of the scan (>= 8)."),
+    method: str = typer.Option(
+        None, "--method",
+        help="'uncertainty' or 'boxes'. Default: uncertainty for a window of the model (the uncertainty "
+             "exponent of random points: no picture, so no pixel scale to bias it, and its CI covers the "
+             "sampling noise; it agrees with box counting of 32768^2 px pictures, README), boxes for "
+             "--image and --store (pictures can only be box-counted). 'boxes' on a window scans a "
+             "--resolution picture: the paper's method (--fit-range 1:64 at 500 px gives its numbers)."),
+    resolution: int = typer.Option(512, "--resolution", help="Boxes: pixels along each axis of the scan (>= 8)."),
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps before a point counts as non-sliding (>= 1)."),
+    points: int = typer.Option(100_000, "--points", help="Uncertainty: random points (>= 100)."),
+    eps: str = typer.Option("1e-6:0.1:11", "--eps", help="Uncertainty: perturbations MIN:MAX:N, log-spaced fractions of the window."),
+    seed: int = typer.Option(0, "--seed", help="Uncertainty: seed of the random points (same seed, same answer)."),
     image: Path = typer.Option(None, "--image", help="Measure the border of the region of this black-and-white picture instead of scanning."),
+    store: Path = typer.Option(None, "--store", help="Measure the border in a finished tiled store (stairbounce scan --tile ... --out X.zarr), tile by tile: no memory limit."),
+    scheduler: str = typer.Option(None, "--scheduler", help="With --store: count the tiles on this Dask scheduler (tcp://host:port)."),
     region: str = typer.Option("black", "--region", help="With --image: which colour is the region, black (darker than mid grey) or white."),
     pixels: bool = typer.Option(False, "--pixels", help="With --image: measure the region's pixels as they are (a line drawing), not its border."),
-    which: str = typer.Option("sliding", "--which", help="Scan: 'sliding' (border of the sliding region) or 'words' (borders between word lengths)."),
-    fit_range: str = typer.Option(None, "--fit-range", help="Box sides to fit, MIN:MAX pixels (default: largest linear region, a heuristic). The paper's numbers: 1:64 at 500 px."),
-    offsets: int = typer.Option(1, "--offsets", help="Grid shifts per axis, counts averaged over them (>= 1)."),
-    connectivity: int = typer.Option(4, "--connectivity", help="Neighbours that define the border: 4 or 8."),
-    png: Path = typer.Option(None, "--png", help="Draw the border beside the log-log plot (Figs. 6/7) to this file (.png, .pdf, .svg)."),
+    which: str = typer.Option("sliding", "--which", help="'sliding' (border of the sliding region) or 'words' (borders between word lengths)."),
+    fit_range: str = typer.Option(None, "--fit-range", help="Boxes: box sides to fit, MIN:MAX pixels (default: largest linear region, a heuristic; with --store 16 px to 1/32 of the picture). The paper's numbers: 1:64 at 500 px. Uncertainty: eps to fit, MIN:MAX (default: all with >= 25 uncertain points)."),
+    offsets: int = typer.Option(1, "--offsets", help="Boxes: grid shifts per axis, counts averaged over them (>= 1)."),
+    connectivity: int = typer.Option(4, "--connectivity", help="Boxes: neighbours that define the border: 4 or 8."),
+    png: Path = typer.Option(None, "--png", help="Draw the result (border and log-log plot, or f(eps) and local dimensions) to this file (.png, .pdf, .svg)."),
     dpi: int = typer.Option(120, "--dpi", help="Resolution of raster output."),
 ):
-    """Box-counting dimension of the border of the sliding region (Figs. 6 and 7), or of a picture."""
+    """Fractal dimension of the border of the sliding region (Figs. 6 and 7), of a picture or of a tiled store."""
     from ..fractal import boundary, box_dimension
 
     if png is not None and png.suffix.lower() not in {".png", ".pdf", ".svg"}:
@@ -80,9 +157,62 @@ def dimension(
         raise CLIError(f"--connectivity must be 4 or 8, got {connectivity}")
     if offsets < 1:
         raise CLIError(f"--offsets must be an integer >= 1, got {offsets}")
-    fr = _parse_fit_range(fit_range)
+    if image is not None and store is not None:
+        raise CLIError("--image and --store: give one of them")
+    if scheduler is not None and store is None:
+        raise CLIError("--scheduler counts the tiles of a --store: give --store too")
+    if method is None:
+        method = "boxes" if (image is not None or store is not None) else "uncertainty"
+    if method not in ("boxes", "uncertainty"):
+        raise CLIError(f"--method must be boxes or uncertainty, got {method!r}")
+    if method == "uncertainty" and (image is not None or store is not None):
+        raise CLIError("--method uncertainty classifies points of the model: give a window (--e, --u), "
+                       "not --image or --store")
 
-    if image is not None:
+    if method == "uncertainty":
+        if max_iter < 1:
+            raise CLIError(f"--max-iter must be an integer >= 1, got {max_iter}")
+        if points < 100:
+            raise CLIError(f"--points must be an integer >= 100, got {points}")
+        if seed < 0:
+            raise CLIError(f"--seed must be an integer >= 0, got {seed}")
+        eps_values = _parse_eps(eps)
+        fr = None
+        if fit_range is not None:
+            fr = parse_range("fit-range", fit_range)
+            if not (0 < fr[0] and fr[1] < 1):
+                raise CLIError(f"--fit-range with --method uncertainty is eps MIN:MAX in (0, 1), got {fit_range!r}")
+        ew, uw = parse_range("e", e), parse_range("u", u)
+        result = _uncertainty_with_progress(
+            dict(e=ew, u=uw, max_iter=max_iter, which=which, method="uncertainty", n_points=points,
+                 eps=eps_values, seed=seed, fit_range=fr),
+            points * (1 + 2 * eps_values.size) * max_iter,
+        )
+        what = "sliding region" if which == "sliding" else "word-length regions"
+        typer.echo(
+            f"border of the {what} in [{ew[0]:g}, {ew[1]:g}] x [{uw[0]:g}, {uw[1]:g}], max_iter {max_iter}: "
+            f"uncertainty exponent of {points} random points (seed {seed}, random directions)"
+        )
+        lo, hi = result.ci
+        typer.echo(f"D = {result.dimension:.4f}")
+        typer.echo(f"95% CI = [{lo:.4f}, {hi:.4f}]  (stderr {result.stderr:.4f}: binomial "
+                   f"{result.stderr_binomial:.4f}, scatter about the line {result.stderr_fit:.4f})")
+        typer.echo(f"r = {result.r:.5f}")
+        typer.echo(f"fit: eps {result.fit_range[0]:.3g}..{result.fit_range[1]:.3g} of the window, "
+                   f"{result.fit.n} values, alpha = {result.alpha:.4f}, D = 2 - alpha")
+        typer.echo(result.table())
+        if png is not None:
+            _draw(png, dpi, lambda: _plot_uncertainty(result, ew, uw))
+        return
+
+    fr = _parse_fit_range(fit_range)
+    if store is not None:
+        if png is not None:
+            raise CLIError("--png draws a picture in memory; a store is measured tile by tile "
+                           "(use 'stairbounce render' to see it)")
+        result, used = _store_dimension(store, which, connectivity, fr, scheduler)
+        plot_image = None
+    elif image is not None:
         mask = _read_region(image, region)
         if not mask.any():
             raise CLIError(f"--image: {image} has no {region} pixel (threshold at mid grey): the region is empty")
@@ -96,6 +226,7 @@ def dimension(
         what = f"{region} pixels" if pixels else f"border of the {region} region"
         typer.echo(f"{image}: {what}, {mask.shape[1]} x {mask.shape[0]} px")
         plot_image = measured[::-1]  # drawn with rows upwards: flip to look like the file
+        used = fr
     else:
         if resolution < 8:
             raise CLIError(f"--resolution must be an integer >= 8, got {resolution}")
@@ -113,26 +244,39 @@ def dimension(
             f"(sliding region: {100 * result.region_fraction:.1f}% of the window)"
         )
         plot_image = None
+        used = fr
 
     lo, hi = result.ci
     typer.echo(f"D = {result.dimension:.4f}")
     typer.echo(f"95% CI = [{lo:.4f}, {hi:.4f}]  (stderr {result.stderr:.4f})")
     typer.echo(f"r = {result.r:.5f}")
-    auto = " (automatic: largest linear region, a heuristic)" if fr is None else ""
+    auto = " (automatic: largest linear region, a heuristic)" if used is None else ""
     typer.echo(f"fit: boxes of {result.fit_range[0]}..{result.fit_range[1]} px, {result.fit.n} sizes{auto}")
     typer.echo("sizes:  " + " ".join(f"{int(s)}" for s in result.sizes))
     typer.echo("counts: " + " ".join(f"{c:g}" for c in np.asarray(result.counts, dtype=float)))
 
     if png is not None:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
         from ..plot import plot_box_dimension
 
-        fig = plot_box_dimension(result, image=plot_image, title=str(image) if image is not None else None)
-        with atomic_path(png) as tmp:
-            fig.savefig(tmp, dpi=dpi)
-        plt.close(fig)
-        typer.echo(f"wrote {png}")
+        _draw(png, dpi, lambda: plot_box_dimension(
+            result, image=plot_image, title=str(image) if image is not None else None))
+
+
+def _plot_uncertainty(result, ew, uw):
+    from ..plot import plot_uncertainty
+
+    return plot_uncertainty(
+        result, title=f"uncertainty exponent of the border in [{ew[0]:g}, {ew[1]:g}] x [{uw[0]:g}, {uw[1]:g}]")
+
+
+def _draw(png, dpi, make):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = make()
+    with atomic_path(png) as tmp:
+        fig.savefig(tmp, dpi=dpi)
+    plt.close(fig)
+    typer.echo(f"wrote {png}")

@@ -6,22 +6,23 @@ Each ``plot_*`` takes the object a computing function returns and needs no
 other argument: the datasets carry their window, ``max_iter`` and the meaning
 of each variable in their attributes.
 
-=========================  ==============================================
-computed by                drawn by
-=========================  ==============================================
-``sb.scan``                :func:`plot_scan` (Figs. 3-5)
-``sb.orbit_diagram``       :func:`plot_orbit_diagram` (Figs. 8, 9)
-``sb.perimeter_dimension`` :func:`plot_box_dimension` (Figs. 6, 7),
-                           :func:`plot_box_counts`, :func:`plot_border`
-``sb.trajectory``          :func:`plot_trajectory` (Fig. 1),
-                           :func:`animate_trajectory`
-``sb.iterate``             :func:`plot_poincare_section`
-(the tongues, Thm. 3.1)    :func:`plot_tongues` (Fig. 2)
-=========================  ==============================================
+=============================  ==============================================
+computed by                    drawn by
+=============================  ==============================================
+``sb.scan``                    :func:`plot_scan` (Figs. 3-5)
+``sb.orbit_diagram``           :func:`plot_orbit_diagram` (Figs. 8, 9)
+``sb.perimeter_dimension``     :func:`plot_box_dimension` (Figs. 6, 7),
+                               :func:`plot_box_counts`, :func:`plot_border`
+``sb.uncertainty_dimension``   :func:`plot_uncertainty`
+``sb.trajectory``              :func:`plot_trajectory` (Fig. 1),
+                               :func:`animate_trajectory`
+``sb.iterate``                 :func:`plot_poincare_section`
+(the tongues, Thm. 3.1)        :func:`plot_tongues` (Fig. 2)
+=============================  ==============================================
 """
 
 from .._compat import register_alias as _register_alias
-from .fractal import plot_border, plot_box_counts, plot_box_dimension
+from .fractal import plot_border, plot_box_counts, plot_box_dimension, plot_uncertainty
 from .orbits import plot_orbit_diagram
 from .plane import plot_scan
 from .tongues import plot_tongues
@@ -40,4 +41,5 @@ __all__ = [
     "plot_scan",
     "plot_tongues",
     "plot_trajectory",
+    "plot_uncertainty",
 ]

@@ -156,3 +156,54 @@ def plot_box_dimension(result, image=None, axes=None, title=None):
         fig.suptitle(title)
     fig.tight_layout()
     return fig
+
+
+def plot_uncertainty(result, axes=None, title=None):
+    """Draw an uncertainty-exponent result: ``f(eps)`` on log-log axes with
+    the fitted power law, and the local dimensions ``2 - d log f / d log eps``.
+
+    Parameters
+    ----------
+    result : :class:`stairbounce.fractal.UncertaintyDimension`
+    axes : (ax_fraction, ax_local) or None
+        None: a new figure of two panels.
+    title : str or None
+
+    Returns the figure.
+    """
+    import matplotlib.pyplot as plt
+
+    if axes is None:
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4.6))
+    else:
+        fig = axes[0].figure
+    ax, ax2 = axes
+    ok = result.uncertain > 0
+    fitted = result.fitted
+    ax.loglog(result.eps[ok & fitted], result.fraction[ok & fitted], "o", color="C0", label="fitted eps")
+    rest = ok & ~fitted
+    if rest.any():
+        ax.loglog(result.eps[rest], result.fraction[rest], "o", mfc="none", color="C0", label="not fitted")
+    lo, hi = result.fit_range
+    xs = np.array([lo, hi])
+    ax.loglog(xs, np.exp(result.fit.intercept) * xs ** result.alpha, "-", color="C3",
+              label=f"f ~ eps^{result.alpha:.3f}")
+    ax.set_xlabel("eps (fraction of the window)")
+    ax.set_ylabel("uncertain fraction f(eps)")
+    ci = result.ci
+    ax.set_title(f"D = 2 - alpha = {result.dimension:.3f}  95% CI [{ci[0]:.3f}, {ci[1]:.3f}]",
+                 fontsize="medium")
+    ax.legend(loc="lower right", fontsize="small")
+    ax.grid(True, which="both", alpha=0.3)
+    mid, local = result.local_dimensions
+    ax2.semilogx(mid, local, "o-", color="C0", label="local 2 - dlog f/dlog eps")
+    ax2.axhline(result.dimension, color="C3", lw=1, label="fitted D")
+    ax2.axhspan(ci[0], ci[1], color="C3", alpha=0.1, lw=0, label="95% CI")
+    ax2.set_xlabel("eps (fraction of the window)")
+    ax2.set_ylabel("local dimension")
+    ax2.legend(loc="best", fontsize="small")
+    ax2.grid(True, which="both", alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig
