@@ -237,7 +237,7 @@ def points_case(n, max_iter, repeat, window=((0.155, 0.2138), (0.6, 0.658))):
          f"  x{t_full / t_pr:.2f} / x{c_full / c_pr:.2f} the pruned time; identical arrays: {same}")
     wg = useful_iterations(grid)
     _row(f"scan, {side} x {side} grid", t_grid, c_grid, wg,
-         f"  same window as a grid, for comparison (pruned)")
+         "  same window as a grid, for comparison (pruned)")
 
 
 def _clock_ghz():
@@ -271,7 +271,7 @@ def main(argv=None):
           f"load average {os.getloadavg()[0]:.1f}; python {sys.version.split()[0]}")
     case("paper grid (Fig. 4)", (0.0, 1.0, 500), (0.0, 1.5, 350), 1000, a.repeat, 1, 7)
     case("Fig. 4 view of the explorer", (0.0, 1.0, 600), (0.0, 1.5, 600), 1000, a.repeat, 4)
-    case(f"Fig. 5e window", (0.04, 0.065, a.big), (0.92, 0.945, a.big), 1000,
+    case("Fig. 5e window", (0.04, 0.065, a.big), (0.92, 0.945, a.big), 1000,
          max(1, a.repeat // 3), 16 * max(1, a.big // 512))
     points_case(a.points, 1000, max(1, a.repeat // 2))
     print(f"\nload average at the end {os.getloadavg()[0]:.1f}")
