@@ -177,10 +177,13 @@ def _never_slides(e, T, ratio, energy0):
       (slowly when ``r`` is large).
 
     The test demands ``T`` smaller than the threshold by the relative
-    ``_PRUNE_MARGIN + _PRUNE_ROUNDING * size`` (``2**-44 size`` is about 2**9
-    times ``delta / 2``, the relative change of ``T`` that a height error
-    ``delta`` is worth): a pruned pixel's computed test fails on every state
-    the map reaches.
+    ``_PRUNE_MARGIN + _PRUNE_ROUNDING * size``.  A height error ``delta`` is
+    worth a relative change ``delta / 2`` of ``T`` (``y* ~ T^2``); with four
+    roundings of terms below ``16 size``, ``delta / 2 <= 2**5 eps size``,
+    and ``_PRUNE_ROUNDING * size = 2**9 eps size`` leaves a factor 16 to
+    spare; ``_PRUNE_MARGIN`` (about 1e-9) covers the threshold and the test
+    (errors of order ``eps r/(r-1)``, included in ``size`` too).  So a pruned
+    pixel's computed test fails on every state the map reaches.
 
     Any start: the first step from ``(y0, v0)`` (``y0 < 1`` allowed) may
     slide, and then the orbit of ``(1, 0)`` never does; or it does not, and
