@@ -139,7 +139,8 @@ def test_rounding_assumption_of_the_margin(y0, v0):
     # eps times the terms of a step, assuming those stay below a small
     # multiple of `size`; measured here over the prunable part of the plane,
     # from e near 0 (long flights) to e near 1 (slow energy loss), just above
-    # the curve and far above it.  The margin leaves room for a factor 2**9.
+    # the curve and far above it.  _never_slides assumes < 16, with a factor
+    # 16 to spare on top.
     rng = np.random.default_rng(5)
     e = np.concatenate([rng.uniform(0, 1, 600), 1 - 10 ** rng.uniform(-8, -1, 300),
                         10 ** rng.uniform(-12, -1, 300)])

@@ -177,10 +177,13 @@ def _never_slides(e, T, ratio, energy0):
       (slowly when ``r`` is large).
 
     The test demands ``T`` smaller than the threshold by the relative
-    ``_PRUNE_MARGIN + _PRUNE_ROUNDING * size`` (``2**-44 size`` is about 2**9
-    times ``delta / 2``, the relative change of ``T`` that a height error
-    ``delta`` is worth): a pruned pixel's computed test fails on every state
-    the map reaches.
+    ``_PRUNE_MARGIN + _PRUNE_ROUNDING * size``.  A height error ``delta`` is
+    worth a relative change ``delta / 2`` of ``T`` (``y* ~ T^2``); with four
+    roundings of terms below ``16 size``, ``delta / 2 <= 2**5 eps size``,
+    and ``_PRUNE_ROUNDING * size = 2**9 eps size`` leaves a factor 16 to
+    spare; ``_PRUNE_MARGIN`` (about 1e-9) covers the threshold and the test
+    (errors of order ``eps r/(r-1)``, included in ``size`` too).  So a pruned
+    pixel's computed test fails on every state the map reaches.
 
     Any start: the first step from ``(y0, v0)`` (``y0 < 1`` allowed) may
     slide, and then the orbit of ``(1, 0)`` never does; or it does not, and
@@ -194,6 +197,8 @@ def _never_slides(e, T, ratio, energy0):
     if not (rm1 > 0.0 and TT > 0.0):  # e = 0, or u so large that T^2 underflows
         return False
     threshold = math.sqrt(2.0 * (rm1 * (ratio + 1.0)))
+    if not T < threshold:  # below the curve (most iterated pixels): the test below is False too
+        return False
     size = TT + (1.0 / TT + 1.0 + energy0) * (ratio + ratio / rm1)
     return T * (1.0 + _PRUNE_MARGIN + _PRUNE_ROUNDING * size) < threshold
 
@@ -280,13 +285,12 @@ def _run_chunk(es, us, grid, max_iter, y0, v0, prune, start, stop,
     active = 0
     pruned = 0
     for l in range(L):
-        if prune:
-            nxt, npr = _skip_proven(es, us, grid, energy0, nxt, stop, status, word_length, jumps, period, impacts)
-            pruned += npr
-        if nxt < stop:
-            _load_lane(l, nxt, es, us, grid, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX)
+        nxt, loaded, npr = _load_next(l, nxt, stop, es, us, grid, y0, v0, from_rest, prune, energy0,
+                                      Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX,
+                                      status, word_length, jumps, period, impacts)
+        pruned += npr
+        if loaded:
             LIVE[l] = 1
-            nxt += 1
             active += 1
 
     while active > 0:
@@ -360,13 +364,11 @@ def _run_chunk(es, us, grid, max_iter, y0, v0, prune, start, stop,
             N[l] = 0
             IMP[l] = 0
             JMP[l] = 0
-            if prune:
-                nxt, npr = _skip_proven(es, us, grid, energy0, nxt, stop, status, word_length, jumps, period, impacts)
-                pruned += npr
-            if nxt < stop:
-                _load_lane(l, nxt, es, us, grid, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX)
-                nxt += 1
-            else:
+            nxt, loaded, npr = _load_next(l, nxt, stop, es, us, grid, y0, v0, from_rest, prune, energy0,
+                                          Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX,
+                                          status, word_length, jumps, period, impacts)
+            pruned += npr
+            if not loaded:
                 LIVE[l] = 0
                 active -= 1
     return pruned
@@ -382,35 +384,36 @@ def _pixel(p, es, us, grid):
     return es[p], us[p]
 
 
-@njit(cache=True)
-def _skip_proven(es, us, grid, energy0, p, stop, status, word_length, jumps, period, impacts):
-    """Give status 1 to the pixels from ``p`` on that :func:`_never_slides`
-    proves, up to the first that needs iterating; returns its index (or
-    ``stop``) and the number given."""
+@njit(cache=True, inline="always")
+def _load_next(l, p, stop, es, us, grid, y0, v0, from_rest, prune, energy0,
+               Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX,
+               status, word_length, jumps, period, impacts):
+    """Load the first pixel from ``p`` on that needs iterating into lane ``l``.
+
+    With ``prune``, the pixels before it that :func:`_never_slides` proves get
+    status 1 here.  Returns the index after the loaded pixel (``stop`` when
+    none is left, the lane then untouched), whether one was loaded, and the
+    number pruned.
+    """
     n = 0
     while p < stop:
         e, u = _pixel(p, es, us, grid)
         T, ratio = _constants(e, u)
-        if not _never_slides(e, T, ratio, energy0):
-            break
-        _store(p, 0, 0, 0, status, word_length, jumps, period, impacts)
-        n += 1
-        p += 1
-    return p, n
-
-
-@njit(cache=True)
-def _load_lane(l, p, es, us, grid, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX):
-    e, u = _pixel(p, es, us, grid)
-    T, ratio = _constants(e, u)
-    E[l] = e
-    TT[l] = T
-    RATIO[l] = ratio
-    HALF_TT[l] = 0.5 * T * T  # as model._step evaluates it
-    Y[l] = 1.0 if from_rest else y0
-    V[l] = 0.0 if from_rest else v0
-    PERIODIC[l] = 1 if from_rest else 0
-    PIX[l] = p
+        if prune and _never_slides(e, T, ratio, energy0):
+            _store(p, 0, 0, 0, status, word_length, jumps, period, impacts)
+            n += 1
+            p += 1
+            continue
+        E[l] = e
+        TT[l] = T
+        RATIO[l] = ratio
+        HALF_TT[l] = 0.5 * T * T  # as model._step evaluates it
+        Y[l] = 1.0 if from_rest else y0
+        V[l] = 0.0 if from_rest else v0
+        PERIODIC[l] = 1 if from_rest else 0
+        PIX[l] = p
+        return p + 1, True, n
+    return p, False, n
 
 
 @njit(cache=True, parallel=True)
