@@ -182,6 +182,47 @@ def _log_norm(a, b, ex):
 
 
 @njit(cache=True, error_model="numpy")
+def _gram_schmidt(na, nb, ra, rb):
+    """Second column of Q and ``|R22|`` of the QR of ``[(na, nb), (ra, rb)]``."""
+    nn = math.sqrt(na * na + nb * nb)
+    ua = na / nn
+    ub = nb / nn
+    p = ra * ua + rb * ub
+    ra -= p * ua
+    rb -= p * ub
+    r22 = math.sqrt(ra * ra + rb * rb)
+    return ra / r22, rb / r22, r22
+
+
+@njit(cache=True, error_model="numpy")
+def _product_exponents_kernel(Js):
+    a = 1.0
+    b = 0.0
+    ex = 0
+    qa = 0.0
+    qb = 1.0
+    l2 = 0.0
+    L0 = _log_norm(a, b, ex)
+    for n in range(Js.shape[0]):
+        J = Js[n]
+        na = J[0, 0] * a + J[0, 1] * b
+        nb = J[1, 0] * a + J[1, 1] * b
+        ra = J[0, 0] * qa + J[0, 1] * qb
+        rb = J[1, 0] * qa + J[1, 1] * qb
+        qa, qb, r22 = _gram_schmidt(na, nb, ra, rb)
+        l2 += math.log(r22)
+        a, b, ex = _rescale(na, nb, ex)
+    return (_log_norm(a, b, ex) - L0) / Js.shape[0], l2 / Js.shape[0]
+
+
+def _product_exponents(jacobians):
+    """The kernels' Lyapunov algorithm (first vector rescaled by powers of two,
+    second by Gram-Schmidt) on any sequence of 2x2 matrices, for tests."""
+    Js = np.ascontiguousarray(np.asarray(jacobians, dtype=np.float64))
+    return _product_exponents_kernel(Js)
+
+
+@njit(cache=True, error_model="numpy")
 def _finish(out, imp, imp_half, land, diss, kick, L0, Lh, Le, e, steps):
     """The fields of :data:`MOTION_FIELDS` of a non-sliding orbit from its sums."""
     N = steps
@@ -256,15 +297,7 @@ def _motion_orbit(y, v, e, T, ratio, transient, steps, out, extra):
         if qr:
             # second column of Q: J q2 minus its component along J q1, normalised
             ra, rb = _apply_jacobian(qa, qb, y, v, vn, k, s, t, w, T)
-            nn = math.sqrt(na * na + nb * nb)
-            ua = na / nn
-            ub = nb / nn
-            p = ra * ua + rb * ub
-            ra -= p * ua
-            rb -= p * ub
-            r22 = math.sqrt(ra * ra + rb * rb)
-            qa = ra / r22
-            qb = rb / r22
+            qa, qb, r22 = _gram_schmidt(na, nb, ra, rb)
             if n >= transient:
                 l2 += math.log(r22)
         a, b, ex = _rescale(na, nb, ex)
