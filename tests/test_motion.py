@@ -156,6 +156,34 @@ def test_determinant_of_a_step_with_k_impacts_is_e_to_the_2k():
         assert np.linalg.det(J) == pytest.approx(e ** (2 * k), rel=1e-8, abs=1e-300)
 
 
+def test_tangent_map_carries_the_vertical_field_so_lambda_1_is_zero():
+    # horizontal translation of a trajectory is a symmetry away from grazing:
+    # J (v, -1) = (v', -1) (motion.py docstring), hence lambda_1 = 0 exactly
+    n = 0
+    for y, v, e, u in _random_states(2000, 6):
+        J, k = step_jacobian(y, v, e, u)
+        if k == model.SLIDING:
+            continue
+        yn, vn, _ = model.poincare_map(y, v, e, u)
+        assert J @ np.array([v, -1.0]) == pytest.approx(np.array([vn, -1.0]), rel=1e-12, abs=1e-12)
+        n += 1
+    assert n > 1000
+
+
+@pytest.mark.parametrize("e, u", _random_non_sliding_points(8, 7))
+def test_lambda_1_is_the_growth_of_the_vertical_field(e, u):
+    # after the transient the tangent vector is aligned with (v, -1) (the other
+    # direction contracts like e^(2k)), so the finite-N estimate of lambda_1 is
+    # log(|(v_N, -1)| / |(v_0, -1)|) / N, and it decays like 1/N
+    N = 3000
+    r = motion(e, u, steps=N, transient=2000)
+    (_, v0), (_, vN) = r["state_start"], r["state_end"]
+    # misalignment left after the transient: about exp(lambda_2 * transient)
+    tol = 4.0 * math.exp(r["lyap2"] * 2000) / N + 1e-9
+    assert r["lyap1"] == pytest.approx(0.5 * math.log((1 + vN * vN) / (1 + v0 * v0)) / N, abs=tol)
+    assert abs(r["lyap1"]) * N < 10
+
+
 def test_step_jacobian_of_a_flight_is_a_shear():
     J, k = step_jacobian(5.0, 3.0, 0.5, 2.0)  # t_1 = 3 + sqrt(19) > T = 0.5
     assert k == 0

@@ -39,6 +39,25 @@ with ``c_k = (1+e-2e^k)/(1-e)``), ``d = T - t_k`` and ``(y', v')`` the image
   Prop. 2.2 (``t_k <= T`` counts as an impact).  These states form curves of
   zero area, met with probability zero by an orbit.
 
+lambda_1 = 0: the answer to "chaotic or just complicated?"
+----------------------------------------------------------
+The impacts are on horizontal floors, so shifting a whole non-sliding
+trajectory horizontally by a small ``delta`` gives another solution (as long as
+no impact or flight comes within ``delta`` of an edge, i.e. away from grazing).
+At an edge the shifted trajectory is the old one ``delta/u`` earlier, so the
+tangent map carries the vertical vector field along the orbit:
+
+    ``J (v, -1) = (v', -1)``  (0 impacts: ``v' = v - T``; k impacts: direct
+    substitution in the formulas above, tested to rounding).
+
+Its norm ``sqrt(1 + v^2)`` stays bounded on a bounded orbit, so one Lyapunov
+exponent is exactly 0; with ``lambda_1 + lambda_2 = 2 <k> log e < 0`` the
+spectrum of every bounded non-sliding orbit that avoids grazing is
+``(0, 2 <k> log e)``: never chaotic in the Lyapunov sense.  The finite-N
+estimate is ``lambda_1 ~ (1/2N) log((1 + v_N^2)/(1 + v_0^2))``, O(1/N); the
+measured values are that (``tests/test_motion.py``).  The complication is in
+``<k>`` and its dependence on (e, u).
+
 Identities every long orbit obeys (tested in ``tests/test_motion.py``)
 ---------------------------------------------------------------------
 Over ``N`` steps with ``K`` impacts in all:
