@@ -26,6 +26,8 @@ from stairbounce.motion import (
     motion_scan,
     one_impact_family,
     one_impact_state,
+    k_mean_bound,
+    speed_spread,
     step_jacobian,
 )
 from stairbounce.plane import pixel_centres
@@ -410,3 +412,52 @@ def test_scan_progress_and_bad_input():
         motion_scan((0.0, 1.5, 5))
     with pytest.raises(ValueError, match="kernel"):
         motion_coords([0.5], [1.0], kernel="slow")
+
+
+def test_k_mean_obeys_the_cauchy_schwarz_bound_exactly(grid_scan):
+    # motion.py docstring: <k> >= impulse^2 (1-e) / (2 (1+e) dissipation) for
+    # every finite orbit (the two balances and Cauchy-Schwarz on impact speeds)
+    ds = grid_scan
+    ok = ds.slide_step.values == 0
+    E = np.broadcast_to(ds.e.values[None, :], ok.shape)[ok]
+    k, P, D = ds.k_mean.values[ok], ds.impulse.values[ok], ds.dissipation.values[ok]
+    assert np.all(k >= P * P * (1 - E) / (2 * (1 + E) * D) * (1 - 1e-12))
+    for e, u in _random_non_sliding_points(10, 8):
+        r = motion(e, u, steps=4000, transient=4000)
+        assert r["k_mean"] >= r["impulse"] ** 2 * (1 - e) / (2 * (1 + e) * r["dissipation"]) * (1 - 1e-12)
+
+
+@pytest.mark.parametrize("n, e", FAMILIES)
+def test_k_mean_bound_is_attained_on_the_families(n, e):
+    assert k_mean_bound(e, one_impact_family(n, e)) == pytest.approx(1.0 / n, rel=1e-14)
+
+
+def test_speed_spread_is_the_relative_variance_of_the_impact_speeds():
+    # counted directly from an impact-by-impact replay of the kept steps
+    for e, u in [(0.5, 0.8), (0.3, 1.2), (0.8, 0.4)]:
+        N, tr = 1500, 1000
+        r = motion(e, u, steps=N, transient=tr)
+        ys, vs, _ = model.iterate(1.0, 0.0, e, u, tr + N)
+        speeds = []
+        for n in range(tr, tr + N):
+            s = math.sqrt(vs[n] ** 2 + 2 * ys[n])
+            k = naive.step(ys[n], vs[n], e, u)[2]
+            speeds += [s * e**j for j in range(k)]
+        speeds = np.array(speeds)
+        assert len(speeds) == round(r["k_mean"] * N)
+        assert r["speed_spread"] == pytest.approx(speeds.var() / speeds.mean() ** 2, rel=1e-6, abs=1e-12)
+    u, y, v = one_impact_state(2, 0.4)
+    assert abs(motion(0.4, u, steps=600, transient=0, y0=y, v0=v)["speed_spread"]) < 1e-12
+    assert math.isnan(speed_spread(math.nan, 1.0, 1.0, 0.5))
+
+
+def test_motion_figures_answer_chaotic_or_just_complicated(tmp_path):
+    # the report row of issue 13, on a coarse grid: lambda_1 compatible with 0
+    # (|lambda_1| <= halves' difference + 5/N) on more than 99% of the pixels
+    from stairbounce import figures as F
+
+    res = F.make_figures(F.Settings(out=tmp_path, dpi=40, scale=0.1), only=["motion_lyap", "motion_cut"])
+    assert [r.error for r in res] == [None, None]
+    row = res[0].rows[0]
+    assert row.quantity == "chaotic or just complicated?" and row.agrees is True
+    assert (tmp_path / "motion_lyap.png").exists() and (tmp_path / "motion_cut.png").exists()

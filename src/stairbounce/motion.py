@@ -74,6 +74,21 @@ Over ``N`` steps with ``K`` impacts in all:
    ``impulse = (1+e) <sum |v_-|>``, equals ``T + (v_N - v_0)/N``: the total
    flight time between impacts is the time elapsed.
 
+A lower bound on <k> (Cauchy-Schwarz)
+------------------------------------
+With ``K`` impacts of speeds ``|v_-|`` in ``N`` steps, (2) and (3) give
+``sum |v_-|^2 = 2 N dissipation / (1 - e^2)`` and ``sum |v_-| = N impulse / (1 + e)``,
+and ``(sum |v_-|)^2 <= K sum |v_-|^2``, so exactly, for every finite orbit,
+
+    ``<k> >= impulse^2 (1 - e) / (2 (1 + e) dissipation)``,
+
+which tends to ``<k>_0 = (1 - e) / (2 (1 + e) u^2)`` (:func:`k_mean_bound`) on long
+orbits.  Equality needs all impact speeds equal: the one-impact families
+(:func:`one_impact_family`, where ``<k>_0 = 1/n``).  ``<k> / <k>_0 - 1``
+measures the spread of the impact speeds; at finite N the exact form is
+:func:`speed_spread`, ``Var |v_-| / <|v_-|>^2`` over the kept impacts.  It is
+where the complication lives.
+
 The kernels iterate every pixel they are given (no pruning: the motion is the
 point here).  Nothing here imports matplotlib, Typer or the web stack.
 
@@ -113,6 +128,8 @@ __all__ = [
     "lyapunov_exponents",
     "one_impact_family",
     "one_impact_state",
+    "k_mean_bound",
+    "speed_spread",
     "MOTION_FIELDS",
 ]
 
@@ -672,6 +689,7 @@ def motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0):
     r["lyap2_err"] = float(extra[5])
     if r["slides"]:
         r["lyap2"] = -math.inf
+    r["speed_spread"] = speed_spread(r["k_mean"], r["impulse"], r["dissipation"], e)
     r["state_start"] = (float(extra[0]), float(extra[1]))
     r["state_end"] = (float(extra[2]), float(extra[3]))
     r["steps"] = steps
@@ -850,3 +868,38 @@ def one_impact_state(n, e, phase=0.5):
     delta = lo + phase * (hi - lo)
     tau1 = T - delta
     return u, w * tau1 - 0.5 * tau1 * tau1 + 1.0, w - tau1
+
+
+def k_mean_bound(e, u):
+    """k_mean_bound(e, u) -> float or array
+
+    The lower bound ``<k>_0 = (1 - e) / (2 (1 + e) u^2)`` of the impacts per step of a long non-sliding orbit.
+
+    From the energy and momentum balances and Cauchy-Schwarz (module
+    docstring); equality exactly on the one-impact families, where it is
+    ``1/n``.  Vectorised over ``e`` in [0, 1) and ``u > 0``.
+    """
+    e = np.asarray(e, dtype=float)
+    u = np.asarray(u, dtype=float)
+    if not (np.all((e >= 0) & (e < 1)) and np.all(u > 0)):
+        raise ValueError("e (restitution coefficient) must be in [0, 1) and u (horizontal speed) > 0")
+    r = (1.0 - e) / (2.0 * (1.0 + e) * u * u)
+    return float(r) if r.ndim == 0 else r
+
+
+def speed_spread(k_mean, impulse, dissipation, e):
+    """speed_spread(k_mean, impulse, dissipation, e) -> float or array
+
+    The relative variance ``Var|v_-| / <|v_-|>^2`` of the impact speeds over the kept steps.
+
+    ``= 2 (1+e) <k> dissipation / ((1-e) impulse^2) - 1`` (module docstring:
+    the balances give ``sum |v_-|`` and ``sum |v_-|^2``), >= 0 exactly, 0 on
+    the one-impact families.  Takes the fields of :func:`motion` or
+    :func:`motion_scan` (arrays broadcast); NaN where the orbit slides.
+    """
+    k = np.asarray(k_mean, dtype=float)
+    e = np.asarray(e, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r = 2.0 * (1.0 + e) * k * np.asarray(dissipation, float) / (
+            (1.0 - e) * np.asarray(impulse, float) ** 2) - 1.0
+    return float(r) if r.ndim == 0 else r
