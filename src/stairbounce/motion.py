@@ -426,6 +426,8 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
     SS = np.empty(L)
     WW = np.empty(L)
     MORE = np.zeros(L, np.int64)
+    TS = np.empty(L)
+    CLOSED = np.zeros(L, np.int64)
 
     nxt = start
     active = 0
@@ -472,24 +474,63 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
             AN[l] = (a + T * b) if fly else (j11 * c - vb * b)
             BN[l] = b if fly else (j21 * c + b)
             SS[l] = s
+            TS[l] = t
             WW[l] = w
             MORE[l] = more
             nmore += more
         if nmore > 0:
-            for l in range(L):
-                if MORE[l]:
+            # lanes with two impacts or more: count on along t += 2w, w *= e as
+            # _tangent_step does, branch-free, up to _COUNTED_IMPACTS; past that
+            # the scalar step (closed form) for that lane
+            nclosed = 0
+            while nmore > 0:
+                nmore = 0
+                for l in range(L):
+                    m = MORE[l]
                     y = Y[l]
                     v = V[l]
                     T = TT[l]
-                    yn, vn, k, s, t, w = _tangent_step(y, v, E[l], T, R[l])
-                    na, nb = _apply_jacobian(A[l], B[l], y, v, vn, k, s, t, w, T)
-                    YN[l] = yn
-                    VN[l] = vn
-                    K[l] = k
-                    AN[l] = na
-                    BN[l] = nb
-                    SS[l] = s
+                    t = TS[l] + 2.0 * WW[l] if m else TS[l]
+                    w = WW[l] * E[l] if m else WW[l]
+                    k = K[l] + m
+                    closed = m & (k >= _COUNTED_IMPACTS)
+                    more = m & (1 - closed) & (t + 2.0 * w <= T)
+                    last = m & (1 - closed) & (1 - more)
+                    d = T - t
+                    yb = -0.5 * d * d + w * d + 1.0
+                    vb = w - d
+                    inv = 1.0 / (v * v + 2.0 * y)
+                    j11 = (d * w - vb * (t - v)) * inv
+                    j21 = (w + t - v) * inv
+                    a = A[l]
+                    b = B[l]
+                    c = a + v * b
+                    YN[l] = yb if last else YN[l]
+                    VN[l] = vb if last else VN[l]
+                    AN[l] = (j11 * c - vb * b) if last else AN[l]
+                    BN[l] = (j21 * c + b) if last else BN[l]
+                    TS[l] = t
                     WW[l] = w
+                    K[l] = k
+                    CLOSED[l] = CLOSED[l] | closed
+                    MORE[l] = more
+                    nmore += more
+                    nclosed += closed
+            if nclosed > 0:
+                for l in range(L):
+                    if CLOSED[l]:
+                        CLOSED[l] = 0
+                        y = Y[l]
+                        v = V[l]
+                        T = TT[l]
+                        yn, vn, k, s, t, w = _tangent_step(y, v, E[l], T, R[l])
+                        na, nb = _apply_jacobian(A[l], B[l], y, v, vn, k, s, t, w, T)
+                        YN[l] = yn
+                        VN[l] = vn
+                        K[l] = k
+                        AN[l] = na
+                        BN[l] = nb
+                        WW[l] = w
         # commit, branch-free; count lanes with an event
         nev = 0
         for l in range(L):
