@@ -461,3 +461,19 @@ def test_motion_figures_answer_chaotic_or_just_complicated(tmp_path):
     row = res[0].rows[0]
     assert row.quantity == "chaotic or just complicated?" and row.agrees is True
     assert (tmp_path / "motion_lyap.png").exists() and (tmp_path / "motion_cut.png").exists()
+
+
+def test_the_guide_page_examples_run():
+    # docs/guide/motion.md's doctest fences, outside Sphinx
+    import doctest
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "docs" / "guide" / "motion.md").read_text()
+    blocks = re.findall(r"```\{doctest\}\n(.*?)```", text, re.S)
+    assert len(blocks) >= 4
+    for b in blocks:
+        test = doctest.DocTestParser().get_doctest(b, {}, "motion.md", "motion.md", 0)
+        runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS)
+        runner.run(test)
+        assert runner.failures == 0

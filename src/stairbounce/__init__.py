@@ -17,6 +17,7 @@ from .model import (
     slides,
     tongue,
 )
+from .motion import k_mean_bound, motion_scan, one_impact_family
 from .orbits import orbit_density, orbit_diagram
 from .symbolic import Word, parse_word, sliding_word
 from .trajectory import Trajectory, trajectory
@@ -35,8 +36,11 @@ __all__ = [
     "impact_number",
     "impact_times",
     "iterate",
+    "k_mean_bound",
+    "motion_scan",
     "no_sliding_bound",
     "normalized_speed",
+    "one_impact_family",
     "orbit_density",
     "orbit_diagram",
     "parse_word",
