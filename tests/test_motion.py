@@ -477,3 +477,8 @@ def test_the_guide_page_examples_run():
         runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS)
         runner.run(test)
         assert runner.failures == 0
+
+
+def test_motion_scan_refuses_what_does_not_fit_in_memory():
+    with pytest.raises(ValueError, match="reduce the size or scan tiles"):
+        motion_scan((0.0, 1.0, 10**6), (0.0, 1.5, 10**6))

@@ -427,6 +427,8 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
     WW = np.empty(L)
     MORE = np.zeros(L, np.int64)
     TS = np.empty(L)
+    INV = np.empty(L)
+    SC = np.zeros(L, np.int64)
     CLOSED = np.zeros(L, np.int64)
 
     nxt = start
@@ -468,6 +470,7 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
             K[l] = SLIDING if slide else (0 if fly else 1)
             # tangent map, as _apply_jacobian
             inv = 1.0 / (v * v + 2.0 * y)
+            INV[l] = inv
             j11 = (d * w - vb * (t - v)) * inv
             j21 = (w + t - v) * inv
             c = a + v * b
@@ -499,7 +502,7 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
                     d = T - t
                     yb = -0.5 * d * d + w * d + 1.0
                     vb = w - d
-                    inv = 1.0 / (v * v + 2.0 * y)
+                    inv = INV[l]
                     j11 = (d * w - vb * (t - v)) * inv
                     j21 = (w + t - v) * inv
                     a = A[l]
@@ -531,29 +534,35 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
                         AN[l] = na
                         BN[l] = nb
                         WW[l] = w
-        # commit, branch-free; count lanes with an event
-        nev = 0
+        # commit, branch-free in two loops (floats, then integers) so that
+        # LLVM vectorises both; count lanes with an event
         for l in range(L):
-            k = K[l]
-            kept = (N[l] >= transient) and (k > 0)
+            kept = (N[l] >= transient) & (K[l] > 0)
             a = AN[l]
             b = BN[l]
-            m = max(abs(a), abs(b))
-            big = m > _BIG
-            small = (m < _SMALL) and (m > 0.0)
+            aa = abs(a)
+            ab = abs(b)
+            big = (aa > _BIG) | (ab > _BIG)  # as _rescale: max(|a|, |b|) > 2^400
+            small = (aa < _SMALL) & (ab < _SMALL) & ((aa > 0.0) | (ab > 0.0))
             f = _SMALL if big else (_BIG if small else 1.0)
             A[l] = a * f
             B[l] = b * f
-            EX[l] += _SCALE if big else (-_SCALE if small else 0)
+            SC[l] = _SCALE if big else (-_SCALE if small else 0)
             s = SS[l]
             w = WW[l]
-            IMP[l] += k if kept else 0
-            LAND[l] += 1 if kept else 0
             DISS[l] += 0.5 * (s * s - w * w) if kept else 0.0
             KICK[l] += R[l] * (s - w) if kept else 0.0
             Y[l] = YN[l]
             V[l] = VN[l]
-            n = N[l] + 1
+        nev = 0
+        for l in range(L):
+            k = K[l]
+            n = N[l]
+            kept = (n >= transient) & (k > 0)
+            EX[l] += SC[l]
+            IMP[l] += k if kept else 0
+            LAND[l] += 1 if kept else 0
+            n += 1
             N[l] = n
             nev += LIVE[l] & ((k == SLIDING) | (n == transient) | (n == transient + half) | (n == total))
         if nev == 0:
@@ -738,6 +747,19 @@ def motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0):
     return r
 
 
+def _check_memory(npix):
+    """The kernel's output and the dataset's copy of it: 2 x 9 float64 per pixel."""
+    from .plane import _available_memory, _human
+
+    need = 2 * 8 * _NF * npix
+    avail = _available_memory()
+    if avail is not None and need > avail:
+        raise ValueError(
+            f"a motion scan of {npix} pixels needs about {_human(need)}, more than the "
+            f"{_human(avail)} of memory available: reduce the size or scan tiles (motion_coords)"
+        )
+
+
 def _coords(name, values):
     from .plane import _coords as plane_coords
 
@@ -761,9 +783,7 @@ def motion_coords(e_values, u_values, steps=1000, transient=1000, y0=1.0, v0=0.0
     y0, v0 = check_state(y0, v0, "y0", "v0")
     if kernel not in ("fast", "plain"):
         raise ValueError(f"kernel must be 'fast' or 'plain', got {kernel!r}")
-    from .plane import _check_memory
-
-    _check_memory(es.size * 3, us.size * 3)  # 76 bytes per pixel, ~9x the sliding scan's
+    _check_memory(es.size * us.size)
     out = np.empty((us.size, es.size, _NF))
     if kernel == "fast":
         _motion_fast(es, us, y0, v0, transient, steps, _chunking(es.size * us.size), _CHUNK, out)
