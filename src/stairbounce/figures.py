@@ -617,8 +617,8 @@ def _motion_plane(s: Settings, fields):
     ds = _motion(s, e, u, n_e, n_u)
     sliding = _scan(s, e, u, n_e, n_u)
     fig, axes = _subplots(1, len(fields), figsize=(9 * len(fields), 6.5), squeeze=False)
-    for ax, field in zip(axes[0], fields):
-        plot_motion(ds, field=field, ax=ax, sliding=sliding)
+    for ax, name in zip(axes[0], fields):
+        plot_motion(ds, field=name, ax=ax, sliding=sliding)
     fig.tight_layout()
     return ds, fig, {"e": e, "u": u, "size": [n_e, n_u], "steps": MOTION_STEPS,
                      "transient": MOTION_TRANSIENT}

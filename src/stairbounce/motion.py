@@ -102,7 +102,6 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 import xarray as xr
 from numba import njit, prange
