@@ -482,3 +482,13 @@ def test_the_guide_page_examples_run():
 def test_motion_scan_refuses_what_does_not_fit_in_memory():
     with pytest.raises(ValueError, match="reduce the size or scan tiles"):
         motion_scan((0.0, 1.0, 10**6), (0.0, 1.5, 10**6))
+
+
+def test_motion_scan_round_trips_through_zarr_and_netcdf(grid_scan, tmp_path):
+    # plane.save / plane.load write any dataset atomically; tiles of a motion
+    # scan can go to a store the same way
+    from stairbounce.plane import load, save
+
+    for name in ("m.zarr", "m.nc"):
+        save(grid_scan, tmp_path / name)
+        assert _same(load(tmp_path / name), grid_scan)
