@@ -492,3 +492,18 @@ def test_motion_scan_round_trips_through_zarr_and_netcdf(grid_scan, tmp_path):
     for name in ("m.zarr", "m.nc"):
         save(grid_scan, tmp_path / name)
         assert _same(load(tmp_path / name), grid_scan)
+
+
+@pytest.mark.parametrize("transient, steps", [(0, 3), (7, 101), (150, 2)])
+def test_fast_and_plain_agree_on_random_coordinates_with_many_impacts(transient, steps):
+    # e near 1 and small u: steps with many impacts (the closed form past 8),
+    # grazing-prone slow balls, odd lengths and no transient
+    rng = np.random.default_rng(transient + steps)
+    es = np.concatenate([rng.uniform(0.9, 0.999, 40), rng.uniform(0.0, 1.0, 40)])
+    us = np.concatenate([rng.uniform(0.01, 0.1, 20), rng.uniform(0.05, 3.0, 20)])
+    a = motion_coords(es, us, steps=steps, transient=transient)
+    b = motion_coords(es, us, steps=steps, transient=transient, kernel="plain")
+    assert _same(a, b)
+    for i, j in [(0, 0), (5, 3), (25, 60), (39, 79)]:
+        r = motion(es[j], us[i], steps=steps, transient=transient)
+        assert float(a.k_mean.values[i, j]) == r["k_mean"] or r["slides"]
