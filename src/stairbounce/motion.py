@@ -428,6 +428,7 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
     TS = np.empty(L)
     INV = np.empty(L)
     SC = np.zeros(L, np.int64)
+    LAST = np.zeros(L, np.int64)
     CLOSED = np.zeros(L, np.int64)
 
     nxt = start
@@ -487,18 +488,31 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
             nclosed = 0
             while nmore > 0:
                 nmore = 0
+                # count one more impact where it happens (two short loops
+                # vectorise better than one)
                 for l in range(L):
                     m = MORE[l]
-                    y = Y[l]
-                    v = V[l]
                     T = TT[l]
                     t = TS[l] + 2.0 * WW[l] if m else TS[l]
                     w = WW[l] * E[l] if m else WW[l]
                     k = K[l] + m
                     closed = m & (k >= _COUNTED_IMPACTS)
                     more = m & (1 - closed) & (t + 2.0 * w <= T)
-                    last = m & (1 - closed) & (1 - more)
-                    d = T - t
+                    LAST[l] = m & (1 - closed) & (1 - more)
+                    TS[l] = t
+                    WW[l] = w
+                    K[l] = k
+                    CLOSED[l] = CLOSED[l] | closed
+                    MORE[l] = more
+                    nmore += more
+                    nclosed += closed
+                # lanes whose last impact this was: the image and the tangent map
+                for l in range(L):
+                    last = LAST[l]
+                    v = V[l]
+                    t = TS[l]
+                    w = WW[l]
+                    d = TT[l] - t
                     yb = -0.5 * d * d + w * d + 1.0
                     vb = w - d
                     inv = INV[l]
@@ -511,13 +525,6 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
                     VN[l] = vb if last else VN[l]
                     AN[l] = (j11 * c - vb * b) if last else AN[l]
                     BN[l] = (j21 * c + b) if last else BN[l]
-                    TS[l] = t
-                    WW[l] = w
-                    K[l] = k
-                    CLOSED[l] = CLOSED[l] | closed
-                    MORE[l] = more
-                    nmore += more
-                    nclosed += closed
             if nclosed > 0:
                 for l in range(L):
                     if CLOSED[l]:
@@ -533,10 +540,10 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
                         AN[l] = na
                         BN[l] = nb
                         WW[l] = w
-        # commit, branch-free in two loops (floats, then integers) so that
-        # LLVM vectorises both; count lanes with an event
+        # commit, branch-free, in short loops (rescaled tangent vector,
+        # accumulators, state, integers): each of them vectorises, where one
+        # loop over all these arrays did not (measured x1.6 on the whole kernel)
         for l in range(L):
-            kept = (N[l] >= transient) & (K[l] > 0)
             a = AN[l]
             b = BN[l]
             aa = abs(a)
@@ -547,10 +554,13 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
             A[l] = a * f
             B[l] = b * f
             SC[l] = _SCALE if big else (-_SCALE if small else 0)
+        for l in range(L):
+            kept = (N[l] >= transient) & (K[l] > 0)
             s = SS[l]
             w = WW[l]
             DISS[l] += 0.5 * (s * s - w * w) if kept else 0.0
             KICK[l] += R[l] * (s - w) if kept else 0.0
+        for l in range(L):
             Y[l] = YN[l]
             V[l] = VN[l]
         nev = 0
