@@ -5,15 +5,9 @@ from __future__ import annotations
 import pytest
 from PIL import Image
 
-from stairbounce.cli import main
 from stairbounce.motion import motion
 
-
-def run(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(args)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
+from .test_cli_model import run
 
 
 def test_motion_prints_k_and_exponents_of_the_library(capsys):

@@ -51,15 +51,9 @@ def test_point_details_of_a_non_sliding_point_has_k_exponents_and_section():
 def test_explorer_colours_by_k_and_shows_the_motion_on_tap():
     from stairbounce.explorer.app import Explorer
 
-    class Inline:
-        def __init__(self):
-            self.calls = []
+    from .test_explorer import InlineExecutor
 
-        def submit(self, fn, *args):
-            self.calls.append(fn.__name__)
-            fn(*args)
-
-    ex = Inline()
+    ex = InlineExecutor()
     app = Explorer(VIEW, executor=ex)
     app.start()
     app.color.value = "k_mean"  # needs the motion fields: recomputed
