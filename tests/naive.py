@@ -102,3 +102,39 @@ def border_pixels(mask):
                     if 0 <= a < h and 0 <= b < w and not mask[a][b]:
                         out[i][j] = True
     return out
+
+
+def impacts_in_window(e, u, y0, v0, start, stop, max_events=10_000_000):
+    """Impacts with horizontal position in ``[start, stop)`` steps, event by event.
+
+    No Poincare map: the ball is followed from impact to impact in the plane.
+    It leaves the edge ``x = 0`` at height ``y0`` above the floor of step 0
+    (floor of step j at height -j) with vertical velocity ``v0`` and
+    horizontal speed ``u``.  From a take-off at ``(x, h)`` with vertical
+    velocity ``w`` the landing step is found by trying the steps in turn: it
+    lands on step j at ``t = w + sqrt(w^2 + 2 (h + j))`` if ``x + u t < j + 1``.
+    Returns the impact count, or None if the impacts accumulate (bounce speed
+    below ``REST`` times the impact speed) before ``stop``.
+    """
+    x, h, w = 0.0, y0, v0
+    count = 0
+    for _ in range(max_events):
+        j = math.floor(x) if x > 0.0 else 0
+        if x >= j + 1.0:  # pragma: no cover - floor guards this
+            j += 1
+        while True:
+            t = w + math.sqrt(w * w + 2.0 * (h + j))
+            if x + u * t < j + 1.0:
+                break
+            j += 1
+        speed = t - w  # |vertical velocity| at the landing
+        x += u * t
+        if x >= stop:
+            return count
+        if x >= start:
+            count += 1
+        h = -float(j)
+        w = e * speed
+        if w <= REST * speed:
+            return None
+    return None  # pragma: no cover

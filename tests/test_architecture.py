@@ -5,7 +5,8 @@ import sys
 
 import pytest
 
-CORE = ["model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas", "atlas_boxes"]
+CORE = ["model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas", "atlas_boxes",
+        "motion"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

@@ -48,6 +48,7 @@ from .model import (
     slides,
     tongue,
 )
+from .motion import k_mean_bound, motion_scan, one_impact_family
 from .orbits import orbit_density, orbit_diagram
 from .plane import (
     estimate_bytes,
@@ -101,12 +102,15 @@ __all__ = [
     "impact_number",
     "impact_times",
     "iterate",
+    "k_mean_bound",
     "label_boundary",
     "linear_region",
     "load",
+    "motion_scan",
     "no_sliding_bound",
     "no_sliding_curve",
     "normalized_speed",
+    "one_impact_family",
     "orbit_density",
     "orbit_diagram",
     "parse_word",

@@ -999,3 +999,136 @@ def default_cache_dir() -> Path:
     """``$XDG_CACHE_HOME/stairbounce`` (``~/.cache/stairbounce``)."""
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return Path(base) / "stairbounce"
+
+
+# --------------------------------------------------------------------------- #
+# issue 13: the non-sliding three quarters of the plane                        #
+# --------------------------------------------------------------------------- #
+
+# orbit lengths of the motion figures (the benchmark's: 1000 + 1000 steps)
+MOTION_STEPS = 1000
+MOTION_TRANSIENT = 1000
+# a finite-N lambda_1 of a quasi-periodic orbit is a log-norm ratio over N:
+# "compatible with 0" allows that many e-folds on top of the halves' difference
+ZERO_EFOLDS = 5.0
+
+
+def _motion(settings, e, u, n_e, n_u):
+    from .motion import motion_scan
+
+    inputs = {"e": list(e), "u": list(u), "n_e": n_e, "n_u": n_u,
+              "steps": MOTION_STEPS, "transient": MOTION_TRANSIENT}
+    return _cached(
+        settings, "motion", inputs,
+        lambda: motion_scan(e=(e[0], e[1], n_e), u=(u[0], u[1], n_u),
+                            steps=MOTION_STEPS, transient=MOTION_TRANSIENT),
+    )
+
+
+def _motion_plane(s: Settings, fields):
+    from .plot.motion import plot_motion
+
+    e, u = (0.0, 1.0), (0.0, 1.5)
+    n_e, n_u = s.px(500), s.px(350)
+    ds = _motion(s, e, u, n_e, n_u)
+    sliding = _scan(s, e, u, n_e, n_u)
+    fig, axes = _subplots(1, len(fields), figsize=(9 * len(fields), 6.5), squeeze=False)
+    for ax, name in zip(axes[0], fields):
+        plot_motion(ds, field=name, ax=ax, sliding=sliding)
+    fig.tight_layout()
+    return ds, fig, {"e": e, "u": u, "size": [n_e, n_u], "steps": MOTION_STEPS,
+                     "transient": MOTION_TRANSIENT}
+
+
+def motion_k(s: Settings) -> Result:
+    """<k> (impacts per step) over the paper's plane, families and Cor. 2.1 overlaid."""
+    from .motion import k_mean_bound, speed_spread
+
+    ds, fig, params = _motion_plane(s, ("k_mean", "speed_spread"))
+    ok = ds.slide_step.values == 0
+    k = ds.k_mean.values[ok]
+    d = ds.dissipation.values[ok]
+    E, U = np.meshgrid(ds.e.values, ds.u.values)
+    ratio = k / k_mean_bound(E[ok], U[ok])
+    spread = speed_spread(k, ds.impulse.values[ok], ds.dissipation.values[ok], E[ok])
+    near = np.abs(d - 1) < 0.05
+    rows = [
+        Row("non-sliding pixels", "three quarters of Fig. 4 are white",
+            f"{100 * ok.mean():.1f}% of pixels: the orbit of (1, 0) does not slide within "
+            f"{MOTION_TRANSIENT + MOTION_STEPS} steps"),
+        Row("<k> over them", "-", f"{k.min():.3g} .. {k.max():.3g} impacts per step, median {np.median(k):.3g}"),
+        Row("<k> against its bound (1-e)/(2(1+e)u^2)", "-",
+            f"<k>/<k>_0: median {np.median(ratio):.4f}, 90th percentile {np.percentile(ratio, 90):.3f}, "
+            f"max {ratio.max():.1f}; below 1 - 1% at {100 * np.mean(ratio < 0.99):.2f}% "
+            "(finite orbits; the finite-N bound holds exactly, tests/test_motion.py)"),
+        Row("spread of the impact speeds Var/mean^2", "-",
+            f"median {np.median(spread):.2e}, 90th percentile {np.percentile(spread, 90):.2e}; "
+            f"below 1e-3 at {100 * np.mean(spread < 1e-3):.1f}% of pixels (0 on the one-impact families)"),
+        Row("energy balance", "-", "mean energy lost at impacts per step within 5% of the height "
+            f"descended (1) at {100 * near.mean():.1f}% of pixels; the others (median e "
+            f"{np.median(E[ok][~near]) if (~near).any() else float('nan'):.3f}) are still gaining "
+            "energy after the transient", bool(near.mean() > 0.9)),
+    ]
+    return Result("motion_k", "Non-sliding motion: impacts per step <k>",
+                  [_save(fig, s, "motion_k")], rows, params)
+
+
+def motion_lyap(s: Settings) -> Result:
+    """lambda_1 over the paper's plane, and the report row "chaotic or just complicated?"."""
+    from .motion import motion
+
+    ds, fig, params = _motion_plane(s, ("lyap1",))
+    ok = ds.slide_step.values == 0
+    l1, err = ds.lyap1.values[ok], ds.lyap1_err.values[ok]
+    N = MOTION_STEPS
+    zero = np.abs(l1) <= err + ZERO_EFOLDS / N
+    i = int(np.argmax(l1))
+    E, U = np.meshgrid(ds.e.values, ds.u.values)
+    e_max, u_max = float(E[ok][i]), float(U[ok][i])
+    longer = motion(e_max, u_max, steps=100 * N, transient=MOTION_TRANSIENT)
+    rows = [
+        Row("chaotic or just complicated?",
+            "Gruiz, Meszena, Tel (2017): quasi-periodic, non-chaotic; the paper: -",
+            f"largest lambda_1 over {ok.sum()} non-sliding pixels: {l1[i]:.2e} "
+            f"(halves differ by {err[i]:.1e}) at (e, u) = ({e_max:.4f}, {u_max:.4f}); there with "
+            f"{100 * N} kept steps: {longer['lyap1']:.1e} (N lambda_1 = {N * l1[i]:.1f} -> "
+            f"{100 * N * longer['lyap1']:.1f}: bounded, lambda_1 -> 0 like 1/N). "
+            f"|lambda_1| <= (halves' difference) + {ZERO_EFOLDS:g}/N at {100 * zero.mean():.2f}% "
+            "of them. Just complicated: J carries (v, -1), so lambda_1 = 0 exactly "
+            "(stairbounce.motion)", bool(zero.mean() > 0.99)),
+        Row("lambda_1 range", "-", f"{l1.min():.2e} .. {l1.max():.2e} per step over N = {N}"),
+    ]
+    params.update(zero_criterion=f"|lambda_1| <= lyap1_err + {ZERO_EFOLDS:g}/N")
+    return Result("motion_lyap", "Non-sliding motion: the largest Lyapunov exponent",
+                  [_save(fig, s, "motion_lyap")], rows, params)
+
+
+MOTION_CUT_U = 0.9
+
+
+def motion_cut(s: Settings) -> Result:
+    """<k> against e at u = 0.9: how complicated the dependence on e is."""
+    from .motion import motion_coords
+    from .plane import pixel_centres
+    from .plot.motion import plot_motion_cut
+
+    n = s.px(4000)
+    es = pixel_centres(0.0, 1.0, n)
+    ds = motion_coords(es, [MOTION_CUT_U], steps=MOTION_STEPS, transient=MOTION_TRANSIENT)
+    fig, axes = _subplots(3, 1, figsize=(9, 8), sharex=True, height_ratios=(3, 2, 1))
+    plot_motion_cut(ds, axes=axes)
+    fig.tight_layout()
+    ok = ds.slide_step.values[0] == 0
+    k = ds.k_mean.values[0][ok]
+    jumps = np.abs(np.diff(k))
+    rows = [
+        Row(f"<k> along u = {MOTION_CUT_U}", "Gruiz et al.: a very complicated dependence on e",
+            f"{ok.sum()} non-sliding values of e of {n}; {len(np.unique(k))} distinct <k>; "
+            f"largest change between neighbouring e: {jumps.max():.3f}" if k.size > 1 else "-"),
+    ]
+    return Result("motion_cut", f"<k> against e at u = {MOTION_CUT_U}",
+                  [_save(fig, s, "motion_cut")], rows,
+                  {"u": MOTION_CUT_U, "n_e": n, "steps": MOTION_STEPS, "transient": MOTION_TRANSIENT})
+
+
+FIGURES.update({"motion_k": motion_k, "motion_lyap": motion_lyap, "motion_cut": motion_cut})

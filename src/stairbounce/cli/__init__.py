@@ -17,6 +17,7 @@ from . import orbits_commands  # noqa: F401  (registers orbit-diagram)
 from . import scan_commands  # noqa: F401  (registers scan)
 from . import explore_commands  # noqa: F401  (registers explore)
 from . import atlas_commands  # noqa: F401  (registers render; scan --tile calls into it)
+from . import motion_commands  # noqa: F401  (registers motion; scan --field k_mean calls into it)
 from ._app import CLIError, app
 
 __all__ = ["app", "main"]

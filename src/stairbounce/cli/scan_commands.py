@@ -16,8 +16,9 @@ from ._app import (
     progress_bar,
     tile_for_workers,
 )
+from .motion_commands import MOTION_FIELD_NAMES, motion_scan_figure
 
-FIELD_NAMES = ("word_length", "period", "impacts", "jumps", "status")
+FIELD_NAMES = ("word_length", "period", "impacts", "jumps", "status") + MOTION_FIELD_NAMES
 OVERLAY_NAMES = ("tongues", "bound")
 
 
@@ -37,7 +38,8 @@ def scan_(
     v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
     out: Path = typer.Option(None, "--out", help="Also save the data: .zarr (chunked) or .nc."),
     png: Path = typer.Option(Path("scan.png"), "--png", help="Figure to write (.png, .pdf or .svg)."),
-    field: str = typer.Option("word_length", "--field", help="Colour by: " + ", ".join(FIELD_NAMES) + "."),
+    field: str = typer.Option("word_length", "--field", help="Colour by: " + ", ".join(FIELD_NAMES) + " (the last "
+                              "four: non-sliding motion, max_iter transient + max_iter kept steps, stairbounce.motion)."),
     overlay: list[str] = typer.Option([], "--overlay", help="Curves to draw, comma-separated or repeated: tongues (Theorem 3.1), bound (Corollary 2.1)."),
     dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output."),
     tile: int = typer.Option(None, "--tile", help="Tiled, resumable scan into --out (.zarr), TILE x TILE pixels a tile."),
@@ -74,6 +76,13 @@ def scan_(
     if tile is None and scheduler is None and workers is None:
         sc._check_memory(n_e, n_u)  # before the progress bar draws anything
 
+    if field in MOTION_FIELD_NAMES:
+        if tile is not None or scheduler is not None or workers is not None:
+            raise CLIError(f"--field {field} is not available for tiled scans; scan tiles with "
+                           "stairbounce.motion.motion_coords")
+        typer.echo(motion_scan_figure((e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0,
+                                      field, png, dpi, out, overlays))
+        return
     if tile is not None or scheduler is not None or workers is not None:
         if out is None:
             raise CLIError("a tiled scan (--tile, --scheduler, --workers) needs --out STORE.zarr")

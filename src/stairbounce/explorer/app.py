@@ -47,6 +47,7 @@ from .view import (
     color_key,
     compute_view,
     format_window,
+    has_color,
     orbit_along_u,
     overlay_curves,
     parse_query,
@@ -70,6 +71,8 @@ _COLOR_OPTIONS = {
     "impacts per period": "impacts",
     "non-zero letters (jumps)": "jumps",
     "status (slides or not)": "status",
+    "<k>, impacts per step (non-sliding motion)": "k_mean",
+    "lambda_1 (non-sliding motion)": "lyap1",
 }
 _OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bound, Cor. 2.1": "no_sliding"}
 
@@ -115,7 +118,8 @@ class Explorer:
                 width=320,
             ),
             pn.Column(pn.pane.Bokeh(self.map_fig), self.status),
-            pn.Column(self.point_pane, pn.pane.Bokeh(self.traj_fig), pn.pane.Bokeh(self.orbit_fig)),
+            pn.Column(self.point_pane, pn.pane.Bokeh(self.traj_fig), pn.pane.Bokeh(self.orbit_fig),
+                      pn.pane.Bokeh(self.section_fig)),
             flex_wrap="wrap",
             align_items="flex-start",
             gap="12px",
@@ -165,7 +169,7 @@ class Explorer:
         self.mapper = LinearColorMapper(palette=list(key.colors), low=-0.5, high=len(key.colors) - 0.5)
         self.colorbar = ColorBar(
             color_mapper=self.mapper, title=key.title, width=14,
-            ticker=FixedTicker(ticks=list(range(len(key.colors)))),
+            ticker=FixedTicker(ticks=key.ticks),
             major_label_overrides={i: s for i, s in enumerate(key.labels)},
         )
         fig.add_layout(self.colorbar, "right")
@@ -204,6 +208,14 @@ class Explorer:
                                  line_width=2, visible=False)
         o.add_layout(self.orbit_marker)
         self.orbit_fig = o
+
+        p = figure(height=300, width=560, tools="pan,wheel_zoom,box_zoom,reset", output_backend="webgl",
+                   title="Poincare section of a non-sliding point: tap the map",
+                   x_axis_label="y at the step edges", y_axis_label="v at the step edges")
+        p.toolbar.logo = None
+        self.section_src = ColumnDataSource(dict(x=[], y=[]))
+        p.scatter("x", "y", source=self.section_src, size=2, color="#1f4e79", alpha=0.5)
+        self.section_fig = p
 
     def _build_widgets(self, messages):
         v = self.view
@@ -336,12 +348,14 @@ class Explorer:
         new = replace(self.view, color=self.color.value)
         key = color_key(new.color)
         self.mapper.update(palette=list(key.colors), low=-0.5, high=len(key.colors) - 0.5)
-        self.colorbar.update(title=key.title, ticker=FixedTicker(ticks=list(range(len(key.colors)))),
+        self.colorbar.update(title=key.title, ticker=FixedTicker(ticks=key.ticks),
                              major_label_overrides={i: s for i, s in enumerate(key.labels)})
         self.view = new
-        if self.ds is not None and self.shown is not None:
+        if self.ds is not None and self.shown is not None and has_color(self.ds, new.color):
             self.shown = replace(self.shown, color=new.color)
             self.img_src.patch({"image": [(0, shade(self.ds, new.color))]})
+        elif self.ds is not None:
+            self._request(new)  # the motion fields are computed on demand
         self._sync_url()
 
     def _on_overlays(self, _event):
@@ -518,6 +532,20 @@ class Explorer:
                     ("non-zero letters", str(w.jumps))]
             title = f"trajectory from (1, 0), {d['steps']} steps (period {w.period})"
         rows = [("e", f'<span class="sb-e">{e!r}</span>'), ("u", f'<span class="sb-u">{u!r}</span>')] + rows
+        m = d.get("motion")
+        if m is not None and not m["slides"]:
+            rows += [("&lt;k&gt;", f'<span class="sb-k">{m["k_mean"]:.6g}</span> impacts per step '
+                                   f'(halves differ by {m["k_err"]:.2g})'),
+                     ("mean jump", f'{m["jump_mean"]:.6g} steps per landing'),
+                     ("&lambda;<sub>1</sub>", f'{m["lyap1"]:+.2e} &plusmn; {m["lyap1_err"]:.1e} (0 exactly)'),
+                     ("&lambda;<sub>2</sub>", f'{m["lyap2"]:+.4e} = 2&lt;k&gt; log e')]
+        elif m is not None:
+            rows += [("motion", f'slides on step {m["slide_step"]} of 2 max_iter')]
+        sec = d.get("section")
+        self.section_src.data = dict(x=sec[0], y=sec[1]) if sec is not None else dict(x=[], y=[])
+        self.section_fig.title.text = (f"Poincare section at e = {e:.6g}, u = {u:.6g}: last "
+                                       f"{len(sec[0])} iterates from (1, 0)" if sec is not None else
+                                       "Poincare section: none (the orbit slides)")
         self.point_pane.object = "<table>" + "".join(
             f"<tr><td><b>{k}</b></td><td>{v}</td></tr>" for k, v in rows) + "</table>"
         steps = d["steps"]

@@ -66,12 +66,13 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     ax.set_ylabel("u (horizontal speed)")
     ax.set_title(
         f"e in [{view.e_lo:.10g}, {view.e_hi:.10g}], u in [{view.u_lo:.10g}, {view.u_hi:.10g}]\n"
-        f"{key.title}, max_iter {view.max_iter} (white: no sliding found)",
+        f"{key.title}, max_iter {view.max_iter} "
+        + ("(grey: the orbit slides)" if key.labels[0] == "slides" else "(white: no sliding found)"),
         fontsize="small",
     )
     cax = fig.add_axes([(w + 1.2) / fw, 0.75 / fh, 0.2 / fw, h / fh])
-    cb = fig.colorbar(im, cax=cax, ticks=np.arange(n))
-    cb.ax.set_yticklabels(list(key.labels), fontsize="small")
+    cb = fig.colorbar(im, cax=cax, ticks=key.ticks)
+    cb.ax.set_yticklabels([key.labels[i] for i in key.ticks], fontsize="small")
     cb.set_label(key.title, fontsize="small")
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)

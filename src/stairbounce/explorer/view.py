@@ -34,6 +34,8 @@ from ..symbolic import sliding_word
 from ..trajectory import trajectory
 
 __all__ = [
+    "MOTION_COLOR_VARS",
+    "has_color",
     "View",
     "DEFAULT_VIEW",
     "COLOR_VARS",
@@ -59,8 +61,13 @@ __all__ = [
     "pixel_of",
 ]
 
-COLOR_VARS = ("word_length", "period", "impacts", "jumps", "status")
-"""Data variables of :func:`stairbounce.plane.scan` that can colour the map."""
+MOTION_COLOR_VARS = ("k_mean", "lyap1")
+"""Fields of :func:`stairbounce.motion.motion_coords` that can colour the map
+(issue 13): computed with ``max_iter`` transient and ``max_iter`` kept steps."""
+
+COLOR_VARS = ("word_length", "period", "impacts", "jumps", "status") + MOTION_COLOR_VARS
+"""Variables that can colour the map: those of :func:`stairbounce.plane.scan`,
+then :data:`MOTION_COLOR_VARS`."""
 
 OVERLAYS = ("tongues", "no_sliding")
 """Curves drawn over the map: the (n, 0^inf) tongues of Theorem 3.1 and the
@@ -394,11 +401,35 @@ def compute_view(view: View, cancelled=None, progress=None) -> xr.Dataset:
         if progress is not None:
             progress(min(view.height, start + rows), view.height)
     ds = parts[0] if len(parts) == 1 else xr.concat(parts, dim="u", combine_attrs="override")
+    if view.color in MOTION_COLOR_VARS:
+        ds = _with_motion(ds, view, es, us, cancelled)
     ds.attrs.update(
         e_min=view.e_lo, e_max=view.e_hi, n_e=view.width,
         u_min=view.u_lo, u_max=view.u_hi, n_u=view.height,
     )
     return ds
+
+
+def _with_motion(ds, view, es, us, cancelled):
+    """``ds`` with the fields of :func:`stairbounce.motion.motion_coords`
+    (``max_iter`` transient + ``max_iter`` kept steps), in bands of rows."""
+    from ..motion import motion_coords
+
+    rows = max(1, min(view.height, _BAND_WORK // max(1, 2 * view.width * view.max_iter)))
+    parts = []
+    for start in range(0, view.height, rows):
+        if cancelled is not None and cancelled():
+            raise Cancelled
+        parts.append(motion_coords(es, us[start : start + rows], steps=max(2, view.max_iter),
+                                   transient=view.max_iter))
+    m = parts[0] if len(parts) == 1 else xr.concat(parts, dim="u", combine_attrs="override")
+    return ds.assign({k: m[k] for k in m.data_vars}).assign_attrs(motion_steps=m.attrs["steps"])
+
+
+def has_color(ds: xr.Dataset, var: str) -> bool:
+    """Whether ``ds`` holds what colouring by ``var`` needs (a motion variable
+    needs a view computed with it, :func:`compute_view`)."""
+    return var in ds or var == "status"
 
 
 def pixel_of(view: View, e: float, u: float) -> tuple[int, int] | None:
@@ -417,7 +448,19 @@ def pixel_of(view: View, e: float, u: float) -> tuple[int, int] | None:
 
 # One colour scale for the explorer and the figures (Figs. 4 and 5): the
 # classes and their colours live with the matplotlib renderer of the plane.
-from ..plot.plane import _CLASS_STARTS, _LEAST, NO_SLIDING_COLOR, ColorKey, color_key  # noqa: E402
+from ..plot.plane import _CLASS_STARTS, _LEAST, NO_SLIDING_COLOR, ColorKey  # noqa: E402
+from ..plot.plane import color_key as _sliding_color_key  # noqa: E402
+
+
+def color_key(var: str) -> ColorKey:
+    """color_key(var) -> ColorKey: the classes and colours used for ``var``: the
+    figures' discrete scale for the sliding variables, a continuous key for the
+    motion variables."""
+    if var in MOTION_COLOR_VARS:
+        return _motion_key(var)
+    if var != "status" and var not in _LEAST:
+        raise ValueError(f"color must be one of {', '.join(COLOR_VARS)}, got {var!r}")
+    return _sliding_color_key(var)
 
 
 def _rgba32(hex_colors):
@@ -430,8 +473,38 @@ def _rgba32(hex_colors):
     return out
 
 
+# Continuous keys of the motion variables: class 0 is "the orbit slides"
+# (grey), then _NBINS colours over a fixed range: log10 <k> in [-2.5, 1.5];
+# N lambda_1 in [-5, 5] (lambda_1 = 0 exactly, its finite-N estimate is O(1/N)).
+_NBINS = 64
+SLIDES_COLOR = "#9a9a9a"
+_MOTION_RANGE = {"k_mean": (-2.5, 1.5), "lyap1": (-5.0, 5.0)}
+
+
+def _motion_key(var):
+    from matplotlib import colormaps
+    from matplotlib.colors import to_hex
+
+    cmap = colormaps["viridis" if var == "k_mean" else "RdBu_r"]
+    colors = (SLIDES_COLOR,) + tuple(to_hex(cmap(x)) for x in np.linspace(0, 1, _NBINS))
+    lo, hi = _MOTION_RANGE[var]
+    labels = ["slides"] + [""] * _NBINS
+    marks = {"k_mean": {-2: "0.01", -1: "0.1", 0: "1", 1: "10"},
+             "lyap1": {-5: "-5/N", -2.5: "-2.5/N", 0: "0", 2.5: "+2.5/N", 5: "+5/N"}}[var]
+    for x, text in marks.items():
+        labels[1 + min(_NBINS - 1, int((x - lo) / (hi - lo) * _NBINS))] = text
+    title = "<k>, impacts per step" if var == "k_mean" else "lambda_1 (N = max_iter kept steps)"
+    return ColorKey(var, title, tuple(labels), colors)
+
+
 def classes(ds: xr.Dataset, var: str) -> np.ndarray:
     """Class index of every pixel under :func:`color_key` (-1: no sliding)."""
+    if var in MOTION_COLOR_VARS:
+        lo, hi = _MOTION_RANGE[var]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            x = np.log10(ds[var].values) if var == "k_mean" else ds[var].values * ds.attrs["motion_steps"]
+        idx = 1 + np.clip(np.floor((x - lo) / (hi - lo) * _NBINS), 0, _NBINS - 1)
+        return np.where((ds["slide_step"].values > 0) | ~np.isfinite(x), 0, idx).astype(np.int64)
     sliding = ds["status"].values == 0
     if var == "status":
         return np.where(sliding, 0, 1)
@@ -500,13 +573,17 @@ def point_details(e: float, u: float, max_iter: int, steps: int | None = None) -
 
     What a tap on ``(e, u)`` shows: the word of the periodic sliding solution
     through (1, 0) (:func:`stairbounce.sliding_word`, ``None`` when it does
-    not slide within ``max_iter`` steps) and the exact trajectory from (1, 0)
+    not slide within ``max_iter`` steps), for a point that does not slide its
+    motion (:func:`stairbounce.motion.motion`, ``max_iter`` transient and kept
+    steps: <k>, exponents) and last Poincare iterates (``"motion"``,
+    ``"section"``; ``None`` otherwise), and the exact trajectory from (1, 0)
     over ``steps`` steps (default: one period and two more steps, 4 to 16
     steps; 12 when it does not slide) sampled for drawing, with its impacts,
     accumulation points and slides.
     """
     e, u = check_e(e), check_u(u)
     w = sliding_word(e, u, max_steps=max_iter)
+    mo, section = _point_motion(e, u, max_iter) if w is None else (None, None)
     if steps is None:
         steps = 12 if w is None else int(min(16, max(4, w.period + 2)))
     traj = trajectory(e, u, 1.0, 0.0, steps)
@@ -525,7 +602,28 @@ def point_details(e: float, u: float, max_iter: int, steps: int | None = None) -
             np.array([a.y for a in traj.accumulations]),
         ),
         "slides": [(s.x_start, s.x_end, s.y) for s in traj.slides],
+        "motion": mo,
+        "section": section,
     }
+
+
+# Points of the Poincare section sent to the page after a tap
+_SECTION_POINTS = 2000
+
+
+def _point_motion(e, u, max_iter):
+    """:func:`stairbounce.motion.motion` of a non-sliding point (``max_iter``
+    transient and kept steps), and the last kept Poincare iterates ``(y, v)``."""
+    from ..model import iterate
+    from ..motion import motion
+
+    steps = max(2, max_iter)
+    r = motion(e, u, steps=steps, transient=max_iter)
+    if r["slides"]:
+        return r, None
+    ys, vs, _ = iterate(1.0, 0.0, e, u, max_iter + steps)
+    keep = min(steps, _SECTION_POINTS)
+    return r, (ys[-keep:], vs[-keep:])
 
 
 def orbit_along_u(e: float, u_lo: float, u_hi: float, n: int = 300, transient: int = 2000,

@@ -49,6 +49,11 @@ class ColorKey:
     labels: tuple[str, ...]
     colors: tuple[str, ...]
 
+    @property
+    def ticks(self) -> list[int]:
+        """Indices of the labelled colours (a continuous key labels a few)."""
+        return [i for i, t in enumerate(self.labels) if t]
+
 
 def _palette(n):
     """Black, then ``n - 1`` well separated colours of the turbo map."""
