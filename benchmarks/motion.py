@@ -21,7 +21,7 @@ import time
 import numba
 import numpy as np
 
-from stairbounce.motion import motion_scan
+from stairbounce.nonsliding import motion_scan
 from stairbounce.plane import scan
 
 

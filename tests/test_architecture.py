@@ -6,7 +6,7 @@ import sys
 import pytest
 
 CORE = ["model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas", "atlas_boxes",
-        "motion"]
+        "nonsliding"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from PIL import Image
 
-from stairbounce.motion import motion
+from stairbounce.nonsliding import motion
 
 from .test_cli_model import run
 

@@ -11,7 +11,7 @@ import pytest
 
 from stairbounce import model
 from stairbounce.explorer import view as V
-from stairbounce.motion import motion, motion_coords
+from stairbounce.nonsliding import motion, motion_coords
 from stairbounce.plane import pixel_centres
 
 VIEW = V.View(0.0, 1.0, 0.0, 1.5, 40, 30, max_iter=200)

@@ -48,7 +48,18 @@ from .model import (
     slides,
     tongue,
 )
-from .motion import k_mean_bound, motion_scan, one_impact_family
+from .nonsliding import (
+    MOTION_FIELDS,
+    k_mean_bound,
+    lyapunov_exponents,
+    motion,
+    motion_coords,
+    motion_scan,
+    one_impact_family,
+    one_impact_state,
+    speed_spread,
+    step_jacobian,
+)
 from .orbits import orbit_density, orbit_diagram
 from .plane import (
     estimate_bytes,
@@ -82,6 +93,7 @@ __all__ = [
     "BoxDimension",
     "Flight",
     "Impact",
+    "MOTION_FIELDS",
     "PerimeterDimension",
     "SLIDING",
     "Slide",
@@ -106,11 +118,15 @@ __all__ = [
     "label_boundary",
     "linear_region",
     "load",
+    "lyapunov_exponents",
+    "motion",
+    "motion_coords",
     "motion_scan",
     "no_sliding_bound",
     "no_sliding_curve",
     "normalized_speed",
     "one_impact_family",
+    "one_impact_state",
     "orbit_density",
     "orbit_diagram",
     "parse_word",
@@ -129,6 +145,8 @@ __all__ = [
     "sliding_classifier",
     "sliding_word",
     "slope_fit",
+    "speed_spread",
+    "step_jacobian",
     "store_box_counts",
     "store_box_dimension",
     "store_info",

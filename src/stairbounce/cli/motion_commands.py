@@ -20,7 +20,7 @@ def motion(
     v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
 ):
     """Whether the orbit slides; if not, <k> (impacts per step), the mean jump and the Lyapunov exponents."""
-    from ..motion import motion as run
+    from ..nonsliding import motion as run
 
     r = run(e, u, steps=steps, transient=transient, y0=y0, v0=v0)
     typer.echo(f"e = {e:g}, u = {u:g}, from (y, v) = ({y0:g}, {v0:g}): "
@@ -32,7 +32,7 @@ def motion(
     typer.echo(f"<k>:         {r['k_mean']:.6g} impacts per step (halves differ by {r['k_err']:.2g})")
     typer.echo(f"mean jump:   {r['jump_mean']:.6g} steps per landing")
     typer.echo(f"lambda_1:    {r['lyap1']:+.3e} per step (halves differ by {r['lyap1_err']:.1e}; "
-               f"N lambda_1 = {steps * r['lyap1']:+.2f}: 0 is exact, see stairbounce.motion)")
+               f"N lambda_1 = {steps * r['lyap1']:+.2f}: 0 is exact, see stairbounce.nonsliding)")
     typer.echo(f"lambda_2:    {r['lyap2']:+.6e} per step (QR); 2 <k> log e = "
                f"{r['lyap2_identity'] + r['lyap1']:+.6e}")
     typer.echo(f"dissipation: {r['dissipation']:.6f} per step (-> 1, the height descended)")
@@ -44,7 +44,7 @@ def motion_scan_figure(e, u, max_iter, y0, v0, field, png, dpi, out=None, overla
     """``stairbounce scan --field k_mean|lyap1|...``: a motion scan with max_iter
     transient and max_iter kept steps, saved and drawn; returns the summary line."""
     from .. import plane as sc
-    from ..motion import motion_scan
+    from ..nonsliding import motion_scan
 
     if max_iter < 2:
         raise CLIError(f"--max-iter must be >= 2 for a motion field, got {max_iter}")

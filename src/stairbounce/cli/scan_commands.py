@@ -39,7 +39,7 @@ def scan_(
     out: Path = typer.Option(None, "--out", help="Also save the data: .zarr (chunked) or .nc."),
     png: Path = typer.Option(Path("scan.png"), "--png", help="Figure to write (.png, .pdf or .svg)."),
     field: str = typer.Option("word_length", "--field", help="Colour by: " + ", ".join(FIELD_NAMES) + " (the last "
-                              "four: non-sliding motion, max_iter transient + max_iter kept steps, stairbounce.motion)."),
+                              "four: non-sliding motion, max_iter transient + max_iter kept steps, stairbounce.nonsliding)."),
     overlay: list[str] = typer.Option([], "--overlay", help="Curves to draw, comma-separated or repeated: tongues (Theorem 3.1), bound (Corollary 2.1)."),
     dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output."),
     tile: int = typer.Option(None, "--tile", help="Tiled, resumable scan into --out (.zarr), TILE x TILE pixels a tile."),
@@ -79,7 +79,7 @@ def scan_(
     if field in MOTION_FIELD_NAMES:
         if tile is not None or scheduler is not None or workers is not None:
             raise CLIError(f"--field {field} is not available for tiled scans; scan tiles with "
-                           "stairbounce.motion.motion_coords")
+                           "stairbounce.nonsliding.motion_coords")
         typer.echo(motion_scan_figure((e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0,
                                       field, png, dpi, out, overlays))
         return

@@ -62,7 +62,7 @@ __all__ = [
 ]
 
 MOTION_COLOR_VARS = ("k_mean", "lyap1")
-"""Fields of :func:`stairbounce.motion.motion_coords` that can colour the map
+"""Fields of :func:`stairbounce.nonsliding.motion_coords` that can colour the map
 (issue 13): computed with ``max_iter`` transient and ``max_iter`` kept steps."""
 
 COLOR_VARS = ("word_length", "period", "impacts", "jumps", "status") + MOTION_COLOR_VARS
@@ -411,9 +411,9 @@ def compute_view(view: View, cancelled=None, progress=None) -> xr.Dataset:
 
 
 def _with_motion(ds, view, es, us, cancelled):
-    """``ds`` with the fields of :func:`stairbounce.motion.motion_coords`
+    """``ds`` with the fields of :func:`stairbounce.nonsliding.motion_coords`
     (``max_iter`` transient + ``max_iter`` kept steps), in bands of rows."""
-    from ..motion import motion_coords
+    from ..nonsliding import motion_coords
 
     rows = max(1, min(view.height, _BAND_WORK // max(1, 2 * view.width * view.max_iter)))
     parts = []
@@ -574,7 +574,7 @@ def point_details(e: float, u: float, max_iter: int, steps: int | None = None) -
     What a tap on ``(e, u)`` shows: the word of the periodic sliding solution
     through (1, 0) (:func:`stairbounce.sliding_word`, ``None`` when it does
     not slide within ``max_iter`` steps), for a point that does not slide its
-    motion (:func:`stairbounce.motion.motion`, ``max_iter`` transient and kept
+    motion (:func:`stairbounce.nonsliding.motion`, ``max_iter`` transient and kept
     steps: <k>, exponents) and last Poincare iterates (``"motion"``,
     ``"section"``; ``None`` otherwise), and the exact trajectory from (1, 0)
     over ``steps`` steps (default: one period and two more steps, 4 to 16
@@ -612,10 +612,10 @@ _SECTION_POINTS = 2000
 
 
 def _point_motion(e, u, max_iter):
-    """:func:`stairbounce.motion.motion` of a non-sliding point (``max_iter``
+    """:func:`stairbounce.nonsliding.motion` of a non-sliding point (``max_iter``
     transient and kept steps), and the last kept Poincare iterates ``(y, v)``."""
     from ..model import iterate
-    from ..motion import motion
+    from ..nonsliding import motion
 
     steps = max(2, max_iter)
     r = motion(e, u, steps=steps, transient=max_iter)

@@ -17,12 +17,14 @@ computed by                    drawn by
 ``sb.trajectory``              :func:`plot_trajectory` (Fig. 1),
                                :func:`animate_trajectory`
 ``sb.iterate``                 :func:`plot_poincare_section`
+``sb.motion_scan``             :func:`plot_motion`, :func:`plot_motion_cut`
 (the tongues, Thm. 3.1)        :func:`plot_tongues` (Fig. 2)
 =============================  ==============================================
 """
 
 from .._compat import register_alias as _register_alias
 from .fractal import plot_border, plot_box_counts, plot_box_dimension, plot_uncertainty
+from .motion import plot_motion, plot_motion_cut
 from .orbits import plot_orbit_diagram
 from .plane import plot_scan
 from .tongues import plot_tongues
@@ -36,6 +38,8 @@ __all__ = [
     "plot_border",
     "plot_box_counts",
     "plot_box_dimension",
+    "plot_motion",
+    "plot_motion_cut",
     "plot_orbit_diagram",
     "plot_poincare_section",
     "plot_scan",

@@ -1,5 +1,5 @@
 """The non-sliding motion over the (e, u) plane: <k> and lambda_1 from a
-:func:`stairbounce.motion.motion_scan` dataset (issue 13)."""
+:func:`stairbounce.nonsliding.motion_scan` dataset (issue 13)."""
 
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ def _greys():
 
 def _families(ax, e_lo, e_hi, u_lo, u_hi, color):
     """One-impact-per-n-steps curves u_n(e) crossing the view (labels at their right end)."""
-    from ..motion import one_impact_family
+    from ..nonsliding import one_impact_family
 
     e = np.linspace(max(e_lo, 1e-6), min(e_hi, 1 - 1e-6), 600)
     n_top = int(np.ceil(2.0 * u_hi**2 * (1 + e[0]) / (1 - e[0]))) + 1
@@ -59,10 +59,10 @@ def plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=OVERLAYS, col
 
     Parameters
     ----------
-    ds : xarray.Dataset from :func:`stairbounce.motion.motion_scan`.
+    ds : xarray.Dataset from :func:`stairbounce.nonsliding.motion_scan`.
     field : "k_mean", "lyap1" or "jump_mean".
     sliding : optional scan dataset of the same grid (word lengths).
-    overlay : among "families" (:func:`stairbounce.motion.one_impact_family`)
+    overlay : among "families" (:func:`stairbounce.nonsliding.one_impact_family`)
         and "bound" (Corollary 2.1).
     """
     import matplotlib.colors as mcolors
@@ -94,7 +94,7 @@ def plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=OVERLAYS, col
                   extent=ext, aspect="auto", interpolation="nearest",
                   cmap=mcolors.ListedColormap(["0.55"]).with_extremes(bad=(0, 0, 0, 0)))
     if field == "speed_spread":
-        from ..motion import speed_spread
+        from ..nonsliding import speed_spread
 
         raw = speed_spread(ds.k_mean.values, ds.impulse.values, ds.dissipation.values,
                            ds.e.values[None, :])
@@ -152,7 +152,7 @@ def plot_motion_cut(ds, axes=None, families=True):
     """plot_motion_cut(ds, axes=None, families=True) -> (Axes, Axes, Axes)
 
     A cut of a motion scan at one ``u``: <k> against e (top), the spread of
-    the impact speeds (:func:`stairbounce.motion.speed_spread`, middle) and
+    the impact speeds (:func:`stairbounce.nonsliding.speed_spread`, middle) and
     ``N lambda_1`` (bottom; bounded for lambda_1 = 0), sliding pixels left out.
     With ``families`` the points (e_n, 1/n) where the one-impact families
     cross the cut are marked.
@@ -161,7 +161,7 @@ def plot_motion_cut(ds, axes=None, families=True):
 
     if ds.sizes["u"] != 1:
         raise ValueError(f"a cut needs a motion scan with one u, got {ds.sizes['u']}")
-    from ..motion import speed_spread
+    from ..nonsliding import speed_spread
 
     if axes is None:
         _, axes = plt.subplots(3, 1, figsize=(9, 8), sharex=True, height_ratios=(3, 2, 1))

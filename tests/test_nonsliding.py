@@ -1,4 +1,4 @@
-"""stairbounce.motion: <k>, Lyapunov exponents and the one-impact families (issue 13).
+"""stairbounce.nonsliding: <k>, Lyapunov exponents and the one-impact families (issue 13).
 
 The references are independent of the kernels: finite differences of the
 Poincare map, NumPy QR on maps with known exponents, an event-by-event
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from stairbounce import model
-from stairbounce.motion import (
+from stairbounce.nonsliding import (
     MOTION_FIELDS,
     _gram_schmidt,
     _log_norm,

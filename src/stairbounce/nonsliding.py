@@ -816,7 +816,7 @@ def motion_coords(e_values, u_values, steps=1000, transient=1000, y0=1.0, v0=0.0
         "transient": transient,
         "y0": y0,
         "v0": v0,
-        "kernel": f"stairbounce.motion._motion_{kernel}",
+        "kernel": f"stairbounce.nonsliding._motion_{kernel}",
         "stairbounce_version": __version__,
         "reference": "Campos, Romero-Valles, Torres, Prop. 2.3; issue 13",
     }
