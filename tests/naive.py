@@ -102,3 +102,73 @@ def border_pixels(mask):
                     if 0 <= a < h and 0 <= b < w and not mask[a][b]:
                         out[i][j] = True
     return out
+
+
+# --------------------------------------------------------------------------- #
+# High-precision reference (60 significant digits, mpmath)                     #
+# --------------------------------------------------------------------------- #
+
+DIGITS = 60
+# past this many impacts the reference sums the geometric series of the bounce
+# durations in closed form instead of one bounce at a time; with 60 digits the
+# sum loses log10(1/(1-e)) <= 16 digits to cancellation, leaving 44
+COUNT_LIMIT = 20_000
+
+
+def precise_step(y, v, e, u, digits=DIGITS, count_limit=COUNT_LIMIT, T=None):
+    """One step in ``digits``-digit arithmetic from the physics alone.
+
+    Returns ``(y_next, v_next, k, v_k, d)`` as mpmath numbers (k an int):
+    the state at the next edge, the impact number, the take-off speed of the
+    last bounce and the time ``d`` spent on it before the edge (``d`` and
+    ``v_k`` are None when the ball flies over or slides).  The inputs are the
+    floats as given (converted exactly), ``T = 1/u`` is exact to ``digits``.
+
+    The ball falls to the root ``t_1`` of ``y + v t - t^2/2 = 0`` with impact
+    speed ``s = sqrt(v^2 + 2y)``; a bounce with take-off speed ``w`` lasts
+    ``2w`` and the next leaves with ``e w``; the bounces sum to the
+    accumulation time ``t_1 + 2 e s/(1-e)``; at or before ``T`` the ball slides
+    off the edge at (1, 0) (Prop. 2.1).  Bounces are counted one by one up to
+    ``count_limit``; past it the count is the exact solution of
+    ``t_1 + 2 e s (1 - e^(k-1))/(1-e) <= T`` found with a logarithm and checked
+    by evaluating both sides at k and k + 1.
+    """
+    import mpmath
+
+    with mpmath.workdps(digits):
+        return _precise_step(mpmath, y, v, e, u, count_limit, T)
+
+
+def _precise_step(ctx, y, v, e, u, count_limit, T):
+    y, v, e, u = (ctx.mpf(float(x)) for x in (y, v, e, u))
+    T = 1 / u if T is None else ctx.mpf(T)
+    s = ctx.sqrt(v * v + 2 * y)
+    # the root without cancellation when v < 0 (v + s = 2y/(s - v))
+    t = v + s if v >= 0 else (2 * y / (s - v) if s - v > 0 else ctx.mpf(0))
+    if t > T:
+        return y + v * T - T * T / 2 + 1, v - T, 0, None, None
+    if e == 0 or t + 2 * e * s / (1 - e) <= T:
+        return ctx.mpf(1), ctx.mpf(0), SLIDING, None, None
+    w = e * s
+    k = 1
+    while k < count_limit:
+        if t + 2 * w > T:
+            d = T - t
+            return w * d - d * d / 2 + 1, w - d, k, w, d
+        t += 2 * w
+        w *= e
+        k += 1
+    t1 = t - 2 * e * s * (1 - e ** (k - 1)) / (1 - e)  # back to the first impact
+
+    def tk(n):
+        return t1 + 2 * e * s * (1 - e ** (n - 1)) / (1 - e)
+
+    # t_k <= T  <=>  e^(k-1) >= 1 - (T - t_1)(1-e)/(2 e s)
+    k = int(ctx.floor(ctx.log(1 - (T - t1) * (1 - e) / (2 * e * s)) / ctx.log(e))) + 1
+    while tk(k) > T:
+        k -= 1
+    while tk(k + 1) <= T:
+        k += 1
+    w = e**k * s
+    d = T - tk(k)
+    return w * d - d * d / 2 + 1, w - d, k, w, d

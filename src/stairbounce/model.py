@@ -72,9 +72,48 @@ def _slides(y, v, T, ratio):
 
 
 @njit(cache=True)
+def _geometric(e, n):
+    """``1 + e + ... + e^(n-1) = (1 - e^n)/(1 - e)`` without cancellation.
+
+    ``1 - e^n = -expm1(n log e)``: ``log e`` is accurate to an ulp for the
+    float ``e`` itself (even one ulp below 1), and ``expm1`` keeps every digit
+    of ``1 - e^n`` where ``e^n`` is close to 1, which is where ``1 - e^n``
+    written out loses them all (e near 1, reliability report D4).
+    """
+    if n <= 0:
+        return 0.0
+    if e == 0.0:
+        return 1.0
+    return -math.expm1(n * math.log(e)) / (1.0 - e)
+
+
+@njit(cache=True)
 def _impact_time(v, s, e, k):
-    """Eq. (2.2): time of the k-th impact, ``v + (1+e-2e^k)/(1-e) s``."""
-    return v + (1.0 + e - 2.0 * e**k) / (1.0 - e) * s
+    """Eq. (2.2), ``t_k = v + (1+e-2e^k)/(1-e) s``, evaluated without cancellation.
+
+    ``(1+e-2e^k)/(1-e) = 1 + 2e (1 - e^(k-1))/(1-e)``, so
+    ``t_k = t_1 + 2 e s G(k-1)`` with the first impact ``t_1 = v + s`` and the
+    geometric sum :func:`_geometric`: every term is >= 0, the relative error is
+    a few ulp for every ``e`` in [0, 1) and every k (the form of eq. (2.2)
+    itself has a relative error of about eps/(1-e)).
+    """
+    return v + s + 2.0 * e * s * _geometric(e, k - 1)
+
+
+@njit(cache=True)
+def _impact_velocity(s, e, k):
+    """Eq. (2.2): the velocity after the k-th impact, ``v_k = e^k s``.
+
+    ``math.pow`` is correctly rounded to about an ulp for any k; repeated
+    squaring (what ``e ** k`` with an integer k may compile to) loses about
+    ``log2 k`` bits.
+    """
+    return math.pow(e, float(k)) * s
+
+
+# The impact number never exceeds log(2^-53) / log(1 - 2^-53) < 3.4e17 < 2^63
+# (below): no cap is needed, and k fits an int64 with room to spare.
+_MAX_IMPACTS = 3.4e17
 
 
 @njit(cache=True)
@@ -82,25 +121,30 @@ def _impact_number_closed(y, v, e, T):
     """Prop. 2.2, ``k = E[log_e(((v - T)(1-e)) / (2 s) + (1+e)/2)]``.
 
     Returns ``SLIDING`` when the argument of the logarithm is not positive
-    (the solution slides, docs/design.md).  The floor of a rounded logarithm can be
-    one off; the result is corrected so that ``t_k <= T < t_{k+1}`` holds with
-    the impact times of eq. (2.2), which is the definition in the proof.
+    (the solution slides, docs/design.md).  The argument is ``1 - q`` with
+    ``q = (1-e)(T - v + s)/(2s)``, a product of non-negative factors, and the
+    logarithm is taken as ``log1p(-q)``: written as in the paper the argument
+    rounds to an absolute error of eps, a relative error of eps/q in the
+    logarithm (report D4).  Since ``q < 1`` is a float, ``1 - q >= 2^-53`` and
+    ``k <= 36.8 / |log e| < 3.4e17`` for every float ``e < 1``.
+
+    The floor of a rounded logarithm can be one off; the result is corrected
+    so that ``t_k <= T < t_{k+1}`` holds with the impact times of
+    :func:`_impact_time`, which is the definition in the proof.
     """
     s = math.sqrt(v * v + 2.0 * y)
     if v + s > T:  # first impact after the edge: the ball flies over
         return 0
     if e == 0.0:  # plastic impact: it sticks at its first contact
         return SLIDING
-    arg = (v - T) * (1.0 - e) / (2.0 * s) + 0.5 * (1.0 + e)
-    if arg <= 0.0:
+    q = (1.0 - e) * ((T - v + s) / (2.0 * s))
+    if q >= 1.0:
         return SLIDING
-    kf = math.floor(math.log(arg) / math.log(e))
-    # e within ~1e-16 of 1 gives up to ~1e18 impacts on one step: cap k where
-    # int64 and e**k are still exact enough, far above any float64-resolved count
-    if kf > 1.0e15:
-        kf = 1.0e15
-    k = max(int(kf), 1)
-    # rounding of log/pow: move k until t_k <= T < t_{k+1}, a few steps at most
+    kf = math.floor(math.log1p(-q) / math.log(e))
+    k = max(int(min(kf, _MAX_IMPACTS)), 1)
+    # rounding of log: move k until t_k <= T < t_{k+1}, a step or two at most
+    # wherever the bounces are longer than the rounding of t_k (elsewhere k is
+    # only known to a relative 1e-15, and so is the answer's phase)
     for _ in range(4):
         if k > 1 and _impact_time(v, s, e, k) > T:
             k -= 1
@@ -117,7 +161,8 @@ def _step_closed(y, v, e, T, ratio):
 
     The plain closed-form evaluation: log and pow on every step with impacts.
     :func:`_step` gives the same map faster; both are tested against the
-    impact-by-impact loop of ``tests/naive.py``.
+    impact-by-impact loop of ``tests/naive.py`` and against a 60-digit
+    reference (``tests/test_precision.py``).
     """
     if _slides(y, v, T, ratio):
         return 1.0, 0.0, SLIDING
@@ -128,10 +173,10 @@ def _step_closed(y, v, e, T, ratio):
     if k == 0:
         return y + v * T - 0.5 * T * T + 1.0, v - T, 0
     tk = _impact_time(v, s, e, k)
-    vk = e**k * s
-    # k is defined by t_k <= T < t_{k+1} = t_k + 2 v_k; where rounding of
-    # eq. (2.2) (e near 1: 1 + e - 2e^k cancels) breaks that, keep the state on
-    # the k-th bounce, so the ball is never below the edge
+    vk = _impact_velocity(s, e, k)
+    # t_k <= T < t_{k+1} = t_k + 2 v_k up to the rounding of t_k and v_k (a
+    # few ulp of T): the clamp keeps that rounding from putting the ball a few
+    # ulp below the edge; it moves d by no more than the error of t_k
     d = min(max(T - tk, 0.0), 2.0 * vk)
     return -0.5 * d * d + vk * d + 1.0, vk - d, k
 
