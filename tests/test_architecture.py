@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-CORE = ["model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas"]
+CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

@@ -25,6 +25,8 @@ import math
 import numpy as np
 from numba import njit
 
+from . import _validate as _v
+
 __all__ = [
     "SLIDING",
     "poincare_map",
@@ -182,6 +184,30 @@ def _step_closed(y, v, e, T, ratio):
 
 
 @njit(cache=True)
+def _state_in_step(y, v, e, tau, ratio):
+    """Height above the floor and velocity at time ``tau`` (``0 <= tau <= T``)
+    after entering a step at ``(y, v)``: the continuous solution inside a step.
+
+    A flight until ``t_1``, then the bounce ``k`` with ``t_k <= tau < t_{k+1}``
+    (Prop. 2.2 with ``T`` replaced by ``tau``, exactly as :func:`_step_closed`
+    evaluates it), or rest on the floor once the impacts have accumulated at
+    ``t_inf = v + (1+e)/(1-e) s`` (Prop. 2.1).  Right limits at impacts.
+    """
+    s = math.sqrt(v * v + 2.0 * y)
+    if tau < v + s:
+        return y + v * tau - 0.5 * tau * tau, v - tau
+    if e == 0.0 or v + ratio * s <= tau:
+        return 0.0, 0.0
+    k = _impact_number_closed(y, v, e, tau)
+    if k == SLIDING:
+        return 0.0, 0.0
+    tk = _impact_time(v, s, e, k)
+    vk = _impact_velocity(s, e, k)
+    d = min(max(tau - tk, 0.0), 2.0 * vk)
+    return -0.5 * d * d + vk * d, vk - d
+
+
+@njit(cache=True)
 def _step(y, v, e, T, ratio):
     """Prop. 2.3, the Poincare map ``(y, v) -> (y_T, v_T, k)``, fast form.
 
@@ -259,13 +285,9 @@ def _iterate(y, v, e, T, ratio, steps, ys, vs, ks):
 
 
 def _finite(name, x):
-    try:
-        x = float(x)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {x!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"{name} must be finite, got {x}")
-    return x
+    """``x`` as a finite float, or ValueError naming ``name`` (the contract of
+    :mod:`stairbounce._validate`: numbers only, no bools or strings)."""
+    return _v.real(name, x)
 
 
 def check_e(e):
@@ -276,35 +298,44 @@ def check_e(e):
     return e
 
 
-def check_u(u):
-    """Validate the horizontal speed: a finite float > 0."""
-    u = _finite("u", u)
+def check_u(u, name="u"):
+    """Validate the horizontal speed: a float in [1e-150, 1e150] (> 0; the
+    bounds keep ``T^2 = 1/u^2`` and ``v T`` far from overflow)."""
+    u = _finite(name, u)
     if not u > 0.0:
-        raise ValueError(f"u (horizontal speed) must be > 0, got {u}")
+        raise ValueError(f"{name} (horizontal speed) must be > 0, got {u}")
+    if not _v.U_MIN <= u <= _v.U_MAX:
+        raise ValueError(
+            f"{name} (horizontal speed) must be in [{_v.U_MIN:g}, {_v.U_MAX:g}] "
+            f"(the valid numeric range), got {u}"
+        )
     return u
 
 
 def check_state(y, v, yname="y", vname="v"):
-    """Validate an edge state: ``y >= 0`` finite (the paper's domain is y >= 1;
-    heights in [0, 1) are accepted as initial states, as in Section 4) and ``v``
-    finite."""
+    """Validate an edge state: ``0 <= y <= 1e300`` (the paper's domain is y >= 1;
+    heights in [0, 1) are accepted as initial states, as in Section 4) and
+    ``|v| <= 1e150``, where ``v^2 + 2y`` cannot overflow."""
     y = _finite(yname, y)
     if y < 0.0:
         raise ValueError(f"{yname} (height above the step's floor) must be >= 0, got {y}")
-    return y, _finite(vname, v)
+    if y > _v.Y_MAX:
+        raise ValueError(
+            f"{yname} (height above the step's floor) must be in [0, {_v.Y_MAX:g}] "
+            f"(the valid numeric range), got {y}"
+        )
+    v = _finite(vname, v)
+    if not abs(v) <= _v.V_MAX:
+        raise ValueError(
+            f"{vname} (vertical velocity) must be in [-{_v.V_MAX:g}, {_v.V_MAX:g}] "
+            f"(the valid numeric range), got {v}"
+        )
+    return y, v
 
 
-def check_count(name, n, minimum):
-    """Validate an integer count ``n >= minimum``."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-        if isinstance(n, float) and n.is_integer():
-            n = int(n)
-        else:
-            raise ValueError(f"{name} must be an integer >= {minimum}, got {n!r}")
-    n = int(n)
-    if n < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {n}")
-    return n
+def check_count(name, n, minimum, maximum=None):
+    """Validate an integer count ``minimum <= n (<= maximum)``; bools are refused."""
+    return _v.count(name, n, minimum, maximum)
 
 
 # --------------------------------------------------------------------------- #
@@ -403,17 +434,28 @@ def impact_times(y, v, e, k):
 
     ``t_j = v + (1+e-2e^j)/(1-e) sqrt(v^2+2y)``, ``v_j = e^j sqrt(v^2+2y)``,
     j = 1..k, measured from the edge, assuming every impact happens on this
-    step (the horizontal speed does not enter).
+    step (the horizontal speed does not enter).  Evaluated as
+    ``t_1 + 2 e s (1 - e^(j-1))/(1-e)``, free of the cancellation of the
+    printed form near e = 1 (:func:`_impact_time`).
 
     Returns two float arrays of length ``k``.
     """
     y, v = check_state(y, v)
     e = check_e(e)
     k = check_count("k", k, 0)
-    s = math.sqrt(v * v + 2.0 * y)
-    j = np.arange(1, k + 1, dtype=float)
-    ej = e**j
-    return v + (1.0 + e - 2.0 * ej) / (1.0 - e) * s, ej * s
+    _v.check_memory(f"k = {k}", 16 * k)
+    times = np.empty(k)
+    speeds = np.empty(k)
+    _impact_times(v, math.sqrt(v * v + 2.0 * y), e, times, speeds)
+    return times, speeds
+
+
+@njit(cache=True)
+def _impact_times(v, s, e, times, speeds):
+    """Fill ``times[j-1] = t_j``, ``speeds[j-1] = v_j`` (eq. 2.2), j = 1..len."""
+    for j in range(1, times.size + 1):
+        times[j - 1] = _impact_time(v, s, e, j)
+        speeds[j - 1] = _impact_velocity(s, e, j)
 
 
 def no_sliding_bound(e):
@@ -458,6 +500,8 @@ def iterate(y, v, e, u, steps):
     e = check_e(e)
     T, ratio = _constants(e, check_u(u))
     steps = check_count("steps", steps, 0)
+    # three arrays of steps + 1 eight-byte numbers
+    _v.check_memory(f"steps = {steps}", 24 * (steps + 1))
     ys = np.empty(steps + 1)
     vs = np.empty(steps + 1)
     ks = np.empty(steps + 1, dtype=np.int64)
