@@ -128,3 +128,34 @@ def check_memory(what, nbytes, available=None):
             f"{human(avail)} available: ask for less"
         )
     return nbytes
+
+
+def real_array(name, value):
+    """``value`` (a number or a sequence/array of numbers) as a float64 array.
+
+    Elements must be real numbers as for :func:`real` (numeric numpy arrays
+    pass as they are); strings, bools, None and complex numbers are refused.
+    Finiteness and ranges are left to the caller.
+    """
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind not in "iuf":
+            raise ValueError(f"{name} must hold real numbers, got an array of {value.dtype}")
+        return value.astype(np.float64)
+    if _is_real(value):
+        return np.asarray(real(name, value))
+    if isinstance(value, (list, tuple)):
+        try:
+            obj = np.array(value, dtype=object)
+        except ValueError:  # ragged nesting
+            raise ValueError(f"{name} must be a real number or a 1-D array of them, got {_show(value)}") from None
+        out = np.empty(obj.shape)
+        for i, x in enumerate(obj.ravel()):
+            if not _is_real(x):
+                raise ValueError(f"{name}[{i}] must be a real number (int or float), got {_show(x)}")
+            try:
+                out.flat[i] = float(x)
+            except OverflowError:
+                raise ValueError(f"{name}[{i}] must be finite (at most 1.8e308 in size), got {_show(x)}") from None
+        return out
+    raise ValueError(f"{name} must be a real number or a 1-D array of them, got {_show(value)}")
+
