@@ -293,7 +293,15 @@ def _check_sizes(sizes, shape):
 def _offsets_for(s, n):
     """``n`` grid shifts per axis for boxes of side ``s``: ``floor(k s / n)``,
     k = 0..n-1, distinct (fewer when ``s < n``)."""
-    return sorted({(k * int(s)) // n for k in range(n)})
+    s = int(s)
+    if n >= s:  # the shifts k s / n step by <= 1: every shift 0..s-1
+        return list(range(s))
+    return sorted({(k * s) // n for k in range(n)})
+
+
+# Grid shifts per axis: each costs up to offsets^2 reads of the image per box
+# size, so the bound keeps one call within minutes (report D12: 10**9 hung)
+_MAX_OFFSETS = 64
 
 
 _REDUCTIONS = ("mean", "min")
@@ -317,7 +325,7 @@ def box_counts(image, sizes=None, offsets=1, reduce="mean"):
     sizes : sequence of int >= 1, default None
         Box sides in pixels (sorted, duplicates dropped).  Default: the powers
         of two from 1 to the shorter side of the image.
-    offsets : int >= 1, default 1
+    offsets : int in [1, 64], default 1
         Grid registration biases box counting (a set can straddle a grid line
         at one position and not at another).  With ``offsets = n`` the grid is
         shifted by ``(o_y, o_x)`` for every pair of shifts
@@ -340,7 +348,7 @@ def box_counts(image, sizes=None, offsets=1, reduce="mean"):
     """
     a = _as_uint8(image)
     s = _check_sizes(sizes, a.shape)
-    n = check_count("offsets", offsets, 1)
+    n = check_count("offsets", offsets, 1, _MAX_OFFSETS)
     if reduce not in _REDUCTIONS:
         raise ValueError(f"reduce must be one of {_REDUCTIONS}, got {reduce!r}")
     counts = np.zeros(len(s), dtype=np.float64 if (reduce == "mean" and n > 1) else np.int64)
@@ -460,31 +468,67 @@ def linear_region(x, y, tol=0.1, min_points=3):
     n = len(x)
     if min_points > n:
         raise ValueError(f"min_points must be <= the number of points ({n}), got {min_points}")
+    if np.ptp(x) == 0.0:
+        raise ValueError("x must not be constant: there is no slope to find")
+    return _linear_region(x, y, tol, min_points)
+
+
+def _linear_region(x, y, tol, min_points):
+    """:func:`linear_region` in O(n^2): every window's least-squares fit from
+    prefix sums, every window's extreme local slopes grown one length at a
+    time (the plain search refitted each window: O(n^3), > 30 s at n = 2000)."""
+    n = len(x)
     with np.errstate(divide="ignore", invalid="ignore"):
         local = np.diff(y) / np.diff(x)
-    best = None  # (length, -stderr, start, stop)
-    fallback = None  # (spread, start, stop)
-    for length in range(n, min_points - 1, -1):
-        for start in range(0, n - length + 1):
-            stop = start + length
-            seg = local[start : stop - 1]
-            if not np.all(np.isfinite(seg)):
-                continue
-            slope, _, stderr, _ = _fit(x[start:stop], y[start:stop])
-            dev = np.max(np.abs(seg - slope))
-            if dev <= tol * abs(slope):
-                key = (length, -stderr)
-                if best is None or key > best[0]:
-                    best = (key, start, stop)
-            elif length == min_points:
-                spread = dev / max(abs(slope), 1e-300)
-                if fallback is None or spread < fallback[0]:
-                    fallback = (spread, start, stop)
-        if best is not None:
-            return best[1], best[2]
+    # sums over windows of the data centred on its mean (less cancellation)
+    xc, yc = x - x.mean(), y - y.mean()
+
+    def prefix(a):
+        return np.concatenate([[0.0], np.cumsum(a)])
+
+    Sx, Sy, Sxx, Syy, Sxy = (prefix(a) for a in (xc, yc, xc * xc, yc * yc, xc * yc))
+    bad = np.concatenate([[0], np.cumsum(~np.isfinite(local))])
+    hi = local.copy()  # max / min of local[i : i + m] for windows of m = length - 1 slopes
+    lo = local.copy()
+    accepted = {}  # length -> (stderr, start) of its best window
+    fallback = None
+    for length in range(2, n + 1):
+        m = length - 1
+        if m > 1:
+            hi = np.maximum(hi[:-1], local[m - 1 :])
+            lo = np.minimum(lo[:-1], local[m - 1 :])
+        if length < min_points:
+            continue
+        i = np.arange(n - length + 1)
+        j = i + length
+
+        def window(S):
+            return S[j] - S[i]
+
+        sx, sy = window(Sx), window(Sy)
+        sxx = window(Sxx) - sx * sx / length
+        sxy = window(Sxy) - sx * sy / length
+        syy = window(Syy) - sy * sy / length
+        finite = (bad[i + m] - bad[i]) == 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slope = sxy / sxx
+            stderr = np.sqrt(np.maximum(syy - slope * sxy, 0.0) / (length - 2) / sxx)
+            dev = np.maximum(hi - slope, slope - lo)
+        finite &= (sxx > 0.0) & np.isfinite(slope)
+        ok = finite & (dev <= tol * np.abs(slope))
+        if ok.any():
+            k = int(np.argmin(np.where(ok, stderr, np.inf)))
+            accepted[length] = int(i[k])
+        elif length == min_points and finite.any():
+            spread = np.where(finite, dev / np.maximum(np.abs(slope), 1e-300), np.inf)
+            k = int(np.argmin(spread))
+            fallback = (int(i[k]), int(i[k]) + length)
+    if accepted:
+        length = max(accepted)
+        return accepted[length], accepted[length] + length
     if fallback is None:
         return 0, n
-    return fallback[1], fallback[2]
+    return fallback
 
 
 def slope_fit(x, y, range=None, tol=0.1, min_points=3):

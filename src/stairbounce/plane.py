@@ -28,6 +28,7 @@ import xarray as xr
 import numba
 from numba import njit, prange
 
+from . import _validate as _v
 from .model import (
     _COUNTED_IMPACTS,
     SLIDING,
@@ -359,7 +360,8 @@ def estimate_bytes(n_e, n_u):
     Memory the outputs of a scan of ``n_e x n_u`` pixels take: one uint8,
     two int32 and two int64 per pixel (25 bytes) plus the coordinates.
     """
-    return int(n_e) * int(n_u) * _BYTES_PER_PIXEL + 8 * (int(n_e) + int(n_u))
+    n_e, n_u = check_count("n_e", n_e, 1), check_count("n_u", n_u, 1)
+    return n_e * n_u * _BYTES_PER_PIXEL + 8 * (n_e + n_u)
 
 
 def _available_memory():
@@ -413,6 +415,9 @@ def pixel_centres(lo, hi, n):
     lo = _finite("lo", lo)
     hi = _finite("hi", hi)
     n = check_count("n", n, 1)
+    if not (lo < hi and math.isfinite(hi - lo)):
+        raise ValueError(f"lo must be < hi with hi - lo finite, got lo = {lo}, hi = {hi}")
+    _v.check_memory(f"n = {n} pixel centres", 16 * n)
     return lo + (np.arange(n) + 0.5) * (hi - lo) / n
 
 
@@ -548,16 +553,20 @@ def tongue_mask(e, u, n_max):
     :func:`stairbounce.tongue`).  ``e`` and ``u`` broadcast against each other.
     """
     n_max = check_count("n_max", n_max, 1)
-    e, u = np.broadcast_arrays(np.asarray(e, dtype=float), np.asarray(u, dtype=float))
-    mask = np.zeros(e.shape, dtype=bool)
-    if mask.size == 0:
-        return mask
-    # only tongues with sqrt((n-1)/2) < max(u) can contain a point
-    n_top = min(n_max, int(2.0 * float(np.nanmax(u)) ** 2) + 2)
+    e, u = np.broadcast_arrays(_coords_any("e", e), _coords_any("u", u))
+    # u lies in at most one tongue: the last n with sqrt((n-1)/2) < u (the upper
+    # bound grows with n), so one test per point, whatever n_max (report D12)
+    n = np.minimum(np.maximum(np.ceil(2.0 * u * u), 1.0), n_max)
+    n = np.where(np.sqrt((n - 1.0) / 2.0) < u, n, n - 1.0)
+    n = np.where((n + 1.0 <= n_max) & (np.sqrt(n / 2.0) < u), n + 1.0, n)
     shrink = (1.0 - e) / (1.0 + e)
-    for n in range(1, n_top + 1):
-        mask |= (math.sqrt((n - 1) / 2.0) < u) & (u <= math.sqrt(n / 2.0) * shrink)
-    return mask
+    return (n >= 1.0) & (np.sqrt((n - 1.0) / 2.0) < u) & (u <= np.sqrt(n / 2.0) * shrink)
+
+
+def _coords_any(name, values):
+    """``e`` or ``u`` values of any shape, checked as :func:`_coords` does."""
+    a = _v.real_array(name, values)
+    return _coords(name, a.ravel()).reshape(a.shape) if a.size else a
 
 
 def no_sliding_curve(e):
@@ -567,7 +576,7 @@ def no_sliding_curve(e):
 
     Vectorised over ``e``; infinite at ``e = 0``.
     """
-    e = np.asarray(e, dtype=float)
+    e = _coords_any("e", e)
     with np.errstate(divide="ignore"):
         return (1.0 - e) / (2.0 * np.sqrt(2.0 * e))
 
