@@ -29,6 +29,7 @@ Y_MAX = 1e300
 V_MAX = 1e150
 U_MIN = 1e-150
 U_MAX = 1e150
+_INT64_MAX = 2**63 - 1
 
 
 def _is_real(x):
@@ -67,6 +68,8 @@ def count(name, n, minimum, maximum=None):
     n = int(n)
     if n < minimum or (maximum is not None and n > maximum):
         raise ValueError(f"{name} must be {rule}, got {_show(n)}")
+    if n > _INT64_MAX:  # nothing that counts (numpy, numba) goes further
+        raise ValueError(f"{name} must be {rule} and below 2**63, got {_show(n)}")
     return n
 
 

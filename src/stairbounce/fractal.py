@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
+from . import _validate as _v
 from .model import check_count
 from .plane import pixel_centres, scan, scan_coords
 
@@ -461,7 +462,7 @@ def linear_region(x, y, tol=0.1, min_points=3):
     min_points : int >= 3, default 3
     """
     x, y = _check_xy(x, y)
-    tol = float(tol)
+    tol = _v.real("tol", tol)
     if not tol > 0.0:
         raise ValueError(f"tol must be > 0, got {tol}")
     min_points = check_count("min_points", min_points, 3)

@@ -345,8 +345,9 @@ def orbit_density(ds, bins=400, component="y", range=None, param_bins=None):
         counts,
         dims=(varied, component),
         coords={
-            varied: (varied, 0.5 * (p_edges[1:] + p_edges[:-1]), {"long_name": _LONG_NAMES[varied]}),
-            component: (component, 0.5 * (x_edges[1:] + x_edges[:-1]), {"long_name": _LONG_NAMES[component]}),
+            # edge + half width: the sum of two edges near 1.8e308 would overflow
+            varied: (varied, p_edges[:-1] + 0.5 * np.diff(p_edges), {"long_name": _LONG_NAMES[varied]}),
+            component: (component, x_edges[:-1] + 0.5 * np.diff(x_edges), {"long_name": _LONG_NAMES[component]}),
         },
         name="count",
         attrs=attrs,
