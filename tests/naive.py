@@ -172,3 +172,49 @@ def _precise_step(ctx, y, v, e, u, count_limit, T):
     w = e**k * s
     d = T - tk(k)
     return w * d - d * d / 2 + 1, w - d, k, w, d
+
+
+EPS = 2.0**-52
+
+
+def classify(y, v, e, u, result, slack=64, count_limit=50):
+    """Judge a float map ``result = (y_next, v_next, k)`` of ``(y, v, e, u)``
+    against :func:`precise_step`: ``(verdict, error)``.
+
+    ``"ok"``: the reference's impact number and state to ``tol = slack eps
+    (T + |v| + s + 1)`` (the rounding of ``T = 1/u`` and of the impact times
+    alone is eps T); ``"ok-conditioned"``: another k, but one the reference
+    gives for an edge moved by ``tol`` (``T (1 -+ slack eps) -+ tol``), with the
+    state on that bounce (its energy ``y - 1 + v^2/2 = v_k^2/2``);
+    ``"k-mismatch"`` / ``"value-mismatch"`` otherwise.  ``error`` is the
+    absolute error of the state (0 when k differs).
+    """
+    import mpmath
+
+    yn, vn, k = result
+    ry, rv, rk, rvk, rd = precise_step(y, v, e, u, count_limit=count_limit)
+    T = 1.0 / u
+    s = math.sqrt(v * v + 2 * y)
+    tol = slack * EPS * (T + abs(v) + s + 1.0)
+    if k == rk:
+        err = max(abs(yn - float(ry)), abs(vn - float(rv)))
+        # a flight's height y + v T - T^2/2 + 1 rounds like its largest term
+        scale_y = (slack * EPS * (abs(y) + abs(v) * T + T * T + 1.0) if rk == 0
+                   else tol * (1 + float(rvk or 0.0)))
+        good = abs(vn - float(rv)) <= tol and abs(yn - float(ry)) <= scale_y
+        if good:
+            return "ok", err
+        if rk <= 0 or 2 * float(rvk) > 4 * tol:
+            return "value-mismatch", err
+    lo = precise_step(y, v, e, u, count_limit=count_limit, T=mpmath.mpf(T) * (1 - slack * EPS) - tol)[2]
+    hi = precise_step(y, v, e, u, count_limit=count_limit, T=mpmath.mpf(T) * (1 + slack * EPS) + tol)[2]
+    within = (lo <= k <= hi) or (hi == SLIDING and k >= lo) or (k == SLIDING and SLIDING in (lo, hi))
+    if not within:
+        return "k-mismatch", 0.0
+    if k > 0:
+        with mpmath.workdps(30):
+            vk = float(mpmath.mpf(e) ** k * mpmath.sqrt(mpmath.mpf(v) ** 2 + 2 * mpmath.mpf(y)))
+        if not (yn >= 1.0 and abs(vn) <= vk * (1 + 1e-12)
+                and abs((yn - 1.0) + 0.5 * vn * vn - 0.5 * vk * vk) <= 8 * tol * (1 + vk)):
+            return "value-mismatch", 0.0
+    return "ok-conditioned", 0.0

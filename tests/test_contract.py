@@ -16,7 +16,7 @@ import re
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import stairbounce as sb
@@ -119,6 +119,8 @@ def test_fuzz_any_value_is_a_result_or_a_value_error(case, value):
     """Hypothesis: whatever is passed, the answer is a result or a ValueError
     naming the parameter (never another exception)."""
     func, kwargs, name, kind, extra = case
+    # a count between these may be a legitimate, long or large, computation
+    assume(not (kind == COUNT and isinstance(value, int) and 10**4 < value < 10**15))
     try:
         func(**{**kwargs, name: value})
     except ValueError as exc:
