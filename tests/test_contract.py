@@ -203,3 +203,25 @@ def test_orbit_density_of_a_huge_range_has_finite_bins():
     ds = sb.orbit_diagram(0.1, [0.3, 0.5], keep=2, transient=1)
     dens = sb.orbit_density(ds, range=(0, 1e308))
     assert np.all(np.isfinite(dens.y.values)) and int(dens.sum()) == 4
+
+
+def test_memory_of_the_dimension_and_orbit_commands_is_checked_first(capsys, monkeypatch, tmp_path):
+    """Report D3: `dimension --resolution 40000` skipped the memory check and
+    grew without bound; `orbit-diagram --n 100 --keep 100000000` was killed at
+    22.8 GB, each slice fitting but not the list of them.  With 10 GiB
+    available both are refused before any work, in one line with exit 2."""
+    from stairbounce import _validate
+    from stairbounce.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(_validate, "available_memory", lambda: 10 * 2**30)
+    with pytest.raises(ValueError, match=r"^resolution = 20000 needs about 11\.2 GiB"):
+        fractal.perimeter_dimension(resolution=20000, progress=lambda done, total: None)
+    for argv in (["dimension", "--resolution", "40000", "--max-iter", "1"],
+                 ["orbit-diagram", "--e", "0.1", "--u", "0.3:1", "--n", "100", "--keep", "100000000",
+                  "--png", "x.png"]):
+        with pytest.raises(SystemExit) as exc:
+            main(argv)
+        err = capsys.readouterr().err
+        assert exc.value.code == 2 and err.strip().count("\n") == 0 and "needs about" in err, err
+    assert list(tmp_path.iterdir()) == []
