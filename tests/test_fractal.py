@@ -493,3 +493,15 @@ def test_box_counts_offsets_are_bounded():
         box_counts(img, offsets=10**9)
     s, c = box_counts(img, sizes=[2, 4], offsets=64, reduce="min")
     assert list(c) == [3, 2]  # the 6-pixel segment: 3 boxes of 2, and 2 of 4 at best
+
+
+def test_box_sides_beyond_int64_arithmetic_are_refused():
+    """Report D5: sizes=[2**63 - 1] counted 0 boxes (int64 overflow), [2**64]
+    raised TypeError.  Sides up to 2**31 are counted: one box holds the set."""
+    from stairbounce.fractal import box_counts
+
+    img = np.eye(8, dtype=bool)
+    for bad in ([2**63 - 1], [2**64], [1.5], [0], ["a"], [True]):
+        with pytest.raises(ValueError, match=r"sizes must be an integer in \[1, 2147483648\]"):
+            box_counts(img, sizes=bad)
+    assert box_counts(img, sizes=[2**31])[1].tolist() == [1]
