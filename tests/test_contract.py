@@ -64,7 +64,7 @@ SPECS = [
       "keep": (COUNT, [0, 10**12])}),
     (plane.pixel_centres, dict(lo=0.0, hi=1.0, n=4), {"lo": (REAL, []), "hi": (REAL, []), "n": (COUNT, [0, 10**12])}),
     (plane.scan_coords, dict(e_values=[0.1], u_values=[0.5], max_iter=10, y0=1.0, v0=0.0),
-     {"max_iter": (COUNT, [0, 2**31]), "y0": (REAL, [-1.0]), "v0": (REAL, [])}),
+     {"max_iter": (COUNT, [0, 2**31]), "y0": (REAL, [-1.0, 1e301]), "v0": (REAL, [1e200])}),
     (plane.tongue_mask, dict(e=0.1, u=0.5, n_max=5),
      {"n_max": (COUNT, [0]), "e": (ARRAY, [1.0, [0.1, -1]]), "u": (ARRAY, [0.0, [0.5, -1.0]])}),
     (plane.no_sliding_curve, dict(e=0.1), {"e": (ARRAY, [1.0, -1.0, 2.0])}),
@@ -176,6 +176,8 @@ def test_the_reports_cases():
         (lambda: fractal.slope_fit(np.arange(5.0), np.arange(5.0), tol=None), "tol"),
         (lambda: sb.sliding_word(0.05, 0.93, max_steps=2**64), "max_steps"),
         (lambda: sb.impact_times(1, 0, 0.5, 10**12), "k"),
+        (lambda: plane.scan_coords([0.1], [1e-200]), "u"),
+        (lambda: plane.scan(u=(0, 1e-160, 4)), "u"),
     ]:
         with pytest.raises(ValueError) as exc:
             call()

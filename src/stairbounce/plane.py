@@ -37,6 +37,7 @@ from .model import (
     _slide_or_steps_with,
     _step_closed,
     check_count,
+    check_state,
 )
 
 __all__ = [
@@ -351,6 +352,11 @@ def _coords(name, values):
         )
     if name == "u" and not np.all(a > 0.0):
         raise ValueError(f"u (horizontal speed) values must be > 0, got min {a.min()}")
+    if name == "u" and not np.all((a >= _v.U_MIN) & (a <= _v.U_MAX)):
+        raise ValueError(
+            f"u (horizontal speed) values must be in [{_v.U_MIN:g}, {_v.U_MAX:g}] (the valid "
+            f"numeric range), got [{a.min()}, {a.max()}]"
+        )
     return np.ascontiguousarray(a)
 
 
@@ -439,10 +445,8 @@ def scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0):
     max_iter = check_count("max_iter", max_iter, 1)
     if max_iter > 2**31 - 1:
         raise ValueError(f"max_iter must be an integer in [1, 2**31 - 1], got {max_iter}")
-    y0 = _finite("y0", y0)
-    v0 = _finite("v0", v0)
-    if y0 < 0.0:
-        raise ValueError(f"y0 (initial height above the step's floor) must be >= 0, got {y0}")
+    # the map's valid range (README): v0^2, 2 y0 and 1/u^2 far from overflow
+    y0, v0 = check_state(y0, v0, "y0", "v0")
     _check_memory(es.size, us.size)
     out = {k: np.empty((us.size, es.size), dtype=dt) for k, (dt, _) in _FIELDS.items()}
     chunk, order = _chunking(es.size * us.size, numba.get_num_threads())
