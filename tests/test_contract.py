@@ -178,6 +178,8 @@ def test_the_reports_cases():
         (lambda: sb.impact_times(1, 0, 0.5, 10**12), "k"),
         (lambda: plane.scan_coords([0.1], [1e-200]), "u"),
         (lambda: plane.scan(u=(0, 1e-160, 4)), "u"),
+        (lambda: plane.scan(e=(0, 1, 4), u=(0, 1, 4), progress="notcallable"), "progress"),
+        (lambda: fractal.perimeter_dimension(resolution=16, progress="notcallable"), "progress"),
     ]:
         with pytest.raises(ValueError) as exc:
             call()

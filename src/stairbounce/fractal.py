@@ -858,6 +858,8 @@ def perimeter_dimension(
     # measured peak (tracemalloc, resolution 1000): 25-28 bytes a pixel, the
     # scan's outputs or its status and word length and the border images; the
     # scan's own check saw only its outputs, and none with progress (report D3)
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
     _v.check_memory(f"resolution = {resolution}", _PERIMETER_BYTES_PER_PIXEL * resolution * resolution)
     status, word_length = _scan_window(e, u, resolution, max_iter, y0, v0, progress)
     region = status == 0

@@ -525,6 +525,8 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
     """
     e_min, e_max, n_e = _window("e", e, 0.0, 1.0, "[0, 1]")
     u_min, u_max, n_u = _window("u", u, 0.0, math.inf, "[0, inf)")
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
     _check_memory(n_e, n_u)
     es = pixel_centres(e_min, e_max, n_e)
     us = pixel_centres(u_min, u_max, n_u)
