@@ -67,7 +67,7 @@ SPECS = [
      {"max_iter": (COUNT, [0, 2**31]), "y0": (REAL, [-1.0, 1e301]), "v0": (REAL, [1e200])}),
     (plane.tongue_mask, dict(e=0.1, u=0.5, n_max=5),
      {"n_max": (COUNT, [0]), "e": (ARRAY, [1.0, [0.1, -1]]), "u": (ARRAY, [0.0, [0.5, -1.0]])}),
-    (plane.no_sliding_curve, dict(e=0.1), {"e": (ARRAY, [1.0, -1.0, 2.0])}),
+    (plane.no_sliding_curve, dict(e=0.1), {"e": (ARRAY, [1.0 + 1e-15, -1.0, 2.0])}),
     (plane.estimate_bytes, dict(n_e=10, n_u=10), {"n_e": (COUNT, [-1, 0]), "n_u": (COUNT, [-1])}),
     (atlas.tile_slices, dict(n=10, tile=3), {"n": (COUNT, [0, 10**12]), "tile": (COUNT, [0])}),
     (fractal.box_counts, dict(image=np.eye(8, dtype=bool), offsets=2), {"offsets": (COUNT, [0, 10**9])}),

@@ -616,7 +616,7 @@ def test_tongue_mask_is_one_test_per_point():
         (lambda: tongue_mask(-1, 0.5, 5), r"e \(restitution coefficient\) values must be in \[0, 1\)"),
         (lambda: tongue_mask("abc", 0.5, 5), "e must be a real number"),
         (lambda: no_sliding_curve(None), "e must be a real number"),
-        (lambda: no_sliding_curve(2), r"e \(restitution coefficient\) values must be in \[0, 1\)"),
+        (lambda: no_sliding_curve(2), r"e \(restitution coefficient\) values must be finite and in \[0, 1\]"),
         (lambda: sc.estimate_bytes(-1, 10), r"n_e must be an integer >= 1"),
         (lambda: sc.estimate_bytes(10, 1.5), r"n_u must be an integer >= 1"),
         (lambda: pixel_centres(1, 0, 4), "lo must be < hi"),

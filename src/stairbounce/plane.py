@@ -588,9 +588,12 @@ def no_sliding_curve(e):
 
     Corollary 2.1: above ``u = (1-e) / (2 sqrt(2e))`` no solution slides.
 
-    Vectorised over ``e``; infinite at ``e = 0``.
+    Vectorised over ``e`` in [0, 1]; infinite at ``e = 0``, 0 at ``e = 1``.
     """
-    e = _coords_any("e", e)
+    e = _v.real_array("e", e)
+    # the curve is drawn over the closed window [0, 1]: e = 1 (u = 0) is its end
+    if not np.all(np.isfinite(e) & (e >= 0.0) & (e <= 1.0)):
+        raise ValueError(f"e (restitution coefficient) values must be finite and in [0, 1], got {e!r}")
     with np.errstate(divide="ignore"):
         return (1.0 - e) / (2.0 * np.sqrt(2.0 * e))
 
