@@ -74,19 +74,18 @@ def _slides(y, v, T, ratio):
 
 
 @njit(cache=True)
-def _geometric(e, n):
+def _geometric(e, n, log_e):
     """``1 + e + ... + e^(n-1) = (1 - e^n)/(1 - e)`` without cancellation.
 
-    ``1 - e^n = -expm1(n log e)``: ``log e`` is accurate to an ulp for the
-    float ``e`` itself (even one ulp below 1), and ``expm1`` keeps every digit
-    of ``1 - e^n`` where ``e^n`` is close to 1, which is where ``1 - e^n``
-    written out loses them all (e near 1, reliability report D4).
+    ``1 - e^n = -expm1(n log e)`` with ``log_e = log(e)``, accurate to an ulp
+    for the float ``e`` itself (even one ulp below 1); ``expm1`` keeps every
+    digit of ``1 - e^n`` where ``e^n`` is close to 1, which is where
+    ``1 - e^n`` written out loses them all (e near 1, reliability report D4).
+    At ``e = 0`` (``log_e = -inf``) it is 1 for every n >= 1.
     """
     if n <= 0:
         return 0.0
-    if e == 0.0:
-        return 1.0
-    return -math.expm1(n * math.log(e)) / (1.0 - e)
+    return -math.expm1(n * log_e) / (1.0 - e)
 
 
 @njit(cache=True)
@@ -99,7 +98,13 @@ def _impact_time(v, s, e, k):
     a few ulp for every ``e`` in [0, 1) and every k (the form of eq. (2.2)
     itself has a relative error of about eps/(1-e)).
     """
-    return v + s + 2.0 * e * s * _geometric(e, k - 1)
+    return _impact_time_log(v, s, e, k, math.log(e) if e > 0.0 else -math.inf)
+
+
+@njit(cache=True)
+def _impact_time_log(v, s, e, k, log_e):
+    """:func:`_impact_time` with ``log e`` given (computed once per step)."""
+    return v + s + 2.0 * e * s * _geometric(e, k - 1, log_e)
 
 
 @njit(cache=True)
@@ -142,15 +147,16 @@ def _impact_number_closed(y, v, e, T):
     q = (1.0 - e) * ((T - v + s) / (2.0 * s))
     if q >= 1.0:
         return SLIDING
-    kf = math.floor(math.log1p(-q) / math.log(e))
+    log_e = math.log(e)
+    kf = math.floor(math.log1p(-q) / log_e)
     k = max(int(min(kf, _MAX_IMPACTS)), 1)
     # rounding of log: move k until t_k <= T < t_{k+1}, a step or two at most
     # wherever the bounces are longer than the rounding of t_k (elsewhere k is
     # only known to a relative 1e-15, and so is the answer's phase)
     for _ in range(4):
-        if k > 1 and _impact_time(v, s, e, k) > T:
+        if k > 1 and _impact_time_log(v, s, e, k, log_e) > T:
             k -= 1
-        elif _impact_time(v, s, e, k + 1) <= T:
+        elif _impact_time_log(v, s, e, k + 1, log_e) <= T:
             k += 1
         else:
             break
