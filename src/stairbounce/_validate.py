@@ -49,14 +49,6 @@ def real(name, x):
     return f
 
 
-def real_in(name, x, lo, hi, label=None):
-    """``x`` as a float in ``[lo, hi]``."""
-    f = real(name, x)
-    if not lo <= f <= hi:
-        raise ValueError(f"{label or name} must be in [{lo:g}, {hi:g}], got {f!r}")
-    return f
-
-
 def count(name, n, minimum, maximum=None):
     """``n`` as an int in ``[minimum, maximum]`` (no upper bound when None)."""
     rule = f"an integer >= {minimum}" if maximum is None else f"an integer in [{minimum}, {maximum}]"
