@@ -5,8 +5,8 @@ import sys
 
 import pytest
 
-CORE = ["model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas", "atlas_boxes",
-        "nonsliding"]
+CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas",
+        "atlas_boxes", "nonsliding"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

@@ -419,3 +419,89 @@ def test_plot_box_dimension_draws_border_and_fitted_line():
     with pytest.raises(ValueError, match="image"):
         plot_box_dimension(box_dimension(segment(128)))
     plt.close("all")
+
+
+def _linear_region_cubic(x, y, tol, min_points):
+    """The plain search linear_region used before its O(n^2) form: every
+    window refitted from scratch, lengths from the longest down."""
+    from stairbounce.fractal import _fit
+
+    n = len(x)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        local = np.diff(y) / np.diff(x)
+    best = fallback = None
+    for length in range(n, min_points - 1, -1):
+        for start in range(0, n - length + 1):
+            stop = start + length
+            seg = local[start : stop - 1]
+            if not np.all(np.isfinite(seg)):
+                continue
+            slope, _, stderr, _ = _fit(x[start:stop], y[start:stop])
+            dev = np.max(np.abs(seg - slope))
+            if dev <= tol * abs(slope):
+                if best is None or (length, -stderr) > best[0]:
+                    best = ((length, -stderr), start, stop)
+            elif length == min_points:
+                spread = dev / max(abs(slope), 1e-300)
+                if fallback is None or spread < fallback[0]:
+                    fallback = (spread, start, stop)
+        if best is not None:
+            return best[1], best[2]
+    return (0, n) if fallback is None else fallback[1:]
+
+
+def test_linear_region_quadratic_form_equals_the_plain_search():
+    """Report D12: the search was O(n^3).  The O(n^2) form picks the same
+    window as the plain one on log-log curves with bends, noise and kinks."""
+    from stairbounce.fractal import linear_region
+
+    rng = np.random.default_rng(12)
+    for trial in range(60):
+        n = int(rng.integers(3, 40))
+        x = np.sort(rng.uniform(-8, 0, n)) if trial % 3 else np.arange(n, dtype=float)
+        kink = rng.uniform(x.min(), x.max())
+        y = 1.3 * x + np.where(x > kink, 0.7 * (x - kink), 0.0) + rng.normal(0, 10.0 ** rng.uniform(-4, -1), n)
+        tol, mp = float(rng.choice([0.02, 0.1, 0.3])), int(rng.integers(3, max(4, n // 2 + 1)))
+        mp = min(mp, n)
+        assert linear_region(x, y, tol=tol, min_points=mp) == _linear_region_cubic(x, y, tol, mp), trial
+
+
+def test_linear_region_is_fast_on_many_points():
+    """2000 points (the plain search took more than 30 s) in well under a second
+    or two; and a constant x is refused instead of answering (0, n)."""
+    from stairbounce.fractal import linear_region, slope_fit
+
+    x = np.log(np.arange(1, 2001, dtype=float))
+    y = 1.5 * x + 0.01 * np.sin(7 * x)
+    start, stop = linear_region(x, y)
+    assert stop - start == 2000
+    assert slope_fit(x, y).slope == pytest.approx(1.5, abs=0.01)
+    with pytest.raises(ValueError, match="x must not be constant"):
+        linear_region(np.ones(5), np.arange(5.0))
+
+
+def test_box_counts_offsets_are_bounded():
+    """Report D12: offsets=10**9 looped for ever; offsets beyond the box side add
+    nothing (every shift is already used) and beyond 64 are refused."""
+    from stairbounce.fractal import _offsets_for, box_counts
+
+    assert _offsets_for(4, 64) == [0, 1, 2, 3] == _offsets_for(4, 4)
+    assert _offsets_for(8, 3) == [0, 2, 5]
+    img = np.zeros((16, 16), bool)
+    img[3:9, 5] = True
+    with pytest.raises(ValueError, match=r"offsets must be an integer in \[1, 64\]"):
+        box_counts(img, offsets=10**9)
+    s, c = box_counts(img, sizes=[2, 4], offsets=64, reduce="min")
+    assert list(c) == [3, 2]  # the 6-pixel segment: 3 boxes of 2, and 2 of 4 at best
+
+
+def test_box_sides_beyond_int64_arithmetic_are_refused():
+    """Report D5: sizes=[2**63 - 1] counted 0 boxes (int64 overflow), [2**64]
+    raised TypeError.  Sides up to 2**31 are counted: one box holds the set."""
+    from stairbounce.fractal import box_counts
+
+    img = np.eye(8, dtype=bool)
+    for bad in ([2**63 - 1], [2**64], [1.5], [0], ["a"], [True]):
+        with pytest.raises(ValueError, match=r"sizes must be an integer in \[1, 2147483648\]"):
+            box_counts(img, sizes=bad)
+    assert box_counts(img, sizes=[2**31])[1].tolist() == [1]

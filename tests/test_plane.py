@@ -691,3 +691,38 @@ def test_console_script_exit_status(tmp_path):
     r = subprocess.run([str(exe), "scan", "--e", "0:1.5"], capture_output=True, text=True, cwd=tmp_path)
     assert r.returncode == 2
     assert r.stderr.strip().startswith("stairbounce: error:") and "Traceback" not in r.stderr
+
+
+def test_tongue_mask_is_one_test_per_point():
+    """Report D12: tongue_mask(0.1, 1e10, 10**12) looped over 2e20 tongues.  The
+    one-tongue form equals the loop over n of inequalities (3.1)."""
+    rng = np.random.default_rng(3)
+    e = np.concatenate([rng.uniform(0, 1, 3000), [0.0, 0.5]])
+    u = np.concatenate([10.0 ** rng.uniform(-150, 1.5, 3000), [1e-150, 2.0]])
+    for n_max in (1, 2, 5, 40, 10**6):
+        loop = np.zeros(e.shape, bool)
+        for n in range(1, min(n_max, 2 * 32**2 + 2) + 1):
+            loop |= (math.sqrt((n - 1) / 2.0) < u) & (u <= math.sqrt(n / 2.0) * (1 - e) / (1 + e))
+        assert np.array_equal(tongue_mask(e, u, n_max), loop), n_max
+    assert not tongue_mask(0.1, 1e10, 10**12)  # (1-e)/(1+e) < 1: above every tongue
+
+
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda: tongue_mask(0.1, float("inf"), 5), "^u (values )?must be finite"),
+        (lambda: tongue_mask(float("nan"), 0.5, 5), "^e (values )?must be finite"),
+        (lambda: tongue_mask(-1, 0.5, 5), r"e \(restitution coefficient\) values must be in \[0, 1\)"),
+        (lambda: tongue_mask("abc", 0.5, 5), "e must be a real number"),
+        (lambda: no_sliding_curve(None), "e must be a real number"),
+        (lambda: no_sliding_curve(2), r"e \(restitution coefficient\) values must be finite and in \[0, 1\]"),
+        (lambda: sc.estimate_bytes(-1, 10), r"n_e must be an integer >= 1"),
+        (lambda: sc.estimate_bytes(10, 1.5), r"n_u must be an integer >= 1"),
+        (lambda: pixel_centres(1, 0, 4), "lo must be < hi"),
+        (lambda: pixel_centres(-1.7e308, 1.7e308, 4), "hi - lo finite"),
+        (lambda: pixel_centres(0, 1, 10**12), r"n = 1000000000000 pixel centres needs about"),
+    ],
+)
+def test_plane_helpers_validate(call, match):
+    with pytest.raises(ValueError, match=match):
+        call()

@@ -152,3 +152,68 @@ def test_trajectory_bad_input():
     traj = sb.trajectory(0.1, 0.5, steps=2)
     with pytest.raises(ValueError, match="t must be in"):
         traj.position([-1.0])
+
+
+def test_scalar_time_after_the_first_impact_of_a_step():
+    """Report D6: position(2.0) raised TypeError where position([2.0]) worked;
+    scalars give 0-d results equal to the 1-element arrays, at every kind of time."""
+    traj = sb.trajectory(0.05, 0.93, steps=6)
+    for t in [0.5, 2.0, 2.05, 4.2, traj.duration]:
+        x, y = traj.position(t)
+        xa, ya = traj.position([t])
+        assert np.shape(y) == () and float(y) == ya[0] and float(x) == xa[0]
+        vx, vy = traj.velocity(t)
+        assert np.shape(vy) == () and float(vy) == traj.velocity([t])[1][0]
+
+
+def test_times_must_be_numbers():
+    traj = sb.trajectory(0.05, 0.93, steps=2)
+    for bad in ["abc", None, True, 0.5 + 0j, {}, [0.5, "a"], 10**400]:
+        with pytest.raises(ValueError, match="^t must"):
+            traj.position(bad)
+
+
+def test_many_impacts_on_one_step_are_not_all_listed():
+    """Report D3: trajectory(1-1e-9, 1e-9, steps=1) listed ~4e8 impacts (24 GB).
+    At most max_listed are listed per step, the rest is one Unlisted record,
+    and position() still resolves them: it agrees with the map at the edge."""
+    e, u = 1 - 1e-9, 1e-9
+    traj = sb.trajectory(e, u, steps=1)
+    k = int(traj.edge_impacts[1])
+    assert k > 10**8  # the step really has that many impacts
+    assert len(traj.impacts) == 30
+    (rest,) = traj.unlisted
+    assert (rest.first, rest.count) == (31, k - 30)
+    y, v = traj.edge_state(1)
+    assert (y, v) == pytest.approx((traj.edge_y[1], traj.edge_v[1]), rel=1e-9, abs=1e-9)
+
+
+_MEASURE = """
+import tracemalloc, stairbounce as sb
+sb.trajectory(0.9, 0.05, steps=3)  # compiled or loaded before tracing
+tracemalloc.start()
+base = tracemalloc.get_traced_memory()[0]
+traj = sb.trajectory(0.9, 0.05, steps=400, max_listed=50)
+used = tracemalloc.get_traced_memory()[0] - base
+n = sum(len(x) for x in (traj.flights, traj.impacts, traj.accumulations, traj.slides, traj.unlisted))
+print(n, used / n)
+"""
+
+
+def test_listed_records_are_estimated_before_they_are_made():
+    """The refusal uses the real size of a record, measured with tracemalloc
+    in a fresh interpreter (pytest's own tracing would blur it)."""
+    import importlib
+    import subprocess
+    import sys
+
+    tmod = importlib.import_module("stairbounce.trajectory")
+    out = subprocess.run([sys.executable, "-c", _MEASURE], capture_output=True, text=True, check=True)
+    records, per_record = out.stdout.split()
+    assert int(records) > 5000
+    assert 0.7 * tmod._RECORD_BYTES < float(per_record) <= 1.1 * tmod._RECORD_BYTES
+    # a sliding orbit lists max_listed impacts per step: refused before listing
+    with pytest.raises(ValueError, match=r"steps = 1000000 with max_listed = 1000000000 needs about"):
+        sb.trajectory(0.05, 0.93, steps=10**6, max_listed=10**9)
+    with pytest.raises(ValueError, match=r"^steps = 1000000000000 needs about .* TiB"):
+        sb.trajectory(0.9, 0.05, steps=10**12)

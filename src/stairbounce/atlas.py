@@ -53,6 +53,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import _validate as _v
 from .model import check_count
 
 __all__ = ["scan_to_zarr", "tile_slices", "tiles_done", "downsample"]
@@ -77,6 +78,8 @@ def tile_slices(n, tile):
     """
     n = check_count("n", n, 1)
     tile = check_count("tile", tile, 1)
+    # about 100 bytes a slice object and its list entry (report D12: 10**12 hung)
+    _v.check_memory(f"n = {n} in tiles of {tile}", 100 * (-(-n // tile)))
     return [slice(a, min(a + tile, n)) for a in range(0, n, tile)]
 
 

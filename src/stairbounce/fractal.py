@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
+from . import _validate as _v
 from .model import check_count
 from .plane import pixel_centres, scan, scan_coords
 
@@ -287,22 +288,33 @@ def _default_sizes(shape):
     return 2 ** np.arange(top + 1, dtype=np.int64)
 
 
+_MAX_BOX = 2**31
+
+
 def _check_sizes(sizes, shape):
     if sizes is None:
         return _default_sizes(shape)
-    s = np.asarray(sizes)
+    s = np.asarray(sizes, dtype=object) if not isinstance(sizes, np.ndarray) else sizes
     if s.ndim != 1 or s.size == 0:
         raise ValueError(f"sizes must be a non-empty 1-D sequence of box sides in pixels, got {sizes!r}")
-    if not np.all(np.isfinite(s.astype(float))) or np.any(s != np.round(s)) or np.any(s < 1):
-        raise ValueError(f"sizes must be integers >= 1 (box sides in pixels), got {sizes!r}")
-    s = np.unique(s.astype(np.int64))
-    return s
+    # box sides beyond 2**31 would overflow the kernels' int64 corner arithmetic
+    # (report D5: 2**63 - 1 counted 0 boxes)
+    s = [check_count("sizes", x.item() if isinstance(x, np.generic) else x, 1, _MAX_BOX) for x in s]
+    return np.unique(np.array(s, dtype=np.int64))
 
 
 def _offsets_for(s, n):
     """``n`` grid shifts per axis for boxes of side ``s``: ``floor(k s / n)``,
     k = 0..n-1, distinct (fewer when ``s < n``)."""
-    return sorted({(k * int(s)) // n for k in range(n)})
+    s = int(s)
+    if n >= s:  # the shifts k s / n step by <= 1: every shift 0..s-1
+        return list(range(s))
+    return sorted({(k * s) // n for k in range(n)})
+
+
+# Grid shifts per axis: each costs up to offsets^2 reads of the image per box
+# size, so the bound keeps one call within minutes (report D12: 10**9 hung)
+_MAX_OFFSETS = 64
 
 
 _REDUCTIONS = ("mean", "min")
@@ -326,7 +338,7 @@ def box_counts(image, sizes=None, offsets=1, reduce="mean"):
     sizes : sequence of int >= 1, default None
         Box sides in pixels (sorted, duplicates dropped).  Default: the powers
         of two from 1 to the shorter side of the image.
-    offsets : int >= 1, default 1
+    offsets : int in [1, 64], default 1
         Grid registration biases box counting (a set can straddle a grid line
         at one position and not at another).  With ``offsets = n`` the grid is
         shifted by ``(o_y, o_x)`` for every pair of shifts
@@ -349,7 +361,7 @@ def box_counts(image, sizes=None, offsets=1, reduce="mean"):
     """
     a = _as_uint8(image)
     s = _check_sizes(sizes, a.shape)
-    n = check_count("offsets", offsets, 1)
+    n = check_count("offsets", offsets, 1, _MAX_OFFSETS)
     if reduce not in _REDUCTIONS:
         raise ValueError(f"reduce must be one of {_REDUCTIONS}, got {reduce!r}")
     counts = np.zeros(len(s), dtype=np.float64 if (reduce == "mean" and n > 1) else np.int64)
@@ -462,38 +474,74 @@ def linear_region(x, y, tol=0.1, min_points=3):
     min_points : int >= 3, default 3
     """
     x, y = _check_xy(x, y)
-    tol = float(tol)
+    tol = _v.real("tol", tol)
     if not tol > 0.0:
         raise ValueError(f"tol must be > 0, got {tol}")
     min_points = check_count("min_points", min_points, 3)
     n = len(x)
     if min_points > n:
         raise ValueError(f"min_points must be <= the number of points ({n}), got {min_points}")
+    if np.ptp(x) == 0.0:
+        raise ValueError("x must not be constant: there is no slope to find")
+    return _linear_region(x, y, tol, min_points)
+
+
+def _linear_region(x, y, tol, min_points):
+    """:func:`linear_region` in O(n^2) at worst: every window's least-squares
+    fit from prefix sums and its extreme local slopes from a sparse table, one
+    vectorised pass per length, longest first, stopping at the first length
+    with an accepted window (the plain search refitted every window: O(n^3),
+    > 30 s at n = 2000)."""
+    n = len(x)
     with np.errstate(divide="ignore", invalid="ignore"):
         local = np.diff(y) / np.diff(x)
-    best = None  # (length, -stderr, start, stop)
-    fallback = None  # (spread, start, stop)
+    # sums over windows of the data centred on its mean (less cancellation)
+    xc, yc = x - x.mean(), y - y.mean()
+
+    def prefix(a):
+        return np.concatenate([[0.0], np.cumsum(a)])
+
+    Sx, Sy, Sxx, Syy, Sxy = (prefix(a) for a in (xc, yc, xc * xc, yc * yc, xc * yc))
+    bad = np.concatenate([[0], np.cumsum(~np.isfinite(local))])
+    # hi[q][i] / lo[q][i]: max / min of local[i : i + 2**q]
+    hi, lo = [local], [local]
+    while 2 ** len(hi) <= len(local):
+        h = 2 ** (len(hi) - 1)
+        hi.append(np.maximum(hi[-1][:-h], hi[-1][h:]))
+        lo.append(np.minimum(lo[-1][:-h], lo[-1][h:]))
+    fallback = None
     for length in range(n, min_points - 1, -1):
-        for start in range(0, n - length + 1):
-            stop = start + length
-            seg = local[start : stop - 1]
-            if not np.all(np.isfinite(seg)):
-                continue
-            slope, _, stderr, _ = _fit(x[start:stop], y[start:stop])
-            dev = np.max(np.abs(seg - slope))
-            if dev <= tol * abs(slope):
-                key = (length, -stderr)
-                if best is None or key > best[0]:
-                    best = (key, start, stop)
-            elif length == min_points:
-                spread = dev / max(abs(slope), 1e-300)
-                if fallback is None or spread < fallback[0]:
-                    fallback = (spread, start, stop)
-        if best is not None:
-            return best[1], best[2]
+        m = length - 1  # local slopes in a window
+        i = np.arange(n - length + 1)
+        j = i + length
+        q = m.bit_length() - 1
+        top = np.maximum(hi[q][i], hi[q][i + m - 2**q])
+        bottom = np.minimum(lo[q][i], lo[q][i + m - 2**q])
+
+        def window(S):
+            return S[j] - S[i]
+
+        sx, sy = window(Sx), window(Sy)
+        sxx = window(Sxx) - sx * sx / length
+        sxy = window(Sxy) - sx * sy / length
+        syy = window(Syy) - sy * sy / length
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slope = sxy / sxx
+            stderr = np.sqrt(np.maximum(syy - slope * sxy, 0.0) / (length - 2) / sxx)
+            dev = np.maximum(top - slope, slope - bottom)
+        finite = ((bad[i + m] - bad[i]) == 0) & (sxx > 0.0) & np.isfinite(slope)
+        ok = finite & (dev <= tol * np.abs(slope))
+        if ok.any():
+            k = int(np.argmin(np.where(ok, stderr, np.inf)))
+            return int(i[k]), int(i[k]) + length
+        if length == min_points and finite.any():
+            with np.errstate(divide="ignore", invalid="ignore"):
+                spread = np.where(finite, dev / np.maximum(np.abs(slope), 1e-300), np.inf)
+            k = int(np.argmin(spread))
+            fallback = (int(i[k]), int(i[k]) + length)
     if fallback is None:
         return 0, n
-    return fallback[1], fallback[2]
+    return fallback
 
 
 def slope_fit(x, y, range=None, tol=0.1, min_points=3):
@@ -748,6 +796,9 @@ def _check_window(name, window):
     return lo, hi
 
 
+_PERIMETER_BYTES_PER_PIXEL = 30
+
+
 def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64, prune=True):
     """``status`` and ``word_length`` of the scan of the window, rows along u.
 
@@ -867,6 +918,12 @@ def perimeter_dimension(
             label=f"border of the {what}, max_iter {max_iter}",
         )
     resolution = check_count("resolution", resolution, 8)
+    # measured peak (tracemalloc, resolution 1000): 25-28 bytes a pixel, the
+    # scan's outputs or its status and word length and the border images; the
+    # scan's own check saw only its outputs, and none with progress (report D3)
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
+    _v.check_memory(f"resolution = {resolution}", _PERIMETER_BYTES_PER_PIXEL * resolution * resolution)
     status, word_length = _scan_window(e, u, resolution, max_iter, y0, v0, progress, prune=prune)
     region = status == 0
     if not region.any():

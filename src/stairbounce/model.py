@@ -25,6 +25,8 @@ import math
 import numpy as np
 from numba import njit
 
+from . import _validate as _v
+
 __all__ = [
     "SLIDING",
     "poincare_map",
@@ -72,9 +74,53 @@ def _slides(y, v, T, ratio):
 
 
 @njit(cache=True)
+def _geometric(e, n, log_e):
+    """``1 + e + ... + e^(n-1) = (1 - e^n)/(1 - e)`` without cancellation.
+
+    ``1 - e^n = -expm1(n log e)`` with ``log_e = log(e)``, accurate to an ulp
+    for the float ``e`` itself (even one ulp below 1); ``expm1`` keeps every
+    digit of ``1 - e^n`` where ``e^n`` is close to 1, which is where
+    ``1 - e^n`` written out loses them all (e near 1, reliability report D4).
+    At ``e = 0`` (``log_e = -inf``) it is 1 for every n >= 1.
+    """
+    if n <= 0:
+        return 0.0
+    return -math.expm1(n * log_e) / (1.0 - e)
+
+
+@njit(cache=True)
 def _impact_time(v, s, e, k):
-    """Eq. (2.2): time of the k-th impact, ``v + (1+e-2e^k)/(1-e) s``."""
-    return v + (1.0 + e - 2.0 * e**k) / (1.0 - e) * s
+    """Eq. (2.2), ``t_k = v + (1+e-2e^k)/(1-e) s``, evaluated without cancellation.
+
+    ``(1+e-2e^k)/(1-e) = 1 + 2e (1 - e^(k-1))/(1-e)``, so
+    ``t_k = t_1 + 2 e s G(k-1)`` with the first impact ``t_1 = v + s`` and the
+    geometric sum :func:`_geometric`: every term is >= 0, the relative error is
+    a few ulp for every ``e`` in [0, 1) and every k (the form of eq. (2.2)
+    itself has a relative error of about eps/(1-e)).
+    """
+    return _impact_time_log(v, s, e, k, math.log(e) if e > 0.0 else -math.inf)
+
+
+@njit(cache=True)
+def _impact_time_log(v, s, e, k, log_e):
+    """:func:`_impact_time` with ``log e`` given (computed once per step)."""
+    return v + s + 2.0 * e * s * _geometric(e, k - 1, log_e)
+
+
+@njit(cache=True)
+def _impact_velocity(s, e, k):
+    """Eq. (2.2): the velocity after the k-th impact, ``v_k = e^k s``.
+
+    ``math.pow`` is correctly rounded to about an ulp for any k; repeated
+    squaring (what ``e ** k`` with an integer k may compile to) loses about
+    ``log2 k`` bits.
+    """
+    return math.pow(e, float(k)) * s
+
+
+# The impact number never exceeds log(2^-53) / log(1 - 2^-53) < 3.4e17 < 2^63
+# (below): no cap is needed, and k fits an int64 with room to spare.
+_MAX_IMPACTS = 3.4e17
 
 
 @njit(cache=True)
@@ -82,29 +128,35 @@ def _impact_number_closed(y, v, e, T):
     """Prop. 2.2, ``k = E[log_e(((v - T)(1-e)) / (2 s) + (1+e)/2)]``.
 
     Returns ``SLIDING`` when the argument of the logarithm is not positive
-    (the solution slides, docs/design.md).  The floor of a rounded logarithm can be
-    one off; the result is corrected so that ``t_k <= T < t_{k+1}`` holds with
-    the impact times of eq. (2.2), which is the definition in the proof.
+    (the solution slides, docs/design.md).  The argument is ``1 - q`` with
+    ``q = (1-e)(T - v + s)/(2s)``, a product of non-negative factors, and the
+    logarithm is taken as ``log1p(-q)``: written as in the paper the argument
+    rounds to an absolute error of eps, a relative error of eps/q in the
+    logarithm (report D4).  Since ``q < 1`` is a float, ``1 - q >= 2^-53`` and
+    ``k <= 36.8 / |log e| < 3.4e17`` for every float ``e < 1``.
+
+    The floor of a rounded logarithm can be one off; the result is corrected
+    so that ``t_k <= T < t_{k+1}`` holds with the impact times of
+    :func:`_impact_time`, which is the definition in the proof.
     """
     s = math.sqrt(v * v + 2.0 * y)
     if v + s > T:  # first impact after the edge: the ball flies over
         return 0
     if e == 0.0:  # plastic impact: it sticks at its first contact
         return SLIDING
-    arg = (v - T) * (1.0 - e) / (2.0 * s) + 0.5 * (1.0 + e)
-    if arg <= 0.0:
+    q = (1.0 - e) * ((T - v + s) / (2.0 * s))
+    if q >= 1.0:
         return SLIDING
-    kf = math.floor(math.log(arg) / math.log(e))
-    # e within ~1e-16 of 1 gives up to ~1e18 impacts on one step: cap k where
-    # int64 and e**k are still exact enough, far above any float64-resolved count
-    if kf > 1.0e15:
-        kf = 1.0e15
-    k = max(int(kf), 1)
-    # rounding of log/pow: move k until t_k <= T < t_{k+1}, a few steps at most
+    log_e = math.log(e)
+    kf = math.floor(math.log1p(-q) / log_e)
+    k = max(int(min(kf, _MAX_IMPACTS)), 1)
+    # rounding of log: move k until t_k <= T < t_{k+1}, a step or two at most
+    # wherever the bounces are longer than the rounding of t_k (elsewhere k is
+    # only known to a relative 1e-15, and so is the answer's phase)
     for _ in range(4):
-        if k > 1 and _impact_time(v, s, e, k) > T:
+        if k > 1 and _impact_time_log(v, s, e, k, log_e) > T:
             k -= 1
-        elif _impact_time(v, s, e, k + 1) <= T:
+        elif _impact_time_log(v, s, e, k + 1, log_e) <= T:
             k += 1
         else:
             break
@@ -117,7 +169,8 @@ def _step_closed(y, v, e, T, ratio):
 
     The plain closed-form evaluation: log and pow on every step with impacts.
     :func:`_step` gives the same map faster; both are tested against the
-    impact-by-impact loop of ``tests/naive.py``.
+    impact-by-impact loop of ``tests/naive.py`` and against a 60-digit
+    reference (``tests/test_precision.py``).
     """
     if _slides(y, v, T, ratio):
         return 1.0, 0.0, SLIDING
@@ -128,12 +181,36 @@ def _step_closed(y, v, e, T, ratio):
     if k == 0:
         return y + v * T - 0.5 * T * T + 1.0, v - T, 0
     tk = _impact_time(v, s, e, k)
-    vk = e**k * s
-    # k is defined by t_k <= T < t_{k+1} = t_k + 2 v_k; where rounding of
-    # eq. (2.2) (e near 1: 1 + e - 2e^k cancels) breaks that, keep the state on
-    # the k-th bounce, so the ball is never below the edge
+    vk = _impact_velocity(s, e, k)
+    # t_k <= T < t_{k+1} = t_k + 2 v_k up to the rounding of t_k and v_k (a
+    # few ulp of T): the clamp keeps that rounding from putting the ball a few
+    # ulp below the edge; it moves d by no more than the error of t_k
     d = min(max(T - tk, 0.0), 2.0 * vk)
     return -0.5 * d * d + vk * d + 1.0, vk - d, k
+
+
+@njit(cache=True)
+def _state_in_step(y, v, e, tau, ratio):
+    """Height above the floor and velocity at time ``tau`` (``0 <= tau <= T``)
+    after entering a step at ``(y, v)``: the continuous solution inside a step.
+
+    A flight until ``t_1``, then the bounce ``k`` with ``t_k <= tau < t_{k+1}``
+    (Prop. 2.2 with ``T`` replaced by ``tau``, exactly as :func:`_step_closed`
+    evaluates it), or rest on the floor once the impacts have accumulated at
+    ``t_inf = v + (1+e)/(1-e) s`` (Prop. 2.1).  Right limits at impacts.
+    """
+    s = math.sqrt(v * v + 2.0 * y)
+    if tau < v + s:
+        return y + v * tau - 0.5 * tau * tau, v - tau
+    if e == 0.0 or v + ratio * s <= tau:
+        return 0.0, 0.0
+    k = _impact_number_closed(y, v, e, tau)
+    if k == SLIDING:
+        return 0.0, 0.0
+    tk = _impact_time(v, s, e, k)
+    vk = _impact_velocity(s, e, k)
+    d = min(max(tau - tk, 0.0), 2.0 * vk)
+    return -0.5 * d * d + vk * d, vk - d
 
 
 @njit(cache=True)
@@ -214,13 +291,9 @@ def _iterate(y, v, e, T, ratio, steps, ys, vs, ks):
 
 
 def _finite(name, x):
-    try:
-        x = float(x)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {x!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"{name} must be finite, got {x}")
-    return x
+    """``x`` as a finite float, or ValueError naming ``name`` (the contract of
+    :mod:`stairbounce._validate`: numbers only, no bools or strings)."""
+    return _v.real(name, x)
 
 
 def check_e(e):
@@ -231,35 +304,44 @@ def check_e(e):
     return e
 
 
-def check_u(u):
-    """Validate the horizontal speed: a finite float > 0."""
-    u = _finite("u", u)
+def check_u(u, name="u"):
+    """Validate the horizontal speed: a float in [1e-150, 1e150] (> 0; the
+    bounds keep ``T^2 = 1/u^2`` and ``v T`` far from overflow)."""
+    u = _finite(name, u)
     if not u > 0.0:
-        raise ValueError(f"u (horizontal speed) must be > 0, got {u}")
+        raise ValueError(f"{name} (horizontal speed) must be > 0, got {u}")
+    if not _v.U_MIN <= u <= _v.U_MAX:
+        raise ValueError(
+            f"{name} (horizontal speed) must be in [{_v.U_MIN:g}, {_v.U_MAX:g}] "
+            f"(the valid numeric range), got {u}"
+        )
     return u
 
 
 def check_state(y, v, yname="y", vname="v"):
-    """Validate an edge state: ``y >= 0`` finite (the paper's domain is y >= 1;
-    heights in [0, 1) are accepted as initial states, as in Section 4) and ``v``
-    finite."""
+    """Validate an edge state: ``0 <= y <= 1e300`` (the paper's domain is y >= 1;
+    heights in [0, 1) are accepted as initial states, as in Section 4) and
+    ``|v| <= 1e150``, where ``v^2 + 2y`` cannot overflow."""
     y = _finite(yname, y)
     if y < 0.0:
         raise ValueError(f"{yname} (height above the step's floor) must be >= 0, got {y}")
-    return y, _finite(vname, v)
+    if y > _v.Y_MAX:
+        raise ValueError(
+            f"{yname} (height above the step's floor) must be in [0, {_v.Y_MAX:g}] "
+            f"(the valid numeric range), got {y}"
+        )
+    v = _finite(vname, v)
+    if not abs(v) <= _v.V_MAX:
+        raise ValueError(
+            f"{vname} (vertical velocity) must be in [-{_v.V_MAX:g}, {_v.V_MAX:g}] "
+            f"(the valid numeric range), got {v}"
+        )
+    return y, v
 
 
-def check_count(name, n, minimum):
-    """Validate an integer count ``n >= minimum``."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-        if isinstance(n, float) and n.is_integer():
-            n = int(n)
-        else:
-            raise ValueError(f"{name} must be an integer >= {minimum}, got {n!r}")
-    n = int(n)
-    if n < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {n}")
-    return n
+def check_count(name, n, minimum, maximum=None):
+    """Validate an integer count ``minimum <= n (<= maximum)``; bools are refused."""
+    return _v.count(name, n, minimum, maximum)
 
 
 # --------------------------------------------------------------------------- #
@@ -358,17 +440,28 @@ def impact_times(y, v, e, k):
 
     ``t_j = v + (1+e-2e^j)/(1-e) sqrt(v^2+2y)``, ``v_j = e^j sqrt(v^2+2y)``,
     j = 1..k, measured from the edge, assuming every impact happens on this
-    step (the horizontal speed does not enter).
+    step (the horizontal speed does not enter).  Evaluated as
+    ``t_1 + 2 e s (1 - e^(j-1))/(1-e)``, free of the cancellation of the
+    printed form near e = 1 (:func:`_impact_time`).
 
     Returns two float arrays of length ``k``.
     """
     y, v = check_state(y, v)
     e = check_e(e)
     k = check_count("k", k, 0)
-    s = math.sqrt(v * v + 2.0 * y)
-    j = np.arange(1, k + 1, dtype=float)
-    ej = e**j
-    return v + (1.0 + e - 2.0 * ej) / (1.0 - e) * s, ej * s
+    _v.check_memory(f"k = {k}", 16 * k)
+    times = np.empty(k)
+    speeds = np.empty(k)
+    _impact_times(v, math.sqrt(v * v + 2.0 * y), e, times, speeds)
+    return times, speeds
+
+
+@njit(cache=True)
+def _impact_times(v, s, e, times, speeds):
+    """Fill ``times[j-1] = t_j``, ``speeds[j-1] = v_j`` (eq. 2.2), j = 1..len."""
+    for j in range(1, times.size + 1):
+        times[j - 1] = _impact_time(v, s, e, j)
+        speeds[j - 1] = _impact_velocity(s, e, j)
 
 
 def no_sliding_bound(e):
@@ -413,6 +506,8 @@ def iterate(y, v, e, u, steps):
     e = check_e(e)
     T, ratio = _constants(e, check_u(u))
     steps = check_count("steps", steps, 0)
+    # three arrays of steps + 1 eight-byte numbers
+    _v.check_memory(f"steps = {steps}", 24 * (steps + 1))
     ys = np.empty(steps + 1)
     vs = np.empty(steps + 1)
     ks = np.empty(steps + 1, dtype=np.int64)

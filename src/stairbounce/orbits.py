@@ -23,6 +23,7 @@ import numpy as np
 import xarray as xr
 from numba import get_num_threads, njit, prange
 
+from . import _validate as _v
 from .model import _constants, _step, check_count, check_state
 
 __all__ = ["orbit_diagram", "orbit_density"]
@@ -89,10 +90,7 @@ def _orbit_kernel_warm(es, us, y0, v0, transient, keep, ys, vs, ks, items):
 
 def _parameter(name, value):
     """``value`` as a float64 array and whether it was given as a 1-D array."""
-    try:
-        a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number or a 1-D array of them, got {value!r}") from None
+    a = _v.real_array(name, value)
     if a.ndim > 1:
         raise ValueError(f"{name} must be a real number or a 1-D array, got an array of shape {a.shape}")
     if a.ndim == 1 and a.size == 0:
@@ -102,8 +100,8 @@ def _parameter(name, value):
         bad |= ~((a >= 0.0) & (a < 1.0))
         rule = "e (restitution coefficient) must be in [0, 1)"
     else:
-        bad |= ~(a > 0.0)
-        rule = "u (horizontal speed) must be finite and > 0"
+        bad |= ~((a >= _v.U_MIN) & (a <= _v.U_MAX))
+        rule = f"u (horizontal speed) must be finite and > 0, in [{_v.U_MIN:g}, {_v.U_MAX:g}]"
     if np.any(bad):
         if a.ndim == 0:
             raise ValueError(f"{rule}, got {float(a)}")
@@ -184,13 +182,14 @@ def orbit_diagram(e, u, y0=0.1, v0=0.0, transient=2000, keep=200, warm_start=Fal
     y0, v0 = check_state(y0, v0, "y0", "v0")
     transient = check_count("transient", transient, 0)
     keep = check_count("keep", keep, 1)
-    if not isinstance(warm_start, (bool, np.bool_)):
-        raise ValueError(f"warm_start must be True or False, got {warm_start!r}")
+    warm_start = _v.flag("warm_start", warm_start)
 
     varied, fixed = ("e", "u") if e_swept else ("u", "e")
     values = ea if e_swept else ua
     fixed_value = float(ua if e_swept else ea)
     n = values.size
+    # y and v (float64) and impacts (int32) for every kept iterate, and the coordinates
+    _v.check_memory(f"keep = {keep} iterates of {n} parameter values", n * keep * 20 + 24 * n + 8 * keep)
     es = np.ascontiguousarray(np.broadcast_to(ea, (n,)), dtype=np.float64)
     us = np.ascontiguousarray(np.broadcast_to(ua, (n,)), dtype=np.float64)
     ys = np.empty((n, keep))
@@ -245,12 +244,15 @@ def _varied(ds):
 
 
 def _check_range(name, value):
-    try:
-        lo, hi = (float(x) for x in value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a pair (min, max) of finite numbers, got {value!r}") from None
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        raise ValueError(f"{name} must be a pair (min, max) of finite numbers with min < max, got {value!r}")
+    if not isinstance(value, (tuple, list, np.ndarray)) or len(value) != 2:
+        raise ValueError(f"{name} must be a pair (min, max) of finite numbers, got {value!r}")
+    lo, hi = (_v.real(name, x) for x in value)
+    # hi - lo must be a float too: the bin edges are lo + i (hi - lo) / bins
+    if not (lo < hi and math.isfinite(hi - lo)):
+        raise ValueError(
+            f"{name} must be a pair (min, max) of finite numbers with min < max and "
+            f"max - min finite, got {value!r}"
+        )
     return lo, hi
 
 
@@ -301,6 +303,8 @@ def orbit_density(ds, bins=400, component="y", range=None, param_bins=None):
         outer bin edges), ``points``, ``points_in_range`` and the inputs of
         the diagram.  Used for the density images of Section 4 (Figs. 8, 9).
     """
+    if not isinstance(ds, xr.Dataset):
+        raise ValueError(f"ds must be a dataset returned by orbit_diagram, got {type(ds).__name__}")
     varied = _varied(ds)
     if component not in ("y", "v"):
         raise ValueError(f"component must be 'y' or 'v', got {component!r}")
@@ -309,6 +313,8 @@ def orbit_density(ds, bins=400, component="y", range=None, param_bins=None):
     if param_bins is None:
         param_bins = params.size
     param_bins = check_count("param_bins", param_bins, 1)
+    # the float64 histogram, its int64 copy and the edges
+    _v.check_memory(f"bins = {bins} by param_bins = {param_bins}", 16 * bins * param_bins + 16 * (bins + param_bins))
     values = np.asarray(ds[component].values, dtype=float)
     finite = np.isfinite(values)
     if range is None:
@@ -339,8 +345,9 @@ def orbit_density(ds, bins=400, component="y", range=None, param_bins=None):
         counts,
         dims=(varied, component),
         coords={
-            varied: (varied, 0.5 * (p_edges[1:] + p_edges[:-1]), {"long_name": _LONG_NAMES[varied]}),
-            component: (component, 0.5 * (x_edges[1:] + x_edges[:-1]), {"long_name": _LONG_NAMES[component]}),
+            # edge + half width: the sum of two edges near 1.8e308 would overflow
+            varied: (varied, p_edges[:-1] + 0.5 * np.diff(p_edges), {"long_name": _LONG_NAMES[varied]}),
+            component: (component, x_edges[:-1] + 0.5 * np.diff(x_edges), {"long_name": _LONG_NAMES[component]}),
         },
         name="count",
         attrs=attrs,

@@ -36,6 +36,7 @@ import xarray as xr
 import numba
 from numba import njit, prange
 
+from . import _validate as _v
 from .model import (
     _COUNTED_IMPACTS,
     SLIDING,
@@ -44,6 +45,7 @@ from .model import (
     _slide_or_steps_with,
     _step_closed,
     check_count,
+    check_state,
 )
 
 __all__ = [
@@ -500,6 +502,11 @@ def _check_values(name, a):
         )
     if name == "u" and not np.all(a > 0.0):
         raise ValueError(f"u (horizontal speed) values must be > 0, got min {a.min()}")
+    if name == "u" and not np.all((a >= _v.U_MIN) & (a <= _v.U_MAX)):
+        raise ValueError(
+            f"u (horizontal speed) values must be in [{_v.U_MIN:g}, {_v.U_MAX:g}] (the valid "
+            f"numeric range), got [{a.min()}, {a.max()}]"
+        )
     return np.ascontiguousarray(a)
 
 
@@ -507,24 +514,17 @@ def estimate_bytes(n_e, n_u):
     """estimate_bytes(n_e, n_u) -> int
 
     Memory the outputs of a scan of ``n_e x n_u`` pixels take: one uint8,
-    two int32 and two int64 per pixel (25 bytes) plus the coordinates.
+    two int32 and two int64 per pixel (25 bytes) plus the coordinates.  This
+    is the peak of :func:`scan` (measured: 25.0 B/pixel without progress,
+    26.6 with it).
     """
-    return int(n_e) * int(n_u) * _BYTES_PER_PIXEL + 8 * (int(n_e) + int(n_u))
+    n_e, n_u = check_count("n_e", n_e, 1), check_count("n_u", n_u, 1)
+    return n_e * n_u * _BYTES_PER_PIXEL + 8 * (n_e + n_u)
 
 
 def _available_memory():
-    """Bytes of memory available now (MemAvailable on Linux, else free pages)."""
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):  # pragma: no cover - no way to tell
-        return None
+    """Bytes of memory available now (:func:`stairbounce._validate.available_memory`)."""
+    return _v.available_memory()
 
 
 def estimate_points_bytes(n):
@@ -536,8 +536,14 @@ def estimate_points_bytes(n):
     return int(n) * (_BYTES_PER_PIXEL + 16)
 
 
-def _check_memory(n_e, n_u):
-    return _check_need(estimate_bytes(n_e, n_u), f"a scan of {n_e} x {n_u} pixels")
+def _check_memory(n_e, n_u, bytes_per_pixel=None):
+    """Refuse a scan whose peak (:func:`estimate_bytes`, or ``bytes_per_pixel``
+    per pixel when the caller does more with the result) exceeds the memory
+    available."""
+    need = estimate_bytes(n_e, n_u)
+    if bytes_per_pixel is not None:
+        need = max(need, n_e * n_u * bytes_per_pixel)
+    return _check_need(need, f"a scan of {n_e} x {n_u} pixels")
 
 
 def _check_need(need, what):
@@ -575,6 +581,9 @@ def pixel_centres(lo, hi, n):
     lo = _finite("lo", lo)
     hi = _finite("hi", hi)
     n = check_count("n", n, 1)
+    if not (lo < hi and math.isfinite(hi - lo)):
+        raise ValueError(f"lo must be < hi with hi - lo finite, got lo = {lo}, hi = {hi}")
+    _v.check_memory(f"n = {n} pixel centres", 16 * n)
     return lo + (np.arange(n) + 0.5) * (hi - lo) / n
 
 
@@ -582,10 +591,8 @@ def _check_run(max_iter, y0, v0):
     max_iter = check_count("max_iter", max_iter, 1)
     if max_iter > 2**31 - 1:
         raise ValueError(f"max_iter must be an integer in [1, 2**31 - 1], got {max_iter}")
-    y0 = _finite("y0", y0)
-    v0 = _finite("v0", v0)
-    if y0 < 0.0:
-        raise ValueError(f"y0 (initial height above the step's floor) must be >= 0, got {y0}")
+    # the map's valid range (README): v0^2, 2 y0 and 1/u^2 far from overflow
+    y0, v0 = check_state(y0, v0, "y0", "v0")
     return max_iter, y0, v0
 
 
@@ -751,6 +758,8 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
     """
     e_min, e_max, n_e = _window("e", e, 0.0, 1.0, "[0, 1]")
     u_min, u_max, n_u = _window("u", u, 0.0, math.inf, "[0, inf)")
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
     _check_memory(n_e, n_u)
     es = pixel_centres(e_min, e_max, n_e)
     us = pixel_centres(u_min, u_max, n_u)
@@ -759,11 +768,22 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
     else:
         progress(0, n_u)
         block = max(1, -(-n_u // 50))
-        parts = []
+        # blocks are copied into the whole arrays as they come: the peak stays
+        # at the outputs plus one block (concatenating the blocks doubled it)
+        full = first = None
         for r in range(0, n_u, block):
-            parts.append(scan_coords(es, us[r : r + block], max_iter, y0, v0, prune=prune))
+            part = scan_coords(es, us[r : r + block], max_iter, y0, v0, prune=prune)
+            if first is None:
+                first = part
+                full = {k: np.empty((n_u, n_e), dtype=part[k].dtype) for k in _FIELDS}
+            for k in _FIELDS:
+                full[k][r : r + block] = part[k].values
             progress(min(r + block, n_u), n_u)
-        ds = xr.concat(parts, dim="u", combine_attrs="override") if len(parts) > 1 else parts[0]
+        ds = xr.Dataset(
+            {k: (("u", "e"), full[k], first[k].attrs) for k in _FIELDS},
+            coords={"e": first["e"], "u": ("u", us, first["u"].attrs)},
+            attrs=first.attrs,
+        )
     ds.attrs.update(
         e_min=e_min, e_max=e_max, n_e=n_e, u_min=u_min, u_max=u_max, n_u=n_u
     )
@@ -780,16 +800,20 @@ def tongue_mask(e, u, n_max):
     :func:`stairbounce.tongue`).  ``e`` and ``u`` broadcast against each other.
     """
     n_max = check_count("n_max", n_max, 1)
-    e, u = np.broadcast_arrays(np.asarray(e, dtype=float), np.asarray(u, dtype=float))
-    mask = np.zeros(e.shape, dtype=bool)
-    if mask.size == 0:
-        return mask
-    # only tongues with sqrt((n-1)/2) < max(u) can contain a point
-    n_top = min(n_max, int(2.0 * float(np.nanmax(u)) ** 2) + 2)
+    e, u = np.broadcast_arrays(_coords_any("e", e), _coords_any("u", u))
+    # u lies in at most one tongue: the last n with sqrt((n-1)/2) < u (the upper
+    # bound grows with n), so one test per point, whatever n_max (report D12)
+    n = np.minimum(np.maximum(np.ceil(2.0 * u * u), 1.0), n_max)
+    n = np.where(np.sqrt((n - 1.0) / 2.0) < u, n, n - 1.0)
+    n = np.where((n + 1.0 <= n_max) & (np.sqrt(n / 2.0) < u), n + 1.0, n)
     shrink = (1.0 - e) / (1.0 + e)
-    for n in range(1, n_top + 1):
-        mask |= (math.sqrt((n - 1) / 2.0) < u) & (u <= math.sqrt(n / 2.0) * shrink)
-    return mask
+    return (n >= 1.0) & (np.sqrt((n - 1.0) / 2.0) < u) & (u <= np.sqrt(n / 2.0) * shrink)
+
+
+def _coords_any(name, values):
+    """``e`` or ``u`` values of any shape, checked as :func:`_coords` does."""
+    a = _v.real_array(name, values)
+    return _coords(name, a.ravel()).reshape(a.shape) if a.size else a
 
 
 def no_sliding_curve(e):
@@ -797,9 +821,12 @@ def no_sliding_curve(e):
 
     Corollary 2.1: above ``u = (1-e) / (2 sqrt(2e))`` no solution slides.
 
-    Vectorised over ``e``; infinite at ``e = 0``.
+    Vectorised over ``e`` in [0, 1]; infinite at ``e = 0``, 0 at ``e = 1``.
     """
-    e = np.asarray(e, dtype=float)
+    e = _v.real_array("e", e)
+    # the curve is drawn over the closed window [0, 1]: e = 1 (u = 0) is its end
+    if not np.all(np.isfinite(e) & (e >= 0.0) & (e <= 1.0)):
+        raise ValueError(f"e (restitution coefficient) values must be finite and in [0, 1], got {e!r}")
     with np.errstate(divide="ignore"):
         return (1.0 - e) / (2.0 * np.sqrt(2.0 * e))
 

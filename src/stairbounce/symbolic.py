@@ -21,6 +21,13 @@ from .model import SLIDING, _constants, _step, check_count, check_e, check_u
 __all__ = ["Word", "sliding_word", "parse_word"]
 
 INFINITY = "\u221e"
+# longest word text parse_word reads: a million characters (regular expression
+# and integer conversion stay linear and fast)
+_MAX_WORD_TEXT = 10**6
+# steps iterated per call of the compiled kernel in sliding_word: the steps'
+# impact numbers are kept only up to the slide, and a long search can be
+# interrupted between blocks
+_BLOCK = 1 << 16
 
 
 @dataclass(frozen=True)
@@ -35,7 +42,9 @@ class Word:
     letters: tuple[int, ...]
 
     def __post_init__(self):
-        letters = tuple(int(a) for a in self.letters)
+        if isinstance(self.letters, (str, bytes)) or not isinstance(self.letters, (tuple, list, np.ndarray)):
+            raise ValueError(f"letters must be a tuple of integer jump numbers, got {self.letters!r}")
+        letters = tuple(check_count(f"letters[{i}]", a, 0) for i, a in enumerate(self.letters))
         if not letters or letters[0] < 1 or letters[-1] < 1 or min(letters) < 0:
             raise ValueError(
                 "letters must be non-negative jump numbers, the first and last >= 1, "
@@ -73,10 +82,17 @@ class Word:
 def parse_word(text: str) -> Word:
     """Read a word written as in the paper, ``(2, 0, 3, 1, 0^inf)`` (or with the
     infinity sign)."""
+    if not isinstance(text, str):
+        raise ValueError(f"word must be a string like (2, 0, 3, 1, 0^inf), got {text!r}")
+    if len(text) > _MAX_WORD_TEXT:
+        raise ValueError(f"word must be at most {_MAX_WORD_TEXT} characters long, got {len(text)}")
     m = re.fullmatch(r"\s*\(\s*((?:\d+\s*,\s*)+)0\^(?:inf|\u221e)\s*\)\s*", text)
     if not m:
         raise ValueError(f"word must look like (2, 0, 3, 1, 0^inf), got {text!r}")
-    return Word(tuple(int(a) for a in m.group(1).split(",") if a.strip()))
+    letters = [a.strip() for a in m.group(1).split(",") if a.strip()]
+    if any(len(a) > 18 for a in letters):  # int64, as the scan stores them
+        raise ValueError(f"word letters must be below 10^18, got {text[:60]!r}...")
+    return Word(tuple(int(a) for a in letters))
 
 
 def terminal_can_print_infinity(stream=None) -> bool:
@@ -93,15 +109,16 @@ def terminal_can_print_infinity(stream=None) -> bool:
 def _impacts_until_slide(y, v, e, T, ratio, max_steps, ks):
     """Impact numbers of the steps from ``(y, v)`` up to the first slide.
 
-    Fills ``ks[:n]`` and returns ``n``, the step count including the sliding
-    step, or 0 when the orbit does not slide within ``max_steps`` steps.
+    Fills ``ks[:n]`` and returns ``(n, y, v)``: ``n`` is the step count
+    including the sliding step, or 0 when the orbit does not slide within
+    ``max_steps`` steps, and ``(y, v)`` the state reached.
     """
     for n in range(max_steps):
         y, v, k = _step(y, v, e, T, ratio)
         ks[n] = k
         if k == SLIDING:
-            return n + 1
-    return 0
+            return n + 1, y, v
+    return 0, y, v
 
 
 def word_from_impacts(impacts) -> Word:
@@ -146,8 +163,16 @@ def sliding_word(e, u, max_steps=1000):
     e = check_e(e)
     T, ratio = _constants(e, check_u(u))
     max_steps = check_count("max_steps", max_steps, 1)
-    ks = np.empty(max_steps, dtype=np.int64)
-    n = _impacts_until_slide(1.0, 0.0, e, T, ratio, max_steps, ks)
-    if n == 0:
-        return None
-    return word_from_impacts(ks[:n])
+    # blocks of _BLOCK steps: memory grows with the period found, not with
+    # max_steps, and Ctrl-C is seen between blocks
+    block = np.empty(min(max_steps, _BLOCK), dtype=np.int64)
+    done = []
+    y, v, left = 1.0, 0.0, max_steps
+    while left > 0:
+        m = min(left, block.size)
+        n, y, v = _impacts_until_slide(y, v, e, T, ratio, m, block)
+        if n:
+            return word_from_impacts(np.concatenate([*done, block[:n]]))
+        done.append(block[:m].copy())
+        left -= m
+    return None

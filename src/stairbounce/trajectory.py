@@ -17,9 +17,27 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .model import SLIDING, _constants, check_count, check_e, check_state, check_u, iterate
+from numba import njit
 
-__all__ = ["Trajectory", "Flight", "Impact", "Accumulation", "Slide", "trajectory"]
+from . import _validate as _v
+from .model import (
+    SLIDING,
+    _constants,
+    _finite,
+    _impact_time,
+    _state_in_step,
+    check_count,
+    check_e,
+    check_state,
+    check_u,
+    iterate,
+)
+
+__all__ = ["Trajectory", "Flight", "Impact", "Accumulation", "Slide", "Unlisted", "trajectory"]
+
+# Bytes one listed record (a Flight or an Impact with its floats) takes, measured
+# with tracemalloc (tests/test_trajectory.py keeps the estimate honest)
+_RECORD_BYTES = 240
 
 
 @dataclass(frozen=True)
@@ -58,6 +76,19 @@ class Accumulation:
 
 
 @dataclass(frozen=True)
+class Unlisted:
+    """Impacts ``first .. first + count - 1`` of a step with more impacts than
+    ``max_listed``, between ``t_start`` and ``t_end``: not listed, but
+    resolved exactly by ``Trajectory.position``."""
+
+    t_start: float
+    t_end: float
+    step: int
+    first: int
+    count: int
+
+
+@dataclass(frozen=True)
 class Slide:
     """The ball slides along the floor of ``step`` (height ``y``) to its edge."""
 
@@ -83,6 +114,7 @@ class Trajectory:
     impacts: list[Impact] = field(default_factory=list)
     accumulations: list[Accumulation] = field(default_factory=list)
     slides: list[Slide] = field(default_factory=list)
+    unlisted: list[Unlisted] = field(default_factory=list)
 
     @property
     def T(self) -> float:
@@ -94,8 +126,9 @@ class Trajectory:
         return self.steps / self.u
 
     def _local(self, t):
-        """Step index, local time and local (height, velocity) for times ``t``."""
-        t = np.asarray(t, dtype=float)
+        """Step index, local time and local (height, velocity) for times ``t``
+        (a scalar gives 0-d arrays)."""
+        t = _times(t)
         if np.any(~np.isfinite(t)) or np.any(t < 0) or np.any(t > self.duration * (1 + 1e-12)):
             raise ValueError(f"t must be in [0, {self.duration}] (the trajectory's duration)")
         j = np.clip(np.floor(t / self.T).astype(np.int64), 0, max(self.steps - 1, 0))
@@ -105,46 +138,15 @@ class Trajectory:
 
     def _solve_local(self, j, tau):
         """Height above the floor of step ``j`` and vertical velocity at local
-        time ``tau`` (0 <= tau <= T) after entering it, in closed form."""
-        e = self.e
-        j = np.asarray(j)
+        time ``tau`` (0 <= tau <= T) after entering it, in closed form
+        (:func:`stairbounce.model._state_in_step`, the map's own functions)."""
+        j = np.asarray(j, dtype=np.int64)
         tau = np.asarray(tau, dtype=float)
-        y0 = self.edge_y[j]
-        v0 = self.edge_v[j]
-        s = np.sqrt(v0 * v0 + 2.0 * y0)
-        t1 = v0 + s
-        sliding = self.edge_impacts[np.minimum(j + 1, self.steps)] == SLIDING
-        t_inf = v0 + (1.0 + e) / (1.0 - e) * s
-
-        y = y0 + v0 * tau - 0.5 * tau * tau  # flight from the edge
-        v = v0 - tau
-        bouncing = tau >= t1
-        if np.any(bouncing):
-            resting = bouncing & sliding & (tau >= t_inf)
-            b = bouncing & ~resting
-            if e > 0.0 and np.any(b):
-                # impacts with t_k <= tau: Prop. 2.2 with T replaced by tau
-                tb, vb, sb = tau[b], v0[b], s[b]
-                arg = (vb - tb) * (1.0 - e) / (2.0 * sb) + 0.5 * (1.0 + e)
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    kf = np.floor(np.log(np.maximum(arg, 1e-300)) / math.log(e))
-                k = np.clip(np.nan_to_num(kf, nan=1.0), 1, 1e15).astype(np.int64)
-
-                def tk(n):
-                    return vb + (1.0 + e - 2.0 * e ** n.astype(float)) / (1.0 - e) * sb
-
-                for _ in range(3):  # rounding of log: t_k <= tau < t_{k+1}
-                    k = np.where((k > 1) & (tk(k) > tb), k - 1, k)
-                    k = np.where(tk(k + 1) <= tb, k + 1, k)
-                vk = e ** k.astype(float) * sb
-                d = np.clip(tb - tk(k), 0.0, 2.0 * vk)  # on the k-th bounce (model._step_closed)
-                y[b] = -0.5 * d * d + vk * d
-                v[b] = vk - d
-            elif np.any(b):  # e = 0 sticks at the first contact: it slides
-                y[b] = 0.0
-                v[b] = 0.0
-            y[resting] = 0.0
-            v[resting] = 0.0
+        j, tau = np.broadcast_arrays(j, tau)
+        y = np.empty(tau.shape)
+        v = np.empty(tau.shape)
+        _states(self.edge_y, self.edge_v, self.e, (1.0 + self.e) / (1.0 - self.e),
+                j.ravel(), tau.ravel(), y.reshape(-1), v.reshape(-1))
         return y, v
 
     def edge_state(self, j):
@@ -160,17 +162,36 @@ class Trajectory:
         return float(y[0]) + 1.0, float(v[0])
 
     def position(self, t):
-        """position(t) -> (x, y): exact position at times ``t`` (vectorised)."""
-        t = np.asarray(t, dtype=float)
+        """position(t) -> (x, y): exact position at times ``t`` (a number or an
+        array of them; a number gives 0-d arrays)."""
         j, _, y, _ = self._local(t)
-        return self.u * t, y - j
+        return self.u * _times(t), y - j
 
     def velocity(self, t):
         """velocity(t) -> (vx, vy): horizontal and vertical velocity at ``t``
-        (right limits at impact times)."""
-        t = np.asarray(t, dtype=float)
+        (right limits at impact times; a number gives 0-d arrays)."""
         _, _, _, v = self._local(t)
         return np.full_like(v, self.u), v
+
+
+def _times(t):
+    """Times as a float array: numbers or arrays of real numbers only."""
+    if isinstance(t, np.ndarray):
+        if t.dtype.kind not in "iuf":
+            raise ValueError(f"t must be a number or an array of real numbers, got an array of {t.dtype}")
+        return t.astype(float)
+    if isinstance(t, (list, tuple)):
+        a = np.array(t, dtype=object)
+        for x in a.ravel():
+            _finite("t", x)
+        return a.astype(float)
+    return np.asarray(_finite("t", t))
+
+
+@njit(cache=True)
+def _states(edge_y, edge_v, e, ratio, j, tau, y, v):
+    for i in range(tau.size):
+        y[i], v[i] = _state_in_step(edge_y[j[i]], edge_v[j[i]], e, tau[i], ratio)
 
 
 def trajectory(e, u, y0=1.0, v0=0.0, steps=10, max_listed=30):
@@ -196,8 +217,12 @@ def trajectory(e, u, y0=1.0, v0=0.0, steps=10, max_listed=30):
         Initial vertical velocity.
     steps : int >= 0, default 10
     max_listed : int >= 1, default 30
-        Impacts listed before an accumulation point (the rest of the infinite
-        sequence is still resolved exactly by ``position``).
+        Impacts listed per step: before an accumulation point, and on a step
+        with more impacts than that (the rest, recorded as one
+        :class:`Unlisted`, is still resolved exactly by ``position``).
+
+    The listed records are counted before they are made and refused with a
+    ValueError when they would not fit in the memory available.
     """
     e = check_e(e)
     u = check_u(u)
@@ -206,10 +231,20 @@ def trajectory(e, u, y0=1.0, v0=0.0, steps=10, max_listed=30):
     max_listed = check_count("max_listed", max_listed, 1)
     T, ratio = _constants(e, u)
     ys, vs, ks = iterate(y0, v0, e, u, steps)
+    # a flight and an impact per listed impact, plus up to three records a step
+    records = sum(2 * _listed(int(k), e, max_listed) + 3 if k else 1 for k in ks[1:])
+    _v.check_memory(f"steps = {steps} with max_listed = {max_listed}", records * _RECORD_BYTES)
     traj = Trajectory(e=e, u=u, steps=steps, edge_y=ys, edge_v=vs, edge_impacts=ks)
     for j in range(steps):
         _solve_step(traj, j, ys[j], vs[j], int(ks[j + 1]), e, T, ratio, max_listed)
     return traj
+
+
+def _listed(k, e, max_listed):
+    """Impacts listed for a step with impact number ``k``."""
+    if k == SLIDING:
+        return 1 if e == 0.0 else max_listed
+    return min(k, max_listed)
 
 
 def _solve_step(traj, j, y, v, k, e, T, ratio, max_listed):
@@ -219,19 +254,22 @@ def _solve_step(traj, j, y, v, k, e, T, ratio, max_listed):
     if k == 0:
         traj.flights.append(Flight(t0, t0 + T, y - j, v, j))
         return
-    n = k if k != SLIDING else (1 if e == 0.0 else max_listed)
+    n = _listed(k, e, max_listed)
     tk = v + s  # eq. (2.1)
     vk = s
     traj.flights.append(Flight(t0, t0 + tk, y - j, v, j))
     for i in range(1, n + 1):
         if i > 1:
-            t_next = v + (1.0 + e - 2.0 * e**i) / (1.0 - e) * s  # eq. (2.2)
+            t_next = _impact_time(v, s, e, i)  # eq. (2.2)
             traj.flights.append(Flight(t0 + tk, t0 + t_next, -float(j), vk, j))
             tk = t_next
         traj.impacts.append(Impact(t0 + tk, traj.u * (t0 + tk), -float(j), -vk, e * vk, j))
         vk = e * vk
     if k != SLIDING:
-        traj.flights.append(Flight(t0 + tk, t0 + T, -float(j), vk, j))
+        if k > n:
+            traj.unlisted.append(Unlisted(t0 + tk, t0 + T, j, n + 1, k - n))
+        else:
+            traj.flights.append(Flight(t0 + tk, t0 + T, -float(j), vk, j))
         return
     t_inf = t0 + v + ratio * s
     traj.accumulations.append(Accumulation(t_inf, traj.u * t_inf, -float(j), j, n))

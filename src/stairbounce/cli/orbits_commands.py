@@ -40,7 +40,12 @@ def _sweep(e, u, varied, y0, v0, transient, keep, warm_start):
 
     from ..orbits import orbit_diagram
 
+    from .._validate import check_memory
+
     values = e if varied == "e" else u
+    # the whole sweep, before any slice: the slices (20 bytes an iterate) and
+    # their concatenation (report D3: each slice fitted, the list did not)
+    check_memory(f"keep = {keep} iterates of {values.size} parameter values", 2 * 20 * values.size * keep)
     if values.size * (transient + keep) < _PROGRESS_STEPS or values.size < 2 * _SLICES:
         return orbit_diagram(e, u, y0, v0, transient, keep, warm_start)
 

@@ -22,6 +22,13 @@ FIELD_NAMES = ("word_length", "period", "impacts", "jumps", "status") + MOTION_F
 OVERLAY_NAMES = ("tongues", "bound")
 
 
+# Peak resident memory of a non-tiled `stairbounce scan` per pixel: the scan's
+# 25 bytes, the figure (matplotlib normalises and colours the whole image) and
+# the file; measured 82-132 B/pixel above the interpreter at 1000^2-3000^2
+# pixels (report D3 found 4x the 25 B/pixel the check used to assume)
+_CLI_BYTES_PER_PIXEL = 140
+
+
 @app.command("scan")
 def scan_(
     e: str = typer.Option(
@@ -74,7 +81,9 @@ def scan_(
     if y0 < 0:
         raise CLIError(f"--y0 must be >= 0, got {y0}")
     if tile is None and scheduler is None and workers is None:
-        sc._check_memory(n_e, n_u)  # before the progress bar draws anything
+        # before the progress bar draws anything; the figure and the file
+        # written from the scan take more than the scan itself
+        sc._check_memory(n_e, n_u, _CLI_BYTES_PER_PIXEL)
 
     if field in MOTION_FIELD_NAMES:
         if tile is not None or scheduler is not None or workers is not None:

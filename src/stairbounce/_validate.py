@@ -1,0 +1,156 @@
+"""The validation contract of the public API, in one place.
+
+Contract (README, "Valid numeric range"):
+
+* A real parameter is a number: a Python ``int`` or ``float``, a numpy integer
+  or floating scalar (any ``numbers.Real`` except ``bool``).  Strings, bools,
+  ``None``, complex numbers and arrays are refused, not coerced.
+* A count is an integer (an integral float such as ``1e6`` is accepted), never
+  a bool.
+* Every refusal is a :class:`ValueError` whose message starts with the
+  parameter's name and states the allowed range; no ``TypeError`` or
+  ``OverflowError`` escapes.
+* The map is computed in float64 only where every intermediate stays far from
+  overflow: ``0 <= y <= 1e300``, ``|v| <= 1e150``, ``1e-150 <= u <= 1e150``
+  (so ``v^2``, ``2y``, ``T^2 = 1/u^2`` and ``v T`` are at most about 1e300).
+* Whatever grows with an argument (arrays, listed objects, loops) is estimated
+  before it starts and refused with its size when it cannot fit.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import os
+
+import numpy as np
+
+Y_MAX = 1e300
+V_MAX = 1e150
+U_MIN = 1e-150
+U_MAX = 1e150
+_INT64_MAX = 2**63 - 1
+
+
+def _is_real(x):
+    return isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_))
+
+
+def real(name, x):
+    """``x`` as a finite float, or ValueError naming ``name``."""
+    if not _is_real(x):
+        raise ValueError(f"{name} must be a real number (int or float), got {_show(x)}")
+    try:
+        f = float(x)
+    except (OverflowError, ValueError, TypeError):
+        raise ValueError(f"{name} must be finite (at most 1.8e308 in size), got {_show(x)}") from None
+    if not math.isfinite(f):
+        raise ValueError(f"{name} must be finite, got {f}")
+    return f
+
+
+def count(name, n, minimum, maximum=None):
+    """``n`` as an int in ``[minimum, maximum]`` (no upper bound when None)."""
+    rule = f"an integer >= {minimum}" if maximum is None else f"an integer in [{minimum}, {maximum}]"
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (numbers.Integral, float, np.floating)):
+        raise ValueError(f"{name} must be {rule}, got {_show(n)}")
+    if not isinstance(n, numbers.Integral):
+        if not (math.isfinite(n) and float(n).is_integer()):
+            raise ValueError(f"{name} must be {rule}, got {_show(n)}")
+    n = int(n)
+    if n < minimum or (maximum is not None and n > maximum):
+        raise ValueError(f"{name} must be {rule}, got {_show(n)}")
+    if n > _INT64_MAX:  # nothing that counts (numpy, numba) goes further
+        raise ValueError(f"{name} must be {rule} and below 2**63, got {_show(n)}")
+    return n
+
+
+def flag(name, x):
+    """A bool (Python or numpy)."""
+    if not isinstance(x, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False, got {_show(x)}")
+    return bool(x)
+
+
+def _show(x):
+    """A short repr: huge integers by their number of digits."""
+    if isinstance(x, numbers.Integral) and not isinstance(x, (bool, np.bool_)):
+        n = int(x)
+        if abs(n) > 10**30:
+            return f"an integer of {len(str(abs(n)))} digits"
+        return str(n)
+    r = repr(x)
+    return r if len(r) <= 80 else r[:77] + "..."
+
+
+# --------------------------------------------------------------------------- #
+# Memory                                                                      #
+# --------------------------------------------------------------------------- #
+
+
+def available_memory():
+    """Bytes of memory available now (MemAvailable on Linux, else free pages), or None."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - no way to tell
+        return None
+
+
+def human(n):
+    """``1536`` -> ``'1.5 KiB'``."""
+    n = float(n)
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{int(n)} B" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024.0
+    return f"{n} B"  # pragma: no cover
+
+
+def check_memory(what, nbytes, available=None):
+    """Refuse ``what`` (a phrase naming the argument, e.g. ``"steps = 10**12"``)
+    when its peak of ``nbytes`` exceeds the memory available now."""
+    avail = available_memory() if available is None else available
+    if avail is not None and nbytes > avail:
+        raise ValueError(
+            f"{what} needs about {human(nbytes)} of memory, more than the "
+            f"{human(avail)} available: ask for less"
+        )
+    return nbytes
+
+
+def real_array(name, value):
+    """``value`` (a number or a sequence/array of numbers) as a float64 array.
+
+    Elements must be real numbers as for :func:`real` (numeric numpy arrays
+    pass as they are); strings, bools, None and complex numbers are refused.
+    Finiteness and ranges are left to the caller.
+    """
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind not in "iuf":
+            raise ValueError(f"{name} must hold real numbers, got an array of {value.dtype}")
+        return value.astype(np.float64)
+    if _is_real(value):
+        return np.asarray(real(name, value))
+    if isinstance(value, (list, tuple)):
+        try:
+            obj = np.array(value, dtype=object)
+        except ValueError:  # ragged nesting
+            raise ValueError(f"{name} must be a real number or a 1-D array of them, got {_show(value)}") from None
+        out = np.empty(obj.shape)
+        for i, x in enumerate(obj.ravel()):
+            if not _is_real(x):
+                raise ValueError(f"{name}[{i}] must be a real number (int or float), got {_show(x)}")
+            try:
+                out.flat[i] = float(x)
+            except OverflowError:
+                raise ValueError(f"{name}[{i}] must be finite (at most 1.8e308 in size), got {_show(x)}") from None
+        return out
+    raise ValueError(f"{name} must be a real number or a 1-D array of them, got {_show(value)}")
+
