@@ -105,7 +105,7 @@ def test_bad_input(stores, tmp_path, monkeypatch):
         store_box_counts(stores[32], which="all")
     with pytest.raises(ValueError, match="connectivity must be 4 or 8"):
         store_box_counts(stores[32], connectivity=6)
-    with pytest.raises(ValueError, match="sizes must be integers >= 1"):
+    with pytest.raises(ValueError, match=r"sizes must be an integer in \[1, "):
         store_box_counts(stores[32], sizes=[0, 2])
     with pytest.raises(ValueError, match="threads must be an integer >= 1"):
         store_box_counts(stores[32], threads=0)
