@@ -533,7 +533,10 @@ def test_cli_tiled_scan_writes_the_store_and_resumes(tmp_path, capsys, reference
     assert f"wrote {store}: 45 x 38 pixels (e x u), 9 tiles of 16, computed in this process" in out
     xr.testing.assert_identical(xr.open_zarr(store, consolidated=False).compute(), reference)
     assert png.stat().st_size > 0
+    # the store is resumed; the picture that exists is replaced only with --force
     code, out, err = run(SCAN_ARGS + ["--tile", 16, "--out", store, "--png", png], capsys)
+    assert code == 2 and "exists: not replaced" in err
+    code, out, err = run(SCAN_ARGS + ["--tile", 16, "--out", store, "--png", png, "--force"], capsys)
     assert code == 0 and "(9 already complete)" in out
 
 
@@ -583,7 +586,7 @@ def test_cli_tiled_scan_bad_input_exits_2(tmp_path, capsys, extra, message):
 def test_cli_refuses_a_different_scan_on_the_store(tmp_path, capsys):
     store = tmp_path / "atlas.zarr"
     assert run(SCAN_ARGS + ["--tile", 16, "--out", store, "--png", tmp_path / "p.png"], capsys)[0] == 0
-    args = SCAN_ARGS[:-1] + ["500", "--tile", 16, "--out", store, "--png", tmp_path / "p.png"]
+    args = SCAN_ARGS[:-1] + ["500", "--tile", 16, "--out", store, "--png", tmp_path / "p2.png"]
     code, _, err = run(args, capsys)
     assert code == 2 and "holds a different scan (max_iter: store 400, asked 500)" in err
 
@@ -626,7 +629,7 @@ def test_cli_render_reduces_large_stores_by_blocks(tmp_path, capsys, store):
     code, out, err = run(["render", store, "--png", png, "--max-pixels", 200, "--field", "period"], capsys)
     assert code == 0, err
     assert "period, 15 x 12 pixels, blocks of 3 x 3 (mode)" in out
-    code, out, _ = run(["render", store, "--png", png, "--max-pixels", 200, "--reduce", "stride"], capsys)
+    code, out, _ = run(["render", store, "--png", png, "--max-pixels", 200, "--reduce", "stride", "--force"], capsys)
     assert code == 0 and "(stride)" in out
 
 

@@ -12,6 +12,7 @@ one fails, and caches the expensive datasets on disk keyed by their inputs;
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import html
 import json
@@ -49,6 +50,8 @@ class Settings:
     scale: float = 1.0
     max_iter: int = 1000
     cache_dir: Path | None = None  # None: no cache
+    # replace existing files that are not from an earlier run into this folder
+    overwrite: bool = False
 
     def px(self, n):
         """A pixel count of the default set, scaled (at least 16)."""
@@ -93,13 +96,32 @@ def _cached(settings, kind, inputs, compute):
         try:
             with xr.open_dataset(path) as ds:
                 return ds.load()
-        except (OSError, ValueError):
-            path.unlink(missing_ok=True)  # a damaged cache entry is recomputed
+        except (OSError, ValueError, RuntimeError):
+            with contextlib.suppress(OSError):
+                path.unlink()  # a damaged cache entry is recomputed
     ds = compute()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path, overwrite=True) as tmp:  # our own cache
+            ds.to_netcdf(tmp)
+    except (OSError, ValueError) as exc:
+        # an unwritable or full cache costs time, never a figure
+        _cache_warning(settings.cache_dir, exc)
     return ds
+
+
+_CACHE_WARNED = set()
+
+
+def _cache_warning(cache_dir, exc):
+    import warnings
+
+    key = str(cache_dir)
+    if key not in _CACHE_WARNED:
+        _CACHE_WARNED.add(key)
+        reason = " ".join(str(exc).split())
+        warnings.warn(f"cannot write the cache {cache_dir} ({reason}): computing without it",
+                      RuntimeWarning, stacklevel=3)
 
 
 def _scan(settings, e, u, n_e, n_u):
@@ -112,11 +134,46 @@ def _scan(settings, e, u, n_e, n_u):
     )
 
 
+def _replaceable(settings):
+    """Whether files in the output folder may be replaced: asked for, or the
+    folder holds the manifest of an earlier run (its files are ours)."""
+    if settings.overwrite:
+        return True
+    try:
+        manifest = json.loads((Path(settings.out) / "manifest.json").read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(manifest, dict) and "stairbounce_version" in manifest
+
+
+def output_files(settings, names):
+    """The files :func:`make_figures` and :func:`write_report` write for ``names``."""
+    out = Path(settings.out)
+    return [out / f"{n}.{settings.fmt}" for n in names] + [
+        out / "report.md", out / "report.html", out / "manifest.json"]
+
+
+def check_outputs(settings, names):
+    """Refuse, before any figure is made, a folder where an existing file
+    would be replaced without ``overwrite`` (and not from an earlier run), or
+    where a target is a folder stairbounce did not write."""
+    from ._io import check_output
+
+    out = Path(settings.out)
+    if not out.exists():
+        if not out.parent.is_dir() and str(out.parent):
+            raise ValueError(f"cannot write {out}: folder {out.parent} does not exist")
+        return
+    replace = _replaceable(settings)
+    for path in output_files(settings, names):
+        check_output(path, overwrite=replace)
+
+
 def _save(fig, settings, name):
     import matplotlib.pyplot as plt
 
     path = Path(settings.out) / f"{name}.{settings.fmt}"
-    with atomic_path(path) as tmp:
+    with atomic_path(path, overwrite=_replaceable(settings)) as tmp:
         fig.savefig(tmp, dpi=settings.dpi, format=settings.fmt)
     plt.close(fig)
     return path.name
@@ -483,6 +540,7 @@ def write_report(results, settings: Settings, total_seconds=None):
     version, timings), all written atomically.
     """
     out = Path(settings.out)
+    replace = _replaceable(settings)
     summary = [Row(f"{r.name}: {x.quantity}", x.paper, x.measured, x.agrees)
                for r in results for x in r.rows]
     md = [
@@ -509,10 +567,10 @@ def write_report(results, settings: Settings, total_seconds=None):
     if total_seconds is not None:
         md += [f"Total time: {total_seconds:.1f} s.", ""]
     paths = []
-    with atomic_path(out / "report.md") as tmp:
+    with atomic_path(out / "report.md", overwrite=replace) as tmp:
         tmp.write_text("\n".join(md))
     paths.append(out / "report.md")
-    with atomic_path(out / "report.html") as tmp:
+    with atomic_path(out / "report.html", overwrite=replace) as tmp:
         tmp.write_text(_html(results, settings, summary, total_seconds))
     paths.append(out / "report.html")
     manifest = {
@@ -525,7 +583,7 @@ def write_report(results, settings: Settings, total_seconds=None):
             for r in results
         ],
     }
-    with atomic_path(out / "manifest.json") as tmp:
+    with atomic_path(out / "manifest.json", overwrite=replace) as tmp:
         tmp.write_text(json.dumps(manifest, indent=2, default=_jsonable))
     paths.append(out / "manifest.json")
     return paths

@@ -70,6 +70,10 @@ _FIELDS = {
     "impacts": (np.int64, "finite impacts per period (the accumulation not counted)"),
 }
 _BYTES_PER_PIXEL = sum(np.dtype(dt).itemsize for dt, _ in _FIELDS.values())
+# Zarr's fill values, what a chunk that was never written (or was deleted) reads
+# as: none is a value a scan can produce, so a missing chunk is never taken for
+# data (status 0 means "found"; 0 is a valid word length where nothing is found).
+FILL_VALUES = {"status": 255, "word_length": -1, "jumps": -1, "period": -1, "impacts": -1}
 
 
 # --------------------------------------------------------------------------- #
@@ -586,22 +590,31 @@ def _format(path):
     raise ValueError(f"path must end in .zarr or .nc, got {str(path)!r}")
 
 
-def save(ds, path, chunks=256):
-    """save(ds, path, chunks=256) -> None
+def save(ds, path, chunks=256, overwrite=False):
+    """save(ds, path, chunks=256, overwrite=False) -> None
 
     Write a scan to ``.zarr`` (chunked ``chunks x chunks``) or ``.nc`` (netCDF4,
     compressed), atomically: under a temporary name, renamed when complete.
+
+    An existing ``path`` is replaced only with ``overwrite=True``, and an
+    existing folder only when it is a store this package wrote
+    (:func:`stairbounce._io.atomic_path`); otherwise ``ValueError`` names it.
+    In a Zarr store a chunk that is missing reads as :data:`FILL_VALUES`
+    (status 255, counts -1), never as a valid result.
     """
     from ._io import atomic_path
 
     fmt = _format(path)
     chunks = check_count("chunks", chunks, 1)
-    with atomic_path(path) as tmp:
+    with atomic_path(path, overwrite=overwrite) as tmp:
         if fmt == "zarr":
             enc = {
                 k: {"chunks": tuple(min(chunks, s) for s in ds[k].shape)}
                 for k in ds.data_vars
             }
+            for k in enc:
+                if k in FILL_VALUES and ds[k].dtype == _FIELDS[k][0]:
+                    enc[k]["fill_value"] = FILL_VALUES[k]
             ds.to_zarr(tmp, mode="w", encoding=enc, consolidated=False)
         else:
             enc = {k: {"zlib": True, "complevel": 4} for k in ds.data_vars}
@@ -618,5 +631,11 @@ def load(path):
         raise ValueError(f"no such file: {path}")
     engine = "zarr" if fmt == "zarr" else "netcdf4"
     kw = {"consolidated": False} if fmt == "zarr" else {}
-    with xr.open_dataset(path, engine=engine, chunks=None, **kw) as ds:
-        return ds.load()
+    try:
+        with xr.open_dataset(path, engine=engine, chunks=None, **kw) as ds:
+            return ds.load()
+    except (OSError, RuntimeError, ValueError, KeyError, TypeError) as exc:
+        # a damaged file or chunk (a decompression error, a truncated file):
+        # one line naming the file, not the reader's traceback
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise ValueError(f"cannot read {path} as a scan ({type(exc).__name__}: {reason})") from None

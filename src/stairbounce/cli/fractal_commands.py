@@ -8,7 +8,7 @@ import numpy as np
 import typer
 
 from .._io import atomic_path
-from ._app import CLIError, app, parse_range
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range
 
 # Scans with more pixel-steps than this show a progress bar.
 _PROGRESS_WORK = 2e8
@@ -33,7 +33,7 @@ def _read_region(path: Path, region: str) -> np.ndarray:
             grey = np.asarray(im.convert("L"), dtype=np.uint8)
     except FileNotFoundError:
         raise CLIError(f"--image: no such file: {path}") from None
-    except (UnidentifiedImageError, OSError, ValueError) as exc:
+    except (UnidentifiedImageError, OSError, ValueError, Image.DecompressionBombError) as exc:
         raise CLIError(f"--image: cannot read {path} as an image ({exc})") from None
     dark = grey < 128
     return dark if region == "black" else ~dark
@@ -70,7 +70,8 @@ def dimension(
     offsets: int = typer.Option(1, "--offsets", help="Grid shifts per axis, counts averaged over them (>= 1)."),
     connectivity: int = typer.Option(4, "--connectivity", help="Neighbours that define the border: 4 or 8."),
     png: Path = typer.Option(None, "--png", help="Draw the border beside the log-log plot (Figs. 6/7) to this file (.png, .pdf, .svg)."),
-    dpi: int = typer.Option(120, "--dpi", help="Resolution of raster output."),
+    dpi: int = typer.Option(120, "--dpi", help="Resolution of raster output (10-1200)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
     """Box-counting dimension of the border of the sliding region (Figs. 6 and 7), or of a picture."""
     from ..fractal import boundary, box_dimension
@@ -86,6 +87,8 @@ def dimension(
     if offsets < 1:
         raise CLIError(f"--offsets must be an integer >= 1, got {offsets}")
     fr = _parse_fit_range(fit_range)
+    check_dpi(dpi)
+    check_outputs(force, png=png)
 
     if image is not None:
         mask = _read_region(image, region)
@@ -137,7 +140,7 @@ def dimension(
         from ..plot import plot_box_dimension
 
         fig = plot_box_dimension(result, image=plot_image, title=str(image) if image is not None else None)
-        with atomic_path(png) as tmp:
+        with atomic_path(png, overwrite=force) as tmp:
             fig.savefig(tmp, dpi=dpi)
         plt.close(fig)
         typer.echo(f"wrote {png}")

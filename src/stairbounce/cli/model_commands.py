@@ -12,7 +12,7 @@ from .._io import atomic_path
 from ..model import SLIDING, iterate
 from ..symbolic import sliding_word, terminal_can_print_infinity
 from ..trajectory import trajectory
-from ._app import CLIError, app
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs
 
 E_HELP = "Restitution coefficient, in [0, 1)."
 U_HELP = "Horizontal speed in normalised units (u > 0); one step takes 1/u."
@@ -72,7 +72,8 @@ def trajectory_(
     steps: int = typer.Option(8, "--steps", help="Number of steps (>= 1)."),
     out: Path = typer.Option(Path("trajectory.png"), "--out", help="Figure file (.png, .pdf, .svg)."),
     animate: Path = typer.Option(None, "--animate", help="Also write an animation of the ball (.gif)."),
-    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output."),
+    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
     """Draw the ball's path on the staircase (Fig. 1) beside its Poincare section (Fig. 2)."""
     if steps < 1:
@@ -81,6 +82,8 @@ def trajectory_(
         raise CLIError(f"--out must end in .png, .pdf or .svg, got {str(out)!r}")
     if animate is not None and animate.suffix.lower() != ".gif":
         raise CLIError(f"--animate must end in .gif, got {str(animate)!r}")
+    check_dpi(dpi)
+    check_outputs(force, out=out, animate=animate)
     traj = trajectory(e, u, y0, v0, steps)
 
     import matplotlib
@@ -94,7 +97,7 @@ def trajectory_(
     plot_trajectory(traj, ax=a1)
     plot_poincare_section(traj.edge_y, traj.edge_v, traj.edge_impacts, ax=a2)
     fig.tight_layout()
-    with atomic_path(out) as tmp:
+    with atomic_path(out, overwrite=force) as tmp:
         fig.savefig(tmp, dpi=dpi)
     plt.close(fig)
     typer.echo(
@@ -102,6 +105,6 @@ def trajectory_(
         f"{len(traj.accumulations)} accumulation points, {len(traj.slides)} slides"
     )
     if animate is not None:
-        with atomic_path(animate) as tmp:
+        with atomic_path(animate, overwrite=force) as tmp:
             animate_trajectory(traj, tmp)
         typer.echo(f"wrote {animate}")
