@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-CORE = ["model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas"]
+CORE = ["model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas", "_io", "_interrupt"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

@@ -573,3 +573,115 @@ def test_temporaries_of_a_killed_process_are_cleaned_by_the_next_run(tmp_path, c
     code, _, err = run(["scan", "--size", "8x8", "--max-iter", "20", "--png", tmp_path / "p.png"], capsys)
     assert code == 0, err
     assert leftovers(tmp_path) == sorted([".notes.part.png", live.name])
+
+
+# --------------------------------------------------------------------------- #
+# 9. Ctrl-C inside long numba kernels                                          #
+# --------------------------------------------------------------------------- #
+
+
+def test_sliced_orbit_kernel_is_bit_identical_to_the_plain_iteration():
+    """The transient runs in slices of 2**16 steps that check the halt flag;
+    the iterates are those of model.iterate (one _step after another), bit for
+    bit, across slice boundaries and a remainder."""
+    from stairbounce import orbits
+    from stairbounce.model import iterate
+
+    transient = 2 * orbits._SLICE + 17
+    us = np.array([0.31, 0.62, 0.93])
+    ds = orbits.orbit_diagram(0.1, us, y0=0.1, v0=0.0, transient=transient, keep=5)
+    warm = orbits.orbit_diagram(0.1, us, y0=0.1, v0=0.0, transient=transient, keep=5, warm_start=True)
+    y, v = 0.1, 0.0
+    for i, u in enumerate(us):
+        ys, vs, _ = iterate(0.1, 0.0, 0.1, u, transient + 5)
+        np.testing.assert_array_equal(ds.y.values[i], ys[transient + 1:])
+        np.testing.assert_array_equal(ds.v.values[i], vs[transient + 1:])
+        ys, vs, _ = iterate(y, v, 0.1, u, transient + 5)
+        np.testing.assert_array_equal(warm.y.values[i], ys[transient + 1:])
+        y, v = ys[-1], vs[-1]
+
+
+def test_kernels_return_at_once_when_halted_and_agree_when_not(reference):
+    """A set halt flag stops the scan kernel before any pixel is written; a
+    clear one changes nothing (the scan through the helper thread equals the
+    kernel called in place)."""
+    from stairbounce import plane
+
+    es, us = reference.e.values, reference.u.values
+    chunk, order = plane._chunking(es.size * us.size, 2)
+    outs = [np.full((us.size, es.size), 99, dtype=reference[k].dtype)
+            for k in ("status", "word_length", "jumps", "period", "impacts")]
+    plane._scan_fast(es, us, 400, 1.0, 0.0, order, chunk, *outs, np.ones(1, np.int64))
+    assert all((o == 99).all() for o in outs)
+    plane._scan_fast(es, us, 400, 1.0, 0.0, order, chunk, *outs, np.zeros(1, np.int64))
+    for o, k in zip(outs, ("status", "word_length", "jumps", "period", "impacts")):
+        np.testing.assert_array_equal(o, reference[k].values)
+
+
+LONG_RUNS = {
+    "orbit-diagram": ["orbit-diagram", "--e", "0.1", "--u", "0.3:1", "--n", "50",
+                      "--transient", "1000000000000", "--png", "x.png"],
+    "scan": ["scan", "--e", "0.999:1", "--u", "0:0.001", "--size", "64x64",
+             "--max-iter", "2000000000", "--png", "x.png"],
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(LONG_RUNS))
+def test_ctrl_c_stops_a_long_kernel_with_130_and_no_file(name, tmp_path):
+    """Campaign D9: both ran on 30 s after SIGINT.  Here SIGINT is sent once the
+    kernel runs (its helper thread exists); the process must end with 130
+    within a few seconds and leave nothing in the folder."""
+    # Ctrl-C at its default in the child (an earlier test may leave it ignored
+    # here, and a child inherits an ignored SIGINT)
+    p = subprocess.Popen([EXE, *LONG_RUNS[name]], cwd=tmp_path, stderr=subprocess.PIPE, text=True,
+                         start_new_session=True, preexec_fn=_default_sigint)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and p.poll() is None:
+            if _kernel_thread_running(p.pid):
+                break
+            time.sleep(0.2)
+        time.sleep(1.0)
+        assert p.poll() is None, p.stderr.read()
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=20)  # a kernel ignoring Ctrl-C runs for hours
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    assert p.returncode == 130, err
+    assert "interrupted" in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def _default_sigint():
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def _kernel_thread_running(pid):
+    try:
+        names = [Path(f"/proc/{pid}/task/{t}/comm").read_text().strip() for t in os.listdir(f"/proc/{pid}/task")]
+    except OSError:
+        return False
+    return any(n.startswith("stairbounce-ker") for n in names)
+
+
+def test_read_only_file_system_is_one_line_before_any_work(tmp_path, capsys):
+    """Campaign cases 165, 194, 217, 242: OSError [Errno 30] tracebacks."""
+    if os.geteuid() != 0:
+        pytest.skip("mounting a read-only tmpfs needs root")
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=1m", "tmpfs", str(ro)], capture_output=True, text=True)
+    if r.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {r.stderr.strip()}")
+    try:
+        for args in (["scan", "--size", "12x8", "--out", ro / "x.nc"],
+                     ["scan", "--size", "12x8", "--tile", "4", "--out", ro / "x.zarr"],
+                     ["trajectory", "--e", "0.05", "--u", "0.93", "--out", ro / "t.png"],
+                     ["figures", "--only", "fig3", "--out", ro / "f"]):
+            code, _, err = run(args, capsys)
+            assert code == 2 and one_line_error(err) and "read-only file system" in err, err
+    finally:
+        subprocess.run(["umount", str(ro)], check=False)

@@ -209,15 +209,13 @@ def _check_path(path):
 
 def _writable(folder):
     """Whether a file can be created in ``folder`` (tried: root ignores mode bits)."""
-    if not os.access(folder, os.W_OK):
-        return False
-    probe = Path(folder) / f".stairbounce-probe-{os.getpid()}-{threading.get_ident()}"
-    try:
-        probe.touch(exist_ok=False)
-    except OSError:
-        return False
-    probe.unlink(missing_ok=True)
-    return True
+    return _unwritable_reason(folder) is None
+
+
+def _unwritable_reason(folder):
+    from ._io import _probe_writable
+
+    return _probe_writable(folder)
 
 
 def _template(probe, es, us, tile):
@@ -430,8 +428,9 @@ def scan_to_zarr(
     us = pixel_centres(a["u_min"], a["u_max"], n_u)
     template, encoding = _template(probe, es, us, tile)
     rows, cols = tile_slices(n_u, tile), tile_slices(n_e, tile)
-    if not path.exists() and not _writable(path.parent):
-        raise ValueError(f"cannot write {path}: folder {path.parent} is not writable")
+    reason = None if path.exists() else _unwritable_reason(path.parent)
+    if reason is not None:
+        raise ValueError(f"cannot write {path}: folder {path.parent} is not writable ({reason})")
 
     own = isinstance(client, str)
     if own:  # connect before the store exists: an unreachable scheduler leaves nothing
@@ -556,7 +555,7 @@ def _run_on_dask(client, args, n_done, total, progress):
             with contextlib.suppress(Exception):
                 from distributed import wait
 
-                wait(pending, timeout=30)
+                wait(pending, timeout=5)
 
 
 def downsample(ds, max_pixels, method="mode"):

@@ -28,6 +28,7 @@ import xarray as xr
 import numba
 from numba import njit, prange
 
+from ._interrupt import halted
 from .model import (
     _COUNTED_IMPACTS,
     SLIDING,
@@ -162,12 +163,14 @@ def _lane_step(y, v, e, T, ratio, half_TT):
 
 
 @njit(cache=True)
-def _run_chunk(es, us, max_iter, y0, v0, start, stop, status, word_length, jumps, period, impacts):
+def _run_chunk(es, us, max_iter, y0, v0, start, stop, status, word_length, jumps, period, impacts, halt):
     """Pixels ``start..stop-1`` (row-major) of the grid, LANES at a time.
 
     A lane takes the next pixel as soon as its own finishes, so lanes stay busy
     whatever the mix of cheap and expensive pixels.  Each pixel sees exactly
     the sequence of operations of ``_slide_or_steps`` with ``model._step``.
+    Returns early, leaving pixels unwritten, once ``halt[0]`` is set (Ctrl-C,
+    :mod:`stairbounce._interrupt`); it is read once per lockstep step.
     """
     L = LANES
     ne = es.shape[0]
@@ -203,6 +206,8 @@ def _run_chunk(es, us, max_iter, y0, v0, start, stop, status, word_length, jumps
             active += 1
 
     while active > 0:
+        if halted(halt):
+            return
         # the common step, vectorised over lanes
         nmore = 0
         for l in range(L):
@@ -297,15 +302,16 @@ def _load_lane(l, p, es, us, y0, v0, from_rest, Y, V, E, TT, RATIO, HALF_TT, PER
     PIX[l] = p
 
 
-@njit(cache=True, parallel=True)
-def _scan_fast(es, us, max_iter, y0, v0, order, chunk, status, word_length, jumps, period, impacts):
+@njit(cache=True, parallel=True, nogil=True)
+def _scan_fast(es, us, max_iter, y0, v0, order, chunk, status, word_length, jumps, period, impacts, halt):
     """Fast kernel: chunks of ``chunk`` pixels in the order ``order``, LANES
-    pixels of a chunk in lockstep (:func:`_run_chunk`)."""
+    pixels of a chunk in lockstep (:func:`_run_chunk`); stops early once
+    ``halt[0]`` is set (then the outputs are incomplete and must be dropped)."""
     npix = es.shape[0] * us.shape[0]
     for c in prange(order.shape[0]):
         s = order[c] * chunk
         _run_chunk(es, us, max_iter, y0, v0, s, min(s + chunk, npix),
-                   status, word_length, jumps, period, impacts)
+                   status, word_length, jumps, period, impacts, halt)
 
 
 def _chunking(npix, threads):
@@ -448,8 +454,11 @@ def scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0):
     _check_memory(es.size, us.size)
     out = {k: np.empty((us.size, es.size), dtype=dt) for k, (dt, _) in _FIELDS.items()}
     chunk, order = _chunking(es.size * us.size, numba.get_num_threads())
-    _scan_fast(
-        es, us, max_iter, y0, v0, order, chunk,
+    from ._interrupt import run_kernel
+
+    # in a helper thread when called from the main thread: Ctrl-C stops it at once
+    run_kernel(
+        _scan_fast, es, us, max_iter, y0, v0, order, chunk,
         out["status"], out["word_length"], out["jumps"], out["period"], out["impacts"],
     )
     from . import __version__
