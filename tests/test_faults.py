@@ -37,6 +37,8 @@ from stairbounce.atlas import scan_to_zarr, tiles_done
 from stairbounce.cli import main
 from stairbounce.plane import FILL_VALUES, load, save, scan
 
+from .test_atlas import StopAfter, stop_after
+
 pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")
 
 WINDOW = dict(e=(0.05, 0.95, 45), u=(0.1, 1.4, 38), max_iter=400)
@@ -267,18 +269,6 @@ def test_a_tile_writes_only_for_the_holder_of_the_lock(tmp_path):
             atlas._run_tile(str(path), token, "not-the-owner", 0, 0, rows[0], cols[0], es,
                             np.linspace(0.2, 1, 38)[rows[0]], 400, 1.0, 0.0, 1)
     assert not tiles_done(path).any()
-
-
-class StopAfter(Exception):
-    pass
-
-
-def stop_after(k):
-    def progress(done, total):
-        if done >= k:
-            raise StopAfter(done)
-
-    return progress
 
 
 @pytest.mark.slow
@@ -541,6 +531,25 @@ def test_an_interrupt_python_lost_still_exits_130(tmp_path, capsys, monkeypatch)
                         "--scale", "0.05", "--no-cache"], capsys)
     assert code == 130 and "interrupted" in err
     assert made == ["fig3"] and not (tmp_path / "f" / "fig4.png").exists()
+
+
+def test_an_interrupted_figures_run_is_rerun_without_force(tmp_path, capsys, monkeypatch):
+    """The folder of a run cut short holds a provisional manifest: it is ours,
+    and the same command run again replaces its figures (campaign 4.1 reruns)."""
+    from stairbounce import figures
+
+    def interrupted(settings):
+        raise KeyboardInterrupt
+
+    out = tmp_path / "f"
+    with monkeypatch.context() as m:
+        m.setitem(figures.FIGURES, "fig4", interrupted)
+        code, _, _ = run(["figures", "--only", "fig3,fig4", "--out", out, "--dpi", "20"], capsys)
+    assert code == 130 and (out / "fig3.png").exists() and not (out / "report.md").exists()
+    code, _, err = run(["figures", "--only", "fig3,fig4", "--out", out, "--dpi", "20", "--scale", "0.05",
+                        "--no-cache"], capsys)
+    assert code == 0, err
+    assert json.loads((out / "manifest.json").read_text())["figures"][0]["name"] == "fig3"
 
 
 # --------------------------------------------------------------------------- #

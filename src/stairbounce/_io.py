@@ -264,7 +264,12 @@ def atomic_path(path, overwrite=False):
     clean_stale_temporaries(_folder(path))
     tmp = _temp_path(path)
     try:
-        yield tmp
+        try:
+            yield tmp
+        except OSError as exc:
+            if exc.filename is None or str(exc.filename) == str(tmp):
+                exc.filename = str(path)  # a full disk names the file asked for, not our temporary
+            raise
         if not os.path.lexists(tmp):
             raise FileNotFoundError(f"the writer of {path} left no file at {tmp}")
         if os.path.lexists(path):

@@ -146,6 +146,17 @@ def _replaceable(settings):
     return isinstance(manifest, dict) and "stairbounce_version" in manifest
 
 
+def _mark_folder(settings):
+    """Write a provisional manifest (replaced by :func:`write_report`), so that
+    a run cut short (Ctrl-C, a kill) leaves a folder recognisably ours: the
+    rerun replaces its figures without --force."""
+    path = Path(settings.out) / "manifest.json"
+    if path.exists() and not _replaceable(settings):
+        return  # not ours: the figures' own writes refuse to replace anything
+    with atomic_path(path, overwrite=True) as tmp:
+        tmp.write_text(json.dumps({"stairbounce_version": __version__, "complete": False, "figures": []}))
+
+
 def output_files(settings, names):
     """The files :func:`make_figures` and :func:`write_report` write for ``names``."""
     out = Path(settings.out)
@@ -505,6 +516,7 @@ def make_figures(settings: Settings, only=None, on_start=None, on_done=None) -> 
         raise ValueError(f"scale must be in [0.01, 16], got {settings.scale!r}")
     names = select(only)
     Path(settings.out).mkdir(parents=True, exist_ok=True)
+    _mark_folder(settings)
     results = []
     for name in names:
         if on_start:

@@ -634,6 +634,11 @@ def load(path):
     """load(path) -> xarray.Dataset
 
     Read a scan written by :func:`save` (``.zarr`` or ``.nc``) into memory.
+
+    A tiled store (:func:`stairbounce.atlas.scan_to_zarr`) reads the same way;
+    where a tile is not computed yet (or a chunk was deleted) it reads as
+    :data:`FILL_VALUES` (status 255), never as a result.  A file or chunk that
+    cannot be decoded raises ``ValueError`` naming the file.
     """
     fmt = _format(path)
     if not os.path.exists(path):

@@ -43,7 +43,11 @@ def main(argv: list[str] | None = None) -> None:
     warnings.showwarning = _one_line_warning
     try:
         code = app(args=argv, prog_name="stairbounce", standalone_mode=False)
-        sys.stdout.flush()  # a full or closed stdout is reported here, not at exit
+        try:
+            sys.stdout.flush()  # a full or closed stdout is reported here, not at exit
+        except OSError as exc:
+            exc.filename = exc.filename or "the standard output"
+            raise
     except (KeyboardInterrupt, typer.Abort):
         _interrupted()
     except SystemExit as exc:
@@ -144,7 +148,7 @@ def _os_message(exc: OSError) -> str:
     what = exc.strerror or str(exc) or type(exc).__name__
     name = exc.filename if exc.filename is not None else None
     if name is None and exc.errno in (errno.ENOSPC, errno.EDQUOT):
-        return f"cannot write: {what.lower()}"
+        return f"cannot write the output: {what.lower()}"
     return f"cannot write {name}: {what.lower()}" if name is not None else f"{what}"
 
 
