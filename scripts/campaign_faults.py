@@ -1,6 +1,6 @@
 """The fault part of the reliability campaign (issue 17), as one script with counts.
 
-    python scripts/campaign_faults.py            # about 2-4 minutes on an idle 2-core machine
+    python scripts/campaign_faults.py            # 71 cases, 12 min on 2 shared cores at load 10
     python scripts/campaign_faults.py --full     # the report's sizes and more trials
     python scripts/campaign_faults.py --only race,damage
 
@@ -329,7 +329,11 @@ def part_ctrlc(t, work, args):
             cmd = ["figures", "--only", only, "--scale", "0.3", "--no-cache", "--out", "f"]
             code, err, sent = _signal_after(cmd, d, delay, sig)
             expect = 130 if sig == signal.SIGINT else -signal.SIGKILL
-            ok = (code == expect) or (not sent and code == 0)
+            finished = (d / "f" / "report.md").exists()
+            # a SIGINT that lands after the work, while Python shuts down (its
+            # handlers are already reset), kills the process by the signal: the
+            # outputs are complete; any Python program does this
+            ok = (code == expect) or (not sent and code == 0) or (finished and code == -signal.SIGINT)
             r = sb(cmd, d)  # the rerun: everything, no temporary left
             ok = ok and r.returncode == 0 and not temporaries(d / "f")
             t.case("ctrlc", f"figures, {signal.Signals(sig).name} at {delay} s", ok,

@@ -281,9 +281,12 @@ def test_unmarked_garbage_is_overwritten(tmp_path, reference):
 KILLED_SCAN = textwrap.dedent(
     """
     import sys, time
+    import numba
     from stairbounce.atlas import scan_to_zarr
+    # one tile at a time (all numba threads each), so that the sleep in
+    # progress paces the tiles and the kill lands mid-scan even under load
     scan_to_zarr(sys.argv[1], e=(0.05, 0.95, 45), u=(0.1, 1.4, 38), max_iter=400, tile=8,
-                 progress=lambda done, total: time.sleep(0.3))
+                 numba_threads=numba.get_num_threads(), progress=lambda done, total: time.sleep(0.3))
     """
 )
 
