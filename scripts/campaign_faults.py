@@ -76,18 +76,23 @@ class Tally:
         self.counts[part][verdict] += 1
         print(f"  [{verdict:6s}] {part:10s} {name}" + (f"  ({detail})" if detail and not ok else ""), flush=True)
 
+    def limit(self, part, name, why):
+        self.counts[part]["limit"] += 1
+        print(f"  [limit ] {part:10s} {name}: {why}", flush=True)
+
     def skip(self, part, name, why):
         self.counts[part]["skipped"] += 1
         print(f"  [skipped] {part:10s} {name}: {why}", flush=True)
 
     def table(self):
-        print("\n| part | cases | ok | defect | skipped |\n|---|---|---|---|---|")
+        print("\n| part | cases | ok | defect | known limit | skipped |\n|---|---|---|---|---|---|")
         total = collections.Counter()
         for part, c in self.counts.items():
             n = sum(c.values())
             total.update(c)
-            print(f"| {part} | {n} | {c['ok']} | {c['DEFECT']} | {c['skipped']} |")
-        print(f"| all | {sum(total.values())} | {total['ok']} | {total['DEFECT']} | {total['skipped']} |")
+            print(f"| {part} | {n} | {c['ok']} | {c['DEFECT']} | {c['limit']} | {c['skipped']} |")
+        print(f"| all | {sum(total.values())} | {total['ok']} | {total['DEFECT']} | {total['limit']} | "
+              f"{total['skipped']} |")
         return total["DEFECT"]
 
 
@@ -336,6 +341,11 @@ def part_ctrlc(t, work, args):
             ok = (code == expect) or (not sent and code == 0) or (finished and code == -signal.SIGINT)
             r = sb(cmd, d)  # the rerun: everything, no temporary left
             ok = ok and r.returncode == 0 and not temporaries(d / "f")
+            if code == -signal.SIGINT and "importlib" in err and not (d / "f").exists() and r.returncode == 0:
+                # Ctrl-C while Python still imports the package, before the
+                # command's own handler exists: Python's traceback, nothing written
+                t.limit("ctrlc", f"figures, SIGINT at {delay} s", "interrupted during start-up (imports)")
+                continue
             t.case("ctrlc", f"figures, {signal.Signals(sig).name} at {delay} s", ok,
                    f"exit {code}, rerun {r.returncode}, left {temporaries(d / 'f')}")
 
