@@ -281,9 +281,12 @@ def test_unmarked_garbage_is_overwritten(tmp_path, reference):
 KILLED_SCAN = textwrap.dedent(
     """
     import sys, time
+    import numba
     from stairbounce.atlas import scan_to_zarr
+    # one tile at a time (all numba threads each), so that the sleep in
+    # progress paces the tiles and the kill lands mid-scan even under load
     scan_to_zarr(sys.argv[1], e=(0.05, 0.95, 45), u=(0.1, 1.4, 38), max_iter=400, tile=8,
-                 progress=lambda done, total: time.sleep(0.3))
+                 numba_threads=numba.get_num_threads(), progress=lambda done, total: time.sleep(0.3))
     """
 )
 
@@ -533,7 +536,10 @@ def test_cli_tiled_scan_writes_the_store_and_resumes(tmp_path, capsys, reference
     assert f"wrote {store}: 45 x 38 pixels (e x u), 9 tiles of 16, computed in this process" in out
     xr.testing.assert_identical(xr.open_zarr(store, consolidated=False).compute(), reference)
     assert png.stat().st_size > 0
+    # the store is resumed; the picture that exists is replaced only with --force
     code, out, err = run(SCAN_ARGS + ["--tile", 16, "--out", store, "--png", png], capsys)
+    assert code == 2 and "exists: not replaced" in err
+    code, out, err = run(SCAN_ARGS + ["--tile", 16, "--out", store, "--png", png, "--force"], capsys)
     assert code == 0 and "(9 already complete)" in out
 
 
@@ -583,7 +589,7 @@ def test_cli_tiled_scan_bad_input_exits_2(tmp_path, capsys, extra, message):
 def test_cli_refuses_a_different_scan_on_the_store(tmp_path, capsys):
     store = tmp_path / "atlas.zarr"
     assert run(SCAN_ARGS + ["--tile", 16, "--out", store, "--png", tmp_path / "p.png"], capsys)[0] == 0
-    args = SCAN_ARGS[:-1] + ["500", "--tile", 16, "--out", store, "--png", tmp_path / "p.png"]
+    args = SCAN_ARGS[:-1] + ["500", "--tile", 16, "--out", store, "--png", tmp_path / "p2.png"]
     code, _, err = run(args, capsys)
     assert code == 2 and "holds a different scan (max_iter: store 400, asked 500)" in err
 
@@ -626,7 +632,7 @@ def test_cli_render_reduces_large_stores_by_blocks(tmp_path, capsys, store):
     code, out, err = run(["render", store, "--png", png, "--max-pixels", 200, "--field", "period"], capsys)
     assert code == 0, err
     assert "period, 15 x 12 pixels, blocks of 3 x 3 (mode)" in out
-    code, out, _ = run(["render", store, "--png", png, "--max-pixels", 200, "--reduce", "stride"], capsys)
+    code, out, _ = run(["render", store, "--png", png, "--max-pixels", 200, "--reduce", "stride", "--force"], capsys)
     assert code == 0 and "(stride)" in out
 
 

@@ -483,8 +483,10 @@ def test_save_load_round_trip(tmp_path, suffix):
     assert back.attrs == ds.attrs
     # nothing left beside it but the file itself
     assert [p.name for p in tmp_path.iterdir()] == [path.name]
-    # overwriting an existing file works and is atomic too
-    sc.save(ds.isel(e=slice(0, 5)), path)
+    # replacing an existing file needs overwrite=True, and is atomic too
+    with pytest.raises(ValueError, match="exists: not replaced"):
+        sc.save(ds.isel(e=slice(0, 5)), path)
+    sc.save(ds.isel(e=slice(0, 5)), path, overwrite=True)
     assert sc.load(path).sizes["e"] == 5
 
 
@@ -647,13 +649,13 @@ def test_cli_scan_defaults_are_figure_4(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     code, stdout, err = _run(["scan", "--out", "fig4.nc"], capsys)
     assert code == 0, err
-    assert (tmp_path / "scan.png").exists()
+    assert not (tmp_path / "scan.png").exists()  # a picture only where asked (--png)
     ds = sc.load(tmp_path / "fig4.nc")
     a = ds.attrs
     assert (a["e_min"], a["e_max"], a["n_e"], a["u_min"], a["u_max"], a["n_u"], a["max_iter"]) == (
         0.0, 1.0, 500, 0.0, 1.5, 350, 1000)
     assert ds.u.values.min() > 0
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig4.nc", "scan.png"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig4.nc"]
 
 
 @pytest.mark.parametrize(

@@ -1,41 +1,434 @@
-"""Atomic file output: write under a temporary name, rename when complete."""
+"""Safe file output: nothing replaced without asking, nothing half-written, no stray temporaries.
+
+Every file or store the package writes goes through :func:`atomic_path`:
+
+- It is written under a hidden temporary name beside the target and renamed
+  when complete, so the target is either the old one or the whole new one.
+  The temporary name carries this host and process
+  (``.NAME.sb<host>p<pid>r<random>.part.SUFFIX``), so a later run can tell
+  the temporaries of a killed process (the owner is dead on this host) from
+  those of a live one, and removes only the former, only ours.
+- An existing target is replaced only with ``overwrite=True`` (``--force``
+  on the command line); a folder is replaced only when it is one of our own
+  outputs (a Zarr store carrying ``stairbounce_version`` or the tile format
+  marker), never any other folder, and never a store another process holds
+  the lock of.
+
+:func:`store_lock` is the exclusive lock of a store: a lock file created with
+``O_EXCL`` beside it, holding the owner's host, pid and a token.  A lock whose
+owner is dead on this host is stale and is taken over; any other lock is a
+refusal naming the holder.
+
+Nothing here imports more than the standard library.
+"""
 
 from __future__ import annotations
 
 import contextlib
+import json
 import os
+import re
+import secrets
 import shutil
-import tempfile
+import socket
+import time
+import zlib
 from pathlib import Path
 
-__all__ = ["atomic_path"]
+__all__ = [
+    "atomic_path",
+    "check_output",
+    "is_our_output",
+    "store_lock",
+    "lock_holder",
+    "OutputExistsError",
+    "StoreLockedError",
+    "clean_stale_temporaries",
+]
+
+
+class OutputExistsError(ValueError):
+    """The output path exists and replacing it was not asked for (or is not allowed)."""
+
+
+class StoreLockedError(ValueError):
+    """Another live process holds the lock of a store."""
+
+
+FORCE_HINT = "give --force (overwrite=True in Python) to replace it"
+
+
+def _host_tag(host=None):
+    # a hostname may hold dots and dashes: the temporary names carry a hash
+    return format(zlib.crc32((host or socket.gethostname()).encode()), "08x")
+
+
+_TEMP = re.compile(r"^\.(?P<name>.+)\.sb(?P<host>[0-9a-f]{8})p(?P<pid>\d+)r[0-9a-z]+\.part(\.[^./]*)?$")
+
+
+def _temp_path(path, kind="new"):
+    path = Path(path)
+    suffix = path.suffix
+    rand = secrets.token_hex(4) + ("o" if kind == "old" else "")
+    return path.with_name(f".{path.name}.sb{_host_tag()}p{os.getpid()}r{rand}.part{suffix}")
+
+
+def _pid_alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, another user's
+        return True
+    except OverflowError:
+        return False
+    return True
+
+
+def _process_start(pid):
+    """Start time (epoch seconds) of a process, None where it cannot be told."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        ticks = int(fields[19])  # field 22 of stat, counted after the command name
+        with open("/proc/stat") as f:
+            boot = next(int(line.split()[1]) for line in f if line.startswith("btime"))
+        return boot + ticks / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError, StopIteration):
+        return None
+
+
+def _owner_gone(host, pid, since):
+    """Whether the process ``pid`` on ``host`` that made something at time
+    ``since`` is certainly gone: only decidable on this host."""
+    if host != _host_tag():
+        return False
+    if pid == os.getpid():
+        return False
+    if not _pid_alive(pid):
+        return True
+    start = _process_start(pid)
+    # the pid was reused by a process started after the thing was made
+    return start is not None and since is not None and start > since + 1.0
+
+
+def clean_stale_temporaries(folder):
+    """clean_stale_temporaries(folder) -> list of Path
+
+    Remove the temporaries (``.NAME.sb<host>p<pid>r<random>.part.SUFFIX``) in
+    ``folder`` that a killed process of this host left behind: the owner pid is
+    dead, or was reused by a process started after the temporary was last
+    written.  Temporaries of other hosts and of live processes are kept; so is
+    everything whose name is not ours.  Returns what was removed.
+    """
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for entry in entries:
+        m = _TEMP.match(entry.name)
+        if m is None:
+            continue
+        try:
+            since = entry.stat(follow_symlinks=False).st_mtime
+        except OSError:
+            continue
+        if not _owner_gone(m["host"], int(m["pid"]), since):
+            continue
+        try:
+            if entry.is_dir(follow_symlinks=False):
+                shutil.rmtree(entry.path)
+            else:
+                os.unlink(entry.path)
+            removed.append(Path(entry.path))
+        except OSError:
+            pass  # another cleaner got there first, or we may not: leave it
+    return removed
+
+
+# --------------------------------------------------------------------------- #
+# What is ours                                                                #
+# --------------------------------------------------------------------------- #
+
+
+def _json(path):
+    try:
+        with open(path, "rb") as f:
+            return json.loads(f.read(1 << 20))
+    except (OSError, ValueError):
+        return None
+
+
+def is_our_output(path):
+    """is_our_output(path) -> bool
+
+    Whether the folder ``path`` is a store this package wrote: a Zarr group
+    (format 3 ``zarr.json`` or format 2 ``.zattrs``) whose attributes carry
+    ``stairbounce_version``, or a tiled store (its ``tiles`` group carries a
+    ``stairbounce-atlas`` format marker).
+    """
+    path = Path(path)
+    if not path.is_dir() or path.is_symlink():
+        return False
+    root = _json(path / "zarr.json")
+    attrs = (root or {}).get("attributes") if isinstance(root, dict) else None
+    if attrs is None:
+        attrs = _json(path / ".zattrs")
+    if isinstance(attrs, dict) and "stairbounce_version" in attrs:
+        return True
+    tiles = _json(path / "tiles" / "zarr.json") or {}
+    marker = tiles.get("attributes", {}).get("format", "") if isinstance(tiles, dict) else ""
+    return isinstance(marker, str) and marker.startswith("stairbounce-atlas")
+
+
+# --------------------------------------------------------------------------- #
+# Checks before the work                                                      #
+# --------------------------------------------------------------------------- #
+
+
+def _folder(path):
+    return path.parent if str(path.parent) else Path(".")
+
+
+def _probe_writable(folder):
+    """Create and remove a file in ``folder`` (root ignores mode bits): None or the reason."""
+    probe = _temp_path(Path(folder) / "probe")
+    try:
+        fd = os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600)
+    except OSError as exc:
+        return (exc.strerror or str(exc)).lower()
+    os.close(fd)
+    with contextlib.suppress(OSError):
+        os.unlink(probe)
+    return None
+
+
+def check_output(path, overwrite=False, option=None):
+    """check_output(path, overwrite=False, option=None) -> Path
+
+    Refuse, before any work, an output path that cannot or must not be written.
+
+    The folder must exist and accept a new file (tried, not guessed from mode
+    bits).  An existing file is replaced only with ``overwrite``; an existing
+    folder only with ``overwrite`` and when it is one of our own stores
+    (:func:`is_our_output`) that no live process holds (:func:`store_lock`).
+    ``option`` (e.g. ``"--png"``) prefixes the messages.
+
+    Raises
+    ------
+    ValueError
+        Naming the path and the reason (:class:`OutputExistsError` when it
+        exists, :class:`StoreLockedError` when another process writes it).
+    """
+    path = Path(path)
+    where = f"{option} " if option else ""
+    folder = _folder(path)
+    if not folder.is_dir():
+        raise ValueError(f"cannot write {where}{path}: folder {folder} does not exist")
+    if os.path.lexists(path):
+        if path.is_dir() and not path.is_symlink():
+            if not is_our_output(path):
+                raise OutputExistsError(
+                    f"{where}{path} is an existing folder that stairbounce did not write: "
+                    "it is never replaced; choose another path"
+                )
+            holder = lock_holder(path)
+            if holder is not None:
+                raise StoreLockedError(f"cannot replace {path}: {_describe(holder)}")
+        if not overwrite:
+            raise OutputExistsError(f"{where}{path} exists: not replaced; {FORCE_HINT}")
+    reason = _probe_writable(folder)
+    if reason is not None:
+        raise ValueError(f"cannot write {where}{path}: {reason} ({folder})")
+    return path
 
 
 @contextlib.contextmanager
-def atomic_path(path):
-    """Yield a temporary path beside ``path`` with the same suffix; on success
-    rename it to ``path``, on any error or interrupt remove it.
+def atomic_path(path, overwrite=False):
+    """atomic_path(path, overwrite=False) -> context manager yielding a temporary Path
 
-    The suffix is kept so that writers that infer the format from the name
-    (matplotlib, xarray) still do.  Works for files and for directories
-    (a ``.zarr`` store).
+    Write ``path`` under a temporary name beside it (same suffix, so writers
+    that infer the format from the name still do); on success rename it to
+    ``path``, on any error or interrupt remove it.
+
+    The target is checked first with :func:`check_output` (an existing file
+    needs ``overwrite``; a folder must also be one of our own stores), and
+    again just before the rename, so a target that appeared meanwhile is not
+    replaced either.  Stale temporaries of killed processes in the same folder
+    are removed (:func:`clean_stale_temporaries`).  Works for files and for
+    folders (a ``.zarr`` store).
     """
     path = Path(path)
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise ValueError(f"cannot write {path}: folder {parent} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".part{path.suffix}", dir=parent)
-    os.close(fd)
-    os.unlink(tmp)  # the writer creates it (a file or a store folder)
-    tmp = Path(tmp)
+    check_output(path, overwrite)
+    clean_stale_temporaries(_folder(path))
+    tmp = _temp_path(path)
     try:
-        yield tmp
-        if path.is_dir() and not path.is_symlink():
-            shutil.rmtree(path)
-        os.replace(tmp, path)
+        try:
+            yield tmp
+        except OSError as exc:
+            if exc.filename is None or str(exc.filename) == str(tmp):
+                exc.filename = str(path)  # a full disk names the file asked for, not our temporary
+            raise
+        if not os.path.lexists(tmp):
+            raise FileNotFoundError(f"the writer of {path} left no file at {tmp}")
+        if os.path.lexists(path):
+            check_output(path, overwrite)
+        _replace(tmp, path)
     except BaseException:
-        if tmp.is_dir():
-            shutil.rmtree(tmp, ignore_errors=True)
-        elif tmp.exists():
-            tmp.unlink()
+        _remove(tmp)
         raise
+
+
+def _remove(p):
+    if os.path.isdir(p) and not os.path.islink(p):
+        shutil.rmtree(p, ignore_errors=True)
+    elif os.path.lexists(p):
+        with contextlib.suppress(OSError):
+            os.unlink(p)
+
+
+def _replace(tmp, path):
+    """Rename ``tmp`` to ``path``; a folder on either side is moved aside first
+    (rename cannot replace it) and removed only once the new one is in place."""
+    both_files = not os.path.isdir(tmp) and not (os.path.isdir(path) and not os.path.islink(path))
+    if both_files or not os.path.lexists(path):
+        os.replace(tmp, path)
+        return
+    old = _temp_path(path, kind="old")
+    os.rename(path, old)
+    try:
+        os.rename(tmp, path)
+    except BaseException:
+        os.rename(old, path)
+        raise
+    _remove(old)
+
+
+# --------------------------------------------------------------------------- #
+# Exclusive lock of a store                                                   #
+# --------------------------------------------------------------------------- #
+
+
+def lock_file(path):
+    """The lock file of the store ``path``: ``.NAME.lock`` beside it."""
+    path = Path(path)
+    return path.with_name(f".{path.name}.lock")
+
+
+def _read_lock(lock):
+    info = _json(lock)
+    return info if isinstance(info, dict) else None
+
+
+def _describe(info):
+    since = info.get("since")
+    when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(since)) if isinstance(since, (int, float)) else "?"
+    return (
+        f"another stairbounce process writes it (pid {info.get('pid')} on host "
+        f"{info.get('hostname')}, since {when}; lock {info.get('lock')})"
+    )
+
+
+def lock_holder(path):
+    """lock_holder(path) -> dict or None
+
+    The live holder of the lock of the store ``path`` (``pid``, ``hostname``,
+    ``since``, ``owner``, ``lock``), or None when it is free or stale.
+    """
+    lock = lock_file(path)
+    info = _read_lock(lock)
+    if info is None:
+        try:
+            age = time.time() - os.stat(lock).st_mtime
+        except OSError:
+            return None
+        if age > 10.0:
+            return None  # garbage, or its writer was killed between create and write
+        # being written this instant: count it as held
+        return {"pid": "?", "hostname": "?", "since": None, "owner": None, "lock": str(lock)}
+    try:
+        pid = int(info.get("pid", -1))
+    except (TypeError, ValueError):
+        pid = -1
+    if pid < 0 or _owner_gone(info.get("host"), pid, info.get("since")):
+        return None
+    info["lock"] = str(lock)
+    return info
+
+
+def _take_over_stale(lock, seen):
+    """Remove the stale lock ``lock`` whose content was ``seen``; one process
+    at a time (an O_EXCL breaker file), and only if it still holds ``seen``."""
+    breaker = lock.with_name(lock.name + ".break")
+    try:
+        fd = os.open(breaker, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+    except FileExistsError:
+        with contextlib.suppress(OSError):
+            if time.time() - breaker.stat().st_mtime > 10.0:
+                breaker.unlink()  # a breaker killed within its few microseconds
+        return
+    try:
+        os.close(fd)
+        if _read_lock(lock) == seen:
+            lock.unlink()
+    finally:
+        with contextlib.suppress(OSError):
+            breaker.unlink()
+
+
+@contextlib.contextmanager
+def store_lock(path):
+    """store_lock(path) -> context manager yielding the lock's owner token (str)
+
+    Hold the exclusive lock of the store ``path`` while the block runs.
+
+    The lock file (``.NAME.lock`` beside the store) is created with
+    ``O_CREAT | O_EXCL`` and holds this host, pid, start time and a fresh
+    token; it is removed on leaving.  A lock left by a dead process of this
+    host is taken over; a live one (or one of another host: whether it lives
+    cannot be told from here) raises :class:`StoreLockedError` naming the holder.
+    """
+    path = Path(path)
+    lock = lock_file(path)
+    owner = secrets.token_hex(16)
+    info = {
+        "pid": os.getpid(),
+        "host": _host_tag(),
+        "hostname": socket.gethostname(),
+        "since": time.time(),
+        "owner": owner,
+    }
+    for _ in range(50):
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            seen = _read_lock(lock)
+            if seen is None:
+                time.sleep(0.02)  # the holder is writing it right now
+                seen = _read_lock(lock)
+            holder = lock_holder(path)
+            if holder is not None:
+                raise StoreLockedError(f"cannot write {path}: {_describe(holder)}") from None
+            _take_over_stale(lock, seen)
+            continue
+        except OSError as exc:
+            raise ValueError(f"cannot lock {path}: {(exc.strerror or str(exc)).lower()} ({lock})") from None
+        with os.fdopen(fd, "w") as f:
+            json.dump(info, f)
+        break
+    else:  # pragma: no cover - fifty takeovers lost in a row
+        raise StoreLockedError(f"cannot write {path}: could not take its lock {lock}")
+    try:
+        yield owner
+    finally:
+        if (_read_lock(lock) or {}).get("owner") == owner:
+            with contextlib.suppress(OSError):
+                lock.unlink()
+
+
+def holds_lock(path, owner):
+    """Whether the lock of the store ``path`` is held by the token ``owner``
+    (checked by every tile before it writes: only the scan that holds the lock
+    writes into the store)."""
+    return (_read_lock(lock_file(path)) or {}).get("owner") == owner

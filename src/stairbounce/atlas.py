@@ -21,10 +21,23 @@ tile (the tile record lives in a sub-group that xarray does not read), so
 saved scan.
 
 Resuming: the store is created up front (atomically: it exists complete with
-its coordinates and attributes, or not at all), then each tile writes its data
-and only afterwards sets its ``tiles/done`` flag.  Chunk files are replaced
-atomically by Zarr's local store, so an interrupted tile is either absent or
-whole per variable, and in any case unmarked: a re-run computes it again.
+its coordinates and attributes, or not at all), then each tile writes its data,
+then the checksum of that data (``tiles/crc``), and only afterwards sets its
+``tiles/done`` flag.  Chunk files are replaced atomically by Zarr's local
+store, so an interrupted tile is either absent or whole per variable, and in
+any case unmarked: a re-run computes it again.  A re-run also reads every tile
+marked done and compares it with its checksum: a deleted, truncated or garbled
+chunk is found, said (a ``RuntimeWarning``) and the tile computed again.  A
+chunk never written reads as :data:`stairbounce.plane.FILL_VALUES` (status
+255, counts -1), never as a result.
+
+One writer at a time: a scan holds the store's lock
+(:func:`stairbounce._io.store_lock`, a lock file beside the store with the
+owner's host, pid and a token) from before it creates the store until it
+returns; a second scan on the same path is refused with the holder's name.
+Every tile, wherever it runs, checks that the lock still holds the token of
+the scan that handed it out before it writes, so only the client holding the
+lock ever writes into the store.
 
 Dask and Numba threads: each tile runs the parallel numba kernel of
 :mod:`stairbounce.plane`, which releases the GIL.  On a Dask worker a tile uses
@@ -49,16 +62,20 @@ import math
 import os
 import threading
 import uuid
+import warnings
+import zlib
 from pathlib import Path
 
 import numpy as np
 
 from . import _validate as _v
+from ._io import store_lock
 from .model import check_count
 
 __all__ = ["scan_to_zarr", "tile_slices", "tiles_done", "downsample"]
 
-FORMAT = "stairbounce-atlas-1"
+# version 2: fill values that are no result, a checksum per tile, a lock
+FORMAT = "stairbounce-atlas-2"
 TILES_GROUP = "tiles"
 
 # Kernel launches one at a time per process where the threading layer needs it.
@@ -100,11 +117,16 @@ def tiles_done(path):
         raise ValueError(f"{path} is not a tiled scan store (no tile record)") from None
 
 
-def _run_tile(path, token, i, j, su, se, e_values, u_values, max_iter, y0, v0, prune, numba_threads):
-    """Compute tile (i, j) and write it into its region of the store, then mark it done.
+def _run_tile(path, token, owner, i, j, su, se, e_values, u_values, max_iter, y0, v0, prune, numba_threads):
+    """Compute tile (i, j) and write it into its region of the store, then its
+    checksum, then mark it done.
 
-    Runs in the calling process (local scans) or on a Dask worker.
+    Runs in the calling process (local scans) or on a Dask worker; writes only
+    while the store's lock holds ``owner``, the token of the scan that handed
+    the tile out.
     """
+    from ._io import holds_lock
+
     import numba
 
     from .plane import scan_coords
@@ -118,12 +140,26 @@ def _run_tile(path, token, i, j, su, se, e_values, u_values, max_iter, y0, v0, p
             ds = scan_coords(e_values, u_values, max_iter, y0, v0, prune=prune)
         finally:
             numba.set_num_threads(before)
-    arrays, done = _open_store(path, token)
-    for name, var in ds.data_vars.items():
-        arrays[name][su, se] = var.values
+    if not holds_lock(path, owner):
+        raise RuntimeError(f"the scan that handed out this tile no longer holds the lock of {path}")
+    arrays, crc, done = _open_store(path, token)
+    values = {name: var.values for name, var in ds.data_vars.items()}
+    for name, a in values.items():
+        arrays[name][su, se] = a
+    crc[i, j] = _checksum(values)
     # only now: a tile killed above is recomputed on the next run
     done[i, j] = True
     return i, j
+
+
+def _checksum(values):
+    """CRC-32 of a tile's variables (by name, C order): checked on resume."""
+    c = 0
+    for name in sorted(values):
+        a = np.ascontiguousarray(values[name])
+        c = zlib.crc32(f"{name}{a.dtype.str}{a.shape}".encode(), c)
+        c = zlib.crc32(a.tobytes(), c)
+    return c
 
 
 # Opened arrays per store, kept by each process for the tiles that follow (opening
@@ -142,7 +178,7 @@ def _open_store(path, token):
         record = root[TILES_GROUP]
         if record.attrs.get("token") != token:
             raise RuntimeError(f"the store {path} was replaced while the scan was running")
-        hit = ({name: arr for name, arr in root.arrays() if arr.ndim == 2}, record["done"])
+        hit = ({name: arr for name, arr in root.arrays() if arr.ndim == 2}, record["crc"], record["done"])
         if len(_OPEN_STORES) > 16:
             _OPEN_STORES.clear()
         _OPEN_STORES[key] = hit
@@ -176,15 +212,13 @@ def _check_path(path):
 
 def _writable(folder):
     """Whether a file can be created in ``folder`` (tried: root ignores mode bits)."""
-    if not os.access(folder, os.W_OK):
-        return False
-    probe = Path(folder) / f".stairbounce-probe-{os.getpid()}-{threading.get_ident()}"
-    try:
-        probe.touch(exist_ok=False)
-    except OSError:
-        return False
-    probe.unlink(missing_ok=True)
-    return True
+    return _unwritable_reason(folder) is None
+
+
+def _unwritable_reason(folder):
+    from ._io import _probe_writable
+
+    return _probe_writable(folder)
 
 
 def _template(probe, es, us, tile):
@@ -206,7 +240,13 @@ def _template(probe, es, us, tile):
     attrs = dict(probe.attrs)
     attrs.update(n_e=n_e, n_u=n_u)
     ds = xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    from .plane import FILL_VALUES
+
     encoding = {name: {"chunks": chunks} for name in data_vars}
+    for name in encoding:
+        if name in FILL_VALUES:
+            # a chunk never written (or deleted) reads as no valid result
+            encoding[name]["fill_value"] = FILL_VALUES[name]
     return ds, encoding
 
 
@@ -221,8 +261,34 @@ def _create(path, template, encoding, shape_tiles, tile):
             record = zarr.open_group(str(tmp), mode="r+").create_group(TILES_GROUP)
             record.attrs.update(format=FORMAT, tile=tile, token=uuid.uuid4().hex)
             record.zeros(name="done", shape=shape_tiles, chunks=(1, 1), dtype=bool)
+            record.full(name="crc", shape=shape_tiles, chunks=(1, 1), dtype=np.int64, fill_value=-1)
     except PermissionError as exc:
         raise ValueError(f"cannot write {path}: {exc.strerror.lower()} ({path.parent})") from None
+
+
+def _verify(path, rows, cols, done):
+    """Tiles marked done whose data no longer matches their checksum (a chunk
+    deleted, truncated or garbled): unmarked, so that they are computed again.
+    Returns their indices."""
+    import zarr
+
+    root = zarr.open_group(str(path), mode="r+")
+    record = root[TILES_GROUP]
+    arrays = {name: arr for name, arr in root.arrays() if arr.ndim == 2}
+    crc = record["crc"][...]
+    damaged = []
+    for i, j in zip(*np.nonzero(done)):
+        try:
+            values = {name: arr[rows[i], cols[j]] for name, arr in arrays.items()}
+            ok = _checksum(values) == int(crc[i, j])
+        except Exception:  # noqa: BLE001 - any read error of a chunk is damage
+            ok = False
+        if not ok:
+            damaged.append((int(i), int(j)))
+    for i, j in damaged:
+        record["done"][i, j] = False
+        record["crc"][i, j] = -1
+    return damaged
 
 
 def _check_existing(path, attrs, tile):
@@ -237,7 +303,12 @@ def _check_existing(path, attrs, tile):
             f"{path} exists and is not a tiled scan store: choose another path or remove it"
         ) from None
     if record.attrs.get("format") != FORMAT:
-        raise ValueError(f"{path} is a tile store of another format ({record.attrs.get('format')!r})")
+        raise ValueError(
+            f"{path} is a tile store of another format ({record.attrs.get('format')!r}, this version "
+            f"writes {FORMAT!r}): it can be read and drawn, but not resumed; write to a new path"
+        )
+    if "crc" not in record or "done" not in record:
+        raise ValueError(f"{path} is a damaged tile store (its tile record is incomplete): write to a new path")
     differ = []
     if record.attrs.get("tile") != tile:
         differ.append(f"tile: store {record.attrs.get('tile')!r}, asked {tile!r}")
@@ -278,8 +349,9 @@ def scan_to_zarr(
     progress=None,
     numba_threads=None,
     prune=True,
+    verify=True,
 ):
-    """scan_to_zarr(path, e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, y0=1.0, v0=0.0, tile=1024, client=None, progress=None, numba_threads=None, prune=True) -> xarray.Dataset
+    """scan_to_zarr(path, e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, y0=1.0, v0=0.0, tile=1024, client=None, progress=None, numba_threads=None, prune=True, verify=True) -> xarray.Dataset
 
     :func:`stairbounce.plane.scan` cut into tiles, computed locally or on Dask, written to Zarr.
 
@@ -292,7 +364,8 @@ def scan_to_zarr(
     marked complete only after its data is written; running the same call
     again skips complete tiles, so an interrupted scan resumes where it
     stopped.  An existing store made with another window, ``max_iter``,
-    ``y0``, ``v0``, ``tile`` or package version is refused, never mixed.
+    ``y0``, ``v0``, ``tile`` or store format is refused, never mixed; a store
+    another scan is writing (its lock is held) is refused, naming the holder.
 
     Parameters
     ----------
@@ -316,6 +389,10 @@ def scan_to_zarr(
         Numba threads per tile.  Locally, ``numba.get_num_threads() //
         numba_threads`` tiles run at once; on a Dask worker as many as it has
         Dask threads (keep their product at most the worker's cores).
+    verify : bool, default True
+        Before resuming, read every tile marked complete and compare it with
+        the checksum written with it; damaged tiles are said (``RuntimeWarning``)
+        and computed again.  False skips the read (a large complete store).
 
     Returns
     -------
@@ -326,8 +403,10 @@ def scan_to_zarr(
     ------
     ValueError
         A bad parameter (naming it), a path that does not end in ``.zarr``,
-        whose folder is missing or read-only, or an existing store made for a
-        different scan.
+        whose folder is missing or read-only, an existing store made for a
+        different scan, a store locked by another scan
+        (:class:`stairbounce._io.StoreLockedError`), or a scheduler that cannot
+        be reached (before the store is created).
 
     Reference: Section 3 of the paper (the scan behind Figures 4 and 5).
     """
@@ -354,31 +433,50 @@ def scan_to_zarr(
     us = pixel_centres(a["u_min"], a["u_max"], n_u)
     template, encoding = _template(probe, es, us, tile)
     rows, cols = tile_slices(n_u, tile), tile_slices(n_e, tile)
+    reason = None if path.exists() else _unwritable_reason(path.parent)
+    if reason is not None:
+        raise ValueError(f"cannot write {path}: folder {path.parent} is not writable ({reason})")
 
-    if path.exists():
-        _check_existing(path, template.attrs, tile)
-    else:
-        if not _writable(path.parent):
-            raise ValueError(f"cannot write {path}: folder {path.parent} is not writable")
-        _create(path, template, encoding, (len(rows), len(cols)), tile)
+    own = isinstance(client, str)
+    if own:  # connect before the store exists: an unreachable scheduler leaves nothing
+        client = _connect(client)
+    try:
+        with store_lock(path) as owner:
+            if path.exists():
+                _check_existing(path, template.attrs, tile)
+            else:
+                _create(path, template, encoding, (len(rows), len(cols)), tile)
 
-    done = tiles_done(path)
-    todo = [(i, j) for i in range(len(rows)) for j in range(len(cols)) if not done[i, j]]
-    total = done.size
-    if todo and not _writable(path):
-        raise ValueError(f"cannot resume {path}: the store is not writable")
-    if progress is not None:
-        progress(total - len(todo), total)
+            done = tiles_done(path)
+            todo = [(i, j) for i in range(len(rows)) for j in range(len(cols)) if not done[i, j]]
+            if todo and not _writable(path):
+                raise ValueError(f"cannot resume {path}: the store is not writable")
+            if verify and done.any():
+                damaged = _verify(path, rows, cols, done)
+                if damaged:
+                    warnings.warn(
+                        f"{len(damaged)} complete tile(s) of {path} no longer match their checksum "
+                        f"(a chunk deleted or damaged), e.g. tile {damaged[0]}: computed again",
+                        RuntimeWarning, stacklevel=2,
+                    )
+                    todo = sorted(set(todo) | set(damaged))
+            total = done.size
+            if progress is not None:
+                progress(total - len(todo), total)
 
-    token = _tile_record(path).attrs["token"]
-    args = [
-        (str(path), token, i, j, rows[i], cols[j], es[cols[j]], us[rows[i]], a["max_iter"], a["y0"], a["v0"], bool(prune), numba_threads)
-        for i, j in todo
-    ]
-    if client is None:
-        _run_here(args, numba_threads, total - len(todo), total, progress)
-    else:
-        _run_on_dask(client, args, total - len(todo), total, progress)
+            token = _tile_record(path).attrs["token"]
+            args = [
+                (str(path), token, owner, i, j, rows[i], cols[j], es[cols[j]], us[rows[i]],
+                 a["max_iter"], a["y0"], a["v0"], bool(prune), numba_threads)
+                for i, j in todo
+            ]
+            if client is None:
+                _run_here(args, numba_threads, total - len(todo), total, progress)
+            else:
+                _run_on_dask(client, args, total - len(todo), total, progress)
+    finally:
+        if own:
+            client.close()
     return xr.open_zarr(str(path), consolidated=False)
 
 
@@ -388,6 +486,28 @@ def _triple(name, spec):
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a tuple ({name}_min, {name}_max, n_{name}), got {spec!r}") from None
     return lo, hi, n
+
+
+def _connect(address):
+    """A client of the scheduler at ``address``; a closed port fails at once
+    (a plain TCP connection is tried first), anything else within Dask's
+    connect timeout."""
+    import socket
+    from urllib.parse import urlsplit
+
+    from distributed import Client
+
+    parts = urlsplit(address)
+    if parts.scheme in ("tcp", "tls") and parts.hostname and parts.port:
+        try:
+            socket.create_connection((parts.hostname, parts.port), timeout=10).close()
+        except OSError as exc:
+            reason = (exc.strerror or str(exc) or type(exc).__name__).lower()
+            raise ValueError(f"cannot reach the Dask scheduler at {address}: {reason}") from None
+    try:
+        return Client(address)
+    except (OSError, TimeoutError) as exc:
+        raise ValueError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
 
 
 def _run_here(args, numba_threads, n_done, total, progress):
@@ -420,15 +540,8 @@ def _run_here(args, numba_threads, n_done, total, progress):
 
 
 def _run_on_dask(client, args, n_done, total, progress):
-    from distributed import Client, as_completed
+    from distributed import as_completed
 
-    own = isinstance(client, str)
-    if own:
-        address = client
-        try:
-            client = Client(address)
-        except OSError as exc:
-            raise ValueError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     futures = []
     try:
         futures = [client.submit(_run_tile, *arg, pure=False) for arg in args]
@@ -441,8 +554,13 @@ def _run_on_dask(client, args, n_done, total, progress):
         pending = [f for f in futures if not f.done()]
         if pending:
             client.cancel(pending)
-        if own:
-            client.close()
+            # the lock is released when the caller returns: tiles still
+            # running must not write after that (they check the lock, and a
+            # cancelled one that already checked writes a whole, unmarked tile)
+            with contextlib.suppress(Exception):
+                from distributed import wait
+
+                wait(pending, timeout=5)
 
 
 def downsample(ds, max_pixels, method="mode"):

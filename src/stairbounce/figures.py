@@ -18,6 +18,7 @@ and fill :attr:`Row.verdict` and :attr:`Row.why`.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import html
 import json
@@ -63,6 +64,8 @@ class Settings:
     cache_dir: Path | None = None  # None: no cache
     progress: object = field(default=None, repr=False, compare=False)
     border_dimension: Path | None = None
+    # replace existing files that are not from an earlier run into this folder
+    overwrite: bool = False
 
     def px(self, n):
         """A pixel count of the default set, scaled (at least 16)."""
@@ -194,13 +197,32 @@ def _cached(settings, kind, inputs, compute):
         try:
             with xr.open_dataset(path) as ds:
                 return ds.load()
-        except (OSError, ValueError):
-            path.unlink(missing_ok=True)  # a damaged cache entry is recomputed
+        except (OSError, ValueError, RuntimeError):
+            with contextlib.suppress(OSError):
+                path.unlink()  # a damaged cache entry is recomputed
     ds = compute()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(path) as tmp:
-        ds.to_netcdf(tmp)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path, overwrite=True) as tmp:  # our own cache
+            ds.to_netcdf(tmp)
+    except (OSError, ValueError) as exc:
+        # an unwritable or full cache costs time, never a figure
+        _cache_warning(settings.cache_dir, exc)
     return ds
+
+
+_CACHE_WARNED = set()
+
+
+def _cache_warning(cache_dir, exc):
+    import warnings
+
+    key = str(cache_dir)
+    if key not in _CACHE_WARNED:
+        _CACHE_WARNED.add(key)
+        reason = " ".join(str(exc).split())
+        warnings.warn(f"cannot write the cache {cache_dir} ({reason}): computing without it",
+                      RuntimeWarning, stacklevel=3)
 
 
 def _scan(settings, label, e, u, n_e, n_u):
@@ -218,12 +240,61 @@ def _scan(settings, label, e, u, n_e, n_u):
     )
 
 
+def _replaceable(settings):
+    """Whether files in the output folder may be replaced: asked for, or the
+    folder holds the manifest of an earlier run (its files are ours)."""
+    if settings.overwrite:
+        return True
+    try:
+        manifest = json.loads((Path(settings.out) / "manifest.json").read_text())
+    except (OSError, ValueError):
+        return False
+    return isinstance(manifest, dict) and "stairbounce_version" in manifest
+
+
+def _mark_folder(settings):
+    """Write a provisional manifest (replaced by :func:`write_report`), so that
+    a run cut short (Ctrl-C, a kill) leaves a folder recognisably ours: the
+    rerun replaces its figures without --force."""
+    path = Path(settings.out) / "manifest.json"
+    if path.exists():
+        # an earlier run's manifest already marks the folder ours, and a partial
+        # run's report is merged with it (write_report); one not ours makes the
+        # figures' own writes refuse to replace anything
+        return
+    with atomic_path(path, overwrite=True) as tmp:
+        tmp.write_text(json.dumps({"stairbounce_version": __version__, "complete": False, "figures": []}))
+
+
+def output_files(settings, names):
+    """The files :func:`make_figures` and :func:`write_report` write for ``names``."""
+    out = Path(settings.out)
+    return [out / f"{n}.{settings.fmt}" for n in names] + [
+        out / "report.md", out / "report.html", out / "manifest.json"]
+
+
+def check_outputs(settings, names):
+    """Refuse, before any figure is made, a folder where an existing file
+    would be replaced without ``overwrite`` (and not from an earlier run), or
+    where a target is a folder stairbounce did not write."""
+    from ._io import check_output
+
+    out = Path(settings.out)
+    if not out.exists():
+        if not out.parent.is_dir() and str(out.parent):
+            raise ValueError(f"cannot write {out}: folder {out.parent} does not exist")
+        return
+    replace = _replaceable(settings)
+    for path in output_files(settings, names):
+        check_output(path, overwrite=replace)
+
+
 def _save(fig, settings, name):
     import matplotlib.pyplot as plt
 
     settings.note(f"{name}: writing {name}.{settings.fmt}")
     path = Path(settings.out) / f"{name}.{settings.fmt}"
-    with atomic_path(path) as tmp:
+    with atomic_path(path, overwrite=_replaceable(settings)) as tmp:
         fig.savefig(tmp, dpi=settings.dpi, format=settings.fmt)
     plt.close(fig)
     return path.name
@@ -800,6 +871,7 @@ def make_figures(settings: Settings, only=None, on_start=None, on_done=None) -> 
         raise ValueError(f"scale must be in [0.01, 16], got {settings.scale!r}")
     names = select(only)
     Path(settings.out).mkdir(parents=True, exist_ok=True)
+    _mark_folder(settings)
     results = []
     for name in names:
         if on_start:
@@ -876,6 +948,7 @@ def write_report(results, settings: Settings, total_seconds=None, merge=True):
     names them.
     """
     out = Path(settings.out)
+    replace = _replaceable(settings)
     for r in results:
         r.params.setdefault("settings", settings.record())
     kept = []
@@ -921,10 +994,10 @@ def write_report(results, settings: Settings, total_seconds=None, merge=True):
     if total_seconds is not None:
         md += [f"Total time of this run: {total_seconds:.1f} s.", ""]
     paths = []
-    with atomic_path(out / "report.md") as tmp:
+    with atomic_path(out / "report.md", overwrite=replace) as tmp:
         tmp.write_text("\n".join(md))
     paths.append(out / "report.md")
-    with atomic_path(out / "report.html") as tmp:
+    with atomic_path(out / "report.html", overwrite=replace) as tmp:
         tmp.write_text(_html(results, settings, summary, total_seconds, kept, tally))
     paths.append(out / "report.html")
     manifest = {
@@ -939,7 +1012,7 @@ def write_report(results, settings: Settings, total_seconds=None, merge=True):
             for r in results
         ],
     }
-    with atomic_path(out / "manifest.json") as tmp:
+    with atomic_path(out / "manifest.json", overwrite=replace) as tmp:
         tmp.write_text(json.dumps(manifest, indent=2, default=_jsonable))
     paths.append(out / "manifest.json")
     return paths, kept

@@ -24,6 +24,7 @@ import xarray as xr
 from numba import get_num_threads, njit, prange
 
 from . import _validate as _v
+from ._interrupt import halted
 from .model import _constants, _step, check_count, check_state
 
 __all__ = ["orbit_diagram", "orbit_density"]
@@ -47,13 +48,26 @@ _LONG_NAMES = {
 # --------------------------------------------------------------------------- #
 
 
+# The kernels read their halt flag (Ctrl-C, stairbounce._interrupt) once per
+# slice of this many map steps: a few milliseconds of work.
+_SLICE = 1 << 16
+
+
 @njit(cache=True)
-def _orbit_row(e, u, y, v, transient, keep, ys, vs, ks, i):
-    """Iterate one parameter pair: skip ``transient`` steps, store ``keep``."""
+def _orbit_row(e, u, y, v, transient, keep, ys, vs, ks, i, halt):
+    """Iterate one parameter pair: skip ``transient`` steps, store ``keep``.
+    Returns early (row incomplete) once ``halt[0]`` is set."""
     T, ratio = _constants(e, u)
-    for _ in range(transient):
-        y, v, k = _step(y, v, e, T, ratio)
+    done = 0
+    while done < transient:  # in slices, each the same steps in the same order
+        if halted(halt):
+            return y, v
+        for _ in range(min(_SLICE, transient - done)):
+            y, v, k = _step(y, v, e, T, ratio)
+        done += _SLICE
     for j in range(keep):
+        if (j & (_SLICE - 1)) == 0 and halted(halt):
+            return y, v
         y, v, k = _step(y, v, e, T, ratio)
         ys[i, j] = y
         vs[i, j] = v
@@ -61,26 +75,29 @@ def _orbit_row(e, u, y, v, transient, keep, ys, vs, ks, i):
     return y, v
 
 
-@njit(parallel=True, cache=True)
-def _orbit_kernel(es, us, y0, v0, transient, keep, ys, vs, ks, items):
+@njit(parallel=True, cache=True, nogil=True)
+def _orbit_kernel(es, us, y0, v0, transient, keep, ys, vs, ks, items, halt):
     """Every parameter pair ``(es[i], us[i])`` from ``(y0, v0)``, in parallel.
 
     The pairs are independent; work item ``c`` takes pairs ``c, c + items,
     c + 2 items, ...`` (interleaved, so all items cost about the same).
+    Stops early once ``halt[0]`` is set (the outputs are then dropped).
     """
     n = es.size
     for c in prange(items):
         for i in range(c, n, items):
-            _orbit_row(es[i], us[i], y0, v0, transient, keep, ys, vs, ks, i)
+            _orbit_row(es[i], us[i], y0, v0, transient, keep, ys, vs, ks, i, halt)
 
 
-@njit(cache=True)
-def _orbit_kernel_warm(es, us, y0, v0, transient, keep, ys, vs, ks, items):
+@njit(cache=True, nogil=True)
+def _orbit_kernel_warm(es, us, y0, v0, transient, keep, ys, vs, ks, items, halt):
     """Like :func:`_orbit_kernel`, but pair ``i`` starts where pair ``i-1``
     ended, so the pairs are iterated one after the other (``items`` unused)."""
     y, v = y0, v0
     for i in range(es.size):
-        y, v = _orbit_row(es[i], us[i], y, v, transient, keep, ys, vs, ks, i)
+        if halted(halt):
+            return
+        y, v = _orbit_row(es[i], us[i], y, v, transient, keep, ys, vs, ks, i, halt)
 
 
 # --------------------------------------------------------------------------- #
@@ -197,7 +214,10 @@ def orbit_diagram(e, u, y0=0.1, v0=0.0, transient=2000, keep=200, warm_start=Fal
     ks = np.empty((n, keep), dtype=np.int32)
     kernel = _orbit_kernel_warm if warm_start else _orbit_kernel
     items = min(n, _ITEMS_PER_THREAD * get_num_threads())
-    kernel(es, us, y0, v0, transient, keep, ys, vs, ks, items)
+    from ._interrupt import run_kernel
+
+    # in a helper thread when called from the main thread: Ctrl-C stops it at once
+    run_kernel(kernel, es, us, y0, v0, transient, keep, ys, vs, ks, items)
 
     from . import __version__
 

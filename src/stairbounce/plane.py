@@ -37,6 +37,7 @@ import numba
 from numba import njit, prange
 
 from . import _validate as _v
+from ._interrupt import halted
 from .model import (
     _COUNTED_IMPACTS,
     SLIDING,
@@ -83,6 +84,10 @@ _FIELDS = {
     "impacts": (np.int64, "finite impacts per period (the accumulation not counted)"),
 }
 _BYTES_PER_PIXEL = sum(np.dtype(dt).itemsize for dt, _ in _FIELDS.values())
+# Zarr's fill values, what a chunk that was never written (or was deleted) reads
+# as: none is a value a scan can produce, so a missing chunk is never taken for
+# data (status 0 means "found"; 0 is a valid word length where nothing is found).
+FILL_VALUES = {"status": 255, "word_length": -1, "jumps": -1, "period": -1, "impacts": -1}
 
 
 # --------------------------------------------------------------------------- #
@@ -250,7 +255,7 @@ def _lane_step(y, v, e, T, ratio, half_TT):
 
 @njit(cache=True)
 def _run_chunk(es, us, grid, max_iter, y0, v0, prune, start, stop,
-               status, word_length, jumps, period, impacts):
+               status, word_length, jumps, period, impacts, halt):
     """Pixels ``start..stop-1`` (flat indices, :func:`_pixel`), LANES at a time.
 
     A lane takes the next pixel as soon as its own finishes, so lanes stay busy
@@ -258,6 +263,8 @@ def _run_chunk(es, us, grid, max_iter, y0, v0, prune, start, stop,
     the sequence of operations of ``_slide_or_steps`` with ``model._step``,
     except pixels where :func:`_never_slides` proves the answer (``prune``):
     they get status 1 without a step.  Returns the number of those.
+    Returns early, leaving pixels unwritten, once ``halt[0]`` is set (Ctrl-C,
+    :mod:`stairbounce._interrupt`); it is read once per lockstep step.
     """
     L = LANES
     from_rest = y0 == 1.0 and v0 == 0.0
@@ -296,6 +303,8 @@ def _run_chunk(es, us, grid, max_iter, y0, v0, prune, start, stop,
             active += 1
 
     while active > 0:
+        if halted(halt):
+            return pruned
         # the common step, vectorised over lanes
         nmore = 0
         for l in range(L):
@@ -418,23 +427,24 @@ def _load_next(l, p, stop, es, us, grid, y0, v0, from_rest, prune, energy0,
     return p, False, n
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _scan_fast(es, us, grid, max_iter, y0, v0, prune, order, chunk,
-               status, word_length, jumps, period, impacts):
+               status, word_length, jumps, period, impacts, halt):
     """Fast kernel: chunks of ``chunk`` pixels in the order ``order``, LANES
     pixels of a chunk in lockstep (:func:`_run_chunk`).
 
     ``grid``: the pixels are the row-major ``n_u x n_e`` grid ``us x es``;
     otherwise the points ``(es[p], us[p])``.  Outputs are flat, one entry per
     pixel.  ``prune``: skip the pixels :func:`_never_slides` proves.  Returns
-    the number of pixels pruned.
+    the number of pixels pruned.  Stops early once ``halt[0]`` is set (then
+    the outputs are incomplete and must be dropped).
     """
     npix = es.shape[0] * us.shape[0] if grid else es.shape[0]
     pruned = np.zeros(order.shape[0], np.int64)
     for c in prange(order.shape[0]):
         s = order[c] * chunk
         pruned[c] = _run_chunk(es, us, grid, max_iter, y0, v0, prune, s, min(s + chunk, npix),
-                               status, word_length, jumps, period, impacts)
+                               status, word_length, jumps, period, impacts, halt)
     return pruned.sum()
 
 
@@ -604,8 +614,11 @@ def _run(es, us, grid, max_iter, y0, v0, prune):
     chunk, order = _chunking(npix, numba.get_num_threads())
     pruned = 0
     if npix:
-        pruned = _scan_fast(
-            es, us, grid, max_iter, y0, v0, bool(prune), order, chunk,
+        from ._interrupt import run_kernel
+
+        # in a helper thread when called from the main thread: Ctrl-C stops it at once
+        pruned = run_kernel(
+            _scan_fast, es, us, grid, max_iter, y0, v0, bool(prune), order, chunk,
             out["status"], out["word_length"], out["jumps"], out["period"], out["impacts"],
         )
     return out, int(pruned)
@@ -873,22 +886,31 @@ def _format(path):
     raise ValueError(f"path must end in .zarr or .nc, got {str(path)!r}")
 
 
-def save(ds, path, chunks=256):
-    """save(ds, path, chunks=256) -> None
+def save(ds, path, chunks=256, overwrite=False):
+    """save(ds, path, chunks=256, overwrite=False) -> None
 
     Write a scan to ``.zarr`` (chunked ``chunks x chunks``) or ``.nc`` (netCDF4,
     compressed), atomically: under a temporary name, renamed when complete.
+
+    An existing ``path`` is replaced only with ``overwrite=True``, and an
+    existing folder only when it is a store this package wrote
+    (:func:`stairbounce._io.atomic_path`); otherwise ``ValueError`` names it.
+    In a Zarr store a chunk that is missing reads as :data:`FILL_VALUES`
+    (status 255, counts -1), never as a valid result.
     """
     from ._io import atomic_path
 
     fmt = _format(path)
     chunks = check_count("chunks", chunks, 1)
-    with atomic_path(path) as tmp:
+    with atomic_path(path, overwrite=overwrite) as tmp:
         if fmt == "zarr":
             enc = {
                 k: {"chunks": tuple(min(chunks, s) for s in ds[k].shape)}
                 for k in ds.data_vars
             }
+            for k in enc:
+                if k in FILL_VALUES and ds[k].dtype == _FIELDS[k][0]:
+                    enc[k]["fill_value"] = FILL_VALUES[k]
             ds.to_zarr(tmp, mode="w", encoding=enc, consolidated=False)
         else:
             enc = {k: {"zlib": True, "complevel": 4} for k in ds.data_vars}
@@ -899,11 +921,22 @@ def load(path):
     """load(path) -> xarray.Dataset
 
     Read a scan written by :func:`save` (``.zarr`` or ``.nc``) into memory.
+
+    A tiled store (:func:`stairbounce.atlas.scan_to_zarr`) reads the same way;
+    where a tile is not computed yet (or a chunk was deleted) it reads as
+    :data:`FILL_VALUES` (status 255), never as a result.  A file or chunk that
+    cannot be decoded raises ``ValueError`` naming the file.
     """
     fmt = _format(path)
     if not os.path.exists(path):
         raise ValueError(f"no such file: {path}")
     engine = "zarr" if fmt == "zarr" else "netcdf4"
     kw = {"consolidated": False} if fmt == "zarr" else {}
-    with xr.open_dataset(path, engine=engine, chunks=None, **kw) as ds:
-        return ds.load()
+    try:
+        with xr.open_dataset(path, engine=engine, chunks=None, **kw) as ds:
+            return ds.load()
+    except (OSError, RuntimeError, ValueError, KeyError, TypeError) as exc:
+        # a damaged file or chunk (a decompression error, a truncated file):
+        # one line naming the file, not the reader's traceback
+        reason = " ".join(str(exc).split()) or type(exc).__name__
+        raise ValueError(f"cannot read {path} as a scan ({type(exc).__name__}: {reason})") from None

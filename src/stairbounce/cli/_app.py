@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 from contextlib import contextmanager
+import threading
+from pathlib import Path
 
 import typer
 
@@ -27,6 +29,38 @@ app = typer.Typer(
 
 class CLIError(Exception):
     """Bad input from the command line: printed as one line, exit status 2."""
+
+
+# Set by the Ctrl-C handler of :func:`stairbounce.cli.main`: long loops check it
+# (a KeyboardInterrupt raised inside a finaliser is lost, this record is not).
+INTERRUPTED = threading.Event()
+
+FORCE_HELP = "Replace output files that exist (never a folder stairbounce did not write)."
+
+
+def check_interrupted():
+    """Raise KeyboardInterrupt if Ctrl-C was pressed since the command started."""
+    if INTERRUPTED.is_set():
+        raise KeyboardInterrupt
+
+
+def check_dpi(dpi: int, option: str = "--dpi") -> int:
+    """Every command takes a dpi in [10, 1200] (a 100000 dpi figure does not fit in memory)."""
+    if not (10 <= dpi <= 1200):
+        raise CLIError(f"{option} must be in [10, 1200], got {dpi}")
+    return dpi
+
+
+def check_outputs(force: bool, **paths) -> None:
+    """Check every output path before any work: its folder exists and takes a
+    new file, and an existing file is replaced only with ``--force`` (a folder
+    only when it is one of our stores).  ``paths``: option name (``png``,
+    ``out``) -> Path or None."""
+    from .._io import check_output
+
+    for option, path in paths.items():
+        if path is not None:
+            check_output(Path(path), overwrite=force, option="--" + option.replace("_", "-"))
 
 
 def parse_range(name: str, text: str) -> tuple[float, float]:

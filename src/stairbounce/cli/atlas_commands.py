@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from ._app import CLIError, app, parse_range, plural
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, plural
 
 DEFAULT_TILE = 1024
 FIELDS = ("word_length", "period", "jumps", "impacts", "status")
@@ -72,6 +72,7 @@ def run_tiled_scan(out, e, u, max_iter=1000, y0=1.0, v0=0.0, tile=None, schedule
                 bar.update(task, completed=done, total=total)
 
             try:
+                # damaged tiles found on resume are a RuntimeWarning: one line (cli.main)
                 ds = scan_to_zarr(
                     out, e=e, u=u, max_iter=max_iter, y0=y0, v0=v0, tile=tile,
                     client=scheduler if scheduler is not None else client, progress=progress,
@@ -122,6 +123,7 @@ def render(
     max_pixels: int = typer.Option(4_000_000, "--max-pixels", help="Largest image; bigger windows are reduced by blocks."),
     reduce: str = typer.Option("mode", "--reduce", help="Block reducer: mode (most frequent value), max or stride."),
     dpi: int = typer.Option(150, "--dpi", help="Resolution of the figure."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
     """Draw a scan store without loading it whole: large windows are reduced by blocks first."""
     import xarray as xr
@@ -136,10 +138,10 @@ def render(
         raise CLIError(f"--max-pixels must be an integer >= 1, got {max_pixels}")
     if reduce not in ("mode", "max", "stride"):
         raise CLIError(f"--reduce must be mode, max or stride, got {reduce!r}")
-    if not (10 <= dpi <= 1200):
-        raise CLIError(f"--dpi must be in [10, 1200], got {dpi}")
+    check_dpi(dpi)
     if not store.exists():
         raise CLIError(f"no such store: {store}")
+    check_outputs(force, png=png)
     try:
         if store.suffix == ".nc":
             ds = xr.open_dataset(store, engine="netcdf4", chunks={})
@@ -156,7 +158,7 @@ def render(
     if done is not None and not done.all():
         print(
             f"stairbounce: warning: {int((~done).sum())} of {done.size} tiles of {store} are not "
-            "computed yet; they are drawn as zeros",
+            "computed yet; they are drawn blank",
             file=sys.stderr,
         )
     if window:
@@ -164,19 +166,22 @@ def render(
         if len(parts) != 2:
             raise CLIError(f"--window must be E0:E1,U0:U1, got {window!r}")
         window = (parse_range("window", parts[0]), parse_range("window", parts[1]))
-    small = draw_store(ds, field, png, dpi, max_pixels=max_pixels, reduce=reduce, window=window)
+    small = draw_store(ds, field, png, dpi, max_pixels=max_pixels, reduce=reduce, window=window,
+                       overwrite=force, source=store)
     f = small.attrs.get("downsampled", 1)
     how = f", blocks of {f} x {f} ({reduce})" if f > 1 else ""
     typer.echo(f"wrote {png}: {field}, {small.sizes['e']} x {small.sizes['u']} pixels{how}")
 
 
-def draw_store(ds, field, png, dpi, overlay=(), max_pixels=4_000_000, reduce="mode", window=None):
+def draw_store(ds, field, png, dpi, overlay=(), max_pixels=4_000_000, reduce="mode", window=None,
+               overwrite=False, source=None):
     """Draw ``field`` of a (lazy) scan dataset into ``png`` with
     :func:`stairbounce.plot.plot_scan`, reduced by blocks to at most
     ``max_pixels`` first (:func:`stairbounce.atlas.downsample`), so that only
     the reduced image is ever in memory.  ``window``: ``((e0, e1), (u0, u1))``,
     the pixels whose centres lie inside are drawn.  Returns the reduced
-    dataset that was drawn.
+    dataset that was drawn.  A chunk that cannot be read (damaged) is one
+    line naming the store (``source``), not a traceback.
     """
     from ..atlas import downsample
     from .scan_commands import _draw
@@ -192,7 +197,15 @@ def draw_store(ds, field, png, dpi, overlay=(), max_pixels=4_000_000, reduce="mo
             if last <= first[name]:
                 raise CLIError(f"--window {name} in [{lo:g}, {hi:g}] holds no pixel of the store")
             ds = ds.isel({name: slice(first[name], last)})
-    small = downsample(ds, max_pixels, method=reduce).compute()
+    try:
+        small = downsample(ds, max_pixels, method=reduce).compute()
+    except (RuntimeError, OSError, ValueError, KeyError) as exc:
+        # a garbled or truncated chunk: the reader's error, in one line
+        where = source if source is not None else "the store"
+        raise CLIError(
+            f"cannot read {where}: a chunk is damaged ({type(exc).__name__}: {' '.join(str(exc).split())}); "
+            "a tiled store repairs itself when its scan is run again"
+        ) from None
     f = small.attrs.get("downsampled", 1)
     for name in ("e", "u") if (window is not None or f > 1) else ():
         # the image edges are those of the pixels kept (blocks trim the far edge)
@@ -205,5 +218,5 @@ def draw_store(ds, field, png, dpi, overlay=(), max_pixels=4_000_000, reduce="mo
             a[keys[2]] = small.sizes[name] * f
         else:
             a.pop(keys[0], None), a.pop(keys[1], None)
-    _draw(small, field, overlay, png, dpi)
+    _draw(small, field, overlay, png, dpi, overwrite=overwrite)
     return small

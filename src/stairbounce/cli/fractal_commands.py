@@ -9,7 +9,7 @@ import numpy as np
 import typer
 
 from .._io import atomic_path
-from ._app import CLIError, app, parse_range, progress_bar
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, progress_bar
 
 # Scans with more pixel-steps than this show a progress bar.
 _PROGRESS_WORK = 2e8
@@ -34,7 +34,7 @@ def _read_region(path: Path, region: str) -> np.ndarray:
             grey = np.asarray(im.convert("L"), dtype=np.uint8)
     except FileNotFoundError:
         raise CLIError(f"--image: no such file: {path}") from None
-    except (UnidentifiedImageError, OSError, ValueError) as exc:
+    except (UnidentifiedImageError, OSError, ValueError, Image.DecompressionBombError) as exc:
         raise CLIError(f"--image: cannot read {path} as an image ({exc})") from None
     dark = grey < 128
     return dark if region == "black" else ~dark
@@ -142,7 +142,8 @@ def dimension(
     offsets: int = typer.Option(1, "--offsets", help="Boxes: grid shifts per axis, counts averaged over them (>= 1)."),
     connectivity: int = typer.Option(4, "--connectivity", help="Boxes: neighbours that define the border: 4 or 8."),
     png: Path = typer.Option(None, "--png", help="Draw the result (border and log-log plot, or f(eps) and local dimensions) to this file (.png, .pdf, .svg)."),
-    dpi: int = typer.Option(120, "--dpi", help="Resolution of raster output."),
+    dpi: int = typer.Option(120, "--dpi", help="Resolution of raster output (10-1200)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
     """Fractal dimension of the border of the sliding region (Figs. 6 and 7), of a picture or of a tiled store."""
     from ..fractal import boundary, box_dimension
@@ -168,6 +169,8 @@ def dimension(
     if method == "uncertainty" and (image is not None or store is not None):
         raise CLIError("--method uncertainty classifies points of the model: give a window (--e, --u), "
                        "not --image or --store")
+    check_dpi(dpi)
+    check_outputs(force, png=png)
 
     if method == "uncertainty":
         if max_iter < 1:
@@ -202,7 +205,7 @@ def dimension(
                    f"{result.fit.n} values, alpha = {result.alpha:.4f}, D = 2 - alpha")
         typer.echo(result.table())
         if png is not None:
-            _draw(png, dpi, lambda: _plot_uncertainty(result, ew, uw))
+            _draw(png, dpi, force, lambda: _plot_uncertainty(result, ew, uw))
         return
 
     fr = _parse_fit_range(fit_range)
@@ -258,7 +261,7 @@ def dimension(
     if png is not None:
         from ..plot import plot_box_dimension
 
-        _draw(png, dpi, lambda: plot_box_dimension(
+        _draw(png, dpi, force, lambda: plot_box_dimension(
             result, image=plot_image, title=str(image) if image is not None else None))
 
 
@@ -269,14 +272,14 @@ def _plot_uncertainty(result, ew, uw):
         result, title=f"uncertainty exponent of the border in [{ew[0]:g}, {ew[1]:g}] x [{uw[0]:g}, {uw[1]:g}]")
 
 
-def _draw(png, dpi, make):
+def _draw(png, dpi, force, make):
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig = make()
-    with atomic_path(png) as tmp:
+    with atomic_path(png, overwrite=force) as tmp:
         fig.savefig(tmp, dpi=dpi)
     plt.close(fig)
     typer.echo(f"wrote {png}")

@@ -13,7 +13,7 @@ from ..model import SLIDING, iterate
 from ..symbolic import sliding_word, terminal_can_print_infinity
 from ..trajectory import trajectory
 from . import _staircase as st
-from ._app import CLIError, app, plural, progress_bar
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, plural, progress_bar
 
 E_HELP = "Restitution coefficient, in [0, 1)."
 U_HELP = "Horizontal speed in normalised units (u > 0); one step takes 1/u. Or --speed with --step-height, --step-length."
@@ -98,7 +98,8 @@ def trajectory_(
     steps: int = typer.Option(8, "--steps", help="Number of steps (>= 1)."),
     out: Path = typer.Option(Path("trajectory.png"), "--out", help="Figure file (.png, .pdf, .svg)."),
     animate: Path = typer.Option(None, "--animate", help="Also write an animation of the ball (.gif)."),
-    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output."),
+    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
     """Draw the ball's path on the staircase (Fig. 1) beside its Poincare section (Fig. 2).
     With a physical staircase the axes are in metres, m/s and seconds."""
@@ -109,6 +110,8 @@ def trajectory_(
         raise CLIError(f"--out must end in .png, .pdf or .svg, got {str(out)!r}")
     if animate is not None and animate.suffix.lower() != ".gif":
         raise CLIError(f"--animate must end in .gif, got {str(animate)!r}")
+    check_dpi(dpi)
+    check_outputs(force, out=out, animate=animate)
     traj = trajectory(e, u, y0, v0, steps)
 
     import matplotlib
@@ -125,7 +128,7 @@ def trajectory_(
         typer.echo(st.describe(u, stairs))
         st.physical_trajectory_axes(a1, a2, stairs, u)
     fig.tight_layout()
-    with atomic_path(out) as tmp:
+    with atomic_path(out, overwrite=force) as tmp:
         fig.savefig(tmp, dpi=dpi)
     plt.close(fig)
     typer.echo(
@@ -138,7 +141,7 @@ def trajectory_(
 
         # Pillow encodes a frame at a time: about 12 s for 8 steps
         with progress_bar(Console(stderr=True), "animation frames", None) as (bar, task), \
-                atomic_path(animate) as tmp:
+                atomic_path(animate, overwrite=force) as tmp:
             animate_trajectory(traj, tmp, progress=lambda done, total: bar.update(
                 task, completed=done, total=total))
         typer.echo(f"wrote {animate}")

@@ -40,7 +40,7 @@ def motion(
     typer.echo(f"speed spread Var|v_-|/<|v_-|>^2: {r['speed_spread']:.3e} (0 on a one-impact family)")
 
 
-def motion_scan_figure(e, u, max_iter, y0, v0, field, png, dpi, out=None, overlays=()):
+def motion_scan_figure(e, u, max_iter, y0, v0, field, png, dpi, out=None, overlays=(), force=False):
     """``stairbounce scan --field k_mean|lyap1|...``: a motion scan with max_iter
     transient and max_iter kept steps, saved and drawn; returns the summary line."""
     from .. import plane as sc
@@ -50,7 +50,7 @@ def motion_scan_figure(e, u, max_iter, y0, v0, field, png, dpi, out=None, overla
         raise CLIError(f"--max-iter must be >= 2 for a motion field, got {max_iter}")
     ds = motion_scan(e, u, steps=max_iter, transient=max_iter, y0=y0, v0=v0)
     if out is not None:
-        sc.save(ds, out)
+        sc.save(ds, out, overwrite=force)
         typer.echo(f"wrote {out}")
     if png is not None:
         import matplotlib
@@ -66,7 +66,7 @@ def motion_scan_figure(e, u, max_iter, y0, v0, field, png, dpi, out=None, overla
             ov = tuple(o for o in overlays if o == "bound") + ("families",)
             plot_motion(ds, field=field, ax=ax, overlay=ov)
             fig.tight_layout()
-            with atomic_path(png) as tmp:
+            with atomic_path(png, overwrite=force) as tmp:
                 fig.savefig(tmp, dpi=dpi)
         finally:
             plt.close(fig)

@@ -10,7 +10,7 @@ import typer
 from .._io import atomic_path
 from ..model import check_count
 from . import _staircase as st
-from ._app import CLIError, app, parse_overlays, parse_range, progress_bar
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_overlays, parse_range, progress_bar
 
 # Above this many map steps (about a second of work) the sweep runs in slices
 # behind a progress bar.
@@ -66,9 +66,9 @@ def _sweep(e, u, varied, y0, v0, transient, keep, warm_start):
     return xr.concat(parts, dim=varied, combine_attrs="override")
 
 
-def _write_data(ds, path: Path) -> None:
+def _write_data(ds, path: Path, overwrite=False) -> None:
     suffix = path.suffix.lower()
-    with atomic_path(path) as tmp:
+    with atomic_path(path, overwrite=overwrite) as tmp:
         if suffix == ".nc":
             ds.to_netcdf(tmp)
         elif suffix == ".zarr":
@@ -98,7 +98,8 @@ def orbit_diagram_(
     value_range: str = typer.Option(None, "--range", help="Plotted range MIN:MAX of the component (a zoom)."),
     png: Path = typer.Option(None, "--png", help="Figure file (.png, .pdf or .svg)."),
     out: Path = typer.Option(None, "--out", help="Data file: .nc (netCDF), .zarr or .csv (one row per point)."),
-    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output."),
+    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
     """Orbit (bifurcation) diagram: iterate the Poincare map at each value of the swept parameter
     and plot the kept iterates (Section 4, Figs. 8 and 9). Exactly one of --e, --u is a range."""
@@ -110,16 +111,14 @@ def orbit_diagram_(
         raise CLIError(f"--component must be y or v, got {component!r}")
     overlays = parse_overlays(overlay, ("tongues",))
     check_count("--bins", bins, 1)
-    check_count("--dpi", dpi, 1)
+    check_dpi(dpi)
     if png is None and out is None:
         raise CLIError("give --png FILE and/or --out FILE: there is nothing to write")
     if png is not None and png.suffix.lower() not in _FIGURE_SUFFIXES:
         raise CLIError(f"--png must end in .png, .pdf or .svg, got {str(png)!r}")
     if out is not None and out.suffix.lower() not in _DATA_SUFFIXES:
         raise CLIError(f"--out must end in .nc, .zarr or .csv, got {str(out)!r}")
-    for path, option in ((png, "--png"), (out, "--out")):
-        if path is not None and not (path.parent if str(path.parent) else Path(".")).is_dir():
-            raise CLIError(f"{option}: folder {path.parent} does not exist")
+    check_outputs(force, png=png, out=out)
     shown = None if value_range is None else parse_range("range", value_range)
     ev, e_swept = _parameter("e", e, n)
     uv, u_swept = _parameter("u", u, n)
@@ -136,7 +135,7 @@ def orbit_diagram_(
                f"({ds.sizes[varied] * ds.sizes['iterate']} points), {fixed} = {ds.attrs[fixed]:g}")
 
     if out is not None:
-        _write_data(ds, out)
+        _write_data(ds, out, overwrite=force)
         typer.echo(f"wrote {out}: {summary}")
     if png is not None:
         import matplotlib
@@ -150,7 +149,7 @@ def orbit_diagram_(
         plot_orbit_diagram(ds, component=component, density=not points, ax=ax,
                            overlay=overlays, bins=bins, range=shown)
         fig.tight_layout()
-        with atomic_path(png) as tmp:
+        with atomic_path(png, overwrite=force) as tmp:
             fig.savefig(tmp, dpi=dpi)
         plt.close(fig)
         typer.echo(f"wrote {png}: {summary}")

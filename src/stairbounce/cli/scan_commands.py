@@ -7,7 +7,10 @@ from pathlib import Path
 import typer
 
 from ._app import (
+    FORCE_HELP,
     CLIError,
+    check_dpi,
+    check_outputs,
     app,
     parse_overlays,
     parse_range,
@@ -43,8 +46,11 @@ def scan_(
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
     y0: float = typer.Option(1.0, "--y0", help="Initial height at the edge (>= 0); (1, 0) is the paper's."),
     v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
-    out: Path = typer.Option(None, "--out", help="Also save the data: .zarr (chunked) or .nc."),
-    png: Path = typer.Option(Path("scan.png"), "--png", help="Figure to write (.png, .pdf or .svg)."),
+    out: Path = typer.Option(None, "--out", help="Save the data: .zarr (chunked) or .nc."),
+    png: Path = typer.Option(
+        None, "--png",
+        help="Figure to write (.png, .pdf or .svg); default scan.png when --out is not given, none with --out.",
+    ),
     field: str = typer.Option("word_length", "--field", help="Colour by: " + ", ".join(FIELD_NAMES) + " (the last "
                               "four: non-sliding motion, max_iter transient + max_iter kept steps, stairbounce.nonsliding)."),
     overlay: list[str] = typer.Option([], "--overlay", help="Curves to draw, comma-separated or repeated: tongues (Theorem 3.1), bound (Corollary 2.1)."),
@@ -52,12 +58,15 @@ def scan_(
     tile: int = typer.Option(None, "--tile", help="Tiled, resumable scan into --out (.zarr), TILE x TILE pixels a tile."),
     scheduler: str = typer.Option(None, "--scheduler", help="Tiled scan on a running Dask scheduler (tcp://HOST:PORT)."),
     workers: int = typer.Option(None, "--workers", help="Tiled scan on a local Dask cluster of this many workers."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP + " A tiled store is resumed, not replaced."),
 ):
     """Scan the (e, u) plane for periodic sliding solutions and draw it (Figures 3-5).
 
     With no options: the paper's Figure 4 view, e in [0, 1] x u in [0, 1.5],
     500 x 350 pixels, max_iter 1000, written to scan.png.  The windows are
     image edges; pixels are sampled at their centres, so u = 0 is never used.
+    A picture is written only to --png, or to scan.png when neither --out nor
+    --png is given; existing files are replaced only with --force.
     """
     from .. import plane as sc
 
@@ -73,26 +82,30 @@ def scan_(
         raise CLIError(f"--png must end in .png, .pdf or .svg, got {str(png)!r}")
     if out is not None and out.suffix not in {".zarr", ".nc"}:
         raise CLIError(f"--out must end in .zarr or .nc, got {str(out)!r}")
-    if not (10 <= dpi <= 1200):
-        raise CLIError(f"--dpi must be in [10, 1200], got {dpi}")
+    check_dpi(dpi)
     # the library's checks name the bound that is out of range
     sc._window("e", (e_lo, e_hi, n_e), 0.0, 1.0, "[0, 1]")
     sc._window("u", (u_lo, u_hi, n_u), 0.0, float("inf"), "[0, inf)")
     if y0 < 0:
         raise CLIError(f"--y0 must be >= 0, got {y0}")
-    if tile is None and scheduler is None and workers is None:
+    tiled = tile is not None or scheduler is not None or workers is not None
+    if png is None and out is None and not tiled:
+        png = Path("scan.png")
+    if not tiled:
         # before the progress bar draws anything; the figure and the file
         # written from the scan take more than the scan itself
         sc._check_memory(n_e, n_u, _CLI_BYTES_PER_PIXEL)
+    # before any work: a tiled store is resumed (its own checks), files are not replaced
+    check_outputs(force, png=png, out=None if tiled else out)
 
     if field in MOTION_FIELD_NAMES:
-        if tile is not None or scheduler is not None or workers is not None:
+        if tiled:
             raise CLIError(f"--field {field} is not available for tiled scans; scan tiles with "
                            "stairbounce.nonsliding.motion_coords")
         typer.echo(motion_scan_figure((e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0,
-                                      field, png, dpi, out, overlays))
+                                      field, png, dpi, out, overlays, force=force))
         return
-    if tile is not None or scheduler is not None or workers is not None:
+    if tiled:
         if out is None:
             raise CLIError("a tiled scan (--tile, --scheduler, --workers) needs --out STORE.zarr")
         from .atlas_commands import draw_store, run_tiled_scan
@@ -110,16 +123,16 @@ def scan_(
                             tile=tile, scheduler=scheduler, workers=workers)
         if png is not None:
             # never the whole store in memory: reduced by blocks first
-            draw_store(ds, field, png, dpi, overlay=overlays)
+            draw_store(ds, field, png, dpi, overlay=overlays, overwrite=force)
             typer.echo(f"wrote {png}")
         return
 
     ds = _scan_with_progress(sc, (e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0)
     if out is not None:
-        sc.save(ds, out)
+        sc.save(ds, out, overwrite=force)
         typer.echo(f"wrote {out}")
     if png is not None:
-        _draw(ds, field, overlays, png, dpi)
+        _draw(ds, field, overlays, png, dpi, overwrite=force)
         typer.echo(f"wrote {png}")
     found = ds["status"].values == 0
     frac = found.mean()
@@ -139,7 +152,7 @@ def _scan_with_progress(sc, e, u, max_iter, y0, v0):
                        progress=lambda done, total: bar.update(task, completed=done, total=total))
 
 
-def _draw(ds, field, overlays, png, dpi):
+def _draw(ds, field, overlays, png, dpi, overwrite=False):
     import matplotlib
 
     matplotlib.use("Agg")
@@ -152,7 +165,7 @@ def _draw(ds, field, overlays, png, dpi):
     try:
         plot_scan(ds, field=field, ax=ax, overlay=overlays)
         fig.tight_layout()
-        with atomic_path(png) as tmp:
+        with atomic_path(png, overwrite=overwrite) as tmp:
             fig.savefig(tmp, dpi=dpi)
     finally:
         plt.close(fig)

@@ -1,0 +1,108 @@
+"""What the safety of issue 17 costs, against baselines in the same process.
+
+    python benchmarks/store_safety.py [--repeat 5] [--size 1024] [--tile 128]
+
+1. The halt flag the scan kernel reads once per lockstep step (Ctrl-C,
+   ``stairbounce._interrupt``): ``_scan_fast`` against a copy of itself
+   compiled from the same source without the check, interleaved, on the
+   paper's grid (500 x 350, max_iter 1000).  The answers are compared bit for
+   bit, then the time ratio is printed.
+2. The helper thread of ``run_kernel``: ``scan_coords`` (kernel in a helper
+   thread, main thread waiting) against the kernel called in place.
+3. Resuming a complete tiled store: the checksum read of every tile
+   (``verify=True``) against the same call with ``verify=False``, and against
+   the time the store took to compute.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import sys
+import tempfile
+import time
+import types
+from pathlib import Path
+
+import numba
+import numpy as np
+
+import stairbounce.plane as P
+from stairbounce.atlas import scan_to_zarr
+
+
+def no_check_copy():
+    """``stairbounce.plane`` compiled again with the halt check removed (not cached)."""
+    src = Path(P.__file__).read_text()
+    check = "        if halted(halt):\n            return\n        # the common step"
+    if check not in src:
+        sys.exit("the halt check of _run_chunk is not where this script expects it")
+    src = src.replace(check, "        # the common step").replace("cache=True", "cache=False")
+    src = src.replace("from ._interrupt", "from stairbounce._interrupt").replace("from .model", "from stairbounce.model")
+    mod = types.ModuleType("plane_without_halt_check")
+    exec(compile(src, "plane_without_halt_check.py", "exec"), mod.__dict__)
+    return mod
+
+
+def best(f, repeat):
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        f()
+        times.append(time.perf_counter() - t)
+    return min(times), float(np.median(times))
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--repeat", type=int, default=5)
+    p.add_argument("--size", type=int, default=1024, help="side of the tiled store (pixels)")
+    p.add_argument("--tile", type=int, default=128)
+    args = p.parse_args()
+    print(f"load {os.getloadavg()[0]:.2f}, numba threads {numba.get_num_threads()}")
+
+    es = P.pixel_centres(0, 1, 500)
+    us = P.pixel_centres(0, 1.5, 350)
+    chunk, order = P._chunking(es.size * us.size, numba.get_num_threads())
+    base = no_check_copy()
+
+    def run(kernel):
+        outs = [np.empty((us.size, es.size), dt) for dt, _ in P._FIELDS.values()]
+        kernel(es, us, 1000, 1.0, 0.0, order, chunk, *outs, np.zeros(1, np.int64))
+        return outs
+
+    a, b = run(P._scan_fast), run(base._scan_fast)  # also compiles the copy
+    assert all(np.array_equal(x, y) for x, y in zip(a, b)), "the halt check changed an answer"
+    with_check, without = [], []
+    for _ in range(args.repeat):  # interleaved: load changes hit both alike
+        with_check.append(best(lambda: run(P._scan_fast), 1)[0])
+        without.append(best(lambda: run(base._scan_fast), 1)[0])
+    print(f"1. scan kernel, paper's grid: with halt check {min(with_check):.3f} s, without {min(without):.3f} s"
+          f" (best of {args.repeat}); ratio {min(with_check) / min(without):.3f}; answers identical")
+
+    in_place = best(lambda: run(P._scan_fast), args.repeat)[0]
+    helper = best(lambda: P.scan_coords(es, us, 1000), args.repeat)[0]
+    print(f"2. scan_coords through the helper thread {helper:.3f} s, kernel in place {in_place:.3f} s;"
+          f" ratio {helper / in_place:.3f} (includes building the Dataset)")
+
+    work = Path(tempfile.mkdtemp(prefix="stairbounce-bench-"))
+    try:
+        store = work / "a.zarr"
+        kw = dict(e=(0, 1, args.size), u=(0, 1.5, args.size), max_iter=1000, tile=args.tile)
+        t = time.perf_counter()
+        scan_to_zarr(store, **kw)
+        compute = time.perf_counter() - t
+        verify = best(lambda: scan_to_zarr(store, **kw), args.repeat)[0]
+        skip = best(lambda: scan_to_zarr(store, verify=False, **kw), args.repeat)[0]
+        n_tiles = (-(-args.size // args.tile)) ** 2
+        print(f"3. resume of a complete {args.size}^2 store ({n_tiles} tiles of {args.tile}): "
+              f"verify {verify:.3f} s, verify=False {skip:.3f} s, computing it took {compute:.2f} s; "
+              f"checksum read = {(verify - skip) / compute:.1%} of the compute time, "
+              f"{args.size ** 2 / max(verify - skip, 1e-9) / 1e6:.0f} M px/s")
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
