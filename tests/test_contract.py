@@ -221,7 +221,7 @@ def test_memory_of_the_dimension_and_orbit_commands_is_checked_first(capsys, mon
     monkeypatch.setattr(_validate, "available_memory", lambda: 10 * 2**30)
     with pytest.raises(ValueError, match=r"^resolution = 20000 needs about 11\.2 GiB"):
         fractal.perimeter_dimension(resolution=20000, progress=lambda done, total: None)
-    for argv in (["dimension", "--resolution", "40000", "--max-iter", "1"],
+    for argv in (["dimension", "--method", "boxes", "--resolution", "40000", "--max-iter", "1"],
                  ["orbit-diagram", "--e", "0.1", "--u", "0.3:1", "--n", "100", "--keep", "100000000",
                   "--png", "x.png"]):
         with pytest.raises(SystemExit) as exc:

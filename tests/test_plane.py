@@ -417,7 +417,7 @@ def test_scan_points_empty_and_scalar_like_inputs():
         ([0.1], [0.0], {}, r"u \(horizontal speed\) values must be > 0"),
         ([np.nan], [0.5], {}, "e values must be finite"),
         ([0.1], [0.5], {"max_iter": 0}, "max_iter must be an integer >= 1"),
-        ([0.1], [0.5], {"y0": -0.5}, r"y0 \(initial height"),
+        ([0.1], [0.5], {"y0": -0.5}, r"y0 \(height above the step.s floor\) must be >= 0"),
         ([0.1], [0.5], {"v0": math.inf}, "v0 must be finite"),
     ],
 )

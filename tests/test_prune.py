@@ -94,8 +94,12 @@ def test_equality_on_the_curve_is_not_pruned():
 
 
 def test_e_zero_and_out_of_range_are_never_pruned():
-    assert not prunable(0.0, np.array([1e-3, 1.0, 1e6, 1e300])).any()
-    assert not prunable(0.5, [1e-300, 1e305]).any()  # 1/T^2 or T^2 overflow: iterate
+    assert not prunable(0.0, np.array([1e-3, 1.0, 1e6, 1e150])).any()
+    # speeds where 1/T^2 or T^2 would overflow are outside the valid numeric
+    # range (README): refused by name rather than pruned or iterated
+    for u in (1e-300, 1e305):
+        with pytest.raises(ValueError, match=r"u \(horizontal speed\) values must be in \[1e-150, 1e\+150\]"):
+            prunable(0.5, [u])
     # the e = 0 column is iterated: the ball flies over about 2 u^2 = 50 steps,
     # lands and sticks (a periodic sliding solution); e = 0.5 is pruned
     ds = scan_coords([0.0, 0.5], [5.0], max_iter=500)

@@ -337,19 +337,20 @@ def test_answer_file_schema_and_claims():
         assert set(best["uncertainty_by_max_iter"]) >= {"1000", "4000", "16000"}
 
 
-def test_figures_report_row_carries_paper_reproduction_and_estimate():
-    from stairbounce.figures import _best_estimate_row
+def test_figures_report_row_carries_paper_and_estimate():
+    from stairbounce.figures import _study_row, load_border_dimension
     from stairbounce.fractal import border_dimension_estimates
 
-    class Reproduced:
-        dimension = 1.3321
-
-    row = _best_estimate_row("fig6", 1.324, Reproduced)
-    best = border_dimension_estimates()["fig6"]
+    best = load_border_dimension()["fig6"]
+    row = _study_row("fig6", 1.324, best)
+    boxes = border_dimension_estimates()["fig6"]["same_scales"]["boxes"]
     assert row.paper == "D = 1.324"
-    assert "reproduced 1.332" in row.measured
-    assert f"best estimate {best['dimension']:.3f}" in row.measured
-    assert f"{best['ci95'][0]:.3f}..{best['ci95'][1]:.3f}" in row.measured and best["method"] in row.measured
+    assert f"D = {best['dimension']:.3f} [{best['ci95'][0]:.3f}, {best['ci95'][1]:.3f}]" in row.measured
+    assert best["method"] in row.measured and f"{boxes['dimension']:.3f}" in row.measured
+    # the paper's 1.324 lies outside the study's interval: the row says it differs
+    assert row.verdict == "differs" and row.why.startswith(f"{best['dimension'] - 1.324:+.3f}")
+    missing = _study_row("fig6", 1.324, None)
+    assert missing.measured == "no study result" and missing.verdict == "not comparable"
 
 
 def test_fit_of_a_stored_measurement_is_the_same_fit():

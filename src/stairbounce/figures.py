@@ -652,16 +652,7 @@ def _dimension(name):
                 verdict=v2, why=w2 + "; this range leaves out the pixel scale the paper's "
                 "fit includes (README, 'Fractal dimension')"),
         ]
-        if best is not None:
-            v3, w3 = _compare(best["dimension"], paper, ci=best["ci95"])
-            rows.append(Row("dimension study, best estimate", f"D = {paper}",
-                            f"D = {best['dimension']:.3f} [{best['ci95'][0]:.3f}, "
-                            f"{best['ci95'][1]:.3f}] ({best['method']}){_same_scales(name)}",
-                            verdict=v3, why=w3))
-        else:
-            rows.append(Row("dimension study, best estimate", f"D = {paper}", "no study result",
-                            verdict="not comparable",
-                            why="stairbounce/data/border_dimension.json is absent"))
+        rows.append(_study_row(name, paper, best))
         caption = (f"Left: the border of the region with a periodic sliding solution (status 0, "
                    f"max_iter = {s.max_iter}) in the paper's window [{e[0]:g}, {e[1]:g}] x "
                    f"[{u[0]:g}, {u[1]:g}] at the paper's 500 px (here {res} px), black on white, "
@@ -681,6 +672,19 @@ def _dimension(name):
     recipe.__name__ = name
     recipe.__doc__ = f"Fig. {name[-1]}: border and box counting of {DIMENSION_WINDOWS[name][0]}."
     return recipe
+
+
+def _study_row(name, paper, best):
+    """The report row of the dimension study's best estimate for window
+    ``name`` (``best``: its entry of :func:`load_border_dimension`, or None)
+    against the paper's ``paper``, with the tiled box count beside it."""
+    if best is None:
+        return Row("dimension study, best estimate", f"D = {paper}", "no study result",
+                   verdict="not comparable", why="stairbounce/data/border_dimension.json is absent")
+    v, w = _compare(best["dimension"], paper, ci=best["ci95"])
+    return Row("dimension study, best estimate", f"D = {paper}",
+               f"D = {best['dimension']:.3f} [{best['ci95'][0]:.3f}, {best['ci95'][1]:.3f}] "
+               f"({best['method']}){_same_scales(name)}", verdict=v, why=w)
 
 
 def _same_scales(name):
