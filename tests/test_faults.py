@@ -267,7 +267,7 @@ def test_a_tile_writes_only_for_the_holder_of_the_lock(tmp_path):
     with _io.store_lock(path):
         with pytest.raises(RuntimeError, match="no longer holds the lock"):
             atlas._run_tile(str(path), token, "not-the-owner", 0, 0, rows[0], cols[0], es,
-                            np.linspace(0.2, 1, 38)[rows[0]], 400, 1.0, 0.0, 1)
+                            np.linspace(0.2, 1, 38)[rows[0]], 400, 1.0, 0.0, True, 1)
     assert not tiles_done(path).any()
 
 
