@@ -165,19 +165,19 @@ def test_compute_view_is_the_scan_bit_for_bit():
     view = V.View(0.0, 1.0, 0.0, 1.5, 120, 90, max_iter=400)
     ref = plane.scan(e=(0.0, 1.0, 120), u=(0.0, 1.5, 90), max_iter=400)
     for band_work in (10**12, 120 * 400 * 7):  # one band, bands of 7 rows
-        old = V._BAND_WORK
-        V._BAND_WORK = band_work
+        old = V.SLICE_WORK
+        V.SLICE_WORK = band_work
         try:
             ds = V.compute_view(view)
         finally:
-            V._BAND_WORK = old
+            V.SLICE_WORK = old
         xr.testing.assert_identical(ds.drop_attrs(), ref.drop_attrs())
         for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u", "max_iter", "convention"):
             assert ds.attrs[k] == ref.attrs[k]
 
 
 def test_compute_view_cancels_between_bands_and_reports_progress(monkeypatch):
-    monkeypatch.setattr(V, "_BAND_WORK", 50 * 100 * 10)  # 10 rows per band
+    monkeypatch.setattr(V, "SLICE_WORK", 50 * 100 * 10)  # 10 rows per band
     view = V.View(0.0, 1.0, 0.0, 1.5, 50, 40, max_iter=100)
     seen = []
     V.compute_view(view, progress=lambda done, total: seen.append((done, total)))
@@ -191,6 +191,54 @@ def test_compute_view_cancels_between_bands_and_reports_progress(monkeypatch):
     with pytest.raises(V.Cancelled):
         V.compute_view(view, cancelled=cancelled)
     assert len(asked) == 3
+
+
+def test_progressive_render_previews_then_gives_the_scan_bit_for_bit():
+    """The coarse preview holds the exact values of every 8th pixel; each
+    preview picture shows the finished rows exactly; the end is the scan."""
+    view = V.View(0.0, 1.0, 0.0, 1.5, 83, 61, max_iter=400)
+    ref = plane.scan(e=(0.0, 1.0, 83), u=(0.0, 1.5, 61), max_iter=400)
+    gen = V.render_slices(view, slice_work=83 * 400 * 16, preview_work=0)
+    parts = []
+    while True:
+        try:
+            parts.append(next(gen))
+        except StopIteration as stop:
+            ds = stop.value
+            break
+    assert [p.rows_done for p in parts] == [0, 16, 32, 48]  # the preview, then bands of 16 rows
+    coarse = parts[0].coarse
+    sub = ref.isel(e=slice(4, None, 8), u=slice(4, None, 8))
+    np.testing.assert_array_equal(coarse["word_length"].values, sub["word_length"].values)
+    xr.testing.assert_identical(ds.drop_attrs(), ref.drop_attrs())
+    full = V.shade(ref, "period")
+    for p in parts:
+        img = V.preview_rgba(p, "period")
+        assert img.shape == (61, 83)
+        np.testing.assert_array_equal(img[: p.rows_done], full[: p.rows_done])
+        # the coarse sample's own pixel always shows its exact colour
+        np.testing.assert_array_equal(img[4::8, 4::8], full[4::8, 4::8])
+    # a small view skips the preview
+    small = list(V.render_slices(V.View(0, 1, 0, 1.5, 40, 40, max_iter=10), slice_work=40 * 10 * 8))
+    assert [p.rows_done for p in small] == [8, 16, 24, 32] and all(p.coarse is None for p in small)
+
+
+def test_window_digits_tell_the_ends_apart():
+    for lo, hi, n in ((0.0525, 0.0525 + 1e-9, 600), (0.0, 1.0, 600), (0.3, 0.3 + 4e-14, 100)):
+        d = V.window_digits(lo, hi, n)
+        a, b = V.format_number(lo, d), V.format_number(hi, d)
+        assert a != b
+        # one pixel is resolved: the text of the second pixel centre differs from the first
+        step = (hi - lo) / n
+        assert V.format_number(lo + 0.5 * step, d) != V.format_number(lo + 1.5 * step, d)
+    assert V.format_number(0.1, 9) == "0.1"
+
+
+def test_tidy_removes_float_noise_within_tolerance():
+    assert V.tidy(0.9200000000000002, 1e-12) == 0.92
+    assert V.tidy(0.19999999999999996, 1e-12) == 0.2
+    x = 0.052500001234
+    assert V.tidy(x, 0.0) == x and abs(V.tidy(x, 1e-6) - x) <= 1e-6
 
 
 def test_map_agrees_with_sliding_word_at_pixel_centres():
@@ -332,30 +380,45 @@ def test_exports_png_and_netcdf():
 # --------------------------------------------------------------------------- #
 
 
-class InlineExecutor:
-    """Runs submitted work at once and records it."""
+from stairbounce.explorer.scheduler import Scheduler  # noqa: E402
+
+
+class InlineScheduler(Scheduler):
+    """Runs submitted work to its end at once and records its kind."""
 
     def __init__(self):
+        super().__init__(thread=False)
         self.calls = []
 
-    def submit(self, fn, *args):
-        self.calls.append(fn.__name__)
-        fn(*args)
+    def submit(self, owner, kind, work, **kw):
+        self.calls.append(kind)
+        job = super().submit(owner, kind, work, **kw)
+        self.run_all()
+        return job
 
 
 @pytest.fixture
 def explorer():
     from stairbounce.explorer.app import Explorer
 
-    ex = InlineExecutor()
-    app = Explorer(V.View(0.0, 0.4, 0.3, 1.1, 60, 50, max_iter=300), executor=ex)
+    ex = InlineScheduler()
+    app = Explorer(V.View(0.0, 0.4, 0.3, 1.1, 60, 50, max_iter=300), scheduler=ex)
     app.start()
     return app, ex
 
 
+def _type_window(app, e=None, u=None):
+    """Type into the window boxes (live text, as the browser syncs it), then Enter."""
+    if e is not None:
+        app.e_window.value_input = e
+    if u is not None:
+        app.u_window.value_input = u
+    app._on_window_text()
+
+
 def test_explorer_renders_the_view(explorer):
     app, ex = explorer
-    assert ex.calls == ["_work"]
+    assert ex.calls == ["render"]
     img = app.img_src.data["image"][0]
     assert img.shape == (50, 60) and img.dtype == np.uint32
     np.testing.assert_array_equal(img, V.shade(app.ds, "word_length"))
@@ -370,7 +433,7 @@ def test_explorer_follows_a_zoom(explorer):
     assert app.shown.e_lo == 0.05 and app.shown.u_hi == 0.7
     assert app.e_window.value == "0.05:0.15" and app.u_window.value == "0.6:0.7"
     assert float(app.ds.e.min()) > 0.05 and float(app.ds.u.max()) < 0.7
-    app.e_window.value = "0.2:0.3"  # typed in: the plot's range moves too
+    _type_window(app, e="0.2:0.3")  # typed in: the plot's range moves too
     assert app.map_fig.x_range.start == 0.2 and app.shown.e_hi == 0.3
 
 
@@ -382,7 +445,7 @@ def test_explorer_refuses_a_view_over_budget(explorer):
     assert len(ex.calls) == 2
     assert app.view.height == 50 and app.shown.height == 50
     assert "pixel budget" in app.status.object and "sb-error" in app.status.object
-    app.e_window.value = "0.3:0.1"
+    _type_window(app, e="0.3:0.1")
     assert "e window must satisfy" in app.status.object
     assert len(ex.calls) == 2 and app.shown.e_lo == 0.0
 
@@ -395,7 +458,7 @@ def test_explorer_tap_shows_the_word(explorer):
     assert e in app.ds.e.values and u in app.ds.u.values
     w = sliding_word(e, u, 300)
     assert w.format() in app.point_pane.object
-    assert f"{w.period} steps" in app.point_pane.object
+    assert f"period {w.period} step" in app.point_pane.object
     assert len(app.path_src.data["x"]) > 100 and app.orbit_marker.location == u
     assert len(app.orbit_src.data["x"]) == 300 * 200
     app._on_tap(SimpleNamespace(x=0.99, y=0.2))  # outside the window: taken as it is
@@ -408,7 +471,29 @@ def test_explorer_colour_change_reshades_without_recomputing(explorer):
     app.color.value = "status"
     assert len(ex.calls) == n
     np.testing.assert_array_equal(app.img_src.data["image"][0], V.shade(app.ds, "status"))
-    assert app.colorbar.major_label_overrides == {0: "found", 1: "none"}
+    assert app.colorbar.major_label_overrides == {0: "found", 1: "none within max_iter"}
+    assert app.mapper.palette == ["#000000", "#ffffff"]
+
+
+def test_colour_key_says_what_white_means(explorer):
+    """Defect 7: white is 'no periodic sliding solution within max_iter', in
+    the key of every variable, drawn with a border, and unlike the
+    not-yet-computed background."""
+    app, _ = explorer
+    for var in V.COLOR_VARS:
+        app.color.value = var
+        labels = app.colorbar.major_label_overrides
+        last = max(labels)
+        assert labels[last] == "none within max_iter"
+        assert app.mapper.palette[last] == V.NO_SLIDING_COLOR == "#ffffff"
+        assert len(app.mapper.palette) == len(labels)
+        # the no-sliding pixels of the image are that colour
+        img = app.img_src.data["image"][0]
+        none = app.ds["status"].values != 0
+        assert none.any() and (img[none] == V._rgba32(["#ffffff"])[0]).all()
+    assert app.colorbar.bar_line_color == "black"
+    assert app.map_fig.background_fill_color.lower() != "#ffffff"
+    assert "white: no periodic sliding solution within max_iter" in app.key_note.object
 
 
 def test_every_colour_variable_is_offered():
@@ -420,16 +505,17 @@ def test_every_colour_variable_is_offered():
 
 def test_explorer_downloads(explorer):
     app, _ = explorer
-    assert app._png().getvalue()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert app._netcdf().getvalue()[:4] == b"\x89HDF"
+    import asyncio
+
+    assert asyncio.run(app._png()).getvalue()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert asyncio.run(app._netcdf()).getvalue()[:4] == b"\x89HDF"
 
 
 def test_create_app_reports_url_messages(monkeypatch):
     from stairbounce.explorer import app as A
 
-    monkeypatch.setattr(A, "_EXECUTOR", InlineExecutor())
     view, messages = V.parse_query({"size": "5000x5000"})
-    ex = A.Explorer(view, messages, executor=InlineExecutor())
+    ex = A.Explorer(view, messages, scheduler=InlineScheduler())
     assert ex.url_messages.visible and "pixel budget" in ex.url_messages.object
 
 

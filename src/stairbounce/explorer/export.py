@@ -34,11 +34,10 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     neighbour), axes in e and u, the colour key, the overlays of the view,
     the window and max_iter in the title.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    # the Figure API without pyplot: no global state, so the server can make
+    # PNGs on a thread of its own
     from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.figure import Figure
 
     key = color_key(view.color)
     idx = classes(ds, view.color).astype(float)
@@ -51,7 +50,7 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     k = max(1, math.ceil(450 / min(view.width, view.height)))
     w, h = view.width * k / dpi, view.height * k / dpi  # image size, inches
     fw, fh = w + 2.9, h + 1.4
-    fig = plt.figure(figsize=(fw, fh), dpi=dpi)
+    fig = Figure(figsize=(fw, fh), dpi=dpi)
     ax = fig.add_axes([1.0 / fw, 0.75 / fh, w / fw, h / fh])
     im = ax.imshow(idx, origin="lower", extent=(view.e_lo, view.e_hi, view.u_lo, view.u_hi),
                    aspect="auto", interpolation="nearest", cmap=cmap, norm=norm)
@@ -66,7 +65,7 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     ax.set_ylabel("u (horizontal speed)")
     ax.set_title(
         f"e in [{view.e_lo:.10g}, {view.e_hi:.10g}], u in [{view.u_lo:.10g}, {view.u_hi:.10g}]\n"
-        f"{key.title}, max_iter {view.max_iter} (white: no sliding found)",
+        f"{key.title}, max_iter {view.max_iter} (white: no periodic sliding solution within max_iter)",
         fontsize="small",
     )
     cax = fig.add_axes([(w + 1.2) / fw, 0.75 / fh, 0.2 / fw, h / fh])
@@ -75,7 +74,6 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     cb.set_label(key.title, fontsize="small")
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
-    plt.close(fig)
     return buf.getvalue()
 
 

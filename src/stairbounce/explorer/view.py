@@ -51,6 +51,13 @@ __all__ = [
     "view_url_query",
     "check_view",
     "compute_view",
+    "render_slices",
+    "preview_rgba",
+    "Partial",
+    "window_digits",
+    "format_number",
+    "tidy",
+    "FIELDS",
     "color_key",
     "shade",
     "overlay_curves",
@@ -59,8 +66,23 @@ __all__ = [
     "pixel_of",
 ]
 
-COLOR_VARS = ("word_length", "period", "impacts", "jumps", "status")
+FIELDS = {
+    # variable: (menu entry, colour-key title, least value on a sliding pixel or None)
+    "word_length": ("word length", "word length", 1),
+    "period": ("period (steps)", "period (steps)", 1),
+    "impacts": ("impacts per period", "impacts per period", 0),
+    "jumps": ("non-zero letters (jumps)", "non-zero letters", 1),
+    "status": ("status (slides or not)", "periodic sliding solution", None),
+}
+"""The variables that can colour the map: data variables of
+:func:`stairbounce.plane.scan` (a new field is one entry here, with its
+classes counted from its least value; ``None``: two classes, found or not)."""
+
+COLOR_VARS = tuple(FIELDS)
 """Data variables of :func:`stairbounce.plane.scan` that can colour the map."""
+
+NO_SLIDING_LABEL = "none within max_iter"
+"""Key entry of white pixels: no periodic sliding solution within max_iter steps."""
 
 OVERLAYS = ("tongues", "no_sliding")
 """Curves drawn over the map: the (n, 0^inf) tongues of Theorem 3.1 and the
@@ -86,13 +108,17 @@ MIN_SIDE = 16
 # float64 spacings: deeper than that the picture would be rounding noise.
 _MIN_ULPS_PER_PIXEL = 4
 
-# Rows are computed in bands of at most this many potential map steps
-# (pixels * max_iter), so a newer request waits at most about a band (under a
-# second here) for the kernel to notice it has been cancelled.  Smaller bands
-# cost more: every parallel call ends waiting for its slowest thread (10-30 %
-# more time with 8 bands for the Fig. 4 view); the Fig. 4 view at 600 x 600
-# and max_iter 1000 is one band.
-_BAND_WORK = 400_000_000
+# A render is cut into slices of at most this many potential map steps
+# (pixels * max_iter, the worst case where nothing slides): the server's
+# scheduler runs one slice at a time, so a cheap request of another session
+# waits at most one slice (about 0.1-0.2 s on two cores, see
+# benchmarks/explorer_load.py), and a cancelled render stops within one.
+SLICE_WORK = 48_000_000
+
+# The coarse preview samples every COARSE-th pixel in each direction (1/64 of
+# the pixels); views cheaper than PREVIEW_WORK map steps skip it.
+COARSE = 8
+PREVIEW_WORK = 4 * SLICE_WORK
 
 
 @dataclass(frozen=True)
@@ -367,38 +393,153 @@ def check_view(view: View) -> View:
     return view
 
 
-def compute_view(view: View, cancelled=None, progress=None) -> xr.Dataset:
-    """compute_view(view, cancelled=None, progress=None) -> xarray.Dataset
+@dataclass
+class Partial:
+    """A render in progress, yielded by :func:`render_slices` after each slice.
 
-    The scan of a view: :func:`stairbounce.plane.scan` on its window and pixels.
+    ``coarse``: the scan of every :data:`COARSE`-th pixel centre (offset
+    ``step // 2``; ``None`` when the view skips the preview); ``parts``: the
+    scans of the first ``rows_done`` rows, in order.
+    """
 
-    The rows (u) are computed in bands with :func:`stairbounce.plane.scan_coords`
-    on slices of :func:`stairbounce.plane.pixel_centres`, which gives the same
-    values bit for bit as one call of ``scan`` (pixels are independent); the
-    dataset carries the same attributes.  Between bands ``cancelled()`` is
-    asked whether a newer request superseded this one (then
-    :class:`Cancelled` is raised) and ``progress(done, total)`` is told how
-    many rows are done.
+    view: View
+    coarse: xr.Dataset | None
+    parts: list
+    rows_done: int
+    step: int = COARSE
+
+    @property
+    def fraction(self) -> float:
+        return self.rows_done / self.view.height
+
+
+def render_slices(view: View, slice_work: int | None = None, coarse: int = COARSE,
+                  preview_work: int | None = None):
+    """render_slices(view, slice_work=SLICE_WORK, coarse=COARSE, preview_work=PREVIEW_WORK) -> generator
+
+    The scan of a view computed one bounded slice at a time.
+
+    A generator: each ``next()`` computes one slice and yields the
+    :class:`Partial` so far; the generator's return value (``StopIteration.value``)
+    is the finished dataset, equal bit for bit to :func:`stairbounce.plane.scan`
+    on the view's window (pixels are independent, so scanning rows of
+    :func:`~stairbounce.plane.pixel_centres` in bands changes nothing).
+
+    First, when the view costs more than ``preview_work`` map steps, the
+    coarse preview: every ``coarse``-th pixel centre of both axes (exact
+    values of those pixels, 1/coarse^2 of the work); then bands of rows of at
+    most ``slice_work`` potential map steps (``width * max_iter`` per row).
 
     Raises :class:`ValueError` from :func:`check_view` for a view over budget.
     """
     check_view(view)
+    slice_work = SLICE_WORK if slice_work is None else slice_work
+    preview_work = PREVIEW_WORK if preview_work is None else preview_work
     es = plane.pixel_centres(view.e_lo, view.e_hi, view.width)
     us = plane.pixel_centres(view.u_lo, view.u_hi, view.height)
-    rows = max(1, min(view.height, _BAND_WORK // max(1, view.width * view.max_iter)))
+    pre = None
+    if coarse > 1 and view.work > preview_work and min(view.width, view.height) >= 2 * coarse:
+        off = coarse // 2
+        pre = plane.scan_coords(es[off::coarse], us[off::coarse], max_iter=view.max_iter)
+        yield Partial(view, pre, [], 0, coarse)
+    rows = max(1, min(view.height, slice_work // max(1, view.width * view.max_iter)))
     parts = []
     for start in range(0, view.height, rows):
-        if cancelled is not None and cancelled():
-            raise Cancelled
         parts.append(plane.scan_coords(es, us[start : start + rows], max_iter=view.max_iter))
-        if progress is not None:
-            progress(min(view.height, start + rows), view.height)
+        done = min(view.height, start + rows)
+        if done < view.height:
+            yield Partial(view, pre, parts, done, coarse)
     ds = parts[0] if len(parts) == 1 else xr.concat(parts, dim="u", combine_attrs="override")
     ds.attrs.update(
         e_min=view.e_lo, e_max=view.e_hi, n_e=view.width,
         u_min=view.u_lo, u_max=view.u_hi, n_u=view.height,
     )
     return ds
+
+
+def compute_view(view: View, cancelled=None, progress=None) -> xr.Dataset:
+    """compute_view(view, cancelled=None, progress=None) -> xarray.Dataset
+
+    The scan of a view: :func:`stairbounce.plane.scan` on its window and pixels.
+
+    Runs :func:`render_slices` to the end (same values bit for bit as one
+    call of ``scan``; the dataset carries the same attributes).  Between
+    slices ``cancelled()`` is asked whether a newer request superseded this
+    one (then :class:`Cancelled` is raised) and ``progress(done, total)`` is
+    told how many rows are done.
+
+    Raises :class:`ValueError` from :func:`check_view` for a view over budget.
+    """
+    gen = render_slices(view)
+    while True:
+        if cancelled is not None and cancelled():
+            gen.close()
+            raise Cancelled
+        try:
+            part = next(gen)
+        except StopIteration as stop:
+            ds = stop.value
+            if progress is not None:
+                progress(view.height, view.height)
+            return ds
+        if progress is not None:
+            progress(part.rows_done, view.height)
+
+
+def preview_rgba(part: Partial, var: str) -> np.ndarray:
+    """preview_rgba(part, var) -> uint32 array (n_u, n_e)
+
+    The picture of a render in progress: the rows already computed at full
+    resolution, the others from the coarse preview (each coarse sample
+    painted over the ``step x step`` block of pixels around it), and
+    the not-yet-computed colour where there is neither.
+    """
+    v = part.view
+    out = np.full((v.height, v.width), _rgba32((NOT_COMPUTED_COLOR,))[0], dtype=np.uint32)
+    if part.coarse is not None:
+        c = part.step
+        block = np.repeat(np.repeat(shade(part.coarse, var), c, axis=0), c, axis=1)
+        block = np.pad(block, ((0, max(0, v.height - block.shape[0])), (0, max(0, v.width - block.shape[1]))),
+                       mode="edge")
+        out[:] = block[: v.height, : v.width]
+    row = 0
+    for p in part.parts:
+        n = p.sizes["u"]
+        out[row : row + n] = shade(p, var)
+        row += n
+    return out
+
+
+def window_digits(lo: float, hi: float, n: int) -> int:
+    """window_digits(lo, hi, n) -> int
+
+    Significant digits that show the ends of a window of ``n`` pixels apart
+    and resolve one pixel: a tenth of a pixel at the larger end, 4 to 17.
+    """
+    big = max(abs(lo), abs(hi), 1e-300)
+    pixel = (hi - lo) / n
+    return int(min(17, max(4, math.ceil(math.log10(big / (pixel / 10))))))
+
+
+def format_number(x: float, digits: int) -> str:
+    """``x`` with ``digits`` significant digits, or its exact shortest text if shorter."""
+    exact = _fmt(x)
+    short = f"{x:.{digits}g}"
+    return exact if len(exact) <= len(short) else short
+
+
+def tidy(x: float, tolerance: float) -> float:
+    """tidy(x, tolerance) -> float
+
+    The float with the shortest decimal text within ``tolerance`` of ``x``
+    (``0.9200000000000002`` -> ``0.92`` for any tolerance above 2e-16): a
+    zoom or pan lands on the range Bokeh computed, whose last bits are noise.
+    """
+    for p in range(1, 18):
+        y = float(f"{x:.{p}g}")
+        if abs(y - x) <= tolerance:
+            return y
+    return float(x)
 
 
 def pixel_of(view: View, e: float, u: float) -> tuple[int, int] | None:
@@ -421,15 +562,8 @@ def pixel_of(view: View, e: float, u: float) -> tuple[int, int] | None:
 # impacts and jumps (black, as the paper's tongues in Fig. 4); classes widen
 # because the counts fall off roughly geometrically.
 _CLASS_STARTS = (0, 1, 2, 3, 4, 5, 7, 10, 15, 25, 50, 100, 250, 500)
-_LEAST = {"word_length": 1, "period": 1, "impacts": 0, "jumps": 1}
 NO_SLIDING_COLOR = "#ffffff"
-_LABELS = {
-    "word_length": "word length",
-    "period": "period (steps)",
-    "impacts": "impacts per period",
-    "jumps": "non-zero letters",
-    "status": "periodic sliding solution",
-}
+NOT_COMPUTED_COLOR = "#b8b8b8"
 
 
 @dataclass(frozen=True)
@@ -455,11 +589,11 @@ def _palette(n):
 
 def color_key(var: str) -> ColorKey:
     """color_key(var) -> ColorKey: the classes and colours used for ``var``."""
-    if var == "status":
-        return ColorKey(var, _LABELS[var], ("found", "none"), ("#000000", NO_SLIDING_COLOR))
-    if var not in _LEAST:
+    if var not in FIELDS:
         raise ValueError(f"color must be one of {', '.join(COLOR_VARS)}, got {var!r}")
-    b = _LEAST[var]
+    _, title, b = FIELDS[var]
+    if b is None:
+        return ColorKey(var, title, ("found", NO_SLIDING_LABEL), ("#000000", NO_SLIDING_COLOR))
     labels = []
     for lo, hi in zip(_CLASS_STARTS, _CLASS_STARTS[1:] + (None,)):
         if hi is None:
@@ -468,7 +602,7 @@ def color_key(var: str) -> ColorKey:
             labels.append(str(b + lo))
         else:
             labels.append(f"{b + lo}-{b + hi - 1}")
-    return ColorKey(var, _LABELS[var], tuple(labels), _palette(len(labels)))
+    return ColorKey(var, title, tuple(labels), _palette(len(labels)))
 
 
 def _rgba32(hex_colors):
@@ -484,9 +618,9 @@ def _rgba32(hex_colors):
 def classes(ds: xr.Dataset, var: str) -> np.ndarray:
     """Class index of every pixel under :func:`color_key` (-1: no sliding)."""
     sliding = ds["status"].values == 0
-    if var == "status":
+    if FIELDS[var][2] is None:
         return np.where(sliding, 0, 1)
-    v = ds[var].values.astype(np.int64) - _LEAST[var]
+    v = ds[var].values.astype(np.int64) - FIELDS[var][2]
     idx = np.searchsorted(np.asarray(_CLASS_STARTS), v, side="right") - 1
     return np.where(sliding, idx, -1)
 
@@ -546,22 +680,25 @@ def overlay_curves(view: View, samples: int = 400, max_tongues: int = 400) -> di
     return {"tongues": (txs, tys), "no_sliding": ([e[ok]], [ns[ok]])}
 
 
-def point_details(e: float, u: float, max_iter: int, steps: int | None = None) -> dict:
-    """point_details(e, u, max_iter, steps=None) -> dict
+def point_details(e: float, u: float, max_iter: int, steps: int | None = None,
+                  max_steps: int = 2000) -> dict:
+    """point_details(e, u, max_iter, steps=None, max_steps=2000) -> dict
 
     What a tap on ``(e, u)`` shows: the word of the periodic sliding solution
     through (1, 0) (:func:`stairbounce.sliding_word`, ``None`` when it does
     not slide within ``max_iter`` steps) and the exact trajectory from (1, 0)
-    over ``steps`` steps (default: one period and two more steps, 4 to 16
-    steps; 12 when it does not slide) sampled for drawing, with its impacts,
-    accumulation points and slides.
+    over ``steps`` steps (default: one full period and two more steps, at
+    least 4 and at most ``max_steps``; 12 when it does not slide) sampled for
+    drawing (at most about 40 000 points), with its impacts, accumulation
+    points and slides.
     """
     e, u = check_e(e), check_u(u)
     w = sliding_word(e, u, max_steps=max_iter)
     if steps is None:
-        steps = 12 if w is None else int(min(16, max(4, w.period + 2)))
+        steps = 12 if w is None else int(min(max_steps, max(4, w.period + 2)))
     traj = trajectory(e, u, 1.0, 0.0, steps)
-    t = np.linspace(0.0, traj.duration, 200 * steps + 1)
+    per_step = max(10, min(200, 40_000 // steps))
+    t = np.linspace(0.0, traj.duration, per_step * steps + 1)
     t = np.union1d(t, [i.time for i in traj.impacts if i.time <= traj.duration])
     x, y = traj.position(t)
     return {
