@@ -29,13 +29,12 @@ from urllib.parse import parse_qs
 
 import numpy as np
 import panel as pn
-from bokeh.core.properties import String
 from bokeh.events import RangesUpdate, Tap
-from bokeh.model import DataModel
 from bokeh.models import (
     ColorBar,
     ColumnDataSource,
     CustomJS,
+    Div,
     CustomJSHover,
     FixedTicker,
     HoverTool,
@@ -107,18 +106,19 @@ _CSS = """
 """
 
 # The address bar is written by the page itself: Panel's Location pushes a
-# history entry on every change and ignores Back/Forward.  ``url`` is
-# "push ?query" or "replace ?query"; a Back/Forward sets ``popped`` to
-# "<time> ?query", which the server turns back into the view.
+# history entry on every change and ignores Back/Forward.  Two models that are
+# never shown carry it: ``out.text`` is "push ?query" or "replace ?query"
+# (server -> browser); a Back/Forward sets ``back.text`` to "<time> ?query"
+# (browser -> server), which the server turns back into the view.
 _HISTORY_JS = """
 if (!window.__sb_popstate) {
   window.__sb_popstate = true;
   window.addEventListener('popstate', () => {
-    h.popped = String(Date.now()) + ' ' + window.location.search;
+    back.text = String(Date.now()) + ' ' + window.location.search;
   });
 }
-const sp = h.url.indexOf(' ');
-const mode = h.url.slice(0, sp), query = h.url.slice(sp + 1);
+const sp = out.text.indexOf(' ');
+const mode = out.text.slice(0, sp), query = out.text.slice(sp + 1);
 if (window.location.search !== query) {
   const url = window.location.pathname + query + window.location.hash;
   if (mode === 'push') window.history.pushState({}, '', url);
@@ -130,13 +130,6 @@ _HOVER_VALUE_JS = """
 if (value == null || Number.isNaN(value) || value < -1) return 'computing';
 return value < 0 ? 'none within max_iter' : String(value);
 """
-
-
-class _History(DataModel):
-    """The page's link to the browser's history (see ``_HISTORY_JS``)."""
-
-    url = String(default="")
-    popped = String(default="")
 
 
 def _plural(n, word):
@@ -171,10 +164,12 @@ class Explorer:
         self._build_map()
         self._build_point_figures()
         self._build_widgets(messages)
-        self.history = _History()
-        self.history.js_on_change("url", CustomJS(args=dict(h=self.history), code=_HISTORY_JS))
-        self.history.on_change("popped", self._locked_bokeh(self._on_popstate))
-        self.map_fig.tags = [self.history]  # puts the model in the page's document
+        self.history_out, self.history_back = Div(text="", visible=False), Div(text="", visible=False)
+        self.history_out.js_on_change(
+            "text", CustomJS(args=dict(out=self.history_out, back=self.history_back), code=_HISTORY_JS))
+        self.history_back.on_change("text", self._locked_bokeh(self._on_popstate))
+        # referenced from the map, the two models are in the page's document
+        self.map_fig.tags = [self.history_out, self.history_back]
         # the status and the tap's word sit above the map, so a laptop screen
         # (1280 x 720) shows them without scrolling; a flex box wraps the
         # trajectory and orbit diagram below the map when the window is narrow
@@ -355,6 +350,8 @@ class Explorer:
         """
 
         def run(*args):
+            if self._syncing:  # the page itself is setting the widgets (watchers fire now)
+                return
             if self._doc is not None and self._doc.session_context is not None:
                 self._doc.add_next_tick_callback(partial(self._in_doc, fn, *args))
             else:  # no server (tests)
@@ -507,7 +504,7 @@ class Explorer:
 
     def _set_url(self, mode):
         """Address bar := the view's query; ``push`` makes a history entry."""
-        self.history.url = f"{mode} {view_url_query(self.view)}"
+        self.history_out.text = f"{mode} {view_url_query(self.view)}"
 
     def _on_popstate(self, popped):
         """Back or Forward: show the view of the address bar's query."""
