@@ -558,39 +558,421 @@ def test_cli_help_lists_the_options(capsys):
     assert "--port" in out and "--host" in out and "--no-browser" in out
 
 
+def test_cli_port_in_use_is_reported_before_loading_kernels(capsys, monkeypatch):
+    """Defect 5: the port is checked first, not after the kernels' warm-up."""
+    from stairbounce.explorer import app as A
+
+    calls = []
+    monkeypatch.setattr(A, "warm_up", lambda *a: calls.append(1))
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        with pytest.raises(SystemExit) as exc:
+            main(["explore", "--no-browser", "--port", str(port)])
+    assert exc.value.code == 2 and calls == []
+
+
+@pytest.mark.parametrize("origin", ["", "a b", "host/path"])
+def test_cli_rejects_a_bad_websocket_origin(capsys, origin):
+    with pytest.raises(SystemExit) as exc:
+        main(["explore", "--no-browser", "--allow-websocket-origin", origin])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "--allow-websocket-origin" in err and err.count("\n") == 1
+
+
+def test_websocket_origins_match_what_browsers_send():
+    """Defect 4: Bokeh compares the Origin header's host[:port] with the
+    allowlist (bokeh.server.util.check_allowlist); browsers write IPv6 hosts in
+    brackets and omit default ports."""
+    import socket as so
+
+    from bokeh.server.util import check_allowlist
+
+    from stairbounce.explorer import browse_url, normalize_host, websocket_origins
+
+    def ok(host, origin_host, extra=()):
+        return check_allowlist(origin_host, websocket_origins(host, 5006, extra))
+
+    for host in ("127.0.0.1", "localhost", "::1", "[::1]"):
+        for seen in ("127.0.0.1:5006", "localhost:5006", "[::1]:5006"):
+            assert ok(host, seen), (host, seen)
+        assert not ok(host, "evil.example.com:5006") and not ok(host, "127.0.0.1:5007")
+    name = so.gethostname()
+    assert ok("0.0.0.0", f"{name.lower()}:5006") and ok("0.0.0.0", "127.0.0.1:5006")
+    assert ok("::", "[::1]:5006") and not ok("0.0.0.0", "evil.example.com:5006")
+    assert ok("192.0.2.7", "192.0.2.7:5006") and not ok("192.0.2.7", "127.0.0.1:5006")
+    # a reverse proxy's public name: browsers omit :443 and :80, Bokeh reads it as :80
+    assert ok("127.0.0.1", "explore.example.org", ["explore.example.org"])
+    assert ok("127.0.0.1", "explore.example.org:8443", ["https://explore.example.org:8443/"])
+    assert ok("127.0.0.1", "[2001:db8::1]:8080", ["[2001:db8::1]:8080"])
+    assert normalize_host("[::1]") == "::1"
+    assert browse_url("::1", 5006) == "http://[::1]:5006/"
+    assert browse_url("0.0.0.0", 5006) == f"http://{name}:5006/"
+
+
+def test_make_server_port_zero_binds_a_free_port():
+    """Issue 17 item 10: port 0 was refused ("Invalid port in host value: 127.0.0.1:*")."""
+    from stairbounce.explorer import make_server
+
+    server = make_server(port=0)
+    try:
+        assert server.port > 0
+        with pytest.raises(OSError):  # it holds the port
+            with socket.socket() as s:
+                s.bind(("127.0.0.1", server.port))
+        assert f"127.0.0.1:{server.port}" in server._tornado.websocket_origins
+    finally:
+        server.stop()
+
+
 @pytest.mark.slow
 def test_console_script_serves_the_page_and_stops_on_ctrl_c():
+    """``--port 0``: the URL printed has the real port; kernels load after it."""
     import os
+    import re
     import shutil
     import signal
     import subprocess
     import sys
-    import time
     import urllib.request
 
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
     exe = shutil.which("stairbounce", path=os.path.dirname(sys.executable))
     cmd = [exe] if exe else [sys.executable, "-c", "from stairbounce.cli import main; main()"]
-    proc = subprocess.Popen(cmd + ["explore", "--port", str(port), "--no-browser"],
+    proc = subprocess.Popen(cmd + ["explore", "--port", "0", "--no-browser"],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
-        deadline = time.monotonic() + 60
-        while True:
-            try:
-                with urllib.request.urlopen(f"http://127.0.0.1:{port}/?size=abc", timeout=30) as r:
-                    page = r.read().decode()
-                break
-            except OSError:
-                assert proc.poll() is None and time.monotonic() < deadline, "the server did not start"
-                time.sleep(0.3)
+        first = proc.stdout.readline()
+        m = re.search(r"stairbounce explorer at http://127\.0\.0\.1:(\d+)/", first)
+        assert m, first
+        port = int(m.group(1))
+        assert port > 0
+        assert "loading the compiled kernels" in proc.stdout.readline()
+        assert "kernels ready in" in proc.stdout.readline()
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/?size=abc", timeout=60) as r:
+            page = r.read().decode()
         assert "<title>stairbounce explorer</title>" in page
+        # a query value Panel would refuse (over 4300 digits) is the app's message, not HTTP 500
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/?e={'1' * 20000}", timeout=60) as r:
+            assert r.status == 200
         proc.send_signal(signal.SIGINT)
         out, _ = proc.communicate(timeout=30)
     finally:
         if proc.poll() is None:
             proc.kill()
     assert proc.returncode == 0
-    assert f"stairbounce explorer at http://127.0.0.1:{port}/" in out
     assert "stopped" in out and "Traceback" not in out
+
+
+# --------------------------------------------------------------------------- #
+# The scheduler (issue 14, defect 2)                                          #
+# --------------------------------------------------------------------------- #
+
+
+def _slices(log, name, n, result=None):
+    """A job of ``n`` slices that records each one in ``log``."""
+    for i in range(n):
+        log.append((name, i))
+        yield i
+    log.append((name, "done"))
+    return result
+
+
+def test_scheduler_runs_a_cheap_request_before_a_heavy_one_continues():
+    """Least attained service: a heavy job that has had its slices waits
+    while another session's one-slice job runs; it never runs to the end first."""
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    log = []
+    a, b = object(), object()
+    heavy = s.submit(a, "render", _slices(log, "A", 10))
+    for _ in range(3):  # A has run three slices
+        s.run_slice(heavy)
+    s.submit(b, "render", _slices(log, "B", 1))
+    s.run_all()
+    order = [name for name, _ in log]
+    assert order.index("B") == 3  # B's slice runs next, before A's fourth
+    assert log[-1] == ("A", "done")
+
+
+def test_scheduler_shares_turns_between_two_heavy_sessions():
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    log = []
+    # equal-cost slices: attained service grows alike, so the two alternate
+    def slow(name):
+        for i in range(6):
+            time.sleep(0.005)  # slices of equal cost
+            log.append((name, i))
+            yield i
+
+    import time
+
+    s.submit("a", "render", slow("A"))
+    s.submit("b", "render", slow("B"))
+    s.run_all()
+    first_half = [name for name, _ in log[:8]]
+    assert first_half.count("A") >= 3 and first_half.count("B") >= 3
+
+
+def test_scheduler_new_request_supersedes_the_sessions_pending_one():
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    log, done = [], []
+    s.submit("a", "render", _slices(log, "old", 5), on_done=lambda r, e, j: done.append("old"))
+    s.submit("a", "point", _slices(log, "tap", 1), on_done=lambda r, e, j: done.append("tap"))
+    s.submit("a", "render", _slices(log, "new", 2), on_done=lambda r, e, j: done.append("new"))
+    s.run_all()
+    assert not any(name == "old" for name, _ in log)  # never started, never finished
+    assert sorted(done) == ["new", "tap"]  # another kind of the same session is kept
+
+
+def test_scheduler_drops_a_closed_sessions_work_at_once():
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    log, done = [], []
+    alive = [True]
+    job = s.submit("a", "render", _slices(log, "A", 100), alive=lambda: alive[0],
+                   on_done=lambda r, e, j: done.append(r))
+    s.run_slice(job)
+    alive[0] = False  # the page's websocket closed
+    s.run_all()
+    assert log == [("A", 0)] and done == []
+    # and cancel() for a session ended by Bokeh
+    job = s.submit("b", "render", _slices(log, "B", 100))
+    s.run_slice(job)
+    s.cancel("b")
+    s.run_all()
+    assert log[-1] == ("B", 0)
+    assert not s.busy()
+
+
+def test_scheduler_thread_keeps_serving_after_a_failing_job():
+    import threading
+
+    from stairbounce.explorer.scheduler import Scheduler
+
+    def bad():
+        yield
+        raise RuntimeError("boom")
+
+    s = Scheduler()
+    errors, ok = [], threading.Event()
+    s.submit("a", "render", bad(), on_done=lambda r, e, j: errors.append(e))
+    s.submit("b", "render", _slices([], "B", 2, result=7), on_done=lambda r, e, j: ok.set())
+    assert ok.wait(30)
+    assert len(errors) == 1 and str(errors[0]) == "boom"
+
+
+def test_render_work_is_sliced_within_the_budget():
+    """A render is cut into slices of at most SLICE_WORK potential map steps,
+    so the wait of another session's request is bounded by one slice."""
+    view = V.View(0.5, 1.0, 5.0, 6.0, 1000, 1000, max_iter=5000)  # nothing slides: worst case
+    rows = max(1, V.SLICE_WORK // (view.width * view.max_iter))
+    assert rows * view.width * view.max_iter <= V.SLICE_WORK
+    # the coarse preview of the heaviest allowed view also fits in a few slices
+    coarse = math.ceil(view.width / V.COARSE) * math.ceil(view.height / V.COARSE) * view.max_iter
+    assert coarse <= 2 * V.SLICE_WORK
+
+
+def test_page_says_when_it_is_queued():
+    from stairbounce.explorer import app as A
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    other = A.Explorer(V.View(width=40, height=40, max_iter=10), scheduler=s)
+    other._request(V.View(0, 1, 0, 1.5, 40, 40, max_iter=20))
+    mine = A.Explorer(V.View(width=40, height=40, max_iter=10), scheduler=s)
+    mine._request(V.View(0, 1, 0, 1.5, 40, 40, max_iter=30))
+    assert "queued" in mine.status.object and "1 request of other sessions" in mine.status.object
+    s.run_all()
+    assert "computed in" in mine.status.object and "computed in" in other.status.object
+
+
+def test_page_says_the_kernels_are_loading(monkeypatch):
+    from stairbounce.explorer import app as A
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    monkeypatch.setattr(A, "SCHEDULER", s)
+    warm = A.warm_up()
+    assert not warm.is_set()
+    page = A.Explorer(V.View(width=40, height=40, max_iter=10))
+    page.start()
+    assert "loading its compiled kernels" in page.status.object
+    s.run_all()
+    assert warm.is_set() and "computed in" in page.status.object
+
+
+# --------------------------------------------------------------------------- #
+# The page's other defects (issue 14)                                         #
+# --------------------------------------------------------------------------- #
+
+
+def test_downloads_run_off_the_event_loop(explorer, monkeypatch):
+    """Defect 3: the callbacks are coroutines; the export runs on another thread."""
+    import asyncio
+    import inspect
+    import threading
+
+    from stairbounce.explorer import app as A
+
+    app, _ = explorer
+    seen = []
+    real = A.view_png
+
+    def spy(ds, view):
+        seen.append(threading.current_thread())
+        return real(ds, view)
+
+    monkeypatch.setattr(A, "view_png", spy)
+    assert inspect.iscoroutinefunction(app.png_button.callback)
+    assert inspect.iscoroutinefunction(app.nc_button.callback)
+    loop_thread = []
+
+    async def download():
+        loop_thread.append(threading.current_thread())
+        return await app._png()
+
+    assert asyncio.run(download()).getvalue()[:4] == b"\x89PNG"
+    assert seen and seen[0] is not loop_thread[0]
+
+
+def test_download_buttons_wait_for_a_view():
+    """Defect 6: disabled until the first picture."""
+    from stairbounce.explorer.app import Explorer
+
+    s = InlineScheduler()
+    app = Explorer(V.View(0.0, 0.4, 0.3, 1.1, 40, 30, max_iter=100), scheduler=s)
+    assert app.png_button.disabled and app.nc_button.disabled
+    app.start()
+    assert not app.png_button.disabled and not app.nc_button.disabled
+
+
+def test_deep_zoom_status_and_hover_tell_the_ends_apart():
+    """Defect 8: enough digits for the window's ends and one pixel; the hover
+    shows the colouring variable's value."""
+    from stairbounce.explorer.app import Explorer
+
+    lo = 0.0525
+    view = V.View(lo, lo + 2e-9, 0.93, 0.93 + 2e-9, 40, 40, max_iter=100)
+    app = Explorer(view, scheduler=InlineScheduler())
+    app.start()
+    import re
+
+    a, b = re.search(r">e (\S+) to (\S+),", app.status.object).groups()
+    assert a != b and float(a) == lo and abs(float(b) - (lo + 2e-9)) < 1e-12
+    tips = dict(app.hover.tooltips)
+    digits = int(tips["e"].split("%.")[1].split("g")[0])
+    step = 2e-9 / 40
+    assert f"{lo + 0.5 * step:.{digits}g}" != f"{lo + 1.5 * step:.{digits}g}"
+    assert tips["word length"] == "@val{custom}"
+    val = app.img_src.data["val"][0]
+    sl = app.ds["status"].values == 0
+    np.testing.assert_array_equal(val[sl], app.ds["word_length"].values[sl])
+    assert (val[~sl] == -1).all()
+
+
+def test_refused_zoom_snaps_back_to_the_last_view(explorer):
+    """Defect 8: a zoom deeper than float64 resolves is refused and the plot's
+    ranges go back to the view shown."""
+    app, ex = explorer
+    n = len(ex.calls)
+    app._on_ranges(SimpleNamespace(x0=0.1, x1=0.1 + 1e-16, y0=0.5, y1=0.6))
+    assert len(ex.calls) == n and "too narrow" in app.status.object
+    assert (app.map_fig.x_range.start, app.map_fig.x_range.end) == (app.shown.e_lo, app.shown.e_hi)
+    assert (app.map_fig.y_range.start, app.map_fig.y_range.end) == (app.shown.u_lo, app.shown.u_hi)
+
+
+def test_error_is_cleared_when_the_input_is_put_back(explorer):
+    """Defect 9: a refused value is put back in its widget; the message goes
+    when the input is back at the view shown, or after Reset."""
+    app, ex = explorer
+    app.width_in.value = 1000
+    app.height_in.value = 1001  # refused
+    assert "pixel budget" in app.status.object
+    assert app.height_in.value == app.view.height == 50  # the widget shows the view again
+    _type_window(app, e="0:0.4")  # the window shown, typed again: nothing to do, message gone
+    assert "sb-error" not in app.status.object
+    _type_window(app, e="abc")
+    assert "sb-error" in app.status.object and app.e_window.value == "0:0.4"
+    v = app.view  # Reset: Bokeh's reset tool moves the ranges back to the view
+    app._on_ranges(SimpleNamespace(x0=v.e_lo, x1=v.e_hi, y0=v.u_lo, y1=v.u_hi))
+    assert "sb-error" not in app.status.object
+
+
+def test_one_apply_for_both_windows(explorer):
+    """Defect 12: typing e and u, then Enter (or Apply) in either box, renders once."""
+    app, ex = explorer
+    n = len(ex.calls)
+    app.e_window.value_input = "0.1:0.2"  # typed, no Enter yet: nothing happens
+    app.e_window.value = "0.1:0.2"  # a blur commits the text box: still nothing
+    assert len(ex.calls) == n
+    app.u_window.value_input = "0.5:0.6"
+    app.u_window.param.trigger("enter_pressed")
+    assert ex.calls[n:] == ["render"]
+    assert (app.shown.e_lo, app.shown.e_hi, app.shown.u_lo, app.shown.u_hi) == (0.1, 0.2, 0.5, 0.6)
+
+
+def test_zoom_url_has_no_float_noise(explorer):
+    """Defect 13: Bokeh's 0.9200000000000002 is written 0.92."""
+    app, _ = explorer
+    app._on_ranges(SimpleNamespace(x0=0.04000000000000001, x1=0.065, y0=0.9200000000000002,
+                                   y1=0.9450000000000001))
+    assert (app.view.e_lo, app.view.u_lo, app.view.u_hi) == (0.04, 0.92, 0.945)
+    assert "u=0.92:0.945&" in app.history_out.text
+
+
+def test_overlay_legend_follows_the_overlays(explorer):
+    app, _ = explorer
+    assert app.legend.visible and len(app.legend.items) == 2
+    app.overlays.value = ["no_sliding"]
+    assert [i.label.value for i in app.legend.items] == [_OVERLAY_LEGEND()["no_sliding"]]
+    app.overlays.value = []
+    assert not app.legend.visible and app.legend.items == []
+
+
+def _OVERLAY_LEGEND():
+    from stairbounce.explorer.app import _OVERLAY_LEGEND
+
+    return _OVERLAY_LEGEND
+
+
+def test_tap_trajectory_shows_a_full_period_and_singular_words(explorer):
+    """Defect 13: a period-31 orbit shows at least 31 steps; 'period 1 step'."""
+    app, _ = explorer
+    # the report's period-31 point (2 x14, 3, 0^inf), checked with sliding_word
+    e, u = 0.0621875, 0.9436874999999999
+    w = sliding_word(e, u, 1000)
+    assert w is not None and w.period == 31
+    app.view = replace(app.view, max_iter=1000)
+    app._request_point(e, u)
+    assert app.path_src.data["x"].max() >= 31  # the ball went down 31 steps or more
+    assert "period 31 steps" in app.point_pane.object
+    assert "one full period" in app.traj_fig.title.text
+    # a point inside the n = 1 tongue: word (1, 0^inf), period 1
+    app._request_point(0.05, 0.5)
+    assert sliding_word(0.05, 0.5, 1000).period == 1
+    assert "period 1 step," in app.point_pane.object and "1 steps" not in app.point_pane.object
+
+
+def test_back_and_forward_restore_the_view(explorer):
+    """Defect 1 (server side): a zoom pushes a history entry; the browser's
+    popstate with an older query brings that view back without a new entry."""
+    app, ex = explorer
+    first = app.history_out.text
+    assert first.startswith("replace ?")
+    app._on_ranges(SimpleNamespace(x0=0.05, x1=0.15, y0=0.6, y1=0.7))
+    assert app.history_out.text.startswith("push ?e=0.05:0.15&u=0.6:0.7&")
+    app.color.value = "period"  # recolouring replaces the entry
+    assert app.history_out.text.startswith("replace ?") and "color=period" in app.history_out.text
+    app.history_back.text = "123 " + first.split(" ", 1)[1]  # Back
+    assert (app.shown.e_lo, app.shown.e_hi, app.shown.u_lo, app.shown.u_hi) == (0.0, 0.4, 0.3, 1.1)
+    assert app.e_window.value == "0:0.4" and app.color.value == "word_length"
+    assert app.map_fig.x_range.start == 0.0 and app.map_fig.y_range.end == 1.1
+    assert app.history_out.text.startswith("replace ?e=0:0.4&")
