@@ -196,8 +196,8 @@ def test_compute_view_cancels_between_bands_and_reports_progress(monkeypatch):
 def test_progressive_render_previews_then_gives_the_scan_bit_for_bit():
     """The coarse preview holds the exact values of every 8th pixel; each
     preview picture shows the finished rows exactly; the end is the scan."""
-    view = V.View(0.0, 1.0, 0.0, 1.5, 83, 61, max_iter=400)
-    ref = plane.scan(e=(0.0, 1.0, 83), u=(0.0, 1.5, 61), max_iter=400)
+    view = V.View(0.0, 1.0, 0.0, 1.5, 83, 67, max_iter=400)
+    ref = plane.scan(e=(0.0, 1.0, 83), u=(0.0, 1.5, 67), max_iter=400)
     gen = V.render_slices(view, slice_work=83 * 400 * 16, preview_work=0)
     parts = []
     while True:
@@ -206,21 +206,29 @@ def test_progressive_render_previews_then_gives_the_scan_bit_for_bit():
         except StopIteration as stop:
             ds = stop.value
             break
-    assert [p.rows_done for p in parts] == [0, 16, 32, 48]  # the preview, then bands of 16 rows
-    coarse = parts[0].coarse
+    # the preview (11 x 8 samples, in bands of 16 * 83 / 11 = 120 rows: one), then bands of 16 rows
+    assert [p.rows_done for p in parts] == [0, 16, 32, 48, 64]
+    coarse = xr.concat(parts[0].coarse, dim="u")
     sub = ref.isel(e=slice(4, None, 8), u=slice(4, None, 8))
     np.testing.assert_array_equal(coarse["word_length"].values, sub["word_length"].values)
     xr.testing.assert_identical(ds.drop_attrs(), ref.drop_attrs())
     full = V.shade(ref, "period")
+    grey = V._rgba32([V.NOT_COMPUTED_COLOR])[0]
     for p in parts:
         img = V.preview_rgba(p, "period")
-        assert img.shape == (61, 83)
+        assert img.shape == (67, 83) and not (img == grey).any()
         np.testing.assert_array_equal(img[: p.rows_done], full[: p.rows_done])
         # the coarse sample's own pixel always shows its exact colour
         np.testing.assert_array_equal(img[4::8, 4::8], full[4::8, 4::8])
+    # the coarse pass is itself cut into bands: half its rows done, the rest grey
+    gen = V.render_slices(view, slice_work=11 * 400 * 4, preview_work=0)
+    first = next(gen)
+    assert [b.sizes["u"] for b in first.coarse] == [4]
+    img = V.preview_rgba(first, "period")
+    assert (img[32:] == grey).all() and not (img[:32] == grey).any()
     # a small view skips the preview
     small = list(V.render_slices(V.View(0, 1, 0, 1.5, 40, 40, max_iter=10), slice_work=40 * 10 * 8))
-    assert [p.rows_done for p in small] == [8, 16, 24, 32] and all(p.coarse is None for p in small)
+    assert [p.rows_done for p in small] == [8, 16, 24, 32] and all(p.coarse == [] for p in small)
 
 
 def test_window_digits_tell_the_ends_apart():
@@ -775,9 +783,11 @@ def test_render_work_is_sliced_within_the_budget():
     view = V.View(0.5, 1.0, 5.0, 6.0, 1000, 1000, max_iter=5000)  # nothing slides: worst case
     rows = max(1, V.SLICE_WORK // (view.width * view.max_iter))
     assert rows * view.width * view.max_iter <= V.SLICE_WORK
-    # the coarse preview of the heaviest allowed view also fits in a few slices
-    coarse = math.ceil(view.width / V.COARSE) * math.ceil(view.height / V.COARSE) * view.max_iter
-    assert coarse <= 2 * V.SLICE_WORK
+    # so are the bands of the coarse preview: every slice of the heaviest allowed view
+    gen = V.render_slices(replace(view, max_iter=1), slice_work=V.SLICE_WORK // 5000)
+    sizes = [(p.coarse[-1].sizes["u"] if not p.parts else p.parts[-1].sizes["u"]) for p in
+             (next(gen) for _ in range(30))]
+    assert max(sizes) * view.width <= V.SLICE_WORK // 5000 or max(sizes) == 1
 
 
 def test_page_says_when_it_is_queued():

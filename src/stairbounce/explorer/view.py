@@ -397,13 +397,13 @@ def check_view(view: View) -> View:
 class Partial:
     """A render in progress, yielded by :func:`render_slices` after each slice.
 
-    ``coarse``: the scan of every :data:`COARSE`-th pixel centre (offset
-    ``step // 2``; ``None`` when the view skips the preview); ``parts``: the
-    scans of the first ``rows_done`` rows, in order.
+    ``coarse``: scans of bands of the coarse grid, every ``step``-th pixel
+    centre of both axes from offset ``step // 2`` (empty when the view skips
+    the preview); ``parts``: the scans of the first ``rows_done`` rows, in order.
     """
 
     view: View
-    coarse: xr.Dataset | None
+    coarse: list
     parts: list
     rows_done: int
     step: int = COARSE
@@ -427,8 +427,9 @@ def render_slices(view: View, slice_work: int | None = None, coarse: int = COARS
 
     First, when the view costs more than ``preview_work`` map steps, the
     coarse preview: every ``coarse``-th pixel centre of both axes (exact
-    values of those pixels, 1/coarse^2 of the work); then bands of rows of at
-    most ``slice_work`` potential map steps (``width * max_iter`` per row).
+    values of those pixels, 1/coarse^2 of the work); then the full grid.
+    Both in bands of rows of at most ``slice_work`` potential map steps
+    (``max_iter`` per pixel; at least one row).
 
     Raises :class:`ValueError` from :func:`check_view` for a view over budget.
     """
@@ -437,16 +438,21 @@ def render_slices(view: View, slice_work: int | None = None, coarse: int = COARS
     preview_work = PREVIEW_WORK if preview_work is None else preview_work
     es = plane.pixel_centres(view.e_lo, view.e_hi, view.width)
     us = plane.pixel_centres(view.u_lo, view.u_hi, view.height)
-    pre = None
+
+    def bands(e, u):
+        rows = max(1, min(u.size, slice_work // max(1, e.size * view.max_iter)))
+        for start in range(0, u.size, rows):
+            yield min(u.size, start + rows), plane.scan_coords(e, u[start : start + rows], max_iter=view.max_iter)
+
+    pre = []
     if coarse > 1 and view.work > preview_work and min(view.width, view.height) >= 2 * coarse:
         off = coarse // 2
-        pre = plane.scan_coords(es[off::coarse], us[off::coarse], max_iter=view.max_iter)
-        yield Partial(view, pre, [], 0, coarse)
-    rows = max(1, min(view.height, slice_work // max(1, view.width * view.max_iter)))
+        for _, band in bands(es[off::coarse], us[off::coarse]):
+            pre.append(band)
+            yield Partial(view, pre, [], 0, coarse)
     parts = []
-    for start in range(0, view.height, rows):
-        parts.append(plane.scan_coords(es, us[start : start + rows], max_iter=view.max_iter))
-        done = min(view.height, start + rows)
+    for done, band in bands(es, us):
+        parts.append(band)
         if done < view.height:
             yield Partial(view, pre, parts, done, coarse)
     ds = parts[0] if len(parts) == 1 else xr.concat(parts, dim="u", combine_attrs="override")
@@ -494,14 +500,21 @@ def preview_rgba(part: Partial, var: str) -> np.ndarray:
     painted over the ``step x step`` block of pixels around it), and
     the not-yet-computed colour where there is neither.
     """
-    v = part.view
+    v, c = part.view, part.step
     out = np.full((v.height, v.width), _rgba32((NOT_COMPUTED_COLOR,))[0], dtype=np.uint32)
-    if part.coarse is not None:
-        c = part.step
-        block = np.repeat(np.repeat(shade(part.coarse, var), c, axis=0), c, axis=1)
-        block = np.pad(block, ((0, max(0, v.height - block.shape[0])), (0, max(0, v.width - block.shape[1]))),
-                       mode="edge")
-        out[:] = block[: v.height, : v.width]
+    row = 0
+    for band in part.coarse:
+        block = np.repeat(np.repeat(shade(band, var), c, axis=0), c, axis=1)
+        rows = min(block.shape[0], v.height - row)
+        if rows <= 0:
+            break
+        # the last block column (row) covers what is left of a side not divisible by step
+        block = np.pad(block, ((0, 0), (0, max(0, v.width - block.shape[1]))), mode="edge")
+        out[row : row + rows] = block[:rows, : v.width]
+        row += rows
+    n_coarse = len(range(c // 2, v.height, c))
+    if part.coarse and sum(b.sizes["u"] for b in part.coarse) == n_coarse and 0 < row < v.height:
+        out[row:] = out[row - 1]  # a side not divisible by step: its last block is taller
     row = 0
     for p in part.parts:
         n = p.sizes["u"]
