@@ -127,25 +127,28 @@ def browse_url(host: str, port: int) -> str:
 
 
 def _guard_long_queries(tornado_app) -> None:
-    """Cut over-long query values before Panel parses the page request."""
+    """Redirect a page request with an over-long query value to the same
+    query with that value cut (the page then reports it as a bad value); let
+    Panel read an IPv6 ``Host`` header."""
+    from urllib.parse import urlencode
+
     from panel.io.server import DocHandler
 
     class _CutQueryDocHandler(DocHandler):
-        def prepare(self):
-            from urllib.parse import urlencode
-
-            req = self.request
-            args = req.query_arguments
-            if any(len(v) > MAX_QUERY_VALUE for vs in args.values() for v in vs):
-                cut = {}
-                for k, vs in args.items():
-                    cut[k] = [v if len(v) <= MAX_QUERY_VALUE else
-                              v[:20] + f"...({len(v)} characters)".encode() for v in vs]
-                req.query_arguments = cut
-                req.arguments = {k: list(v) for k, v in cut.items()}
-                req.query = urlencode([(k, v) for k, vs in cut.items() for v in vs], doseq=False)
-                req.uri = req.path + "?" + req.query
-            return super().prepare()
+        async def get(self, *args, **kwargs):
+            args_ = self.request.query_arguments
+            if any(len(v) > MAX_QUERY_VALUE for vs in args_.values() for v in vs):
+                cut = [(k, v if len(v) <= MAX_QUERY_VALUE else v[:20] + f"...({len(v)} characters)".encode())
+                       for k, vs in args_.items() for v in vs]
+                self.redirect(self.request.path + "?" + urlencode(cut, safe=":,"))
+                return
+            host = self.request.host
+            if host.startswith("["):
+                # Panel splits Host at ':' for its Location (hostname, port),
+                # which fails on "[::1]:5006"; the page's websocket URL is
+                # taken from the browser's address, so this name is only a label
+                self.request.host = "localhost:" + host.rpartition("]:")[2] if "]:" in host else "localhost"
+            return await super().get(*args, **kwargs)
 
     for rule in tornado_app.wildcard_router.rules:
         if rule.target is DocHandler:
