@@ -278,7 +278,10 @@ def test_download_buttons_give_the_view(server, page, tmp_path):
 
 
 def _status(page):
-    return page.locator(".sb-status").inner_text()
+    # the pane's text lives in its shadow root: the spans, not the host element
+    text = " | ".join(page.locator(".sb-status span").all_inner_texts())
+    assert text  # never vacuous
+    return text
 
 
 def _type_windows(page, e, u):

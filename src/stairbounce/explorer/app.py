@@ -89,8 +89,11 @@ _EXPORTS = ThreadPoolExecutor(max_workers=1, thread_name_prefix="stairbounce-exp
 # set once the compiled kernels are loaded (warm_up)
 _WARM = threading.Event()
 
-# least time between two preview pictures of one render sent to the browser
-_PREVIEW_EVERY = 0.4
+# least time between two preview pictures of one render sent to the browser,
+# and their largest side in pixels (a preview is subsampled to it: a 1000 x
+# 1000 preview would be 4 MB on the websocket, shared by every session)
+_PREVIEW_EVERY = 1.0
+_PREVIEW_SIDE = 300
 
 _COLOR_OPTIONS = {menu: var for var, (menu, _, _) in FIELDS.items()}
 _OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bound, Cor. 2.1": "no_sliding"}
@@ -601,7 +604,8 @@ class Explorer:
             now = time.perf_counter()
             if now - last >= _PREVIEW_EVERY:
                 last = now
-                yield part.fraction, preview_rgba(part, view.color)
+                k = -(-max(view.width, view.height) // _PREVIEW_SIDE)
+                yield part.fraction, preview_rgba(part, view.color)[k // 2 :: k, k // 2 :: k]
             else:
                 yield part.fraction, None
         return ds, shade(ds, view.color), _values(ds, view.color)
@@ -781,8 +785,10 @@ class Explorer:
 
 
 def _values(ds, var):
-    """The colouring variable per pixel for the hover (-1: no sliding solution)."""
-    return np.where(ds["status"].values == 0, ds[var].values, -1).astype(np.int32)
+    """The colouring variable per pixel for the hover (-1: no sliding solution),
+    as int16 when it fits (half the bytes on the websocket)."""
+    v = np.where(ds["status"].values == 0, ds[var].values, -1)
+    return v.astype(np.int16 if v.max(initial=0) < 2**15 else np.int32)
 
 
 def warm_up(scheduler: Scheduler | None = None):
