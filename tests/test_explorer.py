@@ -546,14 +546,20 @@ def test_cli_rejects_bad_options(capsys, args, words):
         assert w in err
 
 
-def test_cli_port_in_use_is_one_line(capsys):
+def _explore_on_a_busy_port():
+    """``stairbounce explore`` on a port another socket listens on: (exit code, port)."""
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         s.listen()
         port = s.getsockname()[1]
         with pytest.raises(SystemExit) as exc:
             main(["explore", "--no-browser", "--port", str(port)])
-    assert exc.value.code == 2
+    return exc.value.code, port
+
+
+def test_cli_port_in_use_is_one_line(capsys):
+    code, port = _explore_on_a_busy_port()
+    assert code == 2
     err = capsys.readouterr().err
     assert f"cannot serve on 127.0.0.1:{port}" in err and err.count("\n") == 1
 
@@ -572,13 +578,8 @@ def test_cli_port_in_use_is_reported_before_loading_kernels(capsys, monkeypatch)
 
     calls = []
     monkeypatch.setattr(A, "warm_up", lambda *a: calls.append(1))
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        s.listen()
-        port = s.getsockname()[1]
-        with pytest.raises(SystemExit) as exc:
-            main(["explore", "--no-browser", "--port", str(port)])
-    assert exc.value.code == 2 and calls == []
+    code, _ = _explore_on_a_busy_port()
+    assert code == 2 and calls == []
 
 
 @pytest.mark.parametrize("origin", ["", "a b", "host/path"])
@@ -688,7 +689,7 @@ def _slices(log, name, n, result=None):
 
 
 def test_scheduler_runs_a_cheap_request_before_a_heavy_one_continues():
-    """Least attained service: a heavy job that has had its slices waits
+    """Least recent usage first: a heavy job that has had its slices waits
     while another session's one-slice job runs; it never runs to the end first."""
     from stairbounce.explorer.scheduler import Scheduler
 
@@ -724,6 +725,34 @@ def test_scheduler_shares_turns_between_two_heavy_sessions():
     s.run_all()
     first_half = [name for name, _ in log[:8]]
     assert first_half.count("A") >= 3 and first_half.count("B") >= 3
+
+
+def test_scheduler_does_not_starve_a_long_render():
+    """Session A's long render keeps getting slices while B keeps sending
+    new small requests (each superseding the last): B's usage counts, not
+    only its newest job's (ranking jobs by their own time starved A)."""
+    import time
+
+    from stairbounce.explorer.scheduler import Scheduler
+
+    def slow(log, name, n):
+        for i in range(n):
+            time.sleep(0.004)
+            log.append(name)
+            yield i
+
+    s = Scheduler(thread=False)
+    log = []
+    s.submit("a", "render", slow(log, "A", 1000))
+    for _ in range(40):
+        s.submit("b", "render", slow(log, "B", 3))
+        for _ in range(3):
+            with s._cv:
+                job = s._pick()
+            s.run_slice(job)
+    # A had about a fair half of the 120 slices, not none
+    assert 40 <= log.count("A") <= 80
+    s.cancel("a")
 
 
 def test_scheduler_new_request_supersedes_the_sessions_pending_one():

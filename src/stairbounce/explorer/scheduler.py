@@ -7,23 +7,32 @@ steps; the word, then the orbit diagram of a tap).  Each slice uses every core
 (the numba kernels are parallel), and only one thread ever enters them:
 numba's fallback threading layer must not be entered from two threads at once.
 
-Which job gets the next slice: the one that has had the least compute time
-so far (least attained service), oldest first among equals.  So a new, cheap
-request (a tap, a small view) runs before a long render that has already had
-its share, waiting at most for the slice in progress; two long renders share
-the cores in turns.  A session has at most one job of each kind: a new
-request supersedes its own pending one, and a job whose session is gone
-(``alive()`` false) is dropped before its next slice.
+Which job gets the next slice: the one whose session has used the least
+compute time recently (the sum of its slices' times, decaying with a time
+constant of :data:`USAGE_DECAY` seconds), oldest first among equals.  So a
+request from a session that was idle (a tap, a small view) runs before the
+next slice of another session's long render, waiting at most for the slice
+in progress; sessions that keep the worker busy take turns, and none
+starves (a waiting session's usage decays while the others' grows; ranking
+jobs by their own attained time instead let a session that kept sending
+small requests hold back a longer one for minutes).  A session has at most
+one job of each kind: a new request supersedes its own pending one, and a
+job whose session is gone (``alive()`` false) is dropped before its next
+slice.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 import threading
 import time
 from dataclasses import dataclass, field
 
-__all__ = ["Job", "Scheduler"]
+__all__ = ["Job", "Scheduler", "USAGE_DECAY"]
+
+USAGE_DECAY = 5.0
+"""Time constant (s) of the decay of a session's recent compute time."""
 
 
 @dataclass(eq=False)
@@ -58,6 +67,7 @@ class Scheduler:
         self._jobs: list[Job] = []
         self._running: Job | None = None
         self._seq = itertools.count()
+        self._usage: dict[int, tuple[float, float]] = {}  # id(owner) -> (usage, at time)
         self._name = name
         self._thread: threading.Thread | None = None
         self._use_thread = thread  # False: jobs run only in run_all() (tests)
@@ -126,9 +136,18 @@ class Scheduler:
             else:
                 live.append(j)
         self._jobs = live
+        now = time.monotonic()
+        owners = {id(j.owner) for j in live}
+        for k in [k for k, (u, t) in self._usage.items() if k not in owners and u * _decay(now - t) < 1e-3]:
+            del self._usage[k]  # forgotten: no job and no recent use
         if not live:
             return None
-        return min(live, key=lambda j: (j.attained, j.seq))
+        return min(live, key=lambda j: (self.usage(j.owner, now), j.seq))
+
+    def usage(self, owner, now=None) -> float:
+        """The owner's recent compute time in seconds (decayed)."""
+        u, t = self._usage.get(id(owner), (0.0, 0.0))
+        return u * _decay((time.monotonic() if now is None else now) - t)
 
     def _loop(self):
         while True:
@@ -154,6 +173,8 @@ class Scheduler:
         with self._cv:
             self.slices += 1
             job.attained += dt
+            now = time.monotonic()
+            self._usage[id(job.owner)] = (self.usage(job.owner, now) + dt, now)
             job.started = True
             self._running = None
             cancelled = job.cancelled
@@ -177,6 +198,10 @@ class Scheduler:
                     return
                 self._running = job
             self.run_slice(job)
+
+
+def _decay(age):
+    return math.exp(-max(0.0, age) / USAGE_DECAY)
 
 
 def _safe(fn, *args):
