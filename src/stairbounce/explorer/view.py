@@ -111,12 +111,15 @@ _MIN_ULPS_PER_PIXEL = 4
 # A render is cut into slices of at most this many potential map steps
 # (pixels * max_iter, the worst case where nothing slides): the server's
 # scheduler runs one slice at a time, so a cheap request of another session
-# waits at most one slice (about 0.1-0.2 s on two cores, see
-# benchmarks/explorer_load.py), and a cancelled render stops within one.
-SLICE_WORK = 48_000_000
+# waits at most one slice (under 0.1 s on two idle cores at the 1.2-1.4 G
+# steps/s of a window where nothing slides, benchmarks/README.md; a few
+# tenths under load), and a cancelled render stops within one.  Smaller
+# slices cost more: each parallel call ends on its slowest thread.
+SLICE_WORK = 100_000_000
 
 # The coarse preview samples every COARSE-th pixel in each direction (1/64 of
-# the pixels); views cheaper than PREVIEW_WORK map steps skip it.
+# the pixels); views cheaper than PREVIEW_WORK map steps (the Fig. 4 view at
+# 600 x 600 and max_iter 1000 is 3.6e8) skip it.
 COARSE = 8
 PREVIEW_WORK = 4 * SLICE_WORK
 
