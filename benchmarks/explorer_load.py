@@ -257,6 +257,9 @@ async def main_async(opts):
                 await browser.close()
             time.sleep(2)
             print(f"server RSS at the end {server.memory_info().rss / 2**20:.0f} MB")
+        except BaseException:
+            print("server log (tail):\n" + "\n".join((Path(tmp) / "server.log").read_text().splitlines()[-40:]))
+            raise
         finally:
             proc.terminate()
             try:
