@@ -636,6 +636,28 @@ def test_make_server_port_zero_binds_a_free_port():
         server.stop()
 
 
+def test_server_log_lines_are_written_once():
+    """Defect 13 (doubled log lines): in a server process, a record of the
+    server's loggers is written once (one handler on its way)."""
+    import subprocess
+    import sys
+
+    names = ("bokeh.server.views.ws", "bokeh.server.tornado", "panel", "tornado.application")
+    code = (
+        "import logging\n"
+        "from stairbounce.cli import main\n"
+        "from stairbounce.explorer import make_server\n"
+        "server = make_server(port=0)\n"
+        f"for name in {names!r}:\n"
+        "    logging.getLogger(name).warning('probe %s', name)\n"
+        "server.stop()\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    for name in names:
+        assert (out.stdout + out.stderr).count(f"probe {name}") == 1, (name, out.stdout, out.stderr)
+
+
 @pytest.mark.slow
 def test_console_script_serves_the_page_and_stops_on_ctrl_c():
     """``--port 0``: the URL printed has the real port; kernels load after it."""

@@ -98,8 +98,6 @@ def page(browser, server):
         f.seek(start)
         log = f.read()
     assert "Traceback" not in log and "Error" not in log, f"the server logged: {log}"
-    lines = [ln for ln in log.splitlines() if ln.strip()]
-    assert all(a != b for a, b in zip(lines, lines[1:])), f"doubled log lines: {log}"
 
 
 def _wait_rendered(page, timeout=90_000):
