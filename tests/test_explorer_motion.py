@@ -60,6 +60,8 @@ def test_explorer_colours_by_k_and_shows_the_motion_on_tap():
     assert ex.calls == ["render", "render"]
     np.testing.assert_array_equal(app.img_src.data["image"][0], V.shade(app.ds, "k_mean"))
     assert app.colorbar.major_label_overrides[0] == "slides"
+    # the labelled colours only, on the ticker the page draws (it ignores a new one)
+    assert list(app.colorbar.ticker.ticks) == V.color_key("k_mean").ticks == [0, 9, 25, 41, 57]
     assert "the orbit of (1, 0) slides" in app.key_note.object
     app.color.value = "lyap1"  # already there: reshaded only
     assert ex.calls == ["render", "render"]

@@ -513,6 +513,9 @@ class Explorer:
     def _apply_color(self, color):
         mapper, bar = _bar_settings(color)
         self.mapper.update(**mapper)
+        # the page's colour bar keeps drawing the ticks of the ticker it was
+        # built with: a new FixedTicker is ignored there, new ticks on it are not
+        self.colorbar.ticker.ticks = bar.pop("ticker").ticks
         self.colorbar.update(**bar)
         self.key_note.object = _key_note(color)
         self.view = replace(self.view, color=color)
