@@ -165,19 +165,19 @@ def test_compute_view_is_the_scan_bit_for_bit():
     view = V.View(0.0, 1.0, 0.0, 1.5, 120, 90, max_iter=400)
     ref = plane.scan(e=(0.0, 1.0, 120), u=(0.0, 1.5, 90), max_iter=400)
     for band_work in (10**12, 120 * 400 * 7):  # one band, bands of 7 rows
-        old = V._BAND_WORK
-        V._BAND_WORK = band_work
+        old = V.SLICE_WORK
+        V.SLICE_WORK = band_work
         try:
             ds = V.compute_view(view)
         finally:
-            V._BAND_WORK = old
+            V.SLICE_WORK = old
         xr.testing.assert_identical(ds.drop_attrs(), ref.drop_attrs())
         for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u", "max_iter", "convention"):
             assert ds.attrs[k] == ref.attrs[k]
 
 
 def test_compute_view_cancels_between_bands_and_reports_progress(monkeypatch):
-    monkeypatch.setattr(V, "_BAND_WORK", 50 * 100 * 10)  # 10 rows per band
+    monkeypatch.setattr(V, "SLICE_WORK", 50 * 100 * 10)  # 10 rows per band
     view = V.View(0.0, 1.0, 0.0, 1.5, 50, 40, max_iter=100)
     seen = []
     V.compute_view(view, progress=lambda done, total: seen.append((done, total)))
@@ -191,6 +191,62 @@ def test_compute_view_cancels_between_bands_and_reports_progress(monkeypatch):
     with pytest.raises(V.Cancelled):
         V.compute_view(view, cancelled=cancelled)
     assert len(asked) == 3
+
+
+def test_progressive_render_previews_then_gives_the_scan_bit_for_bit():
+    """The coarse preview holds the exact values of every 8th pixel; each
+    preview picture shows the finished rows exactly; the end is the scan."""
+    view = V.View(0.0, 1.0, 0.0, 1.5, 83, 67, max_iter=400)
+    ref = plane.scan(e=(0.0, 1.0, 83), u=(0.0, 1.5, 67), max_iter=400)
+    gen = V.render_slices(view, slice_work=83 * 400 * 16, preview_work=0)
+    parts = []
+    while True:
+        try:
+            parts.append(next(gen))
+        except StopIteration as stop:
+            ds = stop.value
+            break
+    # the preview (11 x 8 samples, in bands of 16 * 83 / 11 = 120 rows: one), then bands of 16 rows
+    assert [p.rows_done for p in parts] == [0, 16, 32, 48, 64]
+    coarse = xr.concat(parts[0].coarse, dim="u")
+    sub = ref.isel(e=slice(4, None, 8), u=slice(4, None, 8))
+    np.testing.assert_array_equal(coarse["word_length"].values, sub["word_length"].values)
+    xr.testing.assert_identical(ds.drop_attrs(), ref.drop_attrs())
+    full = V.shade(ref, "period")
+    grey = V._rgba32([V.NOT_COMPUTED_COLOR])[0]
+    for p in parts:
+        img = V.preview_rgba(p, "period")
+        assert img.shape == (67, 83) and not (img == grey).any()
+        np.testing.assert_array_equal(img[: p.rows_done], full[: p.rows_done])
+        # the coarse sample's own pixel always shows its exact colour
+        np.testing.assert_array_equal(img[4::8, 4::8], full[4::8, 4::8])
+    # the coarse pass is itself cut into bands: half its rows done, the rest grey
+    gen = V.render_slices(view, slice_work=11 * 400 * 4, preview_work=0)
+    first = next(gen)
+    assert [b.sizes["u"] for b in first.coarse] == [4]
+    img = V.preview_rgba(first, "period")
+    assert (img[32:] == grey).all() and not (img[:32] == grey).any()
+    # a small view skips the preview
+    small = list(V.render_slices(V.View(0, 1, 0, 1.5, 40, 40, max_iter=10), slice_work=40 * 10 * 8))
+    assert [p.rows_done for p in small] == [8, 16, 24, 32] and all(p.coarse == [] for p in small)
+
+
+def test_window_digits_tell_the_ends_apart():
+    for lo, hi, n in ((0.0525, 0.0525 + 1e-9, 600), (0.0, 1.0, 600), (0.3, 0.3 + 4e-14, 100)):
+        d = V.window_digits(lo, hi, n)
+        a, b = V.format_number(lo, d), V.format_number(hi, d)
+        assert a != b
+        # one pixel is resolved: the text of the second pixel centre differs from the first
+        step = (hi - lo) / n
+        assert V.format_number(lo + 0.5 * step, d) != V.format_number(lo + 1.5 * step, d)
+    assert V.format_number(0.1, 9) == "0.1"
+
+
+def test_tidy_removes_float_noise_within_tolerance():
+    assert V.tidy(0.9200000000000002, 1e-12) == 0.92
+    assert V.tidy(0.19999999999999996, 1e-12) == 0.2
+    x = 0.052500001234
+    assert V.tidy(x, 0.0) == x and abs(V.tidy(x, 1e-6) - x) <= 1e-6
 
 
 def test_map_agrees_with_sliding_word_at_pixel_centres():
@@ -332,30 +388,45 @@ def test_exports_png_and_netcdf():
 # --------------------------------------------------------------------------- #
 
 
-class InlineExecutor:
-    """Runs submitted work at once and records it."""
+from stairbounce.explorer.scheduler import Scheduler  # noqa: E402
+
+
+class InlineScheduler(Scheduler):
+    """Runs submitted work to its end at once and records its kind."""
 
     def __init__(self):
+        super().__init__(thread=False)
         self.calls = []
 
-    def submit(self, fn, *args):
-        self.calls.append(fn.__name__)
-        fn(*args)
+    def submit(self, owner, kind, work, **kw):
+        self.calls.append(kind)
+        job = super().submit(owner, kind, work, **kw)
+        self.run_all()
+        return job
 
 
 @pytest.fixture
 def explorer():
     from stairbounce.explorer.app import Explorer
 
-    ex = InlineExecutor()
-    app = Explorer(V.View(0.0, 0.4, 0.3, 1.1, 60, 50, max_iter=300), executor=ex)
+    ex = InlineScheduler()
+    app = Explorer(V.View(0.0, 0.4, 0.3, 1.1, 60, 50, max_iter=300), scheduler=ex)
     app.start()
     return app, ex
 
 
+def _type_window(app, e=None, u=None):
+    """Type into the window boxes (live text, as the browser syncs it), then Enter."""
+    if e is not None:
+        app.e_window.value_input = e
+    if u is not None:
+        app.u_window.value_input = u
+    app._on_window_text()
+
+
 def test_explorer_renders_the_view(explorer):
     app, ex = explorer
-    assert ex.calls == ["_work"]
+    assert ex.calls == ["render"]
     img = app.img_src.data["image"][0]
     assert img.shape == (50, 60) and img.dtype == np.uint32
     np.testing.assert_array_equal(img, V.shade(app.ds, "word_length"))
@@ -370,7 +441,7 @@ def test_explorer_follows_a_zoom(explorer):
     assert app.shown.e_lo == 0.05 and app.shown.u_hi == 0.7
     assert app.e_window.value == "0.05:0.15" and app.u_window.value == "0.6:0.7"
     assert float(app.ds.e.min()) > 0.05 and float(app.ds.u.max()) < 0.7
-    app.e_window.value = "0.2:0.3"  # typed in: the plot's range moves too
+    _type_window(app, e="0.2:0.3")  # typed in: the plot's range moves too
     assert app.map_fig.x_range.start == 0.2 and app.shown.e_hi == 0.3
 
 
@@ -382,7 +453,7 @@ def test_explorer_refuses_a_view_over_budget(explorer):
     assert len(ex.calls) == 2
     assert app.view.height == 50 and app.shown.height == 50
     assert "pixel budget" in app.status.object and "sb-error" in app.status.object
-    app.e_window.value = "0.3:0.1"
+    _type_window(app, e="0.3:0.1")
     assert "e window must satisfy" in app.status.object
     assert len(ex.calls) == 2 and app.shown.e_lo == 0.0
 
@@ -395,7 +466,7 @@ def test_explorer_tap_shows_the_word(explorer):
     assert e in app.ds.e.values and u in app.ds.u.values
     w = sliding_word(e, u, 300)
     assert w.format() in app.point_pane.object
-    assert f"{w.period} steps" in app.point_pane.object
+    assert f"period {w.period} step" in app.point_pane.object
     assert len(app.path_src.data["x"]) > 100 and app.orbit_marker.location == u
     assert len(app.orbit_src.data["x"]) == 300 * 200
     app._on_tap(SimpleNamespace(x=0.99, y=0.2))  # outside the window: taken as it is
@@ -408,7 +479,30 @@ def test_explorer_colour_change_reshades_without_recomputing(explorer):
     app.color.value = "status"
     assert len(ex.calls) == n
     np.testing.assert_array_equal(app.img_src.data["image"][0], V.shade(app.ds, "status"))
-    assert app.colorbar.major_label_overrides == {0: "found", 1: "none"}
+    assert app.colorbar.major_label_overrides == {0: "found", 1: "none within max_iter"}
+    assert app.mapper.palette == ["#000000", "#ffffff"]
+
+
+def test_colour_key_says_what_white_means(explorer):
+    """Defect 7: white is 'no periodic sliding solution within max_iter', in
+    the key of every variable, drawn with a border, and unlike the
+    not-yet-computed background."""
+    app, _ = explorer
+    # (the motion fields colour the non-sliding pixels: test_explorer_motion.py)
+    for var in [v for v in V.COLOR_VARS if v not in V.MOTION_COLOR_VARS]:
+        app.color.value = var
+        labels = app.colorbar.major_label_overrides
+        last = max(labels)
+        assert labels[last] == "none within max_iter"
+        assert app.mapper.palette[last] == V.NO_SLIDING_COLOR == "#ffffff"
+        assert len(app.mapper.palette) == len(labels)
+        # the no-sliding pixels of the image are that colour
+        img = app.img_src.data["image"][0]
+        none = app.ds["status"].values != 0
+        assert none.any() and (img[none] == V._rgba32(["#ffffff"])[0]).all()
+    assert app.colorbar.bar_line_color == "black"
+    assert app.map_fig.background_fill_color.lower() != "#ffffff"
+    assert "white: no periodic sliding solution within max_iter" in app.key_note.object
 
 
 def test_every_colour_variable_is_offered():
@@ -420,16 +514,17 @@ def test_every_colour_variable_is_offered():
 
 def test_explorer_downloads(explorer):
     app, _ = explorer
-    assert app._png().getvalue()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert app._netcdf().getvalue()[:4] == b"\x89HDF"
+    import asyncio
+
+    assert asyncio.run(app._png()).getvalue()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert asyncio.run(app._netcdf()).getvalue()[:4] == b"\x89HDF"
 
 
 def test_create_app_reports_url_messages(monkeypatch):
     from stairbounce.explorer import app as A
 
-    monkeypatch.setattr(A, "_EXECUTOR", InlineExecutor())
     view, messages = V.parse_query({"size": "5000x5000"})
-    ex = A.Explorer(view, messages, executor=InlineExecutor())
+    ex = A.Explorer(view, messages, scheduler=InlineScheduler())
     assert ex.url_messages.visible and "pixel budget" in ex.url_messages.object
 
 
@@ -452,14 +547,20 @@ def test_cli_rejects_bad_options(capsys, args, words):
         assert w in err
 
 
-def test_cli_port_in_use_is_one_line(capsys):
+def _explore_on_a_busy_port():
+    """``stairbounce explore`` on a port another socket listens on: (exit code, port)."""
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         s.listen()
         port = s.getsockname()[1]
         with pytest.raises(SystemExit) as exc:
             main(["explore", "--no-browser", "--port", str(port)])
-    assert exc.value.code == 2
+    return exc.value.code, port
+
+
+def test_cli_port_in_use_is_one_line(capsys):
+    code, port = _explore_on_a_busy_port()
+    assert code == 2
     err = capsys.readouterr().err
     assert f"cannot serve on 127.0.0.1:{port}" in err and err.count("\n") == 1
 
@@ -472,39 +573,470 @@ def test_cli_help_lists_the_options(capsys):
     assert "--port" in out and "--host" in out and "--no-browser" in out
 
 
+def test_cli_port_in_use_is_reported_before_loading_kernels(capsys, monkeypatch):
+    """Defect 5: the port is checked first, not after the kernels' warm-up."""
+    from stairbounce.explorer import app as A
+
+    calls = []
+    monkeypatch.setattr(A, "warm_up", lambda *a: calls.append(1))
+    code, _ = _explore_on_a_busy_port()
+    assert code == 2 and calls == []
+
+
+@pytest.mark.parametrize("origin", ["", "a b", "host/path"])
+def test_cli_rejects_a_bad_websocket_origin(capsys, origin):
+    with pytest.raises(SystemExit) as exc:
+        main(["explore", "--no-browser", "--allow-websocket-origin", origin])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "--allow-websocket-origin" in err and err.count("\n") == 1
+
+
+def test_websocket_origins_match_what_browsers_send():
+    """Defect 4: Bokeh compares the Origin header's host[:port] with the
+    allowlist (bokeh.server.util.check_allowlist); browsers write IPv6 hosts in
+    brackets and omit default ports."""
+    import socket as so
+
+    from bokeh.server.util import check_allowlist
+
+    from stairbounce.explorer import browse_url, normalize_host, websocket_origins
+
+    def ok(host, origin_host, extra=()):
+        return check_allowlist(origin_host, websocket_origins(host, 5006, extra))
+
+    for host in ("127.0.0.1", "localhost", "::1", "[::1]"):
+        for seen in ("127.0.0.1:5006", "localhost:5006", "[::1]:5006"):
+            assert ok(host, seen), (host, seen)
+        assert not ok(host, "evil.example.com:5006") and not ok(host, "127.0.0.1:5007")
+    name = so.gethostname()
+    assert ok("0.0.0.0", f"{name.lower()}:5006") and ok("0.0.0.0", "127.0.0.1:5006")
+    assert ok("::", "[::1]:5006") and not ok("0.0.0.0", "evil.example.com:5006")
+    assert ok("192.0.2.7", "192.0.2.7:5006") and not ok("192.0.2.7", "127.0.0.1:5006")
+    # a reverse proxy's public name: browsers omit :443 and :80, Bokeh reads it as :80
+    assert ok("127.0.0.1", "explore.example.org", ["explore.example.org"])
+    assert ok("127.0.0.1", "explore.example.org:8443", ["https://explore.example.org:8443/"])
+    assert ok("127.0.0.1", "[2001:db8::1]:8080", ["[2001:db8::1]:8080"])
+    assert normalize_host("[::1]") == "::1"
+    assert browse_url("::1", 5006) == "http://[::1]:5006/"
+    assert browse_url("0.0.0.0", 5006) == f"http://{name}:5006/"
+
+
+def test_make_server_port_zero_binds_a_free_port():
+    """Issue 17 item 10: port 0 was refused ("Invalid port in host value: 127.0.0.1:*")."""
+    from stairbounce.explorer import make_server
+
+    server = make_server(port=0)
+    try:
+        assert server.port > 0
+        with pytest.raises(OSError):  # it holds the port
+            with socket.socket() as s:
+                s.bind(("127.0.0.1", server.port))
+        assert f"127.0.0.1:{server.port}" in server._tornado.websocket_origins
+    finally:
+        server.stop()
+
+
+def test_server_log_lines_are_written_once():
+    """Defect 13 (doubled log lines): in a server process, a record of the
+    server's loggers is written once (one handler on its way)."""
+    import subprocess
+    import sys
+
+    names = ("bokeh.server.views.ws", "bokeh.server.tornado", "panel", "tornado.application")
+    code = (
+        "import logging\n"
+        "from stairbounce.cli import main\n"
+        "from stairbounce.explorer import make_server\n"
+        "server = make_server(port=0)\n"
+        f"for name in {names!r}:\n"
+        "    logging.getLogger(name).warning('probe %s', name)\n"
+        "server.stop()\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    for name in names:
+        assert (out.stdout + out.stderr).count(f"probe {name}") == 1, (name, out.stdout, out.stderr)
+
+
 @pytest.mark.slow
 def test_console_script_serves_the_page_and_stops_on_ctrl_c():
+    """``--port 0``: the URL printed has the real port; kernels load after it."""
     import os
+    import re
     import shutil
     import signal
     import subprocess
     import sys
-    import time
     import urllib.request
 
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
     exe = shutil.which("stairbounce", path=os.path.dirname(sys.executable))
     cmd = [exe] if exe else [sys.executable, "-c", "from stairbounce.cli import main; main()"]
-    proc = subprocess.Popen(cmd + ["explore", "--port", str(port), "--no-browser"],
+    proc = subprocess.Popen(cmd + ["explore", "--port", "0", "--no-browser"],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
-        deadline = time.monotonic() + 60
-        while True:
-            try:
-                with urllib.request.urlopen(f"http://127.0.0.1:{port}/?size=abc", timeout=30) as r:
-                    page = r.read().decode()
-                break
-            except OSError:
-                assert proc.poll() is None and time.monotonic() < deadline, "the server did not start"
-                time.sleep(0.3)
+        first = proc.stdout.readline()
+        m = re.search(r"stairbounce explorer at http://127\.0\.0\.1:(\d+)/", first)
+        assert m, first
+        port = int(m.group(1))
+        assert port > 0
+        assert "loading the compiled kernels" in proc.stdout.readline()
+        assert "kernels ready in" in proc.stdout.readline()
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/?size=abc", timeout=60) as r:
+            page = r.read().decode()
         assert "<title>stairbounce explorer</title>" in page
+        # a query value Panel would refuse (over 4300 digits) is the app's message, not HTTP 500
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/?e={'1' * 20000}", timeout=60) as r:
+            assert r.status == 200
         proc.send_signal(signal.SIGINT)
         out, _ = proc.communicate(timeout=30)
     finally:
         if proc.poll() is None:
             proc.kill()
     assert proc.returncode == 0
-    assert f"stairbounce explorer at http://127.0.0.1:{port}/" in out
     assert "stopped" in out and "Traceback" not in out
+
+
+# --------------------------------------------------------------------------- #
+# The scheduler (issue 14, defect 2)                                          #
+# --------------------------------------------------------------------------- #
+
+
+def _slices(log, name, n, result=None):
+    """A job of ``n`` slices that records each one in ``log``."""
+    for i in range(n):
+        log.append((name, i))
+        yield i
+    log.append((name, "done"))
+    return result
+
+
+def test_scheduler_runs_a_cheap_request_before_a_heavy_one_continues():
+    """Least recent usage first: a heavy job that has had its slices waits
+    while another session's one-slice job runs; it never runs to the end first."""
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    log = []
+    a, b = object(), object()
+    heavy = s.submit(a, "render", _slices(log, "A", 10))
+    for _ in range(3):  # A has run three slices
+        s.run_slice(heavy)
+    s.submit(b, "render", _slices(log, "B", 1))
+    s.run_all()
+    order = [name for name, _ in log]
+    assert order.index("B") == 3  # B's slice runs next, before A's fourth
+    assert log[-1] == ("A", "done")
+
+
+def test_scheduler_shares_turns_between_two_heavy_sessions():
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    log = []
+    # equal-cost slices: attained service grows alike, so the two alternate
+    def slow(name):
+        for i in range(6):
+            time.sleep(0.005)  # slices of equal cost
+            log.append((name, i))
+            yield i
+
+    import time
+
+    s.submit("a", "render", slow("A"))
+    s.submit("b", "render", slow("B"))
+    s.run_all()
+    first_half = [name for name, _ in log[:8]]
+    assert first_half.count("A") >= 3 and first_half.count("B") >= 3
+
+
+def test_scheduler_does_not_starve_a_long_render():
+    """Session A's long render keeps getting slices while B keeps sending
+    new small requests (each superseding the last): B's usage counts, not
+    only its newest job's (ranking jobs by their own time starved A)."""
+    import time
+
+    from stairbounce.explorer.scheduler import Scheduler
+
+    def slow(log, name, n):
+        for i in range(n):
+            time.sleep(0.004)
+            log.append(name)
+            yield i
+
+    s = Scheduler(thread=False)
+    log = []
+    s.submit("a", "render", slow(log, "A", 1000))
+    for _ in range(40):
+        s.submit("b", "render", slow(log, "B", 3))
+        for _ in range(3):
+            with s._cv:
+                job = s._pick()
+            s.run_slice(job)
+    # A had about a fair half of the 120 slices, not none
+    assert 40 <= log.count("A") <= 80
+    s.cancel("a")
+
+
+def test_scheduler_new_request_supersedes_the_sessions_pending_one():
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    log, done = [], []
+    s.submit("a", "render", _slices(log, "old", 5), on_done=lambda r, e, j: done.append("old"))
+    s.submit("a", "point", _slices(log, "tap", 1), on_done=lambda r, e, j: done.append("tap"))
+    s.submit("a", "render", _slices(log, "new", 2), on_done=lambda r, e, j: done.append("new"))
+    s.run_all()
+    assert not any(name == "old" for name, _ in log)  # never started, never finished
+    assert sorted(done) == ["new", "tap"]  # another kind of the same session is kept
+
+
+def test_scheduler_drops_a_closed_sessions_work_at_once():
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    log, done = [], []
+    alive = [True]
+    job = s.submit("a", "render", _slices(log, "A", 100), alive=lambda: alive[0],
+                   on_done=lambda r, e, j: done.append(r))
+    s.run_slice(job)
+    alive[0] = False  # the page's websocket closed
+    s.run_all()
+    assert log == [("A", 0)] and done == []
+    # and cancel() for a session ended by Bokeh
+    job = s.submit("b", "render", _slices(log, "B", 100))
+    s.run_slice(job)
+    s.cancel("b")
+    s.run_all()
+    assert log[-1] == ("B", 0)
+    assert not s.busy()
+
+
+def test_scheduler_thread_keeps_serving_after_a_failing_job():
+    import threading
+
+    from stairbounce.explorer.scheduler import Scheduler
+
+    def bad():
+        yield
+        raise RuntimeError("boom")
+
+    s = Scheduler()
+    errors, ok = [], threading.Event()
+    s.submit("a", "render", bad(), on_done=lambda r, e, j: errors.append(e))
+    s.submit("b", "render", _slices([], "B", 2, result=7), on_done=lambda r, e, j: ok.set())
+    assert ok.wait(30)
+    assert len(errors) == 1 and str(errors[0]) == "boom"
+
+
+def test_render_work_is_sliced_within_the_budget():
+    """A render is cut into slices of at most SLICE_WORK potential map steps,
+    so the wait of another session's request is bounded by one slice."""
+    view = V.View(0.5, 1.0, 5.0, 6.0, 1000, 1000, max_iter=5000)  # nothing slides: worst case
+    rows = max(1, V.SLICE_WORK // (view.width * view.max_iter))
+    assert rows * view.width * view.max_iter <= V.SLICE_WORK
+    # so is every slice, coarse preview included (max_iter 1 keeps the test fast)
+    budget = V.SLICE_WORK // 5000
+    work = []
+    for p in V.render_slices(replace(view, max_iter=1), slice_work=budget, preview_work=0):
+        last = p.parts[-1] if p.parts else p.coarse[-1]
+        work.append(last.sizes["u"] * last.sizes["e"])
+    assert len(work) > 40 and max(work) <= budget
+
+
+def test_page_says_when_it_is_queued():
+    from stairbounce.explorer import app as A
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    other = A.Explorer(V.View(width=40, height=40, max_iter=10), scheduler=s)
+    other._request(V.View(0, 1, 0, 1.5, 40, 40, max_iter=20))
+    mine = A.Explorer(V.View(width=40, height=40, max_iter=10), scheduler=s)
+    mine._request(V.View(0, 1, 0, 1.5, 40, 40, max_iter=30))
+    assert "queued" in mine.status.object and "1 request of other sessions" in mine.status.object
+    s.run_all()
+    assert "computed in" in mine.status.object and "computed in" in other.status.object
+
+
+def test_page_says_the_kernels_are_loading(monkeypatch):
+    from stairbounce.explorer import app as A
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False)
+    monkeypatch.setattr(A, "SCHEDULER", s)
+    warm = A.warm_up()
+    assert not warm.is_set()
+    page = A.Explorer(V.View(width=40, height=40, max_iter=10))
+    page.start()
+    assert "loading its compiled kernels" in page.status.object
+    s.run_all()
+    assert warm.is_set() and "computed in" in page.status.object
+
+
+# --------------------------------------------------------------------------- #
+# The page's other defects (issue 14)                                         #
+# --------------------------------------------------------------------------- #
+
+
+def test_downloads_run_off_the_event_loop(explorer, monkeypatch):
+    """Defect 3: the callbacks are coroutines; the export runs on another thread."""
+    import asyncio
+    import inspect
+    import threading
+
+    from stairbounce.explorer import app as A
+
+    app, _ = explorer
+    seen = []
+    real = A.view_png
+
+    def spy(ds, view):
+        seen.append(threading.current_thread())
+        return real(ds, view)
+
+    monkeypatch.setattr(A, "view_png", spy)
+    assert inspect.iscoroutinefunction(app.png_button.callback)
+    assert inspect.iscoroutinefunction(app.nc_button.callback)
+    loop_thread = []
+
+    async def download():
+        loop_thread.append(threading.current_thread())
+        return await app._png()
+
+    assert asyncio.run(download()).getvalue()[:4] == b"\x89PNG"
+    assert seen and seen[0] is not loop_thread[0]
+
+
+def test_download_buttons_wait_for_a_view():
+    """Defect 6: disabled until the first picture."""
+    from stairbounce.explorer.app import Explorer
+
+    s = InlineScheduler()
+    app = Explorer(V.View(0.0, 0.4, 0.3, 1.1, 40, 30, max_iter=100), scheduler=s)
+    assert app.png_button.disabled and app.nc_button.disabled
+    app.start()
+    assert not app.png_button.disabled and not app.nc_button.disabled
+
+
+def test_deep_zoom_status_and_hover_tell_the_ends_apart():
+    """Defect 8: enough digits for the window's ends and one pixel; the hover
+    shows the colouring variable's value."""
+    from stairbounce.explorer.app import Explorer
+
+    lo = 0.0525
+    view = V.View(lo, lo + 2e-9, 0.93, 0.93 + 2e-9, 40, 40, max_iter=100)
+    app = Explorer(view, scheduler=InlineScheduler())
+    app.start()
+    import re
+
+    a, b = re.search(r">e (\S+) to (\S+),", app.status.object).groups()
+    assert a != b and float(a) == lo and abs(float(b) - (lo + 2e-9)) < 1e-12
+    tips = dict(app.hover.tooltips)
+    digits = int(tips["e"].split("%.")[1].split("g")[0])
+    step = 2e-9 / 40
+    assert f"{lo + 0.5 * step:.{digits}g}" != f"{lo + 1.5 * step:.{digits}g}"
+    assert tips["word length"] == "@val{custom}"
+    val = app.img_src.data["val"][0]
+    sl = app.ds["status"].values == 0
+    np.testing.assert_array_equal(val[sl], app.ds["word_length"].values[sl])
+    assert (val[~sl] == -1).all()
+
+
+def test_refused_zoom_snaps_back_to_the_last_view(explorer):
+    """Defect 8: a zoom deeper than float64 resolves is refused and the plot's
+    ranges go back to the view shown."""
+    app, ex = explorer
+    n = len(ex.calls)
+    app._on_ranges(SimpleNamespace(x0=0.1, x1=0.1 + 1e-16, y0=0.5, y1=0.6))
+    assert len(ex.calls) == n and "too narrow" in app.status.object
+    assert (app.map_fig.x_range.start, app.map_fig.x_range.end) == (app.shown.e_lo, app.shown.e_hi)
+    assert (app.map_fig.y_range.start, app.map_fig.y_range.end) == (app.shown.u_lo, app.shown.u_hi)
+
+
+def test_error_is_cleared_when_the_input_is_put_back(explorer):
+    """Defect 9: a refused value is put back in its widget; the message goes
+    when the input is back at the view shown, or after Reset."""
+    app, ex = explorer
+    app.width_in.value = 1000
+    app.height_in.value = 1001  # refused
+    assert "pixel budget" in app.status.object
+    assert app.height_in.value == app.view.height == 50  # the widget shows the view again
+    _type_window(app, e="0:0.4")  # the window shown, typed again: nothing to do, message gone
+    assert "sb-error" not in app.status.object
+    _type_window(app, e="abc")
+    assert "sb-error" in app.status.object and app.e_window.value == "0:0.4"
+    v = app.view  # Reset: Bokeh's reset tool moves the ranges back to the view
+    app._on_ranges(SimpleNamespace(x0=v.e_lo, x1=v.e_hi, y0=v.u_lo, y1=v.u_hi))
+    assert "sb-error" not in app.status.object
+
+
+def test_one_apply_for_both_windows(explorer):
+    """Defect 12: typing e and u, then Enter (or Apply) in either box, renders once."""
+    app, ex = explorer
+    n = len(ex.calls)
+    app.e_window.value_input = "0.1:0.2"  # typed, no Enter yet: nothing happens
+    app.e_window.value = "0.1:0.2"  # a blur commits the text box: still nothing
+    assert len(ex.calls) == n
+    app.u_window.value_input = "0.5:0.6"
+    app.u_window.param.trigger("enter_pressed")
+    assert ex.calls[n:] == ["render"]
+    assert (app.shown.e_lo, app.shown.e_hi, app.shown.u_lo, app.shown.u_hi) == (0.1, 0.2, 0.5, 0.6)
+
+
+def test_zoom_url_has_no_float_noise(explorer):
+    """Defect 13: Bokeh's 0.9200000000000002 is written 0.92."""
+    app, _ = explorer
+    app._on_ranges(SimpleNamespace(x0=0.04000000000000001, x1=0.065, y0=0.9200000000000002,
+                                   y1=0.9450000000000001))
+    assert (app.view.e_lo, app.view.u_lo, app.view.u_hi) == (0.04, 0.92, 0.945)
+    assert "u=0.92:0.945&" in app.history_out.text
+
+
+def test_overlay_legend_follows_the_overlays(explorer):
+    app, _ = explorer
+    assert app.legend.visible and len(app.legend.items) == 2
+    app.overlays.value = ["no_sliding"]
+    assert [i.label.value for i in app.legend.items] == [_OVERLAY_LEGEND()["no_sliding"]]
+    app.overlays.value = []
+    assert not app.legend.visible and app.legend.items == []
+
+
+def _OVERLAY_LEGEND():
+    from stairbounce.explorer.app import _OVERLAY_LEGEND
+
+    return _OVERLAY_LEGEND
+
+
+def test_tap_trajectory_shows_a_full_period_and_singular_words(explorer):
+    """Defect 13: a period-31 orbit shows at least 31 steps; 'period 1 step'."""
+    app, _ = explorer
+    # the report's period-31 point (2 x14, 3, 0^inf), checked with sliding_word
+    e, u = 0.0621875, 0.9436874999999999
+    w = sliding_word(e, u, 1000)
+    assert w is not None and w.period == 31
+    app.view = replace(app.view, max_iter=1000)
+    app._request_point(e, u)
+    assert app.path_src.data["x"].max() >= 31  # the ball went down 31 steps or more
+    assert "period 31 steps" in app.point_pane.object
+    assert "one full period" in app.traj_fig.title.text
+    # a point inside the n = 1 tongue: word (1, 0^inf), period 1
+    app._request_point(0.05, 0.5)
+    assert sliding_word(0.05, 0.5, 1000).period == 1
+    assert "period 1 step," in app.point_pane.object and "1 steps" not in app.point_pane.object
+
+
+def test_back_and_forward_restore_the_view(explorer):
+    """Defect 1 (server side): a zoom pushes a history entry; the browser's
+    popstate with an older query brings that view back without a new entry."""
+    app, ex = explorer
+    first = app.history_out.text
+    assert first.startswith("replace ?")
+    app._on_ranges(SimpleNamespace(x0=0.05, x1=0.15, y0=0.6, y1=0.7))
+    assert app.history_out.text.startswith("push ?e=0.05:0.15&u=0.6:0.7&")
+    app.color.value = "period"  # recolouring replaces the entry
+    assert app.history_out.text.startswith("replace ?") and "color=period" in app.history_out.text
+    app.history_back.text = "123 " + first.split(" ", 1)[1]  # Back
+    assert (app.shown.e_lo, app.shown.e_hi, app.shown.u_lo, app.shown.u_hi) == (0.0, 0.4, 0.3, 1.1)
+    assert app.e_window.value == "0:0.4" and app.color.value == "word_length"
+    assert app.map_fig.x_range.start == 0.0 and app.map_fig.y_range.end == 1.1
+    assert app.history_out.text.startswith("replace ?e=0:0.4&")

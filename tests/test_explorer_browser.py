@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -39,38 +40,40 @@ pytest.importorskip("panel", reason="panel is in the web extra")
 from PIL import Image  # noqa: E402
 
 
-def _free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-@pytest.fixture(scope="module")
-def server(tmp_path_factory):
-    """``stairbounce explore`` on a free port; yields its URL and its log file."""
-    port = _free_port()
+def _start(args, log):
+    """Start ``stairbounce explore ARGS`` writing to ``log``; return (process, URL printed)."""
     exe = shutil.which("stairbounce", path=os.path.dirname(sys.executable)) or shutil.which("stairbounce")
     cmd = [exe] if exe else [sys.executable, "-c", "from stairbounce.cli import main; main()"]
-    log = tmp_path_factory.mktemp("explorer") / "server.log"
     with open(log, "w") as out:
-        proc = subprocess.Popen(cmd + ["explore", "--port", str(port), "--no-browser"],
+        proc = subprocess.Popen(cmd + ["explore", "--no-browser", *args],
                                 stdout=out, stderr=subprocess.STDOUT)
     deadline = time.monotonic() + 60
     while True:
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=0.5).close()
-            break
-        except OSError:
-            if proc.poll() is not None or time.monotonic() > deadline:
-                proc.kill()
-                pytest.fail(f"stairbounce explore did not start: {log.read_text()}")
-            time.sleep(0.2)
-    yield SimpleNamespace(url=f"http://127.0.0.1:{port}/", log=log)
+        m = re.search(r"stairbounce explorer at (\S+) ", log.read_text())
+        if m:
+            return proc, m.group(1)
+        if proc.poll() is not None or time.monotonic() > deadline:
+            proc.kill()
+            pytest.fail(f"stairbounce explore did not start: {log.read_text()}")
+        time.sleep(0.2)
+
+
+def _stop(proc):
     proc.terminate()
     try:
         proc.wait(timeout=10)
     except subprocess.TimeoutExpired:
         proc.kill()
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    """``stairbounce explore --port 0``; yields its URL (as printed), log file and pid."""
+    log = tmp_path_factory.mktemp("explorer") / "server.log"
+    proc, url = _start(["--port", "0"], log)
+    assert url.startswith("http://127.0.0.1:") and not url.endswith(":0/")
+    yield SimpleNamespace(url=url, log=log, pid=proc.pid)
+    _stop(proc)
 
 
 @pytest.fixture(scope="module")
@@ -265,3 +268,172 @@ def test_download_buttons_give_the_view(server, page, tmp_path):
     img = Image.open(png)
     assert png.suffix == ".png" and img.width > 200 and img.height > 150
     shutil.copy(png, ARTIFACTS / "explorer-download.png")
+
+
+# --------------------------------------------------------------------------- #
+# Issue 14: many users, history, hosts, layout                                #
+# --------------------------------------------------------------------------- #
+
+
+def _status(page):
+    # the pane's text lives in its shadow root: the spans, not the host element
+    text = " | ".join(page.locator(".sb-status span").all_inner_texts())
+    assert text  # never vacuous
+    return text
+
+
+def _type_windows(page, e, u):
+    """Type both windows, Enter once (in the u box)."""
+    page.locator(".sb-e-window input").fill(e)
+    page.locator(".sb-u-window input").fill(u)
+    page.locator(".sb-u-window input").press("Enter")
+
+
+def test_back_and_forward_restore_the_view(server, page):
+    """Defect 1: Back undoes a zoom (picture, window boxes, status, address bar agree)."""
+    page.goto(server.url + "?e=0:1&u=0:1.5&size=200x200&max_iter=200")
+    _wait_rendered(page)
+    start = page.evaluate("() => history.length")
+    _type_windows(page, "0:0.5", "0.5:1.5")
+    page.locator(".sb-status .sb-info").get_by_text("e 0 to 0.5, u 0.5 to 1.5:").wait_for(timeout=60_000)
+    box = _map_canvas(page).bounding_box()  # a wheel zoom: another entry
+    page.mouse.move(box["x"] + box["width"] * 0.4, box["y"] + box["height"] * 0.5)
+    page.mouse.wheel(0, -300)
+    page.wait_for_function("() => !document.location.search.includes('e=0:0.5&')", timeout=30_000)
+    _wait_rendered(page)
+    zoomed = _window(page)
+    assert page.evaluate("() => history.length") == start + 2
+    page.go_back()
+    page.locator(".sb-status .sb-info").get_by_text("e 0 to 0.5, u 0.5 to 1.5:").wait_for(timeout=60_000)
+    assert _window(page) == ("0:0.5", "0.5:1.5") and _query(page)["e"] == "0:0.5"
+    page.go_back()
+    page.locator(".sb-status .sb-info").get_by_text("e 0 to 1, u 0 to 1.5:").wait_for(timeout=60_000)
+    assert _window(page) == ("0:1", "0:1.5")
+    page.go_forward()
+    page.locator(".sb-status .sb-info").get_by_text("e 0 to 0.5, u 0.5 to 1.5:").wait_for(timeout=60_000)
+    page.go_forward()
+    page.wait_for_function("([e]) => document.location.search.includes('e=' + e + '&')",
+                           arg=[zoomed[0]], timeout=30_000)
+    _wait_rendered(page)
+    assert _window(page) == zoomed
+    # navigating history made no new entries
+    assert page.evaluate("() => history.length") == start + 2
+
+
+def test_one_enter_applies_both_windows(server, page):
+    """Defect 12: one Enter, one render with both windows, one history entry."""
+    page.goto(server.url + "?e=0:1&u=0:1.5&size=200x200&max_iter=200")
+    _wait_rendered(page)
+    start = page.evaluate("() => history.length")
+    page.locator(".sb-e-window input").fill("0.1:0.3")
+    page.locator(".sb-u-window input").click()  # moving to the u box applies nothing yet
+    page.locator(".sb-u-window input").fill("0.5:0.9")
+    page.locator(".sb-u-window input").press("Enter")
+    page.locator(".sb-status .sb-info").get_by_text("e 0.1 to 0.3, u 0.5 to 0.9:").wait_for(timeout=60_000)
+    assert page.evaluate("() => history.length") == start + 1
+    q = _query(page)
+    assert (q["e"], q["u"]) == ("0.1:0.3", "0.5:0.9")
+
+
+def test_cheap_render_does_not_wait_for_another_sessions_heavy_one(server, browser):
+    """Defect 2: session B's small view and tap finish while session A's
+    heavy render (1000 x 1000, max_iter 5000, two thirds of the pixels do
+    not slide and lie below Cor. 2.1's bound, so the scan cannot prune
+    them) is still running; closing A's page stops its render."""
+    import psutil
+
+    a = browser.new_page(viewport={"width": 1600, "height": 1000})
+    b = browser.new_page(viewport={"width": 1600, "height": 1000})
+    try:
+        a.goto(server.url + "?e=0.3:0.4&u=0.3:0.45&size=1000x1000&max_iter=5000")
+        a.locator(".sb-status .sb-busy").get_by_text("%").wait_for(timeout=60_000)  # A is computing
+        b.goto(server.url + "?e=0:0.4&u=0.3:1.1&size=200x200&max_iter=300")
+        _wait_rendered(b)
+        assert "computed in" not in _status(a)  # A still computes
+        frame, box = _frame_box(b), _map_canvas(b).bounding_box()
+        b.mouse.click(box["x"] + frame["left"] + 0.1 * frame["width"],
+                      box["y"] + frame["top"] + 0.5 * frame["height"])
+        b.locator(".sb-point").get_by_text("period").wait_for(timeout=60_000)
+        assert "computed in" not in _status(a)
+        b.screenshot(path=str(ARTIFACTS / "explorer-beside-a-heavy-render.png"))
+    finally:
+        a.close()
+    # A's page is gone: its render stops (the server goes idle within a slice)
+    proc = psutil.Process(server.pid)
+    time.sleep(1.5)
+    before = sum(proc.cpu_times()[:2])
+    time.sleep(3.0)
+    used = sum(proc.cpu_times()[:2]) - before
+    b.close()
+    assert used < 1.0, f"the server used {used:.1f} s of CPU in 3 s after the heavy page closed"
+
+
+@pytest.mark.parametrize("size", [(1280, 720), (1600, 1000)])
+def test_status_and_tap_result_above_the_fold(server, browser, size):
+    """Defect 11: on laptop screens the status line and the tapped point's
+    word are visible without scrolling."""
+    w, h = size
+    page = browser.new_page(viewport={"width": w, "height": h})
+    try:
+        page.goto(server.url + "?e=0:1&u=0:1.5&size=600x600&max_iter=300")
+        _wait_rendered(page)
+        status = page.locator(".sb-status").bounding_box()
+        assert status["y"] >= 0 and status["y"] + status["height"] <= h
+        # tap inside the n = 3 tongue (Thm 3.1: 1 < u <= sqrt(3/2)(1-e)/(1+e)), in the visible part
+        frame, box = _frame_box(page), _map_canvas(page).bounding_box()
+        x = box["x"] + frame["left"] + 0.02 * frame["width"]
+        y = box["y"] + frame["top"] + (1 - 1.1 / 1.5) * frame["height"]
+        assert y < h
+        page.mouse.click(x, y)
+        word = page.locator(".sb-word")
+        word.wait_for(timeout=60_000)
+        assert word.inner_text() == "(3, 0^\u221e)"
+        for el in (page.locator(".sb-point"), word):
+            bb = el.bounding_box()
+            assert bb["y"] >= 0 and bb["y"] + bb["height"] <= h
+        page.screenshot(path=str(ARTIFACTS / f"explorer-{w}x{h}.png"))
+    finally:
+        page.close()
+
+
+def test_a_very_long_url_value_gets_the_apps_message(server, page):
+    """Defect 10: 20 000 digits (Panel's own parser fails above 4300)."""
+    page.goto(server.url + "?e=" + "1" * 20000 + "&size=200x200&max_iter=100")
+    _wait_rendered(page)
+    msg = page.locator(".sb-url-text").inner_text()
+    assert "ignored e=" in msg and "20000 characters" in msg
+    assert _window(page)[0] == "0:1"
+
+
+def _ipv6_loopback():
+    try:
+        with socket.socket(socket.AF_INET6) as s:
+            s.bind(("::1", 0))
+        return True
+    except OSError:
+        return False
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("host", ["0.0.0.0", "::1"])
+def test_other_hosts_serve_a_working_page(browser, tmp_path, host):
+    """Defect 4: with --host 0.0.0.0 or ::1 the page renders (the websocket is
+    accepted); the URL printed opens it (IPv6 in brackets)."""
+    if host == "::1" and not _ipv6_loopback():
+        pytest.skip("no IPv6 loopback on this machine")
+    proc, url = _start(["--host", host, "--port", "0"], tmp_path / "server.log")
+    try:
+        port = int(url.rsplit(":", 1)[1].strip("/"))
+        urls = [url, f"http://127.0.0.1:{port}/"] if host == "0.0.0.0" else [url]
+        if host == "::1":
+            assert url == f"http://[::1]:{port}/"
+        for u in urls:
+            page = browser.new_page()
+            try:
+                page.goto(u + "?size=100x100&max_iter=50")
+                text = _wait_rendered(page, timeout=60_000)
+                assert "100 x 100 pixels" in text
+            finally:
+                page.close()
+    finally:
+        _stop(proc)

@@ -51,17 +51,21 @@ def test_point_details_of_a_non_sliding_point_has_k_exponents_and_section():
 def test_explorer_colours_by_k_and_shows_the_motion_on_tap():
     from stairbounce.explorer.app import Explorer
 
-    from .test_explorer import InlineExecutor
+    from .test_explorer import InlineScheduler
 
-    ex = InlineExecutor()
-    app = Explorer(VIEW, executor=ex)
+    ex = InlineScheduler()
+    app = Explorer(VIEW, scheduler=ex)
     app.start()
     app.color.value = "k_mean"  # needs the motion fields: recomputed
-    assert ex.calls == ["_work", "_work"]
+    assert ex.calls == ["render", "render"]
     np.testing.assert_array_equal(app.img_src.data["image"][0], V.shade(app.ds, "k_mean"))
     assert app.colorbar.major_label_overrides[0] == "slides"
+    # the labelled colours only, on the ticker the page draws (it ignores a new one)
+    assert list(app.colorbar.ticker.ticks) == V.color_key("k_mean").ticks == [0, 9, 25, 41, 57]
+    assert "the orbit of (1, 0) slides" in app.key_note.object
     app.color.value = "lyap1"  # already there: reshaded only
-    assert ex.calls == ["_work", "_work"]
+    assert ex.calls == ["render", "render"]
+    np.testing.assert_array_equal(app.img_src.data["image"][0], V.shade(app.ds, "lyap1"))
     app._on_tap(SimpleNamespace(x=0.6, y=1.0))
     e, u = app.view.point
     r = motion(e, u, steps=200, transient=200)

@@ -11,7 +11,14 @@ from ._app import CLIError, app
 def explore(
     port: int = typer.Option(5006, "--port", help="TCP port to serve on (0: any free port)."),
     host: str = typer.Option(
-        "127.0.0.1", "--host", help="Address to listen on; the default serves this machine only."
+        "127.0.0.1", "--host",
+        help="Address to listen on; the default serves this machine only. 0.0.0.0 (or ::) "
+             "serves every address of this machine; IPv6 addresses with or without brackets.",
+    ),
+    allow_websocket_origin: list[str] = typer.Option(
+        [], "--allow-websocket-origin",
+        help="Also accept pages served under this HOST[:PORT] (repeatable), e.g. the public "
+             "name of a reverse proxy in front of the app.",
     ),
     no_browser: bool = typer.Option(False, "--no-browser", help="Do not open a web browser."),
 ):
@@ -20,6 +27,9 @@ def explore(
         raise CLIError(f"--port must be in [0, 65535], got {port}")
     if not host.strip():
         raise CLIError("--host must not be empty")
+    for origin in allow_websocket_origin:
+        if not origin.strip() or any(c.isspace() or c in "/?#," for c in origin.split("://")[-1].rstrip("/")):
+            raise CLIError(f"--allow-websocket-origin must be HOST or HOST:PORT, got {origin!r}")
     try:
         import bokeh  # noqa: F401
         import panel  # noqa: F401
@@ -30,10 +40,14 @@ def explore(
     from ..explorer import serve
 
     def ready(url):
-        typer.echo(f"stairbounce explorer at {url} (Ctrl-C to stop)")
+        typer.echo(f"stairbounce explorer at {url} (Ctrl-C to stop)", err=False)
+
+    def say(text):
+        typer.echo(text)
 
     try:
-        serve(port=port, host=host, show=not no_browser, on_ready=ready)
+        serve(port=port, host=host, show=not no_browser, on_ready=ready,
+              allow_websocket_origin=allow_websocket_origin, say=say)
     except OSError as exc:  # port in use, address not available
         raise CLIError(f"cannot serve on {host}:{port}: {exc.strerror or exc}") from None
     typer.echo("stairbounce explorer stopped")

@@ -33,49 +33,199 @@ __all__ = [
     "view_query",
     "make_server",
     "serve",
+    "websocket_origins",
+    "browse_url",
+    "normalize_host",
 ]
 
 
-def make_server(port=5006, host="127.0.0.1", show=False):
-    """make_server(port=5006, host="127.0.0.1", show=False) -> bokeh Server
+_LOOPBACK = ("127.0.0.1", "localhost", "::1")
+_ANY = ("0.0.0.0", "::", "")
 
-    A Panel server for the app at ``http://host:port/`` (not started;
-    ``port=0`` picks a free port, read it back from ``server.port``).
+# A query value longer than this is cut before Panel sees it: Panel parses
+# digit strings with int(), which refuses more than 4300 digits (HTTP 500).
+MAX_QUERY_VALUE = 1000
+
+
+def _netloc(host: str, port: int) -> str:
+    """``host:port`` as a browser's Origin header writes it (IPv6 in brackets)."""
+    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
+
+
+def normalize_host(host: str) -> str:
+    """``"[::1]"`` -> ``"::1"``: the address to bind, without URL brackets."""
+    host = host.strip()
+    if host.startswith("[") and host.endswith("]"):
+        host = host[1:-1]
+    return host
+
+
+def _local_names() -> set[str]:
+    """Names and addresses this machine answers to (for a server on all addresses)."""
+    import socket
+
+    names = {"localhost", "127.0.0.1", "::1"}
+    for name in (socket.gethostname(), socket.getfqdn()):
+        if name:
+            names.add(name.lower())
+            try:
+                names |= {info[4][0] for info in socket.getaddrinfo(name, None)}
+            except OSError:
+                pass
+    try:
+        import psutil
+
+        for addrs in psutil.net_if_addrs().values():
+            names |= {a.address.split("%")[0] for a in addrs if a.family in (socket.AF_INET, socket.AF_INET6)}
+    except Exception:  # psutil is optional
+        pass
+    return names
+
+
+def websocket_origins(host: str, port: int, extra=()) -> list[str]:
+    """websocket_origins(host, port, extra=()) -> list of ``name:port``
+
+    The ``Origin`` hosts whose pages may open the app's websocket: the
+    address served and its loopback aliases (``localhost``, ``127.0.0.1``,
+    ``[::1]``); for ``0.0.0.0`` / ``::`` every name and address of this
+    machine; plus ``extra`` (``--allow-websocket-origin``: ``NAME`` or
+    ``NAME:PORT``, e.g. the public name of a reverse proxy; without a port
+    it matches the default ports, as browsers omit them).
+    """
+    host = normalize_host(host)
+    if host in _LOOPBACK:
+        names = set(_LOOPBACK)
+    elif host in _ANY:
+        names = _local_names()
+    else:
+        names = {host.lower()}
+    out = {_netloc(n, port) for n in names}
+    for item in extra:
+        item = item.strip()
+        if "://" in item:  # a whole URL pasted: keep its host[:port]
+            from urllib.parse import urlsplit
+
+            item = urlsplit(item).netloc
+        if item.startswith("["):  # [v6] or [v6]:port
+            name, _, rest = item[1:].partition("]")
+            out.add(f"[{name.lower()}]:{rest.lstrip(':') or 80}")
+        elif item.count(":") > 1:  # a bare IPv6 address
+            out.add(f"[{item.lower()}]:80")
+        elif ":" in item:
+            out.add(item.lower())
+        else:  # browsers omit default ports; Bokeh compares such an Origin as NAME:80
+            out.add(f"{item.lower()}:80")
+    return sorted(out)
+
+
+def browse_url(host: str, port: int) -> str:
+    """The URL to open for a server on ``host``: the machine's name for all
+    addresses, brackets for IPv6."""
+    import socket
+
+    host = normalize_host(host)
+    if host in _ANY:
+        host = socket.gethostname() or "127.0.0.1"
+    return f"http://{_netloc(host, port)}/"
+
+
+def _guard_long_queries(tornado_app) -> None:
+    """Redirect a page request with an over-long query value to the same
+    query with that value cut (the page then reports it as a bad value); let
+    Panel read an IPv6 ``Host`` header."""
+    from urllib.parse import urlencode
+
+    from panel.io.server import DocHandler
+
+    class _CutQueryDocHandler(DocHandler):
+        async def get(self, *args, **kwargs):
+            args_ = self.request.query_arguments
+            if any(len(v) > MAX_QUERY_VALUE for vs in args_.values() for v in vs):
+                cut = [(k, v if len(v) <= MAX_QUERY_VALUE else v[:20] + f"...({len(v)} characters)".encode())
+                       for k, vs in args_.items() for v in vs]
+                self.redirect(self.request.path + "?" + urlencode(cut, safe=":,"))
+                return
+            host = self.request.host
+            if host.startswith("["):
+                # Panel splits Host at ':' for its Location (hostname, port),
+                # which fails on "[::1]:5006"; the page's websocket URL is
+                # taken from the browser's address, so this name is only a label
+                self.request.host = "localhost:" + host.rpartition("]:")[2] if "]:" in host else "localhost"
+            return await super().get(*args, **kwargs)
+
+    for rule in tornado_app.wildcard_router.rules:
+        if rule.target is DocHandler:
+            rule.target = _CutQueryDocHandler
+
+
+def make_server(port=5006, host="127.0.0.1", show=False, allow_websocket_origin=()):
+    """make_server(port=5006, host="127.0.0.1", show=False, allow_websocket_origin=()) -> bokeh Server
+
+    A Panel server for the app at ``http://host:port/`` (bound, not started:
+    a port in use raises :class:`OSError` here; ``port=0`` picks a free port,
+    read it back from ``server.port``).  ``host`` may be a name, an IPv4 or
+    IPv6 address (with or without brackets), ``0.0.0.0`` or ``::`` for all
+    addresses; the page's websocket is accepted from
+    :func:`websocket_origins`.
     """
     import panel as pn
 
-    from .app import create_app, warm_up
+    from .app import create_app
 
-    warm_up()
-
-    # the page's websocket is accepted only from pages served by this server
-    hosts = {host}
-    if host in ("127.0.0.1", "localhost"):
-        hosts |= {"127.0.0.1", "localhost"}
-    origins = sorted(f"{h}:{port or '*'}" for h in hosts)
-    return pn.serve(
+    address = normalize_host(host)
+    server = pn.serve(
         create_app,
         port=port,
-        address=host,
-        websocket_origin=origins,
+        address=address or None,
+        websocket_origin=["localhost:1"],  # replaced below, once the port is known
         show=show,
         start=False,
         title="stairbounce explorer",
         verbose=False,
+        # a closed page's session is freed after 15 s; look every 5 s
+        check_unused_sessions_milliseconds=5000,
     )
+    origins = server._tornado.websocket_origins  # Bokeh's own set, read on every connection
+    origins.clear()
+    origins.update(websocket_origins(address, server.port, allow_websocket_origin))
+    _guard_long_queries(server._tornado)
+    return server
 
 
-def serve(port=5006, host="127.0.0.1", show=True, on_ready=None):
-    """serve(port=5006, host="127.0.0.1", show=True) -> None
+def serve(port=5006, host="127.0.0.1", show=True, on_ready=None, allow_websocket_origin=(), say=None):
+    """serve(port=5006, host="127.0.0.1", show=True, on_ready=None, allow_websocket_origin=(), say=None) -> None
 
-    Start the app's server and block until interrupted; ``show`` opens the
-    page in a web browser, ``on_ready(url)`` is called once it listens.
+    Start the app's server and block until interrupted: bind the port first
+    (a port in use fails at once), call ``on_ready(url)``, then load the
+    compiled kernels on the scheduler's thread (``say(text)`` reports it;
+    pages opened meanwhile say they are queued) and serve.  ``show`` opens
+    the page in a web browser.
     """
-    server = make_server(port, host, show=False)
-    server.start()
-    url = f"http://{'[' + host + ']' if ':' in host else host}:{server.port}/"
+    import time
+
+    from .app import warm_up
+
+    server = make_server(port, host, show=False, allow_websocket_origin=allow_websocket_origin)
+    url = browse_url(host, server.port)
     if on_ready is not None:
         on_ready(url)
+    t0 = time.perf_counter()
+    if say is not None:
+        say("loading the compiled kernels (the first start after an install compiles them, up to a minute) ...")
+    warm = warm_up()
+
+    def report():
+        if say is not None:
+            say(f"kernels ready in {time.perf_counter() - t0:.1f} s")
+
+    def wait_warm():
+        warm.wait()
+        server.io_loop.add_callback(report)
+
+    import threading
+
+    threading.Thread(target=wait_warm, daemon=True).start()
+    server.start()
     if show:
         server.io_loop.add_callback(server.show, "/")
     try:

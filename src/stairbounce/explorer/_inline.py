@@ -66,7 +66,8 @@ def inline(e=(0.0, 1.0), u=(0.0, 1.5), width=400, height=400, max_iter=1000, col
         Steps before a point counts as having no periodic sliding solution.
     color : str, default ``"word_length"``
         The coloured variable, one of ``word_length``, ``period``, ``impacts``,
-        ``jumps``, ``status``.
+        ``jumps``, ``status``, or a non-sliding motion field ``k_mean``,
+        ``lyap1`` (computed with the scan).
     point : (e, u) or None
         A point whose word, trajectory and orbit diagram are shown.
     """

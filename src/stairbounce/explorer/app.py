@@ -3,21 +3,29 @@
 One :class:`Explorer` per browser session.  The map is a Bokeh ``image_rgba``
 recomputed at the view's pixel size after every pan or zoom (Bokeh's
 ``RangesUpdate`` event, one per gesture); a tap shows the word, trajectory and
-orbit diagram of the tapped pixel.  All dynamics runs on a worker thread (the
-numba kernels release the GIL, so the server's event loop keeps serving the
-page), and results come back to the document with ``add_next_tick_callback``,
-the Bokeh server's thread-safe way in.  A newer request cancels an older
-render between bands of rows (:func:`~stairbounce.explorer.view.compute_view`).
+orbit diagram of the tapped pixel.  All dynamics runs on the shared
+:class:`~stairbounce.explorer.scheduler.Scheduler` (one worker thread, slices
+of bounded work, least attained service first, a session's new request
+superseding its own pending one), so the server's event loop keeps serving
+every page; results come back to the document with
+``add_next_tick_callback``, the Bokeh server's thread-safe way in.  A render
+shows a coarse preview first (every 8th pixel), then fills in rows.
+Downloads are made on their own thread.  The browser's history is kept by
+the page itself (a pan, zoom or new window is a history entry; Back and
+Forward restore the view).
 """
 
 from __future__ import annotations
 
+import asyncio
 import html
 import io
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 from functools import partial
+from urllib.parse import parse_qs
 
 import numpy as np
 import panel as pn
@@ -25,6 +33,9 @@ from bokeh.events import RangesUpdate, Tap
 from bokeh.models import (
     ColorBar,
     ColumnDataSource,
+    CustomJS,
+    Div,
+    CustomJSHover,
     FixedTicker,
     HoverTool,
     Legend,
@@ -37,15 +48,22 @@ from bokeh.plotting import figure
 from panel.io.state import set_curdoc
 
 from .export import export_name, view_netcdf, view_png
+from .scheduler import Scheduler
 from .view import (
     DEFAULT_VIEW,
+    FIELDS,
     MAX_ITER_LIMIT,
+    MOTION_COLOR_VARS,
+    NO_SLIDING_COLOR,
+    NO_SLIDING_LABEL,
+    NOT_COMPUTED_COLOR,
+    OVERLAYS,
+    SLIDES_COLOR,
     U_LIMIT,
-    Cancelled,
     View,
     check_view,
     color_key,
-    compute_view,
+    format_number,
     format_window,
     has_color,
     orbit_along_u,
@@ -54,71 +72,163 @@ from .view import (
     parse_window,
     pixel_of,
     point_details,
+    preview_rgba,
+    render_slices,
     shade,
+    tidy,
     view_url_query,
+    window_digits,
 )
 
-__all__ = ["Explorer", "create_app", "warm_up"]
+__all__ = ["Explorer", "create_app", "warm_up", "SCHEDULER"]
 
-# One worker for every session: each numba kernel already uses all cores, and
-# numba's fallback threading layer (workqueue) must not be entered from two
-# threads at once.
-_EXECUTOR = ThreadPoolExecutor(max_workers=1, thread_name_prefix="stairbounce-explorer")
+SCHEDULER = Scheduler()
+"""The one scheduler every session of this process shares."""
 
-_COLOR_OPTIONS = {
-    "word length": "word_length",
-    "period (steps)": "period",
-    "impacts per period": "impacts",
-    "non-zero letters (jumps)": "jumps",
-    "status (slides or not)": "status",
-    "<k>, impacts per step (non-sliding motion)": "k_mean",
-    "lambda_1 (non-sliding motion)": "lyap1",
-}
+# downloads (matplotlib, netCDF) run here, off the event loop and off the
+# scheduler (they use no numba kernel)
+_EXPORTS = ThreadPoolExecutor(max_workers=1, thread_name_prefix="stairbounce-export")
+
+# set once the compiled kernels are loaded (warm_up)
+_WARM = threading.Event()
+
+# least time between two preview pictures of one render sent to the browser,
+# and their largest side in pixels (a preview is subsampled to it: a 1000 x
+# 1000 preview would be 4 MB on the websocket, shared by every session)
+_PREVIEW_EVERY = 1.0
+_PREVIEW_SIDE = 300
+
+_COLOR_OPTIONS = {menu: var for var, (menu, _, _) in FIELDS.items()}
 _OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bound, Cor. 2.1": "no_sliding"}
+_OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u = (1-e)/(2\u221a(2e)), Cor. 2.1"}
+
+# the longest trajectory drawn for a tap, in steps (one full period when shorter)
+MAX_TRAJECTORY_STEPS = 2000
 
 _CSS = """
-.sb-status { font-family: monospace; font-size: 13px; }
-.sb-point table td { padding: 1px 8px 1px 0; vertical-align: top; }
+.sb-status { font-family: monospace; font-size: 13px; min-height: 2.6em; }
+.sb-point { font-size: 13px; }
 .sb-word { font-family: monospace; font-size: 15px; font-weight: bold; }
 """
+
+# The address bar is written by the page itself: Panel's Location pushes a
+# history entry on every change and ignores Back/Forward.  Two models that are
+# never shown carry it: ``out.text`` is "push ?query" or "replace ?query"
+# (server -> browser); a Back/Forward sets ``back.text`` to "<time> ?query"
+# (browser -> server), which the server turns back into the view.
+_HISTORY_JS = """
+if (!window.__sb_popstate) {
+  window.__sb_popstate = true;
+  window.addEventListener('popstate', () => {
+    back.text = String(Date.now()) + ' ' + window.location.search;
+  });
+}
+const sp = out.text.indexOf(' ');
+const mode = out.text.slice(0, sp), query = out.text.slice(sp + 1);
+if (window.location.search !== query) {
+  const url = window.location.pathname + query + window.location.hash;
+  if (mode === 'push') window.history.pushState({}, '', url);
+  else window.history.replaceState({}, '', url);
+}
+"""
+
+_HOVER_VALUE_JS = """
+if (value == null || Number.isNaN(value) || value < -1) return 'computing';
+return value < 0 ? 'none within max_iter' : String(value);
+"""
+
+# a motion field: NaN not computed yet, infinite where the orbit slides
+_HOVER_MOTION_JS = """
+if (value == null || Number.isNaN(value)) return 'computing';
+if (!Number.isFinite(value)) return 'slides';
+return value.toPrecision(5);
+"""
+
+
+def _plural(n, word):
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"
+
+
+def _bar_key(var):
+    """The colour bar's key: the variable's classes, then white for pixels
+    without a periodic sliding solution within max_iter (a motion field's
+    key has no white: its first class, grey, is "the orbit slides")."""
+    key = color_key(var)
+    if var in MOTION_COLOR_VARS or NO_SLIDING_COLOR in key.colors:  # "status" has white already
+        return key
+    return replace(key, colors=key.colors + (NO_SLIDING_COLOR,), labels=key.labels + (NO_SLIDING_LABEL,))
+
+
+def _bar_settings(var):
+    """Palette, range, ticks and labels of the colour bar of ``var``."""
+    key = _bar_key(var)
+    n = len(key.colors)
+    return (dict(palette=list(key.colors), low=-0.5, high=n - 0.5),
+            dict(title=key.title, ticker=FixedTicker(ticks=key.ticks),
+                 major_label_overrides={i: s for i, s in enumerate(key.labels)}))
+
+
+def _key_note(var):
+    """The line under the map saying what white and grey mean."""
+    if var in MOTION_COLOR_VARS:
+        what = (f"grey ({SLIDES_COLOR}): the orbit of (1, 0) slides within 2 max_iter steps "
+                "(no non-sliding motion)")
+    else:
+        what = "white: no periodic sliding solution within max_iter"
+    return (f'<span style="font-size:12px">{what}; '
+            f'grey ({NOT_COMPUTED_COLOR}): not computed yet</span>')
+
+
+def _placeholder(var):
+    """The hover value of a picture not computed yet."""
+    return np.full((1, 1), np.nan, np.float32) if var in MOTION_COLOR_VARS else np.full((1, 1), -2, np.int32)
 
 
 class Explorer:
     """The widgets, figures and render pipeline of one browser session."""
 
-    def __init__(self, view: View = DEFAULT_VIEW, messages=(), executor=_EXECUTOR):
+    def __init__(self, view: View = DEFAULT_VIEW, messages=(), scheduler: Scheduler | None = None):
         self.view = view  # what is asked for
         self.shown: View | None = None  # what the image shows
         self.ds = None
-        self._executor = executor
+        self._sched = SCHEDULER if scheduler is None else scheduler
         self._doc = pn.state.curdoc
         self._gen = 0
-        self._running = False
-        self._pending: View | None = None
         self._tap_gen = 0
         self._syncing = False
+        self._closed = False
+        self._connected = False
         self._status_text, self._status_level, self._error_text = "", "info", ""
 
         self._build_map()
         self._build_point_figures()
         self._build_widgets(messages)
-        # a flex box wraps the tap panel below the map when the window is narrow
+        self.history_out, self.history_back = Div(text="", visible=False), Div(text="", visible=False)
+        self.history_out.js_on_change(
+            "text", CustomJS(args=dict(out=self.history_out, back=self.history_back), code=_HISTORY_JS))
+        self.history_back.on_change("text", self._locked_bokeh(self._on_popstate))
+        # referenced from the map, the two models are in the page's document
+        self.map_fig.tags = [self.history_out, self.history_back]
+        # the status and the tap's word sit above the map, so a laptop screen
+        # (1280 x 720) shows them without scrolling; a flex box wraps the
+        # trajectory and orbit diagram below the map when the window is narrow
         self.layout = pn.FlexBox(
             pn.Column(
                 pn.pane.Markdown(
                     "## stairbounce explorer\nPeriodic sliding solutions of a ball bouncing down "
-                    "a staircase (Campos, Romero-Valles, Torres). Scroll to zoom, drag to pan, "
-                    "tap a point for its word, trajectory and orbit diagram.",
-                    width=300,
+                    "a staircase. Scroll to zoom, drag to pan, tap a point for its orbit; "
+                    "Back undoes a zoom.",
+                    width=290, margin=(0, 10),
                 ),
                 self.color, self.max_iter, pn.Row(self.width_in, self.height_in),
-                self.e_window, self.u_window, self.overlays, self.fig4_button,
+                self.e_window, self.u_window, pn.Row(self.go_button, self.fig4_button),
+                self.overlays,
                 pn.Row(self.png_button, self.nc_button),
                 self.url_messages,
-                width=320,
+                width=310,
             ),
-            pn.Column(pn.pane.Bokeh(self.map_fig), self.status),
-            pn.Column(self.point_pane, pn.pane.Bokeh(self.traj_fig), pn.pane.Bokeh(self.orbit_fig),
+            pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note),
+            pn.Column(pn.pane.Bokeh(self.traj_fig), pn.pane.Bokeh(self.orbit_fig),
                       pn.pane.Bokeh(self.section_fig)),
             flex_wrap="wrap",
             align_items="flex-start",
@@ -142,36 +252,40 @@ class Explorer:
             x_axis_label="e (restitution coefficient)",
             y_axis_label="u (horizontal speed)",
             title="periodic sliding solutions in the (e, u) plane",
+            min_border_left=70,
         )
         fig.toolbar.logo = None
-        fig.background_fill_color = "#f4f4f4"
+        # not yet computed: grey, so it is not mistaken for white (no sliding)
+        fig.background_fill_color = NOT_COMPUTED_COLOR
         fig.xgrid.visible = fig.ygrid.visible = False
         self.img_src = ColumnDataSource(
-            dict(image=[np.zeros((1, 1), np.uint32)], x=[v.e_lo], y=[v.u_lo],
-                 dw=[v.e_hi - v.e_lo], dh=[v.u_hi - v.u_lo])
+            dict(image=[np.zeros((1, 1), np.uint32)], val=[_placeholder(v.color)],
+                 x=[v.e_lo], y=[v.u_lo], dw=[v.e_hi - v.e_lo], dh=[v.u_hi - v.u_lo])
         )
         img = fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.img_src)
-        fig.add_tools(HoverTool(renderers=[img], tooltips=[("e", "$x{0.0000000}"), ("u", "$y{0.0000000}")]))
+        self.hover = HoverTool(renderers=[img], formatters={
+            "$x": "printf", "$y": "printf", "@val": CustomJSHover(code=_HOVER_VALUE_JS)})
+        fig.add_tools(self.hover)
+        self._set_hover(v)
         self.tongue_src = ColumnDataSource(dict(xs=[], ys=[]))
         self.bound_src = ColumnDataSource(dict(xs=[], ys=[]))
         # grey outlines show on the black tongues and on the white no-sliding region alike
-        tongues = fig.multi_line("xs", "ys", source=self.tongue_src, line_color="#9a9a9a", line_width=1)
+        tongues = fig.multi_line("xs", "ys", source=self.tongue_src, line_color="#7a7a7a", line_width=1)
         bound = fig.multi_line("xs", "ys", source=self.bound_src, line_color="#d62728", line_width=2,
                                line_dash="dashed")
-        fig.add_layout(Legend(items=[
-            LegendItem(label="tongues (n, 0^\u221e), Thm 3.1", renderers=[tongues]),
-            LegendItem(label="u = (1-e)/(2\u221a(2e)), Cor. 2.1", renderers=[bound]),
-        ], orientation="horizontal", label_text_font_size="9pt", border_line_alpha=0), "below")
+        self._overlay_items = {
+            "tongues": LegendItem(label=_OVERLAY_LEGEND["tongues"], renderers=[tongues]),
+            "no_sliding": LegendItem(label=_OVERLAY_LEGEND["no_sliding"], renderers=[bound]),
+        }
+        self.legend = Legend(items=[], orientation="horizontal", label_text_font_size="9pt",
+                             border_line_alpha=0)
+        fig.add_layout(self.legend, "below")
         self.point_src = ColumnDataSource(dict(x=[], y=[]))
         fig.scatter("x", "y", source=self.point_src, marker="circle_cross", size=14,
                     fill_alpha=0.0, line_color="#ff00ff", line_width=2)
-        key = color_key(v.color)
-        self.mapper = LinearColorMapper(palette=list(key.colors), low=-0.5, high=len(key.colors) - 0.5)
-        self.colorbar = ColorBar(
-            color_mapper=self.mapper, title=key.title, width=14,
-            ticker=FixedTicker(ticks=key.ticks),
-            major_label_overrides={i: s for i, s in enumerate(key.labels)},
-        )
+        mapper, bar = _bar_settings(v.color)
+        self.mapper = LinearColorMapper(**mapper)
+        self.colorbar = ColorBar(color_mapper=self.mapper, width=14, bar_line_color="black", **bar)
         fig.add_layout(self.colorbar, "right")
         fig.on_event(RangesUpdate, self._on_ranges)
         fig.on_event(Tap, self._on_tap)
@@ -196,9 +310,11 @@ class Explorer:
                   line_color="black", legend_label="accumulation")
         t.legend.location = "top_right"
         t.legend.label_text_font_size = "8pt"
+        t.legend.visible = False  # shown with the first tap
         self.traj_fig = t
 
-        o = figure(height=300, width=560, x_range=Range1d(0, 1.5), y_range=Range1d(0, 3), tools="pan,wheel_zoom,box_zoom,reset",
+        o = figure(height=300, width=560, x_range=Range1d(0, 1.5), y_range=Range1d(0, 3),
+                   tools="pan,wheel_zoom,box_zoom,reset",
                    title="orbit diagram along u: tap the map", output_backend="webgl",
                    x_axis_label="u", y_axis_label="y at the step edges")
         o.toolbar.logo = None
@@ -229,31 +345,38 @@ class Explorer:
                                              css_classes=["sb-height"])
         self.e_window = pn.widgets.TextInput(label="e window (LO:HI)", value=format_window(v.e_lo, v.e_hi),
                                              width=280, css_classes=["sb-e-window"])
-        self.u_window = pn.widgets.TextInput(label="u window (LO:HI)", value=format_window(v.u_lo, v.u_hi),
+        self.u_window = pn.widgets.TextInput(label="u window (LO:HI), Enter applies both",
+                                             value=format_window(v.u_lo, v.u_hi),
                                              width=280, css_classes=["sb-u-window"])
+        self.go_button = pn.widgets.Button(label="Apply window", width=110, css_classes=["sb-go"])
         self.overlays = pn.widgets.CheckBoxGroup(
             options=_OVERLAY_OPTIONS, value=list(v.overlays), inline=False, width=280,
             css_classes=["sb-overlays"])
-        self.fig4_button = pn.widgets.Button(label="Figure 4 window (e 0:1, u 0:1.5)", width=280)
+        self.fig4_button = pn.widgets.Button(label="Figure 4 window", width=160, css_classes=["sb-fig4"])
+        # disabled until there is a view to download
         self.png_button = pn.widgets.FileDownload(
             callback=self._png, filename="stairbounce_view.png", label="Download PNG",
-            color="primary", width=135, embed=False)
+            color="primary", width=135, embed=False, disabled=True, css_classes=["sb-png"])
         self.nc_button = pn.widgets.FileDownload(
             callback=self._netcdf, filename="stairbounce_view.nc", label="Download .nc",
-            color="primary", width=135, embed=False)
-        self.status = pn.pane.HTML("", css_classes=["sb-status"], width=600)
+            color="primary", width=135, embed=False, disabled=True, css_classes=["sb-nc"])
+        self.status = pn.pane.HTML("", css_classes=["sb-status"], width=700, margin=(0, 5))
         self.url_messages = pn.pane.Alert(
             '<div class="sb-url-text" style="overflow-wrap: anywhere">' + "<br>".join(html.escape(m) for m in messages) + "</div>",
             alert_type="warning",
             visible=bool(messages), width=290, margin=(10, 10), css_classes=["sb-url-messages"])
         self.point_pane = pn.pane.HTML(
-            "<i>Tap a point of the map.</i>", css_classes=["sb-point"], width=560)
+            "<i>Tap a point of the map for its word; its trajectory and orbit diagram follow.</i>",
+            css_classes=["sb-point"], width=700, margin=(0, 5))
+        self.key_note = pn.pane.HTML(_key_note(v.color), css_classes=["sb-key-note"], width=700)
 
         self.color.param.watch(self._locked(self._on_color), "value")
         for w in (self.max_iter, self.width_in, self.height_in):
             w.param.watch(self._locked(self._on_settings), "value")
+        # one apply for both windows: Enter in either box, or the button
         for w in (self.e_window, self.u_window):
-            w.param.watch(self._locked(self._on_window_text), "value")
+            w.param.watch(self._locked(self._on_window_text), "enter_pressed")
+        self.go_button.on_click(self._locked(self._on_window_text))
         self.overlays.param.watch(self._locked(self._on_overlays), "value")
         self.fig4_button.on_click(self._locked(self._on_fig4))
 
@@ -267,6 +390,8 @@ class Explorer:
         """
 
         def run(*args):
+            if self._syncing:  # the page itself is setting the widgets (watchers fire now)
+                return
             if self._doc is not None and self._doc.session_context is not None:
                 self._doc.add_next_tick_callback(partial(self._in_doc, fn, *args))
             else:  # no server (tests)
@@ -274,24 +399,38 @@ class Explorer:
 
         return run
 
+    def _locked_bokeh(self, fn):
+        """A Bokeh property callback ``(attr, old, new)``; it holds the lock already."""
+        return lambda attr, old, new: self._in_doc(fn, new) if self._doc is not None else fn(new)
+
     # ------------------------------------------------------------ interaction
 
     def start(self):
         """First render (and the URL's point) once the page is connected."""
-        self._sync_url()
+        self._connected = True
+        self._set_url("replace")
         self._draw_overlays(self.view)
-        self._request(self.view)
+        self._request(self.view, history=None)
         if self.view.point is not None:
             self._request_point(*self.view.point)
 
     def _message(self, text, level="info"):
         """Status line: the render's state (info, busy) and, on a line of its
-        own, the last refusal (error), kept until a request is accepted so a
-        render finishing meanwhile does not hide it."""
+        own, the last refusal (error), kept until a request is accepted or
+        the input is put back to the view shown, so a render finishing
+        meanwhile does not hide it."""
         if level == "error":
             self._error_text = text
         else:
             self._status_text, self._status_level = text, level
+        self._show_status()
+
+    def _clear_error(self):
+        if self._error_text:
+            self._error_text = ""
+            self._show_status()
+
+    def _show_status(self):
         colours = {"info": "#1a5e1a", "busy": "#555555", "error": "#b00020"}
         parts = [(self._status_level, self._status_text), ("error", self._error_text)]
         self.status.object = "<br>".join(
@@ -299,38 +438,63 @@ class Explorer:
             for lv, t in parts if t
         )
 
+    def _refuse(self, exc):
+        """A refused request: say why, and put widgets and plot back to the view."""
+        self._message(str(exc), "error")
+        self._sync_widgets(self.view)
+        self._set_ranges(self.view)
+
     def _on_ranges(self, event):
         if None in (event.x0, event.x1, event.y0, event.y1):
             return
-        new = self.view.with_window(event.x0, event.x1, event.y0, event.y1)
-        if new != self.view:
-            self._request(new)
+        # Bokeh's ranges carry float noise in their last bits (0.9200000000000002):
+        # the shortest decimals within a thousandth of a pixel
+        v = self.view
+        tol_e = 1e-3 * abs(event.x1 - event.x0) / v.width
+        tol_u = 1e-3 * abs(event.y1 - event.y0) / v.height
+        new = v.with_window(tidy(event.x0, tol_e), tidy(event.x1, tol_e),
+                            tidy(event.y0, tol_u), tidy(event.y1, tol_u))
+        if new == v:
+            self._clear_error()  # e.g. Reset back to the view shown
+            return
+        self._request(new)
 
-    def _on_window_text(self, _event):
+    def _on_window_text(self, _event=None):
         if self._syncing:
             return
+
+        def typed(w):
+            return w.value_input if w.value_input not in (None, "") else w.value
+
         try:
-            e_lo, e_hi = parse_window("e window", self.e_window.value, 1.0)
-            u_lo, u_hi = parse_window("u window", self.u_window.value, U_LIMIT)
+            e_lo, e_hi = parse_window("e window", typed(self.e_window), 1.0)
+            u_lo, u_hi = parse_window("u window", typed(self.u_window), U_LIMIT)
         except ValueError as exc:
-            self._message(str(exc), "error")
+            self._refuse(exc)
             return
         self._goto(self.view.with_window(e_lo, e_hi, u_lo, u_hi))
 
-    def _on_fig4(self, _event):
+    def _on_fig4(self, _event=None):
         self._goto(self.view.with_window(DEFAULT_VIEW.e_lo, DEFAULT_VIEW.e_hi,
                                          DEFAULT_VIEW.u_lo, DEFAULT_VIEW.u_hi))
 
-    def _goto(self, view):
+    def _set_ranges(self, view):
+        self.map_fig.x_range.update(start=view.e_lo, end=view.e_hi)
+        self.map_fig.y_range.update(start=view.u_lo, end=view.u_hi)
+
+    def _goto(self, view, history="push"):
         """Move the plot's ranges (the image follows when computed)."""
+        if view == self.view:
+            self._clear_error()
+            self._sync_widgets(view)
+            return
         try:
             check_view(view)
         except ValueError as exc:
-            self._message(str(exc), "error")
+            self._refuse(exc)
             return
-        self.map_fig.x_range.update(start=view.e_lo, end=view.e_hi)
-        self.map_fig.y_range.update(start=view.u_lo, end=view.u_hi)
-        self._request(view)
+        self._set_ranges(view)
+        self._request(view, history=history)
 
     def _on_settings(self, _event):
         if self._syncing:
@@ -339,99 +503,170 @@ class Explorer:
             new = replace(self.view, max_iter=int(self.max_iter.value), width=int(self.width_in.value),
                           height=int(self.height_in.value))
         except (TypeError, ValueError):
-            self._message("max_iter, width and height must be integers", "error")
+            self._refuse(ValueError("max_iter, width and height must be integers"))
             return
-        if new != self.view:
-            self._request(new)
+        if new == self.view:
+            self._clear_error()
+            return
+        self._request(new)
+
+    def _apply_color(self, color):
+        mapper, bar = _bar_settings(color)
+        self.mapper.update(**mapper)
+        # the page's colour bar keeps drawing the ticks of the ticker it was
+        # built with: a new FixedTicker is ignored there, new ticks on it are not
+        self.colorbar.ticker.ticks = bar.pop("ticker").ticks
+        self.colorbar.update(**bar)
+        self.key_note.object = _key_note(color)
+        self.view = replace(self.view, color=color)
+        if self.ds is not None and self.shown is not None and has_color(self.ds, color):
+            self.shown = replace(self.shown, color=color)
+            self.img_src.patch({"image": [(0, shade(self.ds, color))], "val": [(0, _values(self.ds, color))]})
+        elif color in MOTION_COLOR_VARS:
+            # the motion fields are computed on demand: a render of the same
+            # window with them (superseding one in progress without them)
+            self._request(self.view, history=None)
+        self._set_hover(self.shown or self.view)
 
     def _on_color(self, _event):
-        new = replace(self.view, color=self.color.value)
-        key = color_key(new.color)
-        self.mapper.update(palette=list(key.colors), low=-0.5, high=len(key.colors) - 0.5)
-        self.colorbar.update(title=key.title, ticker=FixedTicker(ticks=key.ticks),
-                             major_label_overrides={i: s for i, s in enumerate(key.labels)})
-        self.view = new
-        if self.ds is not None and self.shown is not None and has_color(self.ds, new.color):
-            self.shown = replace(self.shown, color=new.color)
-            self.img_src.patch({"image": [(0, shade(self.ds, new.color))]})
-        elif self.ds is not None:
-            self._request(new)  # the motion fields are computed on demand
-        self._sync_url()
+        if self._syncing or self.color.value == self.view.color:
+            return
+        self._apply_color(self.color.value)
+        self._set_url("replace")
 
     def _on_overlays(self, _event):
-        self.view = replace(self.view, overlays=tuple(o for o in ("tongues", "no_sliding")
-                                                      if o in self.overlays.value))
+        if self._syncing:
+            return
+        self.view = replace(self.view, overlays=tuple(o for o in OVERLAYS if o in self.overlays.value))
         self._draw_overlays(self.view)
-        self._sync_url()
+        self._set_url("replace")
 
     def _draw_overlays(self, view):
         curves = overlay_curves(view)
         for name, src in (("tongues", self.tongue_src), ("no_sliding", self.bound_src)):
             xs, ys = curves[name] if name in view.overlays else ([], [])
             src.data = dict(xs=list(xs), ys=list(ys))
+        self.legend.items = [self._overlay_items[n] for n in OVERLAYS if n in view.overlays]
+        self.legend.visible = bool(view.overlays)
 
-    def _sync_url(self):
-        if pn.state.location is not None:
-            pn.state.location.search = view_url_query(self.view)
+    def _set_url(self, mode):
+        """Address bar := the view's query; ``push`` makes a history entry."""
+        self.history_out.text = f"{mode} {view_url_query(self.view)}"
+
+    def _on_popstate(self, popped):
+        """Back or Forward: show the view of the address bar's query."""
+        query = popped.partition(" ")[2]
+        view, _messages = parse_query({k: v[-1] for k, v in parse_qs(query.lstrip("?")).items()})
+        self._syncing = True
+        try:
+            self.color.value = view.color
+            self.overlays.value = list(view.overlays)
+        finally:
+            self._syncing = False
+        if view.color != self.view.color:
+            self._apply_color(view.color)
+        if view.overlays != self.view.overlays:
+            self.view = replace(self.view, overlays=view.overlays)
+            self._draw_overlays(self.view)
+        if view.point is not None and view.point != self.view.point:
+            self.view = replace(self.view, point=view.point)
+            self._request_point(*view.point)
+        self._goto(replace(view, point=self.view.point), history=None)
+        self._set_url("replace")  # the address bar already shows it: a no-op in the browser
 
     def _sync_widgets(self, view):
         self._syncing = True
         try:
-            self.e_window.value = format_window(view.e_lo, view.e_hi)
-            self.u_window.value = format_window(view.u_lo, view.u_hi)
+            for w, text in ((self.e_window, format_window(view.e_lo, view.e_hi)),
+                            (self.u_window, format_window(view.u_lo, view.u_hi))):
+                w.value = text
+                w.value_input = text
             self.max_iter.value = view.max_iter
             self.width_in.value = view.width
             self.height_in.value = view.height
         finally:
             self._syncing = False
 
+    def _set_hover(self, view):
+        """Hover: e and u to a tenth of a pixel, and the colouring variable's value."""
+        de = window_digits(view.e_lo, view.e_hi, view.width)
+        du = window_digits(view.u_lo, view.u_hi, view.height)
+        self.hover.tooltips = [("e", f"$x{{%.{de}g}}"), ("u", f"$y{{%.{du}g}}"),
+                               (color_key(view.color).title, "@val{custom}")]
+        code = _HOVER_MOTION_JS if view.color in MOTION_COLOR_VARS else _HOVER_VALUE_JS
+        if self.hover.formatters["@val"].code != code:
+            self.hover.formatters = {**self.hover.formatters, "@val": CustomJSHover(code=code)}
+
     # --------------------------------------------------------------- renders
 
-    def _request(self, view: View):
+    def _request(self, view: View, history="push"):
         """Ask for a render of ``view``: refused at once when over budget, else
-        queued behind (and cancelling) the one in progress."""
+        handed to the scheduler (superseding this session's pending render)."""
         try:
             check_view(view)
         except ValueError as exc:
-            self._message(str(exc), "error")
+            self._refuse(exc)
             return
         self.view = view
         self._error_text = ""
         self._sync_widgets(view)
-        self._sync_url()
+        if history is not None:
+            self._set_url(history)
         self._draw_overlays(view)
         if (view.width, view.height) != (self.map_fig.frame_width, self.map_fig.frame_height):
             self.map_fig.update(frame_width=view.width, frame_height=view.height)
         self._gen += 1
-        self._pending = view
-        self._message(f"computing {view.width} x {view.height} pixels, max_iter {view.max_iter} ...",
-                      "busy")
-        if not self._running:
-            self._start()
-
-    def _start(self):
-        view, self._pending = self._pending, None
         gen = self._gen
-        self._running = True
-        self._executor.submit(self._work, gen, view)
+        job = self._sched.submit(
+            self, "render", self._render_work(view),
+            on_slice=lambda value: self._next_tick(self._show_partial, gen, view, value),
+            on_done=lambda result, error, job: self._next_tick(self._finish, gen, view, result, error, job),
+            alive=self._alive,
+        )
+        if gen == self._gen and job.started is False:
+            self._message(self._waiting_text(view, job), "busy")
 
-    def _work(self, gen, view):
-        """On the worker thread: compute, then hand the result to the document."""
-        t0 = time.perf_counter()
+    def _waiting_text(self, view, job):
+        what = f"{view.width} x {view.height} pixels, max_iter {view.max_iter}"
+        if not _WARM.is_set() and self._sched is SCHEDULER:
+            return (f"queued ({what}): the server is loading its compiled kernels (the first start "
+                    "after an install compiles them, up to a minute)")
+        n = self._sched.ahead_of(job)
+        if n:
+            return (f"queued ({what}): taking turns with {_plural(n, 'request')} of other "
+                    "sessions, cheap ones first")
+        return f"computing {what} ..."
 
-        def progress(done, total):
-            if done < total:
-                self._next_tick(self._show_progress, gen, view, done, total)
+    def _render_work(self, view):
+        """The render as scheduler slices: the scan's slices, with a preview
+        picture at most every _PREVIEW_EVERY seconds; returns (ds, rgba, values)."""
+        slices = render_slices(view)
+        last = -np.inf
+        while True:
+            try:
+                part = next(slices)
+            except StopIteration as stop:
+                ds = stop.value
+                break
+            now = time.perf_counter()
+            if now - last >= _PREVIEW_EVERY:
+                last = now
+                k = -(-max(view.width, view.height) // _PREVIEW_SIDE)
+                yield part.fraction, preview_rgba(part, view.color)[k // 2 :: k, k // 2 :: k]
+            else:
+                yield part.fraction, None
+        return ds, shade(ds, view.color), _values(ds, view.color)
 
-        try:
-            ds = compute_view(view, cancelled=lambda: gen != self._gen, progress=progress)
-            rgba = shade(ds, view.color)
-            result = (ds, rgba, time.perf_counter() - t0)
-        except Cancelled:
-            result = None
-        except Exception as exc:  # shown on the page; the server keeps going
-            result = exc
-        self._next_tick(self._finish, gen, view, result)
+    def _alive(self):
+        """False once the page is gone: its queued work is dropped at once,
+        without waiting for Bokeh to destroy the session (15 s or more)."""
+        if self._closed:
+            return False
+        ctx = self._doc.session_context if self._doc is not None else None
+        session = getattr(ctx, "_session", None)
+        if session is None or not self._connected:
+            return True
+        return session.connection_count > 0
 
     def _next_tick(self, fn, *args):
         if self._doc is None:  # no server (tests): run here
@@ -444,39 +679,57 @@ class Explorer:
 
     def close(self):
         """The session ended: cancel what is queued or running for it."""
+        self._closed = True
         self._gen += 1
         self._tap_gen += 1
-        self._pending = None
+        self._sched.cancel(self)
 
     def _in_doc(self, fn, *args):
         with set_curdoc(self._doc):
             fn(*args)
 
-    def _show_progress(self, gen, view, done, total):
-        if gen == self._gen:
-            self._message(f"computing {view.width} x {view.height} pixels, max_iter "
-                          f"{view.max_iter} ... {100 * done // total}%", "busy")
+    def _show_partial(self, gen, view, value):
+        if gen != self._gen:
+            return
+        fraction, rgba = value
+        if rgba is not None:
+            self._show_image(view, rgba, _placeholder(view.color))
+        self._message(f"computing {view.width} x {view.height} pixels, max_iter {view.max_iter} ... "
+                      f"{int(100 * fraction)}%" + (" (coarse preview, refining)" if fraction < 1 else ""),
+                      "busy")
 
-    def _finish(self, gen, view, result):
-        self._running = False
-        if isinstance(result, Exception):
-            self._message(f"render failed: {result}", "error")
-        elif result is not None and gen == self._gen:
-            ds, rgba, seconds = result
-            self.ds, self.shown = ds, view
-            self.img_src.data = dict(image=[rgba], x=[view.e_lo], y=[view.u_lo],
-                                     dw=[view.e_hi - view.e_lo], dh=[view.u_hi - view.u_lo])
-            frac = float((ds["status"].values == 0).mean())
-            self._message(
-                f"e {view.e_lo:.12g} to {view.e_hi:.12g}, u {view.u_lo:.12g} to {view.u_hi:.12g}: "
-                f"{view.width} x {view.height} pixels, max_iter {view.max_iter}, "
-                f"{100 * frac:.1f}% with a periodic sliding solution, computed in {seconds:.2f} s",
-                "info",
-            )
-            self.png_button.filename = export_name(view, ".png")
-            self.nc_button.filename = export_name(view, ".nc")
-        if self._pending is not None:
-            self._start()
+    def _show_image(self, view, rgba, values):
+        self.img_src.data = dict(image=[rgba], val=[values], x=[view.e_lo], y=[view.u_lo],
+                                 dw=[view.e_hi - view.e_lo], dh=[view.u_hi - view.u_lo])
+
+    def _finish(self, gen, view, result, error, job):
+        if gen != self._gen:
+            return
+        if error is not None:
+            self._message(f"render failed: {error}", "error")
+            return
+        ds, rgba, values = result
+        if self.view.color != view.color and has_color(ds, self.view.color):  # recoloured meanwhile
+            view = replace(view, color=self.view.color)
+            rgba, values = shade(ds, view.color), _values(ds, view.color)
+        self.ds, self.shown = ds, view
+        self._show_image(view, rgba, values)
+        self._set_hover(view)
+        frac = float((ds["status"].values == 0).mean())
+        de = window_digits(view.e_lo, view.e_hi, view.width)
+        du = window_digits(view.u_lo, view.u_hi, view.height)
+        waited = time.monotonic() - job.submitted - job.attained
+        self._message(
+            f"e {format_number(view.e_lo, de)} to {format_number(view.e_hi, de)}, "
+            f"u {format_number(view.u_lo, du)} to {format_number(view.u_hi, du)}: "
+            f"{view.width} x {view.height} pixels, max_iter {view.max_iter}, "
+            f"{100 * frac:.1f}% with a periodic sliding solution, computed in {job.attained:.2f} s"
+            + (f" (after {waited:.1f} s in the queue)" if waited >= 0.5 else ""),
+            "info",
+        )
+        self.png_button.filename = export_name(view, ".png")
+        self.nc_button.filename = export_name(view, ".nc")
+        self.png_button.disabled = self.nc_button.disabled = False
 
     # ------------------------------------------------------------------- tap
 
@@ -493,62 +746,52 @@ class Explorer:
             self._message(f"no point at e = {e:.6g}, u = {u:.6g}: need 0 <= e < 1, 0 < u <= {U_LIMIT:g}",
                           "error")
             return
+        self._clear_error()
         self.view = replace(self.view, point=(e, u))
-        self._sync_url()
+        self._set_url("replace")
         self._request_point(e, u)
 
     def _request_point(self, e, u):
         self._tap_gen += 1
         gen = self._tap_gen
+        view = self.view
         self.point_src.data = dict(x=[e], y=[u])
         self.point_pane.object = f"<i>computing the orbit at e = {e!r}, u = {u!r} ...</i>"
-        self._executor.submit(self._point_work, gen, e, u, self.view)
+        self._sched.submit(
+            self, "point", self._point_work(e, u, view),
+            on_slice=lambda d: self._next_tick(self._show_point, gen, view, d),
+            on_done=lambda result, error, _job: self._next_tick(self._show_orbit, gen, view, result, error),
+            alive=self._alive,
+        )
 
-    def _point_work(self, gen, e, u, view):
-        try:
-            details = point_details(e, u, view.max_iter)
-            orbit = orbit_along_u(e, max(view.u_lo, 0.0), view.u_hi)
-            result = (details, orbit)
-        except Exception as exc:
-            result = exc
-        self._next_tick(self._show_point, gen, view, result)
+    def _point_work(self, e, u, view):
+        """Two slices: the word and trajectory (shown at once), then the orbit diagram."""
+        details = point_details(e, u, view.max_iter, max_steps=MAX_TRAJECTORY_STEPS)
+        yield details
+        return orbit_along_u(e, max(view.u_lo, 0.0), view.u_hi)
 
-    def _show_point(self, gen, view, result):
+    def _show_point(self, gen, view, d):
         if gen != self._tap_gen:
             return
-        if isinstance(result, Exception):
-            self.point_pane.object = f"<b>failed:</b> {html.escape(str(result))}"
-            return
-        d, orbit = result
         e, u, w = d["e"], d["u"], d["word"]
+        head = (f'e = <span class="sb-e">{e!r}</span>, u = <span class="sb-u">{u!r}</span>: ')
+        steps = d["steps"]
         if w is None:
-            rows = [("word", f"none: the orbit of (1, 0) does not slide within max_iter = "
-                             f"{view.max_iter} steps")]
-            title = f"trajectory from (1, 0), {d['steps']} steps (no sliding found)"
+            body = (f"no periodic sliding solution: the orbit of (1, 0) does not slide within "
+                    f"max_iter = {view.max_iter} steps")
+            title = f"trajectory from (1, 0), {_plural(steps, 'step')} (no sliding found)"
         else:
-            rows = [("word", f'<span class="sb-word">{html.escape(w.format())}</span>'),
-                    ("length", str(len(w))), ("period", f"{w.period} steps"),
-                    ("impacts", f"{w.impacts} per period (plus the accumulation)"),
-                    ("non-zero letters", str(w.jumps))]
-            title = f"trajectory from (1, 0), {d['steps']} steps (period {w.period})"
-        rows = [("e", f'<span class="sb-e">{e!r}</span>'), ("u", f'<span class="sb-u">{u!r}</span>')] + rows
-        m = d.get("motion")
-        if m is not None and not m["slides"]:
-            rows += [("&lt;k&gt;", f'<span class="sb-k">{m["k_mean"]:.6g}</span> impacts per step '
-                                   f'(halves differ by {m["k_err"]:.2g})'),
-                     ("mean jump", f'{m["jump_mean"]:.6g} steps per landing'),
-                     ("&lambda;<sub>1</sub>", f'{m["lyap1"]:+.2e} &plusmn; {m["lyap1_err"]:.1e} (0 exactly)'),
-                     ("&lambda;<sub>2</sub>", f'{m["lyap2"]:+.4e} = 2&lt;k&gt; log e')]
-        elif m is not None:
-            rows += [("motion", f'slides on step {m["slide_step"]} of 2 max_iter')]
+            body = (f'word <span class="sb-word">{html.escape(w.format())}</span>, length {len(w)}, '
+                    f"period {_plural(w.period, 'step')}, {_plural(w.impacts, 'impact')} per period "
+                    f"(plus the accumulation), {_plural(w.jumps, 'non-zero letter')}")
+            shown = "one full period" if steps >= w.period else f"first {steps} steps of the period"
+            title = f"trajectory from (1, 0), {_plural(steps, 'step')}: {shown} (period {w.period})"
+        self.point_pane.object = head + body + _motion_table(d.get("motion"))
         sec = d.get("section")
         self.section_src.data = dict(x=sec[0], y=sec[1]) if sec is not None else dict(x=[], y=[])
         self.section_fig.title.text = (f"Poincare section at e = {e:.6g}, u = {u:.6g}: last "
                                        f"{len(sec[0])} iterates from (1, 0)" if sec is not None else
                                        "Poincare section: none (the orbit slides)")
-        self.point_pane.object = "<table>" + "".join(
-            f"<tr><td><b>{k}</b></td><td>{v}</td></tr>" for k, v in rows) + "</table>"
-        steps = d["steps"]
         sx = np.repeat(np.arange(-1, steps + 1), 2)[1:].astype(float)
         sy = -np.repeat(np.arange(-1, steps + 1), 2)[:-1].astype(float)
         self.stairs_src.data = dict(x=sx, y=sy)
@@ -558,6 +801,15 @@ class Explorer:
         self.slide_src.data = dict(xs=[[a, b] for a, b, _ in d["slides"]],
                                    ys=[[y, y] for _, _, y in d["slides"]])
         self.traj_fig.title.text = title
+        self.traj_fig.legend.visible = True
+
+    def _show_orbit(self, gen, view, orbit, error):
+        if gen != self._tap_gen:
+            return
+        if error is not None:
+            self.point_pane.object = f"<b>failed:</b> {html.escape(str(error))}"
+            return
+        e, u = self.view.point if self.view.point is not None else (None, None)
         y = orbit["y"].values
         self.orbit_src.data = dict(x=np.repeat(orbit["u"].values, y.shape[1]), y=y.ravel())
         self.orbit_fig.x_range.update(start=float(orbit["u"].values[0]), end=float(orbit["u"].values[-1]))
@@ -566,33 +818,69 @@ class Explorer:
             lo, hi = float(finite.min()), float(finite.max())
             pad = 0.05 * (hi - lo) or 0.5
             self.orbit_fig.y_range.update(start=lo - pad, end=hi + pad)
-        self.orbit_marker.update(location=u, visible=True)
-        self.orbit_fig.title.text = f"orbit diagram at e = {e:.6g}, iterates 2001-2200 from (0.1, 0)"
+        if u is not None:
+            self.orbit_marker.update(location=u, visible=True)
+            self.orbit_fig.title.text = f"orbit diagram at e = {e:.6g}, iterates 2001-2200 from (0.1, 0)"
 
     # --------------------------------------------------------------- exports
 
-    def _png(self):
-        if self.ds is None:
-            raise ValueError("nothing computed yet")
-        return io.BytesIO(view_png(self.ds, self.shown))
+    async def _png(self):
+        """The PNG of the view shown, made on the export thread."""
+        ds, shown = self.ds, self.shown
+        data = await asyncio.wrap_future(_EXPORTS.submit(view_png, ds, shown))
+        return io.BytesIO(data)
 
-    def _netcdf(self):
-        if self.ds is None:
-            raise ValueError("nothing computed yet")
-        return io.BytesIO(view_netcdf(self.ds))
+    async def _netcdf(self):
+        ds = self.ds
+        data = await asyncio.wrap_future(_EXPORTS.submit(view_netcdf, ds))
+        return io.BytesIO(data)
 
 
-def warm_up(executor=_EXECUTOR):
-    """Load the compiled kernels on the worker thread before the first page
-    asks for them (numba's cache still takes a second or two to load)."""
+def _motion_table(m):
+    """The rows of a non-sliding point's motion (issue 13) under its word line:
+    <k>, the mean jump and the two Lyapunov exponents."""
+    if m is None:
+        return ""
+    if m["slides"]:
+        rows = [("motion", f'slides on step {m["slide_step"]} of 2 max_iter')]
+    else:
+        rows = [("&lt;k&gt;", f'<span class="sb-k">{m["k_mean"]:.6g}</span> impacts per step '
+                              f'(halves differ by {m["k_err"]:.2g})'),
+                ("mean jump", f'{m["jump_mean"]:.6g} steps per landing'),
+                ("&lambda;<sub>1</sub>", f'{m["lyap1"]:+.2e} &plusmn; {m["lyap1_err"]:.1e} (0 exactly)'),
+                ("&lambda;<sub>2</sub>", f'{m["lyap2"]:+.4e} = 2&lt;k&gt; log e')]
+    return '<table class="sb-motion">' + "".join(
+        f"<tr><td><b>{k}</b></td><td>{v}</td></tr>" for k, v in rows) + "</table>"
+
+
+def _values(ds, var):
+    """The colouring variable per pixel for the hover (-1: no sliding solution),
+    as int16 when it fits (half the bytes on the websocket); a motion field as
+    float32, infinite where the orbit slides."""
+    if var in MOTION_COLOR_VARS:
+        return np.where(ds["slide_step"].values > 0, np.inf, ds[var].values).astype(np.float32)
+    v = np.where(ds["status"].values == 0, ds[var].values, -1)
+    return v.astype(np.int16 if v.max(initial=0) < 2**15 else np.int32)
+
+
+def warm_up(scheduler: Scheduler | None = None):
+    """Load (or, on the first start after an install, compile) the kernels on
+    the scheduler's thread before any page needs them; returns a
+    :class:`threading.Event` set when done."""
+    sched = SCHEDULER if scheduler is None else scheduler
     tiny = replace(DEFAULT_VIEW, width=16, height=16, max_iter=10)
 
-    def run():
-        compute_view(tiny)
+    def work():
+        for _ in render_slices(tiny):
+            pass
         point_details(0.1, 0.75, 10)
         orbit_along_u(0.1, 0.5, 1.0, n=4, transient=2, keep=2)
+        yield
+        return None
 
-    return executor.submit(run)
+    _WARM.clear()
+    sched.submit("warm-up", "warm-up", work(), on_done=lambda result, error, _job: _WARM.set())
+    return _WARM
 
 
 def create_app():

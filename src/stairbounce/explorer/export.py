@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import plane
-from .view import View, classes, color_key, overlay_curves
+from .view import MOTION_COLOR_VARS, View, classes, color_key, overlay_curves
 
 __all__ = ["view_png", "view_netcdf", "export_name"]
 
@@ -34,11 +34,10 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     neighbour), axes in e and u, the colour key, the overlays of the view,
     the window and max_iter in the title.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    # the Figure API without pyplot: no global state, so the server can make
+    # PNGs on a thread of its own
     from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.figure import Figure
 
     key = color_key(view.color)
     idx = classes(ds, view.color).astype(float)
@@ -51,7 +50,7 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     k = max(1, math.ceil(450 / min(view.width, view.height)))
     w, h = view.width * k / dpi, view.height * k / dpi  # image size, inches
     fw, fh = w + 2.9, h + 1.4
-    fig = plt.figure(figsize=(fw, fh), dpi=dpi)
+    fig = Figure(figsize=(fw, fh), dpi=dpi)
     ax = fig.add_axes([1.0 / fw, 0.75 / fh, w / fw, h / fh])
     im = ax.imshow(idx, origin="lower", extent=(view.e_lo, view.e_hi, view.u_lo, view.u_hi),
                    aspect="auto", interpolation="nearest", cmap=cmap, norm=norm)
@@ -67,7 +66,8 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     ax.set_title(
         f"e in [{view.e_lo:.10g}, {view.e_hi:.10g}], u in [{view.u_lo:.10g}, {view.u_hi:.10g}]\n"
         f"{key.title}, max_iter {view.max_iter} "
-        + ("(grey: the orbit slides)" if key.labels[0] == "slides" else "(white: no sliding found)"),
+        + ("(grey: the orbit slides)" if view.color in MOTION_COLOR_VARS
+           else "(white: no periodic sliding solution within max_iter)"),
         fontsize="small",
     )
     cax = fig.add_axes([(w + 1.2) / fw, 0.75 / fh, 0.2 / fw, h / fh])
@@ -76,7 +76,6 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     cb.set_label(key.title, fontsize="small")
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
-    plt.close(fig)
     return buf.getvalue()
 
 

@@ -12,7 +12,8 @@ the server side of the app can be tested by calling these functions directly:
   float64 resolution), raising :class:`ValueError` with the reason;
 - :func:`compute_view`: the scan of a view (:func:`stairbounce.plane.scan_coords`
   on the view's :func:`~stairbounce.plane.pixel_centres`, in bands of rows so a
-  newer request can cancel it between bands);
+  newer request can cancel it between bands; with the fields of
+  :func:`stairbounce.nonsliding.motion_coords` when a motion field colours it);
 - :func:`shade`, :func:`color_key`: the colours of the map (datashader's split:
   compute the labelled grid first, shade it as a separate step);
 - :func:`overlay_curves`, :func:`point_details`, :func:`orbit_along_u`: the
@@ -31,11 +32,11 @@ import xarray as xr
 from .. import orbits, plane
 from ..model import check_e, check_u, tongue
 from ..symbolic import sliding_word
+from ..plot.plane import _CLASS_STARTS, _LEAST, NO_SLIDING_COLOR, ColorKey
+from ..plot.plane import color_key as _sliding_color_key
 from ..trajectory import trajectory
 
 __all__ = [
-    "MOTION_COLOR_VARS",
-    "has_color",
     "View",
     "DEFAULT_VIEW",
     "COLOR_VARS",
@@ -53,6 +54,15 @@ __all__ = [
     "view_url_query",
     "check_view",
     "compute_view",
+    "render_slices",
+    "preview_rgba",
+    "Partial",
+    "window_digits",
+    "format_number",
+    "tidy",
+    "FIELDS",
+    "MOTION_COLOR_VARS",
+    "has_color",
     "color_key",
     "shade",
     "overlay_curves",
@@ -65,9 +75,27 @@ MOTION_COLOR_VARS = ("k_mean", "lyap1")
 """Fields of :func:`stairbounce.nonsliding.motion_coords` that can colour the map
 (issue 13): computed with ``max_iter`` transient and ``max_iter`` kept steps."""
 
-COLOR_VARS = ("word_length", "period", "impacts", "jumps", "status") + MOTION_COLOR_VARS
-"""Variables that can colour the map: those of :func:`stairbounce.plane.scan`,
-then :data:`MOTION_COLOR_VARS`."""
+FIELDS = {
+    # variable: (menu entry, colour-key title, least value on a sliding pixel or None)
+    "word_length": ("word length", "word length", _LEAST["word_length"]),
+    "period": ("period (steps)", "period (steps)", _LEAST["period"]),
+    "impacts": ("impacts per period", "impacts per period", _LEAST["impacts"]),
+    "jumps": ("non-zero letters (jumps)", "non-zero letters", _LEAST["jumps"]),
+    "status": ("status (slides or not)", "periodic sliding solution", None),
+    "k_mean": ("<k>, impacts per step (non-sliding motion)", "<k>, impacts per step", None),
+    "lyap1": ("lambda_1 (non-sliding motion)", "lambda_1 (N = max_iter kept steps)", None),
+}
+"""The variables that can colour the map: data variables of
+:func:`stairbounce.plane.scan`, then :data:`MOTION_COLOR_VARS`.  A count is
+coloured on the figures' discrete scale (:func:`stairbounce.plot.plane.color_key`,
+classes counted from its least value, ``_LEAST`` there); ``None``: two
+classes (found or not) for ``status``, a continuous key for a motion field."""
+
+COLOR_VARS = tuple(FIELDS)
+"""Variables that can colour the map (the keys of :data:`FIELDS`)."""
+
+NO_SLIDING_LABEL = "none within max_iter"
+"""Key entry of white pixels: no periodic sliding solution within max_iter steps."""
 
 OVERLAYS = ("tongues", "no_sliding")
 """Curves drawn over the map: the (n, 0^inf) tongues of Theorem 3.1 and the
@@ -93,13 +121,20 @@ MIN_SIDE = 16
 # float64 spacings: deeper than that the picture would be rounding noise.
 _MIN_ULPS_PER_PIXEL = 4
 
-# Rows are computed in bands of at most this many potential map steps
-# (pixels * max_iter), so a newer request waits at most about a band (under a
-# second here) for the kernel to notice it has been cancelled.  Smaller bands
-# cost more: every parallel call ends waiting for its slowest thread (10-30 %
-# more time with 8 bands for the Fig. 4 view); the Fig. 4 view at 600 x 600
-# and max_iter 1000 is one band.
-_BAND_WORK = 400_000_000
+# A render is cut into slices of at most this many potential map steps
+# (pixels * max_iter, the worst case where nothing slides): the server's
+# scheduler runs one slice at a time, so a cheap request of another session
+# waits at most one slice (under 0.1 s on two idle cores at the 1.2-1.4 G
+# steps/s of a window where nothing slides, benchmarks/README.md; a few
+# tenths under load), and a cancelled render stops within one.  Smaller
+# slices cost more: each parallel call ends on its slowest thread.
+SLICE_WORK = 100_000_000
+
+# The coarse preview samples every COARSE-th pixel in each direction (1/64 of
+# the pixels); views cheaper than PREVIEW_WORK map steps (the Fig. 4 view at
+# 600 x 600 and max_iter 1000 is 3.6e8) skip it.
+COARSE = 8
+PREVIEW_WORK = 4 * SLICE_WORK
 
 
 @dataclass(frozen=True)
@@ -374,35 +409,80 @@ def check_view(view: View) -> View:
     return view
 
 
-def compute_view(view: View, cancelled=None, progress=None) -> xr.Dataset:
-    """compute_view(view, cancelled=None, progress=None) -> xarray.Dataset
+@dataclass
+class Partial:
+    """A render in progress, yielded by :func:`render_slices` after each slice.
 
-    The scan of a view: :func:`stairbounce.plane.scan` on its window and pixels.
+    ``coarse``: scans of bands of the coarse grid, every ``step``-th pixel
+    centre of both axes from offset ``step // 2`` (empty when the view skips
+    the preview); ``parts``: the scans of the first ``rows_done`` rows, in order.
+    """
 
-    The rows (u) are computed in bands with :func:`stairbounce.plane.scan_coords`
-    on slices of :func:`stairbounce.plane.pixel_centres`, which gives the same
-    values bit for bit as one call of ``scan`` (pixels are independent); the
-    dataset carries the same attributes.  Between bands ``cancelled()`` is
-    asked whether a newer request superseded this one (then
-    :class:`Cancelled` is raised) and ``progress(done, total)`` is told how
-    many rows are done.
+    view: View
+    coarse: list
+    parts: list
+    rows_done: int
+    step: int = COARSE
+
+    @property
+    def fraction(self) -> float:
+        return self.rows_done / self.view.height
+
+
+def render_slices(view: View, slice_work: int | None = None, coarse: int = COARSE,
+                  preview_work: int | None = None):
+    """render_slices(view, slice_work=SLICE_WORK, coarse=COARSE, preview_work=PREVIEW_WORK) -> generator
+
+    The scan of a view computed one bounded slice at a time.
+
+    A generator: each ``next()`` computes one slice and yields the
+    :class:`Partial` so far; the generator's return value (``StopIteration.value``)
+    is the finished dataset, equal bit for bit to :func:`stairbounce.plane.scan`
+    on the view's window (pixels are independent, so scanning rows of
+    :func:`~stairbounce.plane.pixel_centres` in bands changes nothing).
+
+    First, when the view costs more than ``preview_work`` map steps, the
+    coarse preview: every ``coarse``-th pixel centre of both axes (exact
+    values of those pixels, 1/coarse^2 of the work); then the full grid.
+    Both in bands of rows of at most ``slice_work`` potential map steps
+    (``max_iter`` per pixel; at least one row).  A view coloured by a motion
+    field (:data:`MOTION_COLOR_VARS`) also has the fields of
+    :func:`stairbounce.nonsliding.motion_coords` in every band (``max_iter``
+    transient and ``max_iter`` kept steps, 3 ``max_iter`` per pixel in all),
+    so it is cut into slices and cancelled like any render.
 
     Raises :class:`ValueError` from :func:`check_view` for a view over budget.
     """
     check_view(view)
+    slice_work = SLICE_WORK if slice_work is None else slice_work
+    preview_work = PREVIEW_WORK if preview_work is None else preview_work
     es = plane.pixel_centres(view.e_lo, view.e_hi, view.width)
     us = plane.pixel_centres(view.u_lo, view.u_hi, view.height)
-    rows = max(1, min(view.height, _BAND_WORK // max(1, view.width * view.max_iter)))
+
+    motion = view.color in MOTION_COLOR_VARS
+    # a motion field costs max_iter transient + max_iter kept steps per pixel
+    per_pixel = view.max_iter * (3 if motion else 1)
+
+    def bands(e, u):
+        rows = max(1, min(u.size, slice_work // max(1, e.size * per_pixel)))
+        for start in range(0, u.size, rows):
+            band = plane.scan_coords(e, u[start : start + rows], max_iter=view.max_iter)
+            if motion:
+                band = _with_motion(band, view, e, u[start : start + rows])
+            yield min(u.size, start + rows), band
+
+    pre = []
+    if coarse > 1 and view.work > preview_work and min(view.width, view.height) >= 2 * coarse:
+        off = coarse // 2
+        for _, band in bands(es[off::coarse], us[off::coarse]):
+            pre.append(band)
+            yield Partial(view, pre, [], 0, coarse)
     parts = []
-    for start in range(0, view.height, rows):
-        if cancelled is not None and cancelled():
-            raise Cancelled
-        parts.append(plane.scan_coords(es, us[start : start + rows], max_iter=view.max_iter))
-        if progress is not None:
-            progress(min(view.height, start + rows), view.height)
+    for done, band in bands(es, us):
+        parts.append(band)
+        if done < view.height:
+            yield Partial(view, pre, parts, done, coarse)
     ds = parts[0] if len(parts) == 1 else xr.concat(parts, dim="u", combine_attrs="override")
-    if view.color in MOTION_COLOR_VARS:
-        ds = _with_motion(ds, view, es, us, cancelled)
     ds.attrs.update(
         e_min=view.e_lo, e_max=view.e_hi, n_e=view.width,
         u_min=view.u_lo, u_max=view.u_hi, n_u=view.height,
@@ -410,19 +490,105 @@ def compute_view(view: View, cancelled=None, progress=None) -> xr.Dataset:
     return ds
 
 
-def _with_motion(ds, view, es, us, cancelled):
-    """``ds`` with the fields of :func:`stairbounce.nonsliding.motion_coords`
-    (``max_iter`` transient + ``max_iter`` kept steps), in bands of rows."""
+def compute_view(view: View, cancelled=None, progress=None) -> xr.Dataset:
+    """compute_view(view, cancelled=None, progress=None) -> xarray.Dataset
+
+    The scan of a view: :func:`stairbounce.plane.scan` on its window and pixels.
+
+    Runs :func:`render_slices` to the end (same values bit for bit as one
+    call of ``scan``; the dataset carries the same attributes).  Between
+    slices ``cancelled()`` is asked whether a newer request superseded this
+    one (then :class:`Cancelled` is raised) and ``progress(done, total)`` is
+    told how many rows are done.
+
+    Raises :class:`ValueError` from :func:`check_view` for a view over budget.
+    """
+    gen = render_slices(view)
+    while True:
+        if cancelled is not None and cancelled():
+            gen.close()
+            raise Cancelled
+        try:
+            part = next(gen)
+        except StopIteration as stop:
+            ds = stop.value
+            if progress is not None:
+                progress(view.height, view.height)
+            return ds
+        if progress is not None:
+            progress(part.rows_done, view.height)
+
+
+def preview_rgba(part: Partial, var: str) -> np.ndarray:
+    """preview_rgba(part, var) -> uint32 array (n_u, n_e)
+
+    The picture of a render in progress: the rows already computed at full
+    resolution, the others from the coarse preview (each coarse sample
+    painted over the ``step x step`` block of pixels around it), and
+    the not-yet-computed colour where there is neither.
+    """
+    v, c = part.view, part.step
+    out = np.full((v.height, v.width), _rgba32((NOT_COMPUTED_COLOR,))[0], dtype=np.uint32)
+    row = 0
+    for band in part.coarse:
+        block = np.repeat(np.repeat(shade(band, var), c, axis=0), c, axis=1)
+        rows = min(block.shape[0], v.height - row)
+        if rows <= 0:
+            break
+        # the last block column (row) covers what is left of a side not divisible by step
+        block = np.pad(block, ((0, 0), (0, max(0, v.width - block.shape[1]))), mode="edge")
+        out[row : row + rows] = block[:rows, : v.width]
+        row += rows
+    n_coarse = len(range(c // 2, v.height, c))
+    if part.coarse and sum(b.sizes["u"] for b in part.coarse) == n_coarse and 0 < row < v.height:
+        out[row:] = out[row - 1]  # a side not divisible by step: its last block is taller
+    row = 0
+    for p in part.parts:
+        n = p.sizes["u"]
+        out[row : row + n] = shade(p, var)
+        row += n
+    return out
+
+
+def window_digits(lo: float, hi: float, n: int) -> int:
+    """window_digits(lo, hi, n) -> int
+
+    Significant digits that show the ends of a window of ``n`` pixels apart
+    and resolve one pixel: a tenth of a pixel at the larger end, 4 to 17.
+    """
+    big = max(abs(lo), abs(hi), 1e-300)
+    pixel = (hi - lo) / n
+    return int(min(17, max(4, math.ceil(math.log10(big / (pixel / 10))))))
+
+
+def format_number(x: float, digits: int) -> str:
+    """``x`` with ``digits`` significant digits, or its exact shortest text if shorter."""
+    exact = _fmt(x)
+    short = f"{x:.{digits}g}"
+    return exact if len(exact) <= len(short) else short
+
+
+def tidy(x: float, tolerance: float) -> float:
+    """tidy(x, tolerance) -> float
+
+    The float with the shortest decimal text within ``tolerance`` of ``x``
+    (``0.9200000000000002`` -> ``0.92`` for any tolerance above 2e-16): a
+    zoom or pan lands on the range Bokeh computed, whose last bits are noise.
+    """
+    for p in range(1, 18):
+        y = float(f"{x:.{p}g}")
+        if abs(y - x) <= tolerance:
+            return y
+    return float(x)
+
+
+def _with_motion(ds, view, es, us):
+    """``ds`` (a band of rows) with the fields of
+    :func:`stairbounce.nonsliding.motion_coords` (``max_iter`` transient +
+    ``max_iter`` kept steps) at the same pixel centres."""
     from ..nonsliding import motion_coords
 
-    rows = max(1, min(view.height, _BAND_WORK // max(1, 2 * view.width * view.max_iter)))
-    parts = []
-    for start in range(0, view.height, rows):
-        if cancelled is not None and cancelled():
-            raise Cancelled
-        parts.append(motion_coords(es, us[start : start + rows], steps=max(2, view.max_iter),
-                                   transient=view.max_iter))
-    m = parts[0] if len(parts) == 1 else xr.concat(parts, dim="u", combine_attrs="override")
+    m = motion_coords(es, us, steps=max(2, view.max_iter), transient=view.max_iter)
     return ds.assign({k: m[k] for k in m.data_vars}).assign_attrs(motion_steps=m.attrs["steps"])
 
 
@@ -447,20 +613,26 @@ def pixel_of(view: View, e: float, u: float) -> tuple[int, int] | None:
 # --------------------------------------------------------------------------- #
 
 # One colour scale for the explorer and the figures (Figs. 4 and 5): the
-# classes and their colours live with the matplotlib renderer of the plane.
-from ..plot.plane import _CLASS_STARTS, _LEAST, NO_SLIDING_COLOR, ColorKey  # noqa: E402
-from ..plot.plane import color_key as _sliding_color_key  # noqa: E402
+# classes of the counts (_CLASS_STARTS from their least values _LEAST), their
+# colours and white for no sliding live with the matplotlib renderer of the
+# plane (stairbounce.plot.plane); the explorer adds the grey of pixels not yet
+# computed and the continuous keys of the motion fields.
+NOT_COMPUTED_COLOR = "#b8b8b8"
 
 
 def color_key(var: str) -> ColorKey:
     """color_key(var) -> ColorKey: the classes and colours used for ``var``: the
-    figures' discrete scale for the sliding variables, a continuous key for the
+    figures' discrete scale for the counts (:func:`stairbounce.plot.plane.color_key`),
+    found / none within max_iter for ``status``, a continuous key for the
     motion variables."""
+    if var not in FIELDS:
+        raise ValueError(f"color must be one of {', '.join(COLOR_VARS)}, got {var!r}")
     if var in MOTION_COLOR_VARS:
         return _motion_key(var)
-    if var != "status" and var not in _LEAST:
-        raise ValueError(f"color must be one of {', '.join(COLOR_VARS)}, got {var!r}")
-    return _sliding_color_key(var)
+    _, title, b = FIELDS[var]
+    if b is None:
+        return ColorKey(var, title, ("found", NO_SLIDING_LABEL), ("#000000", NO_SLIDING_COLOR))
+    return replace(_sliding_color_key(var), title=title)
 
 
 def _rgba32(hex_colors):
@@ -493,12 +665,12 @@ def _motion_key(var):
              "lyap1": {-5: "-5/N", -2.5: "-2.5/N", 0: "0", 2.5: "+2.5/N", 5: "+5/N"}}[var]
     for x, text in marks.items():
         labels[1 + min(_NBINS - 1, int((x - lo) / (hi - lo) * _NBINS))] = text
-    title = "<k>, impacts per step" if var == "k_mean" else "lambda_1 (N = max_iter kept steps)"
-    return ColorKey(var, title, tuple(labels), colors)
+    return ColorKey(var, FIELDS[var][1], tuple(labels), colors)
 
 
 def classes(ds: xr.Dataset, var: str) -> np.ndarray:
-    """Class index of every pixel under :func:`color_key` (-1: no sliding)."""
+    """Class index of every pixel under :func:`color_key` (-1: no sliding; a
+    motion variable: 0 where the orbit slides, never -1)."""
     if var in MOTION_COLOR_VARS:
         lo, hi = _MOTION_RANGE[var]
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -506,9 +678,9 @@ def classes(ds: xr.Dataset, var: str) -> np.ndarray:
         idx = 1 + np.clip(np.floor((x - lo) / (hi - lo) * _NBINS), 0, _NBINS - 1)
         return np.where((ds["slide_step"].values > 0) | ~np.isfinite(x), 0, idx).astype(np.int64)
     sliding = ds["status"].values == 0
-    if var == "status":
+    if FIELDS[var][2] is None:
         return np.where(sliding, 0, 1)
-    v = ds[var].values.astype(np.int64) - _LEAST[var]
+    v = ds[var].values.astype(np.int64) - FIELDS[var][2]
     idx = np.searchsorted(np.asarray(_CLASS_STARTS), v, side="right") - 1
     return np.where(sliding, idx, -1)
 
@@ -568,8 +740,9 @@ def overlay_curves(view: View, samples: int = 400, max_tongues: int = 400) -> di
     return {"tongues": (txs, tys), "no_sliding": ([e[ok]], [ns[ok]])}
 
 
-def point_details(e: float, u: float, max_iter: int, steps: int | None = None) -> dict:
-    """point_details(e, u, max_iter, steps=None) -> dict
+def point_details(e: float, u: float, max_iter: int, steps: int | None = None,
+                  max_steps: int = 2000) -> dict:
+    """point_details(e, u, max_iter, steps=None, max_steps=2000) -> dict
 
     What a tap on ``(e, u)`` shows: the word of the periodic sliding solution
     through (1, 0) (:func:`stairbounce.sliding_word`, ``None`` when it does
@@ -577,17 +750,19 @@ def point_details(e: float, u: float, max_iter: int, steps: int | None = None) -
     motion (:func:`stairbounce.nonsliding.motion`, ``max_iter`` transient and kept
     steps: <k>, exponents) and last Poincare iterates (``"motion"``,
     ``"section"``; ``None`` otherwise), and the exact trajectory from (1, 0)
-    over ``steps`` steps (default: one period and two more steps, 4 to 16
-    steps; 12 when it does not slide) sampled for drawing, with its impacts,
-    accumulation points and slides.
+    over ``steps`` steps (default: one full period and two more steps, at
+    least 4 and at most ``max_steps``; 12 when it does not slide) sampled for
+    drawing (at most about 40 000 points), with its impacts, accumulation
+    points and slides.
     """
     e, u = check_e(e), check_u(u)
     w = sliding_word(e, u, max_steps=max_iter)
     mo, section = _point_motion(e, u, max_iter) if w is None else (None, None)
     if steps is None:
-        steps = 12 if w is None else int(min(16, max(4, w.period + 2)))
+        steps = 12 if w is None else int(min(max_steps, max(4, w.period + 2)))
     traj = trajectory(e, u, 1.0, 0.0, steps)
-    t = np.linspace(0.0, traj.duration, 200 * steps + 1)
+    per_step = max(10, min(200, 40_000 // steps))
+    t = np.linspace(0.0, traj.duration, per_step * steps + 1)
     t = np.union1d(t, [i.time for i in traj.impacts if i.time <= traj.duration])
     x, y = traj.position(t)
     return {

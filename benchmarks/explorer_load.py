@@ -1,0 +1,312 @@
+"""``stairbounce explore`` under load, in Chromium (issue 14).
+
+    python benchmarks/explorer_load.py [--quick] [--sessions 5] [--rounds 3]
+
+Starts ``stairbounce explore --port 0`` in a subprocess and drives headless
+Chromium (``/usr/bin/chromium``) with Playwright, loopback only, every loop
+bounded.  "Action to picture" runs from the gesture (wheel zoom, drag pan)
+until the page's status line reports the finished render of a new window.
+
+1. One session: pans and zooms in the Fig. 5e window (e 0.04..0.065,
+   u 0.92..0.945) at 600 x 600, max_iter 1000: median and p90; the ratio to
+   the server's own work for that view (``compute_view`` + ``shade``, timed
+   in this process) is the overhead of the page.
+2. ``--sessions`` pages panning and zooming at once (600 x 600, max_iter
+   1000, from e 0.1..0.5, u 0.4..1), plus 50 plain page GETs from a thread:
+   median and p90 of both, for ``--rounds`` rounds, and the server's memory
+   (RSS) after each round.
+3. A cheap render (200 x 200, max_iter 300) and a tap in one session while
+   another session renders 1000 x 1000 at max_iter 5000 where nothing
+   slides: how much longer than the same actions alone (the wait behind
+   the heavy render; target under 0.5 s).
+
+``--quick``: one round of 3 sessions, fewer actions.  Prints the machine
+load (``os.getloadavg``) with the numbers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import random
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import urllib.request
+from pathlib import Path
+
+import psutil
+
+CHROMIUM = "/usr/bin/chromium"
+ARGS = ["--no-sandbox", "--headless", "--disable-gpu", "--disable-background-networking",
+        "--disable-component-update", "--disable-sync", "--no-first-run"]
+FIG5E = "?e=0.04:0.065&u=0.92:0.945&size=600x600&max_iter=1000"
+MIDDLE = "?e=0.1:0.5&u=0.4:1&size=600x600&max_iter=1000"  # room to pan and zoom out
+# most pixels neither slide nor lie above Cor. 2.1's bound (which the scan
+# prunes without iterating): about 0.7 x 1e6 pixels x 5000 map steps
+HEAVY = "?e=0.3:0.4&u=0.3:0.45&size=1000x1000&max_iter=5000"
+CHEAP = "?e=0:0.4&u=0.3:1.1&size=200x200&max_iter=300"
+
+
+def pct(xs, q):
+    xs = sorted(xs)
+    return xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]
+
+
+def summary(xs):
+    ok = [x for x in xs if x is not None]
+    failed = len(xs) - len(ok)
+    if not ok:
+        return f"no picture in {failed} tries"
+    return (f"median {statistics.median(ok):.2f} s, p90 {pct(ok, 0.9):.2f} s, max {max(ok):.2f} s "
+            f"(n={len(ok)}" + (f", {failed} with no picture within 120 s" if failed else "") + ")")
+
+
+def load():
+    return "load average " + ", ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+def start_server(log: Path):
+    exe = shutil.which("stairbounce", path=os.path.dirname(sys.executable)) or shutil.which("stairbounce")
+    cmd = [exe] if exe else [sys.executable, "-c", "from stairbounce.cli import main; main()"]
+    out = open(log, "w")
+    proc = subprocess.Popen(cmd + ["explore", "--port", "0", "--no-browser"], stdout=out,
+                            stderr=subprocess.STDOUT)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        text = log.read_text()
+        m = re.search(r"explorer at (\S+) ", text)
+        if m and "kernels ready" in text:
+            return proc, m.group(1)
+        if proc.poll() is not None:
+            break
+        time.sleep(0.2)
+    proc.kill()
+    raise SystemExit(f"the server did not start: {log.read_text()}")
+
+
+async def status(page):
+    # the pane's text lives in its shadow root: the spans, not the host element
+    return " | ".join(await page.locator(".sb-status span").all_inner_texts())
+
+
+async def wait_new_picture(page, before, timeout=120.0):
+    """Poll (20 ms) until the status reports a finished render other than ``before``."""
+    t_end = time.perf_counter() + timeout
+    while time.perf_counter() < t_end:
+        s = await status(page)
+        if "computed in" in s and s != before:
+            return s
+        await asyncio.sleep(0.02)
+    raise TimeoutError("no new picture")
+
+
+async def open_page(browser, url):
+    page = await browser.new_page(viewport={"width": 1600, "height": 1000})
+    await page.goto(url)
+    await wait_new_picture(page, None)
+    return page
+
+
+async def gesture(page, rng):
+    """One random wheel zoom (in or out) or drag pan on the map; returns its name."""
+    box = await page.locator(".bk-Canvas").first.bounding_box()
+    x = box["x"] + box["width"] * rng.uniform(0.3, 0.6)
+    y = box["y"] + box["height"] * rng.uniform(0.3, 0.6)
+    kind = rng.choice(["zoom in", "zoom out", "pan"])
+    await page.mouse.move(x, y)
+    if kind == "pan":
+        await page.mouse.down()
+        await page.mouse.move(x + rng.uniform(-80, 80), y + rng.uniform(-80, 80), steps=5)
+        await page.mouse.up()
+    else:
+        await page.mouse.wheel(0, -200 if kind == "zoom in" else 200)
+    return kind
+
+
+async def window(page):
+    return await page.locator(".sb-e-window input").input_value(), \
+        await page.locator(".sb-u-window input").input_value()
+
+
+async def act(page, rng):
+    """A gesture and its time to the new picture.  A gesture that changes
+    nothing (a pan against the domain's bound) is retried: the server
+    writes the new window into the boxes as soon as it accepts a request."""
+    for _ in range(5):
+        before, win = await status(page), await window(page)
+        t0 = time.perf_counter()
+        await gesture(page, rng)
+        while await window(page) == win and time.perf_counter() - t0 < 10.0:
+            await asyncio.sleep(0.02)
+        if await window(page) == win:
+            continue
+        try:
+            await wait_new_picture(page, before)
+        except TimeoutError:
+            return None  # counted as a failure
+        return time.perf_counter() - t0
+    return None
+
+
+async def one_session(browser, base, actions, rng):
+    page = await open_page(browser, base + FIG5E)
+    times = []
+    for _ in range(actions):
+        times.append(await act(page, rng))
+        if times[-1] is None:
+            await page.goto(base + FIG5E)
+            await wait_new_picture(page, None)
+            continue
+        if _ % 3 == 2:  # back to the Fig. 5e window now and then, so the view stays comparable
+            await page.goto(base + FIG5E)
+            await wait_new_picture(page, None)
+    await page.close()
+    return times
+
+
+def gets(base, n, out):
+    for _ in range(n):
+        t0 = time.perf_counter()
+        try:
+            with urllib.request.urlopen(base, timeout=120) as r:
+                r.read()
+        except OSError:
+            out.append(None)
+            continue
+        out.append(time.perf_counter() - t0)
+
+
+async def many_sessions(browser, base, sessions, actions, rng, n_gets=50):
+    pages = await asyncio.gather(*(open_page(browser, base + MIDDLE) for _ in range(sessions)))
+    get_times: list[float] = []
+    th = threading.Thread(target=gets, args=(base, n_gets, get_times))
+    th.start()
+
+    async def run(page, seed):
+        r = random.Random(seed)
+        out = []
+        for _ in range(actions):
+            out.append(await act(page, r))
+            if out[-1] is None:
+                break  # this page stopped answering; the others go on
+        return out
+
+    results = await asyncio.gather(*(run(p, rng.random()) for p in pages))
+    await asyncio.to_thread(th.join)
+    for p in pages:
+        await p.close()
+    return [t for r in results for t in r], get_times
+
+
+async def beside_heavy(browser, base, repeats):
+    """Cheap renders and taps in B: alone, then while A renders the heavy view."""
+    b = await open_page(browser, base + CHEAP)
+    counter = iter(range(301, 10**6))
+
+    async def cheap_round():
+        times = []
+        for _ in range(repeats):
+            before = await status(b)
+            t0 = time.perf_counter()
+            await b.locator(".sb-max-iter input").fill(str(next(counter)))
+            await b.locator(".sb-max-iter input").press("Enter")
+            await wait_new_picture(b, before)
+            times.append(time.perf_counter() - t0)
+        return times
+
+    alone = await cheap_round()
+    a = await browser.new_page(viewport={"width": 1600, "height": 1000})
+    await a.goto(base + HEAVY)
+    t_end = time.perf_counter() + 60
+    while "%" not in await status(a) and time.perf_counter() < t_end:  # A is computing
+        await asyncio.sleep(0.05)
+    beside = await cheap_round()
+    still = "computed in" not in await status(a)
+    await a.close()
+    await b.close()
+    return alone, beside, still
+
+
+def in_process_baseline(repeat=3):
+    from dataclasses import replace
+
+    from stairbounce.explorer.view import View, compute_view, shade
+
+    view = View(0.04, 0.065, 0.92, 0.945, 600, 600, 1000)
+    compute_view(replace(view, width=16, height=16))
+    best = float("inf")
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        shade(compute_view(view), view.color)
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+async def main_async(opts):
+    from playwright.async_api import async_playwright
+
+    rng = random.Random(14)
+    with tempfile.TemporaryDirectory() as tmp:
+        proc, base = start_server(Path(tmp) / "server.log")
+        server = psutil.Process(proc.pid)
+        try:
+            print(f"server {base}, RSS {server.memory_info().rss / 2**20:.0f} MB after start; {load()}")
+            async with async_playwright() as p:
+                browser = await p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+                base_s = in_process_baseline()
+                t1 = await one_session(browser, base, opts.actions, rng)
+                ok = [t for t in t1 if t is not None] or [float("nan")]
+                print(f"1 session, Fig. 5e window 600x600 max_iter 1000: action to picture {summary(t1)}; "
+                      f"server work alone {base_s:.2f} s; ratio median/work "
+                      f"{statistics.median(ok) / base_s:.1f}; {load()}")
+                for r in range(opts.rounds):
+                    tm, tg = await many_sessions(browser, base, opts.sessions, opts.actions, rng, opts.gets)
+                    print(f"round {r + 1}: {opts.sessions} sessions: action to picture {summary(tm)}; "
+                          f"{opts.gets} GETs {summary(tg) if tg else '-'}; server RSS {server.memory_info().rss / 2**20:.0f} MB; "
+                          f"{load()}")
+                alone, beside, still = await beside_heavy(browser, base, opts.repeats)
+                wait = [b - statistics.median(alone) for b in beside]
+                print(f"cheap render (200x200, max_iter 300) alone {summary(alone)}; beside a heavy "
+                      f"render (1000x1000, max_iter 5000, two thirds do not slide) {summary(beside)}; "
+                      f"longest extra wait {max(wait):.2f} s (target < 0.5 s); ratio median beside/alone "
+                      f"{statistics.median(beside) / statistics.median(alone):.2f}; heavy render still "
+                      f"running meanwhile: {still}; {load()}")
+                await browser.close()
+            time.sleep(2)
+            print(f"server RSS at the end {server.memory_info().rss / 2**20:.0f} MB")
+        except BaseException:
+            print("server log (tail):\n" + "\n".join((Path(tmp) / "server.log").read_text().splitlines()[-40:]))
+            raise
+        finally:
+            proc.terminate()
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="1 round of 3 sessions, 4 actions each")
+    ap.add_argument("--sessions", type=int, default=5)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--actions", type=int, default=6, help="gestures per session and round")
+    ap.add_argument("--repeats", type=int, default=5, help="cheap renders beside the heavy one")
+    ap.add_argument("--gets", type=int, default=50, help="plain page GETs during each round")
+    opts = ap.parse_args()
+    if opts.quick:
+        opts.sessions, opts.rounds, opts.actions, opts.repeats = 3, 1, 4, 3
+    if not os.path.exists(CHROMIUM):
+        raise SystemExit(f"no Chromium at {CHROMIUM}")
+    asyncio.run(main_async(opts))
+
+
+if __name__ == "__main__":
+    main()
