@@ -49,7 +49,6 @@ from .model import (
     tongue,
 )
 from .nonsliding import (
-    MOTION_FIELDS,
     k_mean_bound,
     lyapunov_exponents,
     motion,
@@ -93,7 +92,6 @@ __all__ = [
     "BoxDimension",
     "Flight",
     "Impact",
-    "MOTION_FIELDS",
     "PerimeterDimension",
     "SLIDING",
     "Slide",
