@@ -49,6 +49,24 @@ def test_word_of_a_physical_staircase_is_the_word_at_its_u(capsys):
     assert f"= {w.period * B / speed:.6g} s" in out
 
 
+def test_motion_of_a_physical_staircase_is_the_motion_at_its_u(capsys):
+    # 2.5 m/s on 17 cm x 29 cm steps: u = 1.13, above the Corollary 2.1 bound
+    # at e = 0.5, so the orbit never slides and <k> is printed
+    speed, e = 2.5, 0.5
+    code, out, err = run(["motion", "--e", str(e), "--speed", str(speed), "--step-height", str(A),
+                          "--step-length", str(B), "--steps", "200", "--transient", "200"], capsys)
+    assert code == 0, err
+    code2, ref, _ = run(["motion", "--e", str(e), "--u", repr(u_of(speed)), "--steps", "200",
+                         "--transient", "200"], capsys)
+    assert code2 == 0
+    assert f"u = U sqrt(a/g) / b = {u_of(speed):.6g}" in out
+    k_line = [ln for ln in ref.splitlines() if ln.startswith("<k>:")]
+    assert k_line and k_line[0] in out
+    code3, _, err3 = run(["motion", "--e", "0.5", "--u", "1.0", "--speed", "2.5", "--step-height", str(A),
+                          "--step-length", str(B)], capsys)
+    assert code3 == 2 and err3.strip().count("\n") == 0
+
+
 def test_gravity_option_changes_u_as_the_formula_says(capsys):
     # on a staircase with a = g (in its units) the time unit is 1 s and u = U / b;
     # U = 0.5 b lies in the first tongue of Thm 3.1 for e = 0.1 (u^2 <= (1/2)(0.9/1.1)^2)

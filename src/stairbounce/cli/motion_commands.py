@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import typer
 
+from . import _staircase as st
 from ._app import CLIError, app
 
 MOTION_FIELD_NAMES = ("k_mean", "lyap1", "jump_mean", "speed_spread")
@@ -13,7 +14,11 @@ MOTION_FIELD_NAMES = ("k_mean", "lyap1", "jump_mean", "speed_spread")
 @app.command()
 def motion(
     e: float = typer.Option(..., "--e", help="Restitution coefficient, in [0, 1)."),
-    u: float = typer.Option(..., "--u", help="Horizontal speed in normalised units (u > 0)."),
+    u: float = typer.Option(None, "--u", help="Horizontal speed in normalised units (u > 0). Or --speed with --step-height, --step-length."),
+    speed: float = st.speed_option(),
+    step_height: float = st.step_height_option(),
+    step_length: float = st.step_length_option(),
+    g: float = st.g_option(),
     steps: int = typer.Option(1000, "--steps", help="Kept steps (>= 2)."),
     transient: int = typer.Option(1000, "--transient", help="Steps discarded first (>= 0)."),
     y0: float = typer.Option(1.0, "--y0", help="Initial height above the step's floor (>= 0)."),
@@ -22,6 +27,9 @@ def motion(
     """Whether the orbit slides; if not, <k> (impacts per step), the mean jump and the Lyapunov exponents."""
     from ..nonsliding import motion as run
 
+    u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
+    if stairs is not None:
+        typer.echo(st.describe(u, stairs))
     r = run(e, u, steps=steps, transient=transient, y0=y0, v0=v0)
     typer.echo(f"e = {e:g}, u = {u:g}, from (y, v) = ({y0:g}, {v0:g}): "
                f"{transient} transient + {steps} kept steps")
