@@ -63,6 +63,21 @@ def check_outputs(force: bool, **paths) -> None:
             check_output(Path(path), overwrite=force, option="--" + option.replace("_", "-"))
 
 
+def save_figure(fig, path, dpi: int, overwrite: bool = False) -> None:
+    """Write a matplotlib Figure to ``path`` atomically (under a temporary
+    name, renamed when complete; the format from the suffix) and close it,
+    whether the write succeeds or not."""
+    import matplotlib.pyplot as plt
+
+    from .._io import atomic_path
+
+    try:
+        with atomic_path(path, overwrite=overwrite) as tmp:
+            fig.savefig(tmp, dpi=dpi)
+    finally:
+        plt.close(fig)
+
+
 def parse_range(name: str, text: str) -> tuple[float, float]:
     """``"0:1.5"`` -> ``(0.0, 1.5)``, with ``min < max`` and both finite."""
     parts = text.split(":")

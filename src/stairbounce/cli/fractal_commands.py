@@ -8,8 +8,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from .._io import atomic_path
-from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, progress_bar
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, progress_bar, save_figure
 
 # Scans with more pixel-steps than this show a progress bar.
 _PROGRESS_WORK = 2e8
@@ -276,10 +275,5 @@ def _draw(png, dpi, force, make):
     import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig = make()
-    with atomic_path(png, overwrite=force) as tmp:
-        fig.savefig(tmp, dpi=dpi)
-    plt.close(fig)
+    save_figure(make(), png, dpi, force)
     typer.echo(f"wrote {png}")

@@ -13,7 +13,7 @@ from ..model import SLIDING, iterate
 from ..symbolic import sliding_word, terminal_can_print_infinity
 from ..trajectory import trajectory
 from . import _staircase as st
-from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, plural, progress_bar
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, plural, progress_bar, save_figure
 
 E_HELP = "Restitution coefficient, in [0, 1)."
 U_HELP = "Horizontal speed in normalised units (u > 0); one step takes 1/u. Or --speed with --step-height, --step-length."
@@ -128,9 +128,7 @@ def trajectory_(
         typer.echo(st.describe(u, stairs))
         st.physical_trajectory_axes(a1, a2, stairs, u)
     fig.tight_layout()
-    with atomic_path(out, overwrite=force) as tmp:
-        fig.savefig(tmp, dpi=dpi)
-    plt.close(fig)
+    save_figure(fig, out, dpi, force)
     typer.echo(
         f"wrote {out}: {plural(len(traj.impacts), 'impact')} listed, "
         f"{plural(len(traj.accumulations), 'accumulation point')}, "

@@ -6,7 +6,7 @@ from __future__ import annotations
 import typer
 
 from . import _staircase as st
-from ._app import CLIError, app
+from ._app import CLIError, app, save_figure
 
 MOTION_FIELD_NAMES = ("k_mean", "lyap1", "jump_mean", "speed_spread")
 
@@ -66,18 +66,13 @@ def motion_scan_figure(e, u, max_iter, y0, v0, field, png, dpi, out=None, overla
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        from .._io import atomic_path
         from ..plot.motion import plot_motion
 
         fig, ax = plt.subplots(figsize=(9, 6.5))
-        try:
-            ov = tuple(o for o in overlays if o == "bound") + ("families",)
-            plot_motion(ds, field=field, ax=ax, overlay=ov)
-            fig.tight_layout()
-            with atomic_path(png, overwrite=force) as tmp:
-                fig.savefig(tmp, dpi=dpi)
-        finally:
-            plt.close(fig)
+        ov = tuple(o for o in overlays if o == "bound") + ("families",)
+        plot_motion(ds, field=field, ax=ax, overlay=ov)
+        fig.tight_layout()
+        save_figure(fig, png, dpi, force)
         typer.echo(f"wrote {png}")
     ok = ds.slide_step.values == 0
     l1 = ds.lyap1.values[ok]

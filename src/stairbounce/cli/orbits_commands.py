@@ -10,7 +10,17 @@ import typer
 from .._io import atomic_path
 from ..model import check_count
 from . import _staircase as st
-from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_overlays, parse_range, progress_bar
+from ._app import (
+    FORCE_HELP,
+    CLIError,
+    app,
+    check_dpi,
+    check_outputs,
+    parse_overlays,
+    parse_range,
+    progress_bar,
+    save_figure,
+)
 
 # Above this many map steps (about a second of work) the sweep runs in slices
 # behind a progress bar.
@@ -149,7 +159,5 @@ def orbit_diagram_(
         plot_orbit_diagram(ds, component=component, density=not points, ax=ax,
                            overlay=overlays, bins=bins, range=shown)
         fig.tight_layout()
-        with atomic_path(png, overwrite=force) as tmp:
-            fig.savefig(tmp, dpi=dpi)
-        plt.close(fig)
+        save_figure(fig, png, dpi, force)
         typer.echo(f"wrote {png}: {summary}")

@@ -17,6 +17,7 @@ from ._app import (
     parse_size,
     plural,
     progress_bar,
+    save_figure,
     tile_for_workers,
 )
 from .motion_commands import MOTION_FIELD_NAMES, motion_scan_figure
@@ -158,14 +159,9 @@ def _draw(ds, field, overlays, png, dpi, overwrite=False):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .._io import atomic_path
     from ..plot import plot_scan
 
     fig, ax = plt.subplots(figsize=(8, 6))
-    try:
-        plot_scan(ds, field=field, ax=ax, overlay=overlays)
-        fig.tight_layout()
-        with atomic_path(png, overwrite=overwrite) as tmp:
-            fig.savefig(tmp, dpi=dpi)
-    finally:
-        plt.close(fig)
+    plot_scan(ds, field=field, ax=ax, overlay=overlays)
+    fig.tight_layout()
+    save_figure(fig, png, dpi, overwrite)
