@@ -637,6 +637,95 @@ def test_make_server_port_zero_binds_a_free_port():
         server.stop()
 
 
+def test_page_requests_share_one_kept_session():
+    """Load: a page request answers with the page's HTML rendered from one
+    kept session; it no longer builds a session's document on the event loop
+    (0.3 s each, which every open page waited for).  Five requests with
+    different queries leave one session on the server (they left five)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import threading, urllib.request\n"
+        "from stairbounce.explorer import make_server\n"
+        "server = make_server(port=0)\n"
+        "ctx = server._tornado.applications['/']\n"
+        "url = f'http://127.0.0.1:{server.port}/'\n"
+        "pages = []\n"
+        "def hit():\n"
+        "    try:\n"
+        "        for q in ['', '?e=0:0.5', '?size=100x100', '?e=0.1:0.2&u=0.5:0.6', '']:\n"
+        "            with urllib.request.urlopen(url + q, timeout=60) as r:\n"
+        "                pages.append((r.status, b'<title>stairbounce explorer</title>' in r.read()))\n"
+        "    finally:\n"
+        "        server.io_loop.add_callback(server.io_loop.stop)\n"
+        "threading.Thread(target=hit).start()\n"
+        "server.start()\n"
+        "server.io_loop.start()\n"
+        "print('SESSIONS', len(list(ctx.sessions)), pages)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=180)
+    assert out.returncode == 0, out.stderr
+    line = [x for x in out.stdout.splitlines() if x.startswith("SESSIONS")][0]
+    assert line == "SESSIONS 1 " + repr([(200, True)] * 5), line
+
+
+def test_page_changes_are_held_until_a_callback_ends():
+    """Every callback into a page runs with its document held, so its changes
+    go out through Bokeh's own ordered writes when it ends (Panel's direct
+    sending, used otherwise, lost the last status line under load); a hold
+    taken by someone else is left to them."""
+    from bokeh.document import Document
+    from panel.io.state import set_curdoc
+
+    from stairbounce.explorer import app as A
+
+    doc = Document()
+    with set_curdoc(doc):
+        page = A.Explorer(V.View(width=40, height=40, max_iter=10), scheduler=InlineScheduler())
+    assert page._doc is doc
+    seen = []
+    page._in_doc(lambda: seen.append(doc.callbacks.hold_value))
+    assert seen == ["combine"] and doc.callbacks.hold_value is None
+    doc.hold("collect")
+    page._in_doc(lambda: seen.append(doc.callbacks.hold_value))
+    assert seen[-1] == "collect" and doc.callbacks.hold_value == "collect"
+    doc.unhold()
+    # the map's pan/zoom and tap events take the same way
+    event_seen = []
+    monkey = page._locked_event(lambda ev: event_seen.append((ev, doc.callbacks.hold_value)))
+    monkey("ev")
+    assert event_seen == [("ev", "combine")]
+
+
+def test_render_sends_a_preview_only_when_the_render_takes_time(monkeypatch):
+    """Progressive rendering: a render done within _PREVIEW_AFTER (0.25 s) of
+    its first slice sends no preview picture (each costs every browser a
+    repaint); a longer one sends the coarse pass first.  The final picture is
+    the same either way."""
+    from stairbounce.explorer import app as A
+
+    view = V.View(0.3, 0.4, 0.3, 0.45, 200, 200, max_iter=3000)  # 1.2e8 steps: over one slice
+
+    def run():
+        gen = A.Explorer._render_work(None, view)
+        previews = []
+        while True:
+            try:
+                fraction, rgba = next(gen)
+            except StopIteration as stop:
+                return previews, stop.value
+            previews.append((fraction, None if rgba is None else rgba.shape))
+
+    monkeypatch.setattr(A, "_PREVIEW_AFTER", 1e9)
+    never, (ds1, rgba1, _) = run()
+    monkeypatch.setattr(A, "_PREVIEW_AFTER", 0.0)
+    at_once, (ds2, rgba2, _) = run()
+    assert len(never) >= 1 and all(shape is None for _, shape in never)
+    assert at_once[0][1] is not None and at_once[0][0] < 1  # the coarse pass, shown first
+    assert np.array_equal(rgba1, rgba2) and ds1.identical(ds2)
+
+
 def test_server_log_lines_are_written_once():
     """Defect 13 (doubled log lines): in a server process, a record of the
     server's loggers is written once (one handler on its way)."""
@@ -702,6 +791,16 @@ def test_console_script_serves_the_page_and_stops_on_ctrl_c():
 # --------------------------------------------------------------------------- #
 
 
+def _timed_slices(log, name, n, seconds):
+    """A job of ``n`` slices of ``seconds`` each that records its name in ``log``."""
+    import time
+
+    for i in range(n):
+        time.sleep(seconds)
+        log.append(name)
+        yield i
+
+
 def _slices(log, name, n, result=None):
     """A job of ``n`` slices that records each one in ``log``."""
     for i in range(n):
@@ -713,10 +812,11 @@ def _slices(log, name, n, result=None):
 
 def test_scheduler_runs_a_cheap_request_before_a_heavy_one_continues():
     """Least recent usage first: a heavy job that has had its slices waits
-    while another session's one-slice job runs; it never runs to the end first."""
+    while another session's one-slice job runs; it never runs to the end first
+    (no quantum: the rule alone)."""
     from stairbounce.explorer.scheduler import Scheduler
 
-    s = Scheduler(thread=False)
+    s = Scheduler(thread=False, quantum=0.0)
     log = []
     a, b = object(), object()
     heavy = s.submit(a, "render", _slices(log, "A", 10))
@@ -732,7 +832,6 @@ def test_scheduler_runs_a_cheap_request_before_a_heavy_one_continues():
 def test_scheduler_shares_turns_between_two_heavy_sessions():
     from stairbounce.explorer.scheduler import Scheduler
 
-    s = Scheduler(thread=False)
     log = []
     # equal-cost slices: attained service grows alike, so the two alternate
     def slow(name):
@@ -743,6 +842,7 @@ def test_scheduler_shares_turns_between_two_heavy_sessions():
 
     import time
 
+    s = Scheduler(thread=False, quantum=0.0)
     s.submit("a", "render", slow("A"))
     s.submit("b", "render", slow("B"))
     s.run_all()
@@ -754,27 +854,57 @@ def test_scheduler_does_not_starve_a_long_render():
     """Session A's long render keeps getting slices while B keeps sending
     new small requests (each superseding the last): B's usage counts, not
     only its newest job's (ranking jobs by their own time starved A)."""
-    import time
-
     from stairbounce.explorer.scheduler import Scheduler
 
-    def slow(log, name, n):
-        for i in range(n):
-            time.sleep(0.004)
-            log.append(name)
-            yield i
-
-    s = Scheduler(thread=False)
+    s = Scheduler(thread=False, quantum=0.0)
     log = []
-    s.submit("a", "render", slow(log, "A", 1000))
+    s.submit("a", "render", _timed_slices(log, "A", 1000, 0.004))
     for _ in range(40):
-        s.submit("b", "render", slow(log, "B", 3))
+        s.submit("b", "render", _timed_slices(log, "B", 3, 0.004))
         for _ in range(3):
             with s._cv:
                 job = s._pick()
             s.run_slice(job)
     # A had about a fair half of the 120 slices, not none
     assert 40 <= log.count("A") <= 80
+    s.cancel("a")
+
+
+def test_scheduler_finishes_equal_requests_one_after_another():
+    """With the quantum, three sessions' equal small renders run first come,
+    first served (the first done after one render, not all at the end);
+    without it they share the worker slice by slice (processor sharing)."""
+    from stairbounce.explorer.scheduler import Scheduler
+
+    def order(quantum):
+        s = Scheduler(thread=False, quantum=quantum)
+        log = []
+        for name in "ABC":  # slices of no measurable cost: far below the quantum
+            s.submit(name, "render", _slices(log, name, 4))
+        s.run_all()
+        return "".join(name for name, i in log if i != "done")
+
+    assert order(0.25) == "AAAABBBBCCCC"
+    assert sorted(order(0.0)[:3]) == ["A", "B", "C"]  # each session's first slice first
+
+
+def test_scheduler_quantum_bounds_the_wait_of_a_new_request():
+    """A request from an idle session waits for at most the quantum (0.25 s)
+    of another session's render under way, plus the slice in progress."""
+    from stairbounce.explorer.scheduler import Scheduler
+
+    s = Scheduler(thread=False, quantum=0.25)
+    log = []
+    heavy = s.submit("a", "render", _timed_slices(log, "A", 20, 0.1))
+    s.run_slice(heavy)
+    s.submit("b", "render", _timed_slices(log, "B", 1, 0.1))
+    while "B" not in log:
+        with s._cv:
+            job = s._pick()
+        s.run_slice(job)
+    # A's usage passes 0.25 s (decayed by at most 8 %) after its 3rd slice: B comes
+    # at the latest after A's 4th; with no quantum it would come right after A's 1st
+    assert 2 <= log.index("B") <= 4
     s.cancel("a")
 
 

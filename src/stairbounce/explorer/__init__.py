@@ -129,13 +129,24 @@ def browse_url(host: str, port: int) -> str:
     return f"http://{_netloc(host, port)}/"
 
 
+def _label_ipv6_host(request) -> None:
+    """Let Panel read an IPv6 ``Host`` header: Panel splits it at ':' for its
+    Location (hostname, port), which fails on "[::1]:5006"; the page's
+    websocket URL is taken from the browser's address, so this name is only
+    a label."""
+    host = request.host
+    if host.startswith("["):
+        request.host = "localhost:" + host.rpartition("]:")[2] if "]:" in host else "localhost"
+
+
 def _guard_long_queries(tornado_app) -> None:
     """Redirect a page request with an over-long query value to the same
     query with that value cut (the page then reports it as a bad value); let
-    Panel read an IPv6 ``Host`` header."""
+    Panel read an IPv6 ``Host`` header, in the page request and in the
+    websocket request (where the page's session is built)."""
     from urllib.parse import urlencode
 
-    from panel.io.server import DocHandler
+    from panel.io.server import DocHandler, WSHandler
 
     class _CutQueryDocHandler(DocHandler):
         async def get(self, *args, **kwargs):
@@ -145,17 +156,37 @@ def _guard_long_queries(tornado_app) -> None:
                        for k, vs in args_.items() for v in vs]
                 self.redirect(self.request.path + "?" + urlencode(cut, safe=":,"))
                 return
-            host = self.request.host
-            if host.startswith("["):
-                # Panel splits Host at ':' for its Location (hostname, port),
-                # which fails on "[::1]:5006"; the page's websocket URL is
-                # taken from the browser's address, so this name is only a label
-                self.request.host = "localhost:" + host.rpartition("]:")[2] if "]:" in host else "localhost"
+            _label_ipv6_host(self.request)
             return await super().get(*args, **kwargs)
+
+    class _IPv6WSHandler(WSHandler):
+        def open(self, *args, **kwargs):
+            _label_ipv6_host(self.request)
+            return super().open(*args, **kwargs)
 
     for rule in tornado_app.wildcard_router.rules:
         if rule.target is DocHandler:
             rule.target = _CutQueryDocHandler
+        elif rule.target is WSHandler:
+            rule.target = _IPv6WSHandler
+
+
+def _page_key(request) -> str:
+    """The kept session serving a page request: one per path."""
+    return request.path
+
+
+def _prepare_page(server, host: str) -> None:
+    """Request the page once, so that the session every later page request
+    is rendered from is built now, not for the first visitor (whose own
+    session it would then also be)."""
+    import urllib.request
+
+    host = normalize_host(host)
+    local = {"0.0.0.0": "127.0.0.1", "": "127.0.0.1", "::": "::1"}.get(host, host)
+    direct = urllib.request.build_opener(urllib.request.ProxyHandler({}))  # never through a proxy
+    with direct.open(browse_url(local, server.port), timeout=60) as answer:
+        answer.read()
 
 
 def make_server(port=5006, host="127.0.0.1", show=False, allow_websocket_origin=()):
@@ -172,6 +203,14 @@ def make_server(port=5006, host="127.0.0.1", show=False, allow_websocket_origin=
 
     from .app import create_app
 
+    # A page request answers with the page's HTML only (the same for every
+    # view: the picture and widgets come over the websocket), rendered from
+    # one kept session instead of building a new session's document (0.3 s of
+    # the event loop, which every open page waits for); the page's own
+    # session is built when its websocket connects, from the query in its
+    # token.  One kept session per path, whatever the query.
+    pn.config.reuse_sessions = True
+    pn.config.session_key_func = _page_key
     address = normalize_host(host)
     server = pn.serve(
         create_app,
@@ -219,6 +258,10 @@ def serve(port=5006, host="127.0.0.1", show=True, on_ready=None, allow_websocket
             say(f"kernels ready in {time.perf_counter() - t0:.1f} s")
 
     def wait_warm():
+        try:
+            _prepare_page(server, host)
+        except OSError:  # the first visitor builds it instead
+            pass
         warm.wait()
         server.io_loop.add_callback(report)
 

@@ -97,10 +97,17 @@ _WARM = threading.Event()
 # 1000 preview would be 4 MB on the websocket, shared by every session)
 _PREVIEW_EVERY = 1.0
 _PREVIEW_SIDE = 300
+# no preview for a render that is done sooner than this after its first slice
+# (s): the picture itself is about to come, and each picture costs every
+# browser showing it a repaint
+_PREVIEW_AFTER = 0.25
 
 _COLOR_OPTIONS = {menu: var for var, (menu, _, _) in FIELDS.items()}
 _OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bound, Cor. 2.1": "no_sliding"}
 _OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u = (1-e)/(2\u221a(2e)), Cor. 2.1"}
+
+# milliseconds without wheel events after which a wheel zoom is taken as done
+ZOOM_SETTLE_MS = 150
 
 # the longest trajectory drawn for a tap, in steps (one full period when shorter)
 MAX_TRAJECTORY_STEPS = 2000
@@ -253,6 +260,11 @@ class Explorer:
             y_axis_label="u (horizontal speed)",
             title="periodic sliding solutions in the (e, u) plane",
             min_border_left=70,
+            # a wheel zoom reports its new ranges (RangesUpdate) once the wheel
+            # has been still this long: Bokeh's default 500 ms is most of the
+            # wait for the next picture; a trackpad's wheel events come every
+            # ~16 ms, so a gesture in progress still sends one request
+            lod_timeout=ZOOM_SETTLE_MS,
         )
         fig.toolbar.logo = None
         # not yet computed: grey, so it is not mistaken for white (no sliding)
@@ -287,8 +299,8 @@ class Explorer:
         self.mapper = LinearColorMapper(**mapper)
         self.colorbar = ColorBar(color_mapper=self.mapper, width=14, bar_line_color="black", **bar)
         fig.add_layout(self.colorbar, "right")
-        fig.on_event(RangesUpdate, self._on_ranges)
-        fig.on_event(Tap, self._on_tap)
+        fig.on_event(RangesUpdate, self._locked_event(self._on_ranges))
+        fig.on_event(Tap, self._locked_event(self._on_tap))
         self.map_fig = fig
 
     def _build_point_figures(self):
@@ -402,6 +414,10 @@ class Explorer:
     def _locked_bokeh(self, fn):
         """A Bokeh property callback ``(attr, old, new)``; it holds the lock already."""
         return lambda attr, old, new: self._in_doc(fn, new) if self._doc is not None else fn(new)
+
+    def _locked_event(self, fn):
+        """A Bokeh UI event callback (pan, zoom, tap); it holds the lock already."""
+        return lambda event: self._in_doc(fn, event) if self._doc is not None else fn(event)
 
     # ------------------------------------------------------------ interaction
 
@@ -641,7 +657,7 @@ class Explorer:
         """The render as scheduler slices: the scan's slices, with a preview
         picture at most every _PREVIEW_EVERY seconds; returns (ds, rgba, values)."""
         slices = render_slices(view)
-        last = -np.inf
+        first = last = None
         while True:
             try:
                 part = next(slices)
@@ -649,7 +665,9 @@ class Explorer:
                 ds = stop.value
                 break
             now = time.perf_counter()
-            if now - last >= _PREVIEW_EVERY:
+            if first is None:
+                first = now
+            if now - first >= _PREVIEW_AFTER and (last is None or now - last >= _PREVIEW_EVERY):
                 last = now
                 k = -(-max(view.width, view.height) // _PREVIEW_SIDE)
                 yield part.fraction, preview_rgba(part, view.color)[k // 2 :: k, k // 2 :: k]
@@ -685,8 +703,26 @@ class Explorer:
         self._sched.cancel(self)
 
     def _in_doc(self, fn, *args):
-        with set_curdoc(self._doc):
-            fn(*args)
+        """Run ``fn`` on the page's document (under its lock), holding the
+        document's change events until it returns.
+
+        Held, the changes reach the browser through Bokeh's own ordered
+        writes when ``fn`` ends.  Not held, Panel 1.9 sends a pane's or
+        widget's change itself and, when the websocket is busy writing (a
+        picture), queues it; two such queues can race and the last change
+        is never sent (the page kept "computing ... 83%" over a finished
+        picture while other visitors loaded the page).
+        """
+        doc = self._doc
+        with set_curdoc(doc):
+            if doc.callbacks.hold_value is not None:  # someone holds it already: they release it
+                fn(*args)
+                return
+            doc.hold("combine")
+            try:
+                fn(*args)
+            finally:
+                doc.unhold()
 
     def _show_partial(self, gen, view, value):
         if gen != self._gen:
@@ -888,6 +924,6 @@ def create_app():
     (:func:`~stairbounce.explorer.view.parse_query`)."""
     view, messages = parse_query(pn.state.session_args if pn.state.curdoc else {})
     explorer = Explorer(view, messages)
-    pn.state.onload(explorer.start)
+    pn.state.onload(partial(explorer._in_doc, explorer.start) if explorer._doc is not None else explorer.start)
     pn.state.on_session_destroyed(lambda _ctx: explorer.close())
     return explorer.layout

@@ -15,7 +15,13 @@ next slice of another session's long render, waiting at most for the slice
 in progress; sessions that keep the worker busy take turns, and none
 starves (a waiting session's usage decays while the others' grows; ranking
 jobs by their own attained time instead let a session that kept sending
-small requests hold back a longer one for minutes).  A session has at most
+small requests hold back a longer one for minutes).  The job that ran the
+last slice keeps the worker while its session's recent compute time is
+within :data:`QUANTUM` of the least: requests of equal size then finish one
+after another (the first after one render's time, the fifth after five)
+instead of all together at the end, as slice-by-slice sharing did, and a
+request from the least busy session waits at most ``QUANTUM`` and one slice.
+A session has at most
 one job of each kind: a new request supersedes its own pending one, and a
 job whose session is gone (``alive()`` false) is dropped before its next
 slice.
@@ -33,6 +39,10 @@ __all__ = ["Job", "Scheduler", "USAGE_DECAY"]
 
 USAGE_DECAY = 5.0
 """Time constant (s) of the decay of a session's recent compute time."""
+
+QUANTUM = 0.25
+"""The job that ran the last slice keeps the worker while its session's
+recent compute time is at most this much (s) above the least of the others."""
 
 
 @dataclass(eq=False)
@@ -59,13 +69,17 @@ class Scheduler:
 
     ``submit`` never blocks; ``cancel(owner)`` drops an owner's jobs at once
     (a slice already running finishes, then its job is closed).  With
-    ``thread=False`` nothing runs until :meth:`run_all` (tests).
+    ``thread=False`` nothing runs until :meth:`run_all` (tests); ``quantum``
+    (s, default :data:`QUANTUM`) is how far above the least used session the
+    job under way may go before it yields the worker.
     """
 
-    def __init__(self, name: str = "stairbounce-explorer", thread: bool = True):
+    def __init__(self, name: str = "stairbounce-explorer", thread: bool = True, quantum: float = QUANTUM):
         self._cv = threading.Condition()
         self._jobs: list[Job] = []
         self._running: Job | None = None
+        self._last: Job | None = None  # ran the last slice and is not done
+        self.quantum = quantum  # 0: the least used session's job every slice
         self._seq = itertools.count()
         self._usage: dict[int, tuple[float, float]] = {}  # id(owner) -> (usage, at time)
         self._name = name
@@ -142,7 +156,12 @@ class Scheduler:
             del self._usage[k]  # forgotten: no job and no recent use
         if not live:
             return None
-        return min(live, key=lambda j: (self.usage(j.owner, now), j.seq))
+        best = min(live, key=lambda j: (self.usage(j.owner, now), j.seq))
+        last = self._last
+        if (last is not None and last is not best and any(j is last for j in live)
+                and self.usage(last.owner, now) <= self.usage(best.owner, now) + self.quantum):
+            return last  # finish what is under way rather than share the worker slice by slice
+        return best
 
     def usage(self, owner, now=None) -> float:
         """The owner's recent compute time in seconds (decayed)."""
@@ -177,6 +196,7 @@ class Scheduler:
             self._usage[id(job.owner)] = (self.usage(job.owner, now) + dt, now)
             job.started = True
             self._running = None
+            self._last = None if done or job.cancelled else job
             cancelled = job.cancelled
             if done and job in self._jobs:
                 self._jobs.remove(job)
