@@ -5,11 +5,13 @@ recomputed at the view's pixel size after every pan or zoom (Bokeh's
 ``RangesUpdate`` event, one per gesture); a tap shows the word, trajectory and
 orbit diagram of the tapped pixel.  All dynamics runs on the shared
 :class:`~stairbounce.explorer.scheduler.Scheduler` (one worker thread, slices
-of bounded work, least attained service first, a session's new request
-superseding its own pending one), so the server's event loop keeps serving
-every page; results come back to the document with
-``add_next_tick_callback``, the Bokeh server's thread-safe way in.  A render
-shows a coarse preview first (every 8th pixel), then fills in rows.
+of bounded work, the least recently busy session first with a quantum for
+the job under way, a session's new request superseding its own pending one),
+so the server's event loop keeps serving every page; results come back to
+the document with ``add_next_tick_callback``, the Bokeh server's thread-safe
+way in, and every callback holds the document until it ends (see
+:meth:`Explorer._in_doc`).  A render that takes time shows a coarse preview
+first (every 8th pixel), then fills in rows.
 Downloads are made on their own thread.  The browser's history is kept by
 the page itself (a pan, zoom or new window is a history entry; Back and
 Forward restore the view).
