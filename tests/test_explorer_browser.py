@@ -314,8 +314,13 @@ def test_back_and_forward_restore_the_view(server, page):
     page.go_forward()
     page.wait_for_function("([e]) => document.location.search.includes('e=' + e + '&')",
                            arg=[zoomed[0]], timeout=30_000)
-    _wait_rendered(page)
+    # the address bar changes at once; the boxes and the picture follow when
+    # the server has taken the Forward (the status still reads the last view)
+    deadline = time.monotonic() + 30
+    while _window(page) != zoomed and time.monotonic() < deadline:
+        time.sleep(0.1)
     assert _window(page) == zoomed
+    _wait_rendered(page)
     # navigating history made no new entries
     assert page.evaluate("() => history.length") == start + 2
 
