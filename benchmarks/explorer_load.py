@@ -160,9 +160,7 @@ async def wait_new_picture(page, before, timeout=120.0):
 
 async def open_page(browser, url):
     page = await browser.new_page(viewport={"width": 1600, "height": 1000})
-    await page.goto(url)
-    await watch(page)
-    await wait_new_picture(page, None)
+    await goto(page, url)
     return page
 
 

@@ -862,9 +862,7 @@ def test_scheduler_does_not_starve_a_long_render():
     for _ in range(40):
         s.submit("b", "render", _timed_slices(log, "B", 3, 0.004))
         for _ in range(3):
-            with s._cv:
-                job = s._pick()
-            s.run_slice(job)
+            assert s.run_next()
     # A had about a fair half of the 120 slices, not none
     assert 40 <= log.count("A") <= 80
     s.cancel("a")
@@ -899,9 +897,7 @@ def test_scheduler_quantum_bounds_the_wait_of_a_new_request():
     s.run_slice(heavy)
     s.submit("b", "render", _timed_slices(log, "B", 1, 0.05))
     while "B" not in log:
-        with s._cv:
-            job = s._pick()
-        s.run_slice(job)
+        assert s.run_next()
     # A's usage (at least 0.05 s a slice, decayed by at most 6 %) passes 0.25 s after
     # its 6th slice at the latest, so B comes by then (sooner if sleeps overshoot);
     # with no quantum it would come right after A's 1st

@@ -406,20 +406,17 @@ class Explorer:
         def run(*args):
             if self._syncing:  # the page itself is setting the widgets (watchers fire now)
                 return
-            if self._doc is not None and self._doc.session_context is not None:
-                self._doc.add_next_tick_callback(partial(self._in_doc, fn, *args))
-            else:  # no server (tests)
-                fn(*args)
+            self._next_tick(fn, *args)
 
         return run
 
     def _locked_bokeh(self, fn):
         """A Bokeh property callback ``(attr, old, new)``; it holds the lock already."""
-        return lambda attr, old, new: self._in_doc(fn, new) if self._doc is not None else fn(new)
+        return lambda attr, old, new: self._in_doc(fn, new)
 
     def _locked_event(self, fn):
         """A Bokeh UI event callback (pan, zoom, tap); it holds the lock already."""
-        return lambda event: self._in_doc(fn, event) if self._doc is not None else fn(event)
+        return lambda event: self._in_doc(fn, event)
 
     # ------------------------------------------------------------ interaction
 
@@ -689,7 +686,9 @@ class Explorer:
         return session.connection_count > 0
 
     def _next_tick(self, fn, *args):
-        if self._doc is None:  # no server (tests): run here
+        """Run ``fn`` on the page's document at the server's next tick (any
+        thread may ask); without a server (tests), here and now."""
+        if self._doc is None or self._doc.session_context is None:
             fn(*args)
             return
         try:
@@ -713,9 +712,13 @@ class Explorer:
         widget's change itself and, when the websocket is busy writing (a
         picture), queues it; two such queues can race and the last change
         is never sent (the page kept "computing ... 83%" over a finished
-        picture while other visitors loaded the page).
+        picture while other visitors loaded the page).  Without a document
+        (tests) ``fn`` just runs.
         """
         doc = self._doc
+        if doc is None:
+            fn(*args)
+            return
         with set_curdoc(doc):
             if doc.callbacks.hold_value is not None:  # someone holds it already: they release it
                 fn(*args)
@@ -926,6 +929,6 @@ def create_app():
     (:func:`~stairbounce.explorer.view.parse_query`)."""
     view, messages = parse_query(pn.state.session_args if pn.state.curdoc else {})
     explorer = Explorer(view, messages)
-    pn.state.onload(partial(explorer._in_doc, explorer.start) if explorer._doc is not None else explorer.start)
+    pn.state.onload(partial(explorer._in_doc, explorer.start))
     pn.state.on_session_destroyed(lambda _ctx: explorer.close())
     return explorer.layout

@@ -158,7 +158,7 @@ class Scheduler:
             return None
         best = min(live, key=lambda j: (self.usage(j.owner, now), j.seq))
         last = self._last
-        if (last is not None and last is not best and any(j is last for j in live)
+        if (last is not None and last is not best and last in live  # jobs compare by identity
                 and self.usage(last.owner, now) <= self.usage(best.owner, now) + self.quantum):
             return last  # finish what is under way rather than share the worker slice by slice
         return best
@@ -171,12 +171,20 @@ class Scheduler:
     def _loop(self):
         while True:
             with self._cv:
-                job = self._pick()
-                while job is None:
+                while not self._jobs:
                     self._cv.wait()
-                    job = self._pick()
-                self._running = job
-            self.run_slice(job)
+            self.run_next()
+
+    def run_next(self) -> bool:
+        """Run one slice of the job :meth:`_pick` chooses on this thread (the
+        worker's loop; tests); False when there is none."""
+        with self._cv:
+            job = self._pick()
+            if job is None:
+                return False
+            self._running = job
+        self.run_slice(job)
+        return True
 
     def run_slice(self, job: Job) -> None:
         """Run one slice of ``job`` on this thread (the worker's loop; tests)."""
@@ -211,13 +219,8 @@ class Scheduler:
 
     def run_all(self) -> None:
         """Run every queued job to its end on this thread (tests, no server)."""
-        while True:
-            with self._cv:
-                job = self._pick()
-                if job is None:
-                    return
-                self._running = job
-            self.run_slice(job)
+        while self.run_next():
+            pass
 
 
 def _decay(age):
