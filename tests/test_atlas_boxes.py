@@ -73,6 +73,13 @@ def test_dask_cluster_gives_the_same_counts(stores, image):
     np.testing.assert_array_equal(c2, box_counts(border_in_memory(image, "sliding", 4))[1])
 
 
+def test_unreachable_scheduler_is_refused_at_once(stores):
+    """Counting connects as the tiled scan does (atlas._connect): a closed port
+    is a ValueError naming the address and the reason."""
+    with pytest.raises(ValueError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9: connection refused"):
+        store_box_counts(stores[32], client="tcp://127.0.0.1:9")
+
+
 def test_dimension_is_box_dimension_of_the_border(stores, image):
     border = border_in_memory(image, "sliding", 4)
     a = store_box_dimension(stores[50], fit_range=(2, 32))

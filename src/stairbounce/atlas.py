@@ -418,10 +418,7 @@ def scan_to_zarr(
     tile = check_count("tile", tile, 1)
     if numba_threads is not None:
         numba_threads = check_count("numba_threads", numba_threads, 1)
-    if client is not None and not isinstance(client, str) and not hasattr(client, "submit"):
-        raise ValueError(
-            f"client must be None, a dask.distributed.Client or a scheduler address, got {client!r}"
-        )
+    _check_client(client)
     # one pixel through the public scan: validates everything as scan does and
     # gives its variables and attributes, whatever scan records
     (e_lo, e_hi, n_e), (u_lo, u_hi, n_u) = _triple("e", e), _triple("u", u)
@@ -539,28 +536,50 @@ def _run_here(args, numba_threads, n_done, total, progress):
                 future.cancel()
 
 
-def _run_on_dask(client, args, n_done, total, progress):
+def _check_client(client) -> None:
+    """``client`` as the tiled functions take it: None (here), a
+    ``dask.distributed.Client`` or a scheduler address (see :func:`_connect`)."""
+    if client is not None and not isinstance(client, str) and not hasattr(client, "submit"):
+        raise ValueError(
+            f"client must be None, a dask.distributed.Client or a scheduler address, got {client!r}"
+        )
+
+
+def _dask_each(client, fn, args, each, wait_cancelled=False) -> None:
+    """Run ``fn(*a)`` on the cluster for every ``a`` in ``args`` and call
+    ``each(result)`` here as they finish.  On the way out (an error, Ctrl-C)
+    what has not finished is cancelled; with ``wait_cancelled``, waited for
+    (up to 5 s) until it has stopped."""
     from distributed import as_completed
 
     futures = []
     try:
-        futures = [client.submit(_run_tile, *arg, pure=False) for arg in args]
+        futures = [client.submit(fn, *a, pure=False) for a in args]
         for future in as_completed(futures):
-            future.result()
-            n_done += 1
-            if progress is not None:
-                progress(n_done, total)
+            each(future.result())
+            future.release()
     finally:
         pending = [f for f in futures if not f.done()]
         if pending:
             client.cancel(pending)
-            # the lock is released when the caller returns: tiles still
-            # running must not write after that (they check the lock, and a
-            # cancelled one that already checked writes a whole, unmarked tile)
-            with contextlib.suppress(Exception):
-                from distributed import wait
+            if wait_cancelled:
+                with contextlib.suppress(Exception):
+                    from distributed import wait
 
-                wait(pending, timeout=5)
+                    wait(pending, timeout=5)
+
+
+def _run_on_dask(client, args, n_done, total, progress):
+    def each(_):
+        nonlocal n_done
+        n_done += 1
+        if progress is not None:
+            progress(n_done, total)
+
+    # the lock is released when the caller returns: tiles still running must
+    # not write after that (they check the lock, and a cancelled one that
+    # already checked writes a whole, unmarked tile), hence the wait
+    _dask_each(client, _run_tile, args, each, wait_cancelled=True)
 
 
 def downsample(ds, max_pixels, method="mode"):

@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .atlas import tile_slices, tiles_done
+from .atlas import _check_client, _connect, _dask_each, tile_slices, tiles_done
 from .fractal import (
     _check_sizes,
     _WHICH,
@@ -272,34 +272,24 @@ def _run_here(tasks, threads, collect, progress):
 
 
 def _run_on_dask(client, tasks, collect, progress):
-    from distributed import Client, as_completed
-
-    if not isinstance(client, str) and not hasattr(client, "submit"):
-        raise ValueError(
-            f"client must be None, a dask.distributed.Client or a scheduler address, got {client!r}"
-        )
+    _check_client(client)
     own = isinstance(client, str)
     if own:
-        address = client
-        try:
-            client = Client(address)
-        except OSError as exc:
-            raise ValueError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
-    total = len(tasks)
-    futures = []
+        client = _connect(client)
+    total, done = len(tasks), 0
+
+    def each(result):
+        nonlocal done
+        collect(result)
+        done += 1
+        if progress is not None:
+            progress(done, total)
+
     try:
         if progress is not None:
             progress(0, total)
-        futures = [client.submit(_tile_counts, *t, pure=False) for t in tasks]
-        for done, future in enumerate(as_completed(futures), 1):
-            collect(future.result())
-            future.release()
-            if progress is not None:
-                progress(done, total)
+        _dask_each(client, _tile_counts, tasks, each)
     finally:
-        pending = [f for f in futures if not f.done()]
-        if pending:
-            client.cancel(pending)
         if own:
             client.close()
 
