@@ -616,8 +616,21 @@ def test_plot_scan(tmp_path):
     plt.close(ax.figure)
     with pytest.raises(ValueError, match="field must be one of"):
         plot_scan(ds, field="colour")
-    with pytest.raises(ValueError, match="overlay must be among"):
+    with pytest.raises(ValueError, match="overlay must be among tongues, bound, got 'grid'"):
         plot_scan(ds, overlay=("grid",))
+
+
+def test_every_plot_refuses_an_unknown_overlay_by_name():
+    """The three plots with overlays check them the same way (_validate.among)."""
+    from stairbounce import nonsliding, orbits
+    from stairbounce.plot import plot_motion, plot_orbit_diagram
+
+    motion = nonsliding.motion_scan(e=(0.1, 0.2, 4), u=(0.5, 0.6, 3), steps=10, transient=0)
+    with pytest.raises(ValueError, match="overlay must be among families, bound, got 'grid'"):
+        plot_motion(motion, overlay=("grid",))
+    diagram = orbits.orbit_diagram(e=0.1, u=(0.5, 0.6, 3), transient=2, keep=2)
+    with pytest.raises(ValueError, match="overlay must be among tongues, got 'grid'"):
+        plot_orbit_diagram(diagram, overlay="grid")
 
 
 # --------------------------------------------------------------------------- #

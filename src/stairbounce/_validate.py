@@ -65,6 +65,14 @@ def count(name, n, minimum, maximum=None):
     return n
 
 
+def among(name, values, allowed):
+    """Every item of ``values`` is one of ``allowed`` (a list option such as
+    a plot's overlays)."""
+    for x in values:
+        if x not in allowed:
+            raise ValueError(f"{name} must be among {', '.join(allowed)}, got {x!r}")
+
+
 def flag(name, x):
     """A bool (Python or numpy)."""
     if not isinstance(x, (bool, np.bool_)):

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import _validate as _v
+
 __all__ = ["plot_motion", "plot_motion_cut", "MOTION_PLOT_FIELDS"]
 
 MOTION_PLOT_FIELDS = {
@@ -71,9 +73,7 @@ def plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=OVERLAYS, col
 
     if field not in MOTION_PLOT_FIELDS:
         raise ValueError(f"field must be one of {', '.join(MOTION_PLOT_FIELDS)}, got {field!r}")
-    for o in overlay:
-        if o not in OVERLAYS:
-            raise ValueError(f"overlay must be among {', '.join(OVERLAYS)}, got {o!r}")
+    _v.among("overlay", overlay, OVERLAYS)
     from .plane import _extent
 
     if ax is None:

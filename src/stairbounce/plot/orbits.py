@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from .. import _validate as _v
 from ..model import tongue
 from ..orbits import _LONG_NAMES, _varied, orbit_density
 
@@ -107,9 +108,7 @@ def plot_orbit_diagram(ds, component="y", density=True, ax=None, overlay=(), bin
     if component not in ("y", "v"):
         raise ValueError(f"component must be 'y' or 'v', got {component!r}")
     overlay = (overlay,) if isinstance(overlay, str) else tuple(overlay)
-    for name in overlay:
-        if name not in _OVERLAYS:
-            raise ValueError(f"overlay must be a subset of {_OVERLAYS}, got {name!r}")
+    _v.among("overlay", overlay, _OVERLAYS)
     if not (math.isfinite(unit) and unit > 0):
         raise ValueError(f"unit must be a finite number > 0, got {unit!r}")
     if ax is None:

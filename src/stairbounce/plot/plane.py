@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _validate as _v
+
 __all__ = ["plot_scan", "FIELDS", "ColorKey", "color_key", "NO_SLIDING_COLOR", "class_bounds"]
 
 FIELDS = {
@@ -199,9 +201,7 @@ def plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=
     if field not in FIELDS:
         raise ValueError(f"field must be one of {', '.join(FIELDS)}, got {field!r}")
     overlay = tuple(overlay)
-    for o in overlay:
-        if o not in OVERLAYS:
-            raise ValueError(f"overlay must be among {', '.join(OVERLAYS)}, got {o!r}")
+    _v.among("overlay", overlay, OVERLAYS)
     if ax is None:
         _, ax = plt.subplots(figsize=(8, 6))
     e_lo, e_hi, u_lo, u_hi = _extent(ds)
