@@ -162,8 +162,10 @@ def load_border_dimension(path=None):
     path = STUDY_FILE if path is None else Path(path)
     if not path.exists():
         return None
+    from .fractal import border_dimension_estimates
+
     try:
-        data = json.loads(path.read_text())
+        data = border_dimension_estimates(path)
         out = {}
         for name, entry in data.items():
             if not isinstance(entry, dict):  # "generated_by", "date": provenance, not a window

@@ -1483,18 +1483,23 @@ def sliding_classifier(max_iter=1000, which="sliding", y0=1.0, v0=0.0, prune=Tru
     return SlidingClassifier(max_iter, which, _finite("y0", y0), _finite("v0", v0), bool(prune))
 
 
-def border_dimension_estimates():
-    """border_dimension_estimates() -> dict
+def border_dimension_estimates(path=None):
+    """border_dimension_estimates(path=None) -> dict
 
     The measured dimension of the border of the sliding region in the
     paper's Fig. 6 and Fig. 7 windows, as written by
     ``benchmarks/dimension_study.py --json`` into the package's
-    ``data/border_dimension.json``: per window (``"fig6"``, ``"fig7"``) the
-    best estimate (``dimension``, ``ci95``, ``method``, ``details``), the
-    paper's value, the uncertainty-exponent results per ``max_iter`` and the
-    tiled box count; plus ``generated_by`` and ``date``.
+    ``data/border_dimension.json`` (or into ``path``): per window
+    (``"fig6"``, ``"fig7"``) the best estimate (``dimension``, ``ci95``,
+    ``method``, ``details``), the paper's value, the uncertainty-exponent
+    results per ``max_iter`` and the tiled box count; plus ``generated_by``
+    and ``date``.
     """
     import json
+    from pathlib import Path
+
+    if path is not None:
+        return json.loads(Path(path).read_text())
     from importlib.resources import files
 
     return json.loads(files("stairbounce").joinpath("data", "border_dimension.json").read_text())
