@@ -183,7 +183,7 @@ def _prepare_page(server, host: str) -> None:
     import urllib.request
 
     host = normalize_host(host)
-    local = {"0.0.0.0": "127.0.0.1", "": "127.0.0.1", "::": "::1"}.get(host, host)
+    local = ("::1" if host == "::" else "127.0.0.1") if host in _ANY else host
     direct = urllib.request.build_opener(urllib.request.ProxyHandler({}))  # never through a proxy
     with direct.open(browse_url(local, server.port), timeout=60) as answer:
         answer.read()
