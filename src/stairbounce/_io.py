@@ -43,6 +43,7 @@ __all__ = [
     "lock_holder",
     "OutputExistsError",
     "StoreLockedError",
+    "StoreReplacedError",
     "clean_stale_temporaries",
 ]
 
@@ -53,6 +54,10 @@ class OutputExistsError(ValueError):
 
 class StoreLockedError(ValueError):
     """Another live process holds the lock of a store."""
+
+
+class StoreReplacedError(ValueError):
+    """The store a writer opened is no longer the one at its path."""
 
 
 FORCE_HINT = "give --force (overwrite=True in Python) to replace it"
@@ -233,6 +238,7 @@ def check_output(path, overwrite=False, option=None):
                     f"{where}{path} is an existing folder that stairbounce did not write: "
                     "it is never replaced; choose another path"
                 )
+        if path.is_dir():  # a store, or a symlink to one: its writer's lock (resolved)
             holder = lock_holder(path)
             if holder is not None:
                 raise StoreLockedError(f"cannot replace {path}: {_describe(holder)}")
@@ -311,8 +317,10 @@ def _replace(tmp, path):
 
 
 def lock_file(path):
-    """The lock file of the store ``path``: ``.NAME.lock`` beside it."""
-    path = Path(path)
+    """The lock file of the store ``path``: ``.NAME.lock`` beside the store
+    the path names, symlinks resolved (report N3: a symlinked name took a
+    lock of its own, so two writers ran at once)."""
+    path = Path(os.path.realpath(path))
     return path.with_name(f".{path.name}.lock")
 
 

@@ -72,7 +72,7 @@ from . import _validate as _v
 from ._io import store_lock
 from .model import check_count
 
-__all__ = ["scan_to_zarr", "tile_slices", "tiles_done", "downsample"]
+__all__ = ["scan_to_zarr", "tile_slices", "tiles_done", "downsample", "DamagedStoreError"]
 
 # version 2: fill values that are no result, a checksum per tile, a lock
 FORMAT = "stairbounce-atlas-2"
@@ -106,15 +106,72 @@ def _tile_record(path):
     return zarr.open_group(str(path), mode="r")[TILES_GROUP]
 
 
+class DamagedStoreError(ValueError):
+    """A chunk of a store's tile record or coordinates cannot be read or does
+    not match the store's window: running its scan again repairs it."""
+
+
 def tiles_done(path):
     """tiles_done(path) -> np.ndarray of bool, shape (tiles along u, tiles along e)
 
-    Which tiles of the store at ``path`` are complete.
+    Which tiles of the store at ``path`` are complete.  A done flag that
+    cannot be read (a garbled chunk) raises :class:`DamagedStoreError` (a
+    ``ValueError``); running the store's scan again repairs it.
     """
     try:
-        return np.asarray(_tile_record(path)["done"][...], dtype=bool)
+        flags = _tile_record(path)["done"]
     except (KeyError, FileNotFoundError):
         raise ValueError(f"{path} is not a tiled scan store (no tile record)") from None
+    done, bad = _read_record(flags, False)
+    if bad:
+        raise DamagedStoreError(
+            f"the tile record of {path} is damaged (the done flag of tile {bad[0]} cannot be read): "
+            "run its scan again to repair it"
+        )
+    return done.astype(bool)
+
+
+def _read_record(arr, unreadable):
+    """A tile record array (chunks 1 x 1) and the tiles whose chunk cannot be
+    read (report N5: a garbled chunk was a Zstd traceback): read whole when it
+    can be, else chunk by chunk, an unreadable chunk reading as ``unreadable``."""
+    try:
+        return np.asarray(arr[...]), []
+    except Exception:  # noqa: BLE001 - any decoding error of a chunk is damage
+        pass
+    out = np.full(arr.shape, unreadable, dtype=arr.dtype)
+    bad = []
+    for i, j in np.ndindex(*arr.shape):
+        try:
+            out[i, j] = arr[i, j]
+        except Exception:  # noqa: BLE001
+            bad.append((i, j))
+    return out, bad
+
+
+def _store_token(path):
+    """The token of the store now at ``path`` (None: not a tile store): read
+    from its tile record's metadata file, a few hundred bytes."""
+    from ._io import _json
+
+    record = _json(os.path.join(path, TILES_GROUP, "zarr.json"))
+    try:
+        return record["attributes"]["token"]
+    except (TypeError, KeyError):
+        return None
+
+
+def _check_same_store(path, token):
+    """Refuse to write into a store other than the one the scan opened (report
+    N3: a store replaced under a running scan received its tiles)."""
+    from ._io import StoreReplacedError
+
+    if _store_token(path) != token:
+        raise StoreReplacedError(
+            f"the store {path} was replaced while the scan was running: its tiles were not "
+            "written into the new one; run the scan again (to a new path, or with the same "
+            "one to resume the new store if it is this scan's)"
+        )
 
 
 def _run_tile(path, token, owner, i, j, su, se, e_values, u_values, max_iter, y0, v0, prune, numba_threads):
@@ -142,11 +199,14 @@ def _run_tile(path, token, owner, i, j, su, se, e_values, u_values, max_iter, y0
             numba.set_num_threads(before)
     if not holds_lock(path, owner):
         raise RuntimeError(f"the scan that handed out this tile no longer holds the lock of {path}")
+    _check_same_store(path, token)
     arrays, crc, done = _open_store(path, token)
     values = {name: var.values for name, var in ds.data_vars.items()}
     for name, a in values.items():
         arrays[name][su, se] = a
     crc[i, j] = _checksum(values)
+    # the store replaced while the data was written: no done flag into the new one
+    _check_same_store(path, token)
     # only now: a tile killed above is recomputed on the next run
     done[i, j] = True
     return i, j
@@ -177,7 +237,7 @@ def _open_store(path, token):
         root = zarr.open_group(path, mode="r+")
         record = root[TILES_GROUP]
         if record.attrs.get("token") != token:
-            raise RuntimeError(f"the store {path} was replaced while the scan was running")
+            _check_same_store(path, token)
         hit = ({name: arr for name, arr in root.arrays() if arr.ndim == 2}, record["crc"], record["done"])
         if len(_OPEN_STORES) > 16:
             _OPEN_STORES.clear()
@@ -202,9 +262,11 @@ def _serial_launches():
 
 
 def _check_path(path):
-    path = Path(os.path.abspath(os.fspath(path)))
-    if path.suffix != ".zarr":
-        raise ValueError(f"path must end in .zarr, got {str(path)!r}")
+    given = Path(os.path.abspath(os.fspath(path)))
+    if given.suffix != ".zarr":
+        raise ValueError(f"path must end in .zarr, got {str(given)!r}")
+    # the store the name leads to: one lock and one store whatever the name (report N3)
+    path = Path(os.path.realpath(given))
     if not path.parent.is_dir():
         raise ValueError(f"cannot write {path}: folder {path.parent} does not exist")
     return path
@@ -266,16 +328,16 @@ def _create(path, template, encoding, shape_tiles, tile):
         raise ValueError(f"cannot write {path}: {exc.strerror.lower()} ({path.parent})") from None
 
 
-def _verify(path, rows, cols, done):
+def _verify(path, rows, cols, done, repair=True):
     """Tiles marked done whose data no longer matches their checksum (a chunk
-    deleted, truncated or garbled): unmarked, so that they are computed again.
-    Returns their indices."""
+    deleted, truncated or garbled): unmarked (with ``repair``), so that they
+    are computed again.  Returns their indices."""
     import zarr
 
-    root = zarr.open_group(str(path), mode="r+")
+    root = zarr.open_group(str(path), mode="r+" if repair else "r")
     record = root[TILES_GROUP]
     arrays = {name: arr for name, arr in root.arrays() if arr.ndim == 2}
-    crc = record["crc"][...]
+    crc, _ = _read_record(record["crc"], -2)  # -2: no checksum, an unreadable chunk is damage
     damaged = []
     for i, j in zip(*np.nonzero(done)):
         try:
@@ -285,9 +347,10 @@ def _verify(path, rows, cols, done):
             ok = False
         if not ok:
             damaged.append((int(i), int(j)))
-    for i, j in damaged:
-        record["done"][i, j] = False
-        record["crc"][i, j] = -1
+    if repair:
+        for i, j in damaged:
+            record["done"][i, j] = False
+            record["crc"][i, j] = -1
     return damaged
 
 
@@ -321,6 +384,43 @@ def _check_existing(path, attrs, tile):
             f"{path} holds a different scan ({'; '.join(differ)}): resume it with its own "
             "parameters, or write to a new path"
         )
+
+
+def _check_coords(path, es, us, repair):
+    """The coordinate arrays of the store against the pixel centres of its
+    window (report N2: they are outside the checksum; a deleted ``e`` chunk
+    read as nan, a rewritten one as another window, and passed as complete).
+    Wrong or unreadable ones are rewritten (said, ``RuntimeWarning``) with
+    ``repair``, else refused.  Returns the names rewritten."""
+    import zarr
+
+    root = zarr.open_group(str(path), mode="r+" if repair else "r")
+    fixed = []
+    for name, want in (("e", es), ("u", us)):
+        try:
+            arr = root[name]
+        except Exception:  # noqa: BLE001 - its metadata garbled: not ours to rebuild
+            raise DamagedStoreError(f"{path} is damaged (its {name} coordinate array cannot be read): "
+                                    "write to a new path") from None
+        try:
+            ok = arr.shape == want.shape and np.array_equal(arr[...], want)
+        except Exception:  # noqa: BLE001 - a garbled chunk
+            ok = False
+        if ok:
+            continue
+        if not repair:
+            raise DamagedStoreError(
+                f"the {name} coordinates of {path} are damaged (they do not match its window) and "
+                "the store cannot be written here: run its scan again where it can be written"
+            )
+        arr[...] = want
+        fixed.append(name)
+    if fixed:
+        warnings.warn(
+            f"the coordinate {' and '.join(fixed)} of {path} did not match the store's window "
+            "(a chunk deleted or damaged): rewritten", RuntimeWarning, stacklevel=3,
+        )
+    return fixed
 
 
 def _differs(a, b):
@@ -430,7 +530,10 @@ def scan_to_zarr(
     us = pixel_centres(a["u_min"], a["u_max"], n_u)
     template, encoding = _template(probe, es, us, tile)
     rows, cols = tile_slices(n_u, tile), tile_slices(n_e, tile)
-    reason = None if path.exists() else _unwritable_reason(path.parent)
+    reason = _unwritable_reason(path.parent)
+    if reason is not None and path.exists():
+        # no lock can be taken here: a complete store opens read-only (report N9)
+        return _open_read_only(path, template.attrs, tile, es, us, rows, cols, verify, progress, reason)
     if reason is not None:
         raise ValueError(f"cannot write {path}: folder {path.parent} is not writable ({reason})")
 
@@ -441,10 +544,16 @@ def scan_to_zarr(
         with store_lock(path) as owner:
             if path.exists():
                 _check_existing(path, template.attrs, tile)
+                _check_coords(path, es, us, repair=True)
             else:
                 _create(path, template, encoding, (len(rows), len(cols)), tile)
 
-            done = tiles_done(path)
+            done, unreadable = _read_record(_tile_record(path)["done"], False)
+            if unreadable:
+                warnings.warn(
+                    f"the done flag of {len(unreadable)} tile(s) of {path} cannot be read (a chunk "
+                    f"damaged), e.g. tile {unreadable[0]}: computed again", RuntimeWarning, stacklevel=2,
+                )
             todo = [(i, j) for i in range(len(rows)) for j in range(len(cols)) if not done[i, j]]
             if todo and not _writable(path):
                 raise ValueError(f"cannot resume {path}: the store is not writable")
@@ -471,9 +580,35 @@ def scan_to_zarr(
                 _run_here(args, numba_threads, total - len(todo), total, progress)
             else:
                 _run_on_dask(client, args, total - len(todo), total, progress)
+            _check_same_store(path, token)
     finally:
         if own:
             client.close()
+    return xr.open_zarr(str(path), consolidated=False)
+
+
+def _open_read_only(path, attrs, tile, es, us, rows, cols, verify, progress, reason):
+    """A store whose folder cannot be written (no lock can be taken there):
+    opened read-only when it is this scan's, complete and intact, else refused."""
+    import xarray as xr
+
+    _check_existing(path, attrs, tile)
+    _check_coords(path, es, us, repair=False)
+    done = tiles_done(path)
+    missing = int((~done).sum())
+    if missing:
+        raise ValueError(f"cannot resume {path}: its folder is not writable ({reason}) and "
+                         f"{missing} of {done.size} tiles are not computed yet")
+    if verify:
+        damaged = _verify(path, rows, cols, done, repair=False)
+        if damaged:
+            raise DamagedStoreError(
+                f"{len(damaged)} tile(s) of {path} no longer match their checksum, e.g. tile "
+                f"{damaged[0]}, and its folder is not writable ({reason}): run its scan again "
+                "where it can be written"
+            )
+    if progress is not None:
+        progress(done.size, done.size)
     return xr.open_zarr(str(path), consolidated=False)
 
 

@@ -934,9 +934,45 @@ def load(path):
     kw = {"consolidated": False} if fmt == "zarr" else {}
     try:
         with xr.open_dataset(path, engine=engine, chunks=None, **kw) as ds:
-            return ds.load()
+            ds = ds.load()
     except (OSError, RuntimeError, ValueError, KeyError, TypeError) as exc:
         # a damaged file or chunk (a decompression error, a truncated file):
         # one line naming the file, not the reader's traceback
         reason = " ".join(str(exc).split()) or type(exc).__name__
         raise ValueError(f"cannot read {path} as a scan ({type(exc).__name__}: {reason})") from None
+    _check_grid(ds, path)
+    return ds
+
+
+def _check_grid(ds, source):
+    """_check_grid(ds, source) -> None
+
+    Refuse a scan whose ``e``/``u`` coordinates are not the pixel centres of
+    the window its attributes record (``e_min``, ``e_max``, ``n_e``; a part
+    of a window, of another length, is checked for finite values only): the
+    coordinates of a store are outside its tiles' checksums, and a deleted or
+    rewritten chunk of them read as nan or as another window (report N2).
+    ``ValueError`` names ``source`` and the coordinate.
+    """
+    for name in ("e", "u"):
+        if name not in ds.coords or ds[name].ndim != 1:
+            continue
+        c = np.asarray(ds[name].values)
+        if c.dtype.kind != "f":
+            continue
+        if not np.all(np.isfinite(c)):
+            raise ValueError(f"cannot read {source} as a scan: its {name} coordinates are damaged (not "
+                             "finite); a tiled store repairs them when its scan is run again")
+        a = ds.attrs
+        keys = (f"{name}_min", f"{name}_max", f"n_{name}")
+        if all(k in a for k in keys) and c.size == a[keys[2]]:
+            try:
+                want = pixel_centres(float(a[keys[0]]), float(a[keys[1]]), int(a[keys[2]]))
+            except (TypeError, ValueError):
+                continue
+            if not np.array_equal(c, want):
+                raise ValueError(
+                    f"cannot read {source} as a scan: its {name} coordinates do not match its window "
+                    f"[{a[keys[0]]}, {a[keys[1]]}] of {a[keys[2]]} pixels (damaged); a tiled store "
+                    "repairs them when its scan is run again"
+                )

@@ -128,7 +128,8 @@ def render(
     """Draw a scan store without loading it whole: large windows are reduced by blocks first."""
     import xarray as xr
 
-    from ..atlas import downsample, tiles_done
+    from ..atlas import DamagedStoreError, tiles_done
+    from ..plane import _check_grid
 
     if png.suffix.lower() != ".png":
         raise CLIError(f"--png must end in .png, got {str(png)!r}")
@@ -151,8 +152,11 @@ def render(
         raise CLIError(f"cannot read {store} as a scan: {' '.join(str(exc).split())}") from None
     if field not in ds.data_vars or set(ds[field].dims) != {"u", "e"}:
         raise CLIError(f"{store} has no ({'u'}, {'e'}) variable {field!r}")
+    _check_grid(ds, store)
     try:
         done = tiles_done(store)
+    except DamagedStoreError:
+        raise
     except ValueError:
         done = None  # a saved scan, complete by construction
     if done is not None and not done.all():

@@ -1,0 +1,238 @@
+"""The second fault campaign's ten findings (issue 23; report
+``reliability-round2.md``, N1-N10), each with the case that broke.
+
+Every expected answer comes from the contract the README and docs state
+("Files and stores: what is guaranteed", the valid numeric range, the
+explorer's origin rule), not from the code's output; the numeric case is
+checked against a 60-digit mpmath evaluation of (2.4).
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+import zarr
+
+from stairbounce import _io, atlas
+from stairbounce.atlas import scan_to_zarr, tiles_done
+from stairbounce.cli import main
+from stairbounce.plane import load, save, scan
+
+from .test_atlas import StopAfter, stop_after
+
+pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")
+
+WINDOW = dict(e=(0.05, 0.95, 45), u=(0.1, 1.4, 38), max_iter=400)
+TILE = 16  # 3 x 3 tiles
+SCAN = ["scan", "--e", "0.05:0.95", "--u", "0.1:1.4", "--size", "45x38", "--max-iter", "400"]
+SRC = str(Path(__file__).resolve().parents[1] / "src")
+
+
+@pytest.fixture(scope="module")
+def reference():
+    return scan(**WINDOW)
+
+
+def run(args, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return exc.value.code, out, err
+
+
+def one_line_error(err):
+    lines = [x for x in err.strip().splitlines() if not x.startswith("stairbounce: warning:")]
+    return len(lines) == 1 and lines[0].startswith("stairbounce: error:") and "Traceback" not in err
+
+
+@pytest.fixture
+def store(tmp_path):
+    path = tmp_path / "a.zarr"
+    scan_to_zarr(path, tile=TILE, **WINDOW)
+    return path
+
+
+def mount(where, options):
+    """Mount a tmpfs (root only; skipped elsewhere)."""
+    if os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    where.mkdir(exist_ok=True)
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(where)], capture_output=True, text=True)
+    if r.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {r.stderr.strip()}")
+    return where
+
+
+def umount(where):
+    subprocess.run(["umount", str(where)], check=False)
+
+
+# --------------------------------------------------------------------------- #
+# N3 (finding 1): a symlinked name, a store replaced under a running scan     #
+# --------------------------------------------------------------------------- #
+
+HOLDER = textwrap.dedent("""
+    import sys, time
+    from pathlib import Path
+    from stairbounce.atlas import scan_to_zarr
+    path, ready = sys.argv[1], Path(sys.argv[2])
+    def progress(done, total):
+        ready.write_text(str(done))
+        time.sleep(120)      # holds the lock until killed
+    scan_to_zarr(path, e=(0.05, 0.95, 45), u=(0.1, 1.4, 38), max_iter=400, tile=16, progress=progress)
+""")
+
+
+def test_a_symlinked_name_takes_the_lock_of_the_store_it_names(tmp_path, capsys, reference):
+    """Report N3 (a), (b): a scan resuming through a symlinked name held only
+    the lock of that name; a second scan and ``scan --force`` on the real name
+    both ran.  Now a second process holds the store's own lock, whatever name
+    it was reached by."""
+    real = tmp_path / "real.zarr"
+    with pytest.raises(StopAfter):
+        scan_to_zarr(real, tile=TILE, progress=stop_after(2), **WINDOW)
+    alias = tmp_path / "alias.zarr"
+    alias.symlink_to(real.name)
+    ready = tmp_path / "ready"
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(alias), str(ready)],
+                              env={**os.environ, "PYTHONPATH": SRC}, stderr=subprocess.PIPE, text=True)
+    try:
+        for _ in range(1200):
+            if ready.exists() or holder.poll() is not None:
+                break
+            time.sleep(0.1)
+        assert ready.exists(), holder.stderr.read() if holder.poll() is not None else "no progress"
+        done_before = tiles_done(real).copy()
+        with pytest.raises(_io.StoreLockedError, match=f"pid {holder.pid}"):
+            scan_to_zarr(real, tile=TILE, **WINDOW)
+        with pytest.raises(_io.StoreLockedError, match=f"pid {holder.pid}"):
+            save(reference.isel(e=slice(0, 4), u=slice(0, 4)), real, overwrite=True)
+        code, _, err = run(["scan", "--size", "8x8", "--max-iter", "20", "--out", real, "--force"], capsys)
+        assert code == 2 and one_line_error(err) and "another stairbounce process" in err, err
+        code, _, err = run(SCAN + ["--tile", TILE, "--out", real], capsys)
+        assert code == 2 and one_line_error(err) and "another stairbounce process" in err, err
+        # nothing of the running scan's store was touched
+        np.testing.assert_array_equal(tiles_done(real), done_before)
+        assert (real / "tiles").is_dir() and alias.is_symlink()
+    finally:
+        holder.kill()
+        holder.wait()
+    ds = scan_to_zarr(alias, tile=TILE, **WINDOW)  # the holder is dead: its lock is stale
+    xr.testing.assert_identical(ds.compute(), reference)
+
+
+def test_a_writer_whose_store_was_replaced_fails_and_writes_nothing_into_the_new_one(tmp_path):
+    """Report N3 (b): the resuming scan wrote its tiles into the store that
+    replaced its own and said 'wrote ...'.  A store replaced under a running
+    scan (here by hand, as another host or a user's mv could) stops it with
+    ValueError; the new store gets no chunk of the old scan."""
+    path = tmp_path / "a.zarr"
+    other = scan(e=(0.1, 0.2, 4), u=(0.3, 0.4, 4), max_iter=20)
+
+    def replace_it(done, total):
+        if done >= 1 and not (tmp_path / "old.zarr").exists():
+            os.rename(path, tmp_path / "old.zarr")
+            save(other, path)
+
+    import numba
+
+    # tiles one after another (all numba threads a tile): the store is replaced between two
+    with pytest.raises(ValueError, match="replaced while the scan was running"):
+        scan_to_zarr(path, tile=TILE, progress=replace_it, numba_threads=numba.get_num_threads(), **WINDOW)
+    xr.testing.assert_identical(load(path), other)
+    assert not (path / "tiles").exists()
+    names = sorted(str(p.relative_to(path)) for p in path.rglob("*") if p.is_file())
+    assert all(not n.startswith(("tiles", "impacts/c/1", "status/c/2")) for n in names), names
+
+
+# --------------------------------------------------------------------------- #
+# N2 (finding 2): the coordinates outside the checksum                        #
+# --------------------------------------------------------------------------- #
+
+
+def _rewrite_e(path, shift):
+    arr = zarr.open_group(str(path), mode="r+")["e"]
+    arr[...] = arr[...] + shift
+
+
+@pytest.mark.parametrize("damage", ["deleted", "rewritten"])
+def test_damaged_coordinates_are_found_not_passed_as_complete(store, tmp_path, capsys, reference, damage):
+    """Report N2: a deleted or rewritten ``e`` chunk passed resume ('already
+    complete', exit 0), render and load (e = nan, or a shifted window)."""
+    if damage == "deleted":
+        (store / "e" / "c" / "0").unlink()
+    else:
+        _rewrite_e(store, 0.5)
+    with pytest.raises(ValueError, match="coordinates"):
+        load(store)
+    code, _, err = run(["render", store, "--png", tmp_path / "s.png"], capsys)
+    assert code == 2 and one_line_error(err) and "coordinates" in err, err
+    assert not (tmp_path / "s.png").exists()
+    with pytest.warns(RuntimeWarning, match="coordinate e"):
+        ds = scan_to_zarr(store, tile=TILE, **WINDOW)
+    xr.testing.assert_identical(ds.compute(), reference)
+    xr.testing.assert_identical(load(store), reference)
+
+
+# --------------------------------------------------------------------------- #
+# N5 (finding 5): garbled record chunks; a full disk; a lost scheduler        #
+# --------------------------------------------------------------------------- #
+
+
+def _garble(p):
+    p.write_bytes(b"\x28\xb5\x2f\xfd" + os.urandom(40))  # a zstd magic, then noise
+
+
+@pytest.mark.parametrize("chunk", ["e/c/0", "tiles/done/c/0/0", "tiles/crc/c/0/0"])
+def test_a_garbled_coordinate_or_record_chunk_is_repaired_on_resume(store, capsys, reference, chunk):
+    """Report N5: resume with a garbled ``e``, done-flag or checksum chunk
+    was a Zstd traceback, exit 1.  Now the rerun says so and repairs it."""
+    _garble(store / chunk)
+    code, out, err = run(SCAN + ["--tile", TILE, "--out", store], capsys)
+    assert code == 0 and "Traceback" not in err, err
+    assert "warning" in err
+    xr.testing.assert_identical(load(store), reference)
+    assert tiles_done(store).all()
+
+
+def test_a_garbled_done_flag_is_one_line_in_render(store, tmp_path, capsys):
+    """Report N5: ``render`` of a store with a garbled ``tiles/done`` chunk: a traceback."""
+    _garble(store / "tiles" / "done" / "c" / "1" / "1")
+    code, _, err = run(["render", store, "--png", tmp_path / "s.png"], capsys)
+    assert code == 2 and one_line_error(err) and "tile record" in err, err
+
+
+# --------------------------------------------------------------------------- #
+# N9 (finding 8): a complete store on a read-only file system                 #
+# --------------------------------------------------------------------------- #
+
+
+def test_a_complete_store_on_a_read_only_file_system_opens_read_only(tmp_path, capsys, reference):
+    """Report N9: 'cannot lock ...: read-only file system', exit 2, although a
+    complete store opens read-only.  An incomplete one is still refused in one line."""
+    ro = mount(tmp_path / "ro", "size=4m")
+    try:
+        scan_to_zarr(ro / "done.zarr", tile=TILE, **WINDOW)
+        with pytest.raises(StopAfter):
+            scan_to_zarr(ro / "part.zarr", tile=TILE, progress=stop_after(1), **WINDOW)
+        subprocess.run(["mount", "-o", "remount,ro", str(ro)], check=True)
+        ds = scan_to_zarr(ro / "done.zarr", tile=TILE, **WINDOW)
+        xr.testing.assert_identical(ds.compute(), reference)
+        code, out, err = run(SCAN + ["--tile", TILE, "--out", ro / "done.zarr"], capsys)
+        assert code == 0 and "9 already complete" in out, err
+        code, _, err = run(SCAN + ["--tile", TILE, "--out", ro / "part.zarr"], capsys)
+        assert code == 2 and one_line_error(err) and "read-only" in err, err
+    finally:
+        umount(ro)
