@@ -25,6 +25,7 @@ Nothing here imports more than the standard library.
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import re
@@ -276,19 +277,46 @@ def atomic_path(path, overwrite=False):
             if exc.filename is None or str(exc.filename) == str(tmp):
                 exc.filename = str(path)  # a full disk names the file asked for, not our temporary
             raise
+        except RuntimeError as exc:
+            if str(exc).startswith("NetCDF:"):  # netCDF4 reports a full disk so (report N5, N6)
+                raise _netcdf_os_error(exc, path) from None
+            raise
         if not os.path.lexists(tmp):
             raise FileNotFoundError(f"the writer of {path} left no file at {tmp}")
         if os.path.lexists(path):
             check_output(path, overwrite)
         _replace(tmp, path)
     except BaseException:
-        _remove(tmp)
+        _remove(tmp, settle=True)
         raise
 
 
-def _remove(p):
+def _netcdf_os_error(exc, path):
+    """The OSError behind a netCDF4 ``RuntimeError("NetCDF: HDF error")``: a
+    full disk (ENOSPC, when under 1 MiB is left, the temporary still in
+    place) or an input/output error naming the library's message."""
+    try:
+        st = os.statvfs(_folder(Path(path)))
+        full = st.f_bavail * st.f_frsize < (1 << 20)
+    except OSError:
+        full = False
+    if full:
+        return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+    return OSError(errno.EIO, f"the netCDF library could not write it ({exc})", str(path))
+
+
+def _remove(p, settle=False):
     if os.path.isdir(p) and not os.path.islink(p):
-        shutil.rmtree(p, ignore_errors=True)
+        # after a failed write (``settle``) the writer's pending asynchronous
+        # chunk writes (Zarr) may recreate the folder just after it is removed
+        # (report N6): remove until it stays gone
+        for _ in range(20 if settle else 1):
+            shutil.rmtree(p, ignore_errors=True)
+            if not settle:
+                break
+            time.sleep(0.05)
+            if not os.path.lexists(p):
+                break
     elif os.path.lexists(p):
         with contextlib.suppress(OSError):
             os.unlink(p)

@@ -207,8 +207,9 @@ def _cached(settings, kind, inputs, compute):
         path.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(path, overwrite=True) as tmp:  # our own cache
             ds.to_netcdf(tmp)
-    except (OSError, ValueError) as exc:
-        # an unwritable or full cache costs time, never a figure
+    except (OSError, ValueError, RuntimeError) as exc:
+        # an unwritable or full cache costs time, never a figure (netCDF4
+        # reports a full disk as a RuntimeError, report N6)
         _cache_warning(settings.cache_dir, exc)
     return ds
 
