@@ -291,3 +291,61 @@ def test_a_non_tiled_zarr_on_a_full_disk_leaves_no_temporary(nearly_full, capsys
                            capsys)
         assert code == 2 and one_line_error(err) and "no space left" in err, err
         assert sorted(p.name for p in nearly_full.iterdir()) == ["filler"]
+
+
+def _free_port():
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_a_lost_dask_scheduler_is_one_line_and_the_store_resumes(tmp_path, reference):
+    """Report N7: the scheduler SIGKILLed mid-scan gave a 30-line
+    ``FutureCancelledError`` traceback, exit 1.  Now one line, exit 2; the
+    store then resumes here to the in-memory scan, bit for bit."""
+    pytest.importorskip("distributed")
+    dask_cli = str(Path(sys.executable).with_name("dask"))
+    if not os.path.exists(dask_cli):
+        pytest.skip("no dask command beside this interpreter")
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    env = {**os.environ, "PYTHONPATH": SRC, "NUMBA_NUM_THREADS": "1"}
+    quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    sched = subprocess.Popen([dask_cli, "scheduler", "--host", "127.0.0.1", "--port", str(port),
+                              "--no-dashboard"], **quiet)
+    worker = scan_proc = None
+    try:
+        worker = subprocess.Popen([dask_cli, "worker", address, "--nworkers", "1", "--nthreads", "1",
+                                   "--no-dashboard", "--host", "127.0.0.1"], **quiet)
+        path = tmp_path / "s.zarr"
+        scan_proc = subprocess.Popen(
+            [sys.executable, "-c", "from stairbounce.cli import main; main()", *SCAN, "--tile", "4",
+             "--scheduler", address, "--out", str(path)],
+            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for _ in range(1200):  # until a few tiles are done
+            if scan_proc.poll() is not None:
+                break
+            try:
+                if tiles_done(path).sum() >= 3:
+                    break
+            except (ValueError, OSError):
+                pass
+            time.sleep(0.1)
+        assert scan_proc.poll() is None, scan_proc.communicate()
+        sched.kill()
+        _, err = scan_proc.communicate(timeout=120)
+        assert scan_proc.returncode == 2 and one_line_error(err), err
+        assert "scheduler" in err and "resume" in err, err
+    finally:
+        for p in (scan_proc, worker, sched):
+            if p is not None and p.poll() is None:
+                p.send_signal(signal.SIGTERM)
+                try:
+                    p.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+                    p.wait()
+    ds = scan_to_zarr(path, tile=4, **WINDOW)
+    xr.testing.assert_identical(ds.compute(), reference)

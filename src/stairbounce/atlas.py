@@ -687,16 +687,28 @@ def _dask_each(client, fn, args, each, wait_cancelled=False) -> None:
     (up to 5 s) until it has stopped."""
     from distributed import as_completed
 
+    from distributed.client import FutureCancelledError
+    from distributed.comm.core import CommClosedError
+
     futures = []
     try:
         futures = [client.submit(fn, *a, pure=False) for a in args]
         for future in as_completed(futures):
             each(future.result())
             future.release()
+    except (FutureCancelledError, CommClosedError) as exc:
+        # the scheduler is gone (report N7: a 30-line traceback): what is
+        # complete stays complete, the same call resumes
+        reason = " ".join(str(exc).split())[:200] or type(exc).__name__
+        raise ValueError(
+            f"lost the Dask scheduler {getattr(client.scheduler, 'address', '')} ({type(exc).__name__}: "
+            f"{reason}); the complete tiles are kept: run the same command again to resume"
+        ) from None
     finally:
         pending = [f for f in futures if not f.done()]
         if pending:
-            client.cancel(pending)
+            with contextlib.suppress(Exception):  # a scheduler that is gone takes no cancel
+                client.cancel(pending)
             if wait_cancelled:
                 with contextlib.suppress(Exception):
                     from distributed import wait

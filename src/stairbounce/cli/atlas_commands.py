@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import sys
 import warnings
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -52,7 +53,7 @@ def run_tiled_scan(out, e, u, max_iter=1000, y0=1.0, v0=0.0, tile=None, schedule
     counts = {}
     cluster = client = None
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _quiet_dask_logs(scheduler is not None or workers is not None):
             # a local cluster's HTTP server moves to a free port when 8787 is taken
             warnings.filterwarnings("ignore", message="Port .* is already in use")
             if workers is not None:
@@ -97,6 +98,30 @@ def run_tiled_scan(out, e, u, max_iter=1000, y0=1.0, v0=0.0, tile=None, schedule
         f"{plural(counts.get('total', 0), 'tile')} of {tile}{resumed}, computed in {where}"
     )
     return ds
+
+
+@contextmanager
+def _quiet_dask_logs(active=True):
+    """Dask's client logs a lost scheduler as tracebacks on stderr, also while
+    the command reports it and ends; the command says it in one line (report
+    N7).  Its loggers are quiet while the scan runs, and stay so after an
+    error (the command is ending)."""
+    import logging
+
+    if not active:
+        yield
+        return
+    try:
+        import distributed  # noqa: F401  (its import configures its loggers: first)
+    except ImportError:
+        pass
+    names = ["distributed"] + [n for n in logging.root.manager.loggerDict if n.startswith("distributed.")]
+    levels = {n: logging.getLogger(n).level for n in names}
+    for n in names:
+        logging.getLogger(n).setLevel(logging.CRITICAL + 1)
+    yield
+    for n, level in levels.items():
+        logging.getLogger(n).setLevel(level)
 
 
 def _local_cluster(workers):
