@@ -349,3 +349,99 @@ def test_a_lost_dask_scheduler_is_one_line_and_the_store_resumes(tmp_path, refer
                     p.wait()
     ds = scan_to_zarr(path, tile=4, **WINDOW)
     xr.testing.assert_identical(ds.compute(), reference)
+
+
+# --------------------------------------------------------------------------- #
+# N1 (finding 3): the figures' cache                                           #
+# --------------------------------------------------------------------------- #
+
+CACHED = {"e": [0.0, 1.0], "u": [0.0, 1.5], "n_e": 30, "n_u": 21, "max_iter": 200}
+
+
+def _asked():
+    return scan(e=(0.0, 1.0, 30), u=(0.0, 1.5, 21), max_iter=200)
+
+
+def _cached(cache, compute):
+    from stairbounce import figures as F
+
+    return F._cached(F.Settings(out=cache, cache_dir=cache), "scan", dict(CACHED), compute)
+
+
+def _entry(cache):
+    (path,) = [p for p in cache.iterdir() if p.suffix == ".nc"]
+    return path
+
+
+def test_a_well_formed_foreign_file_under_a_cached_name_is_recomputed(tmp_path):
+    """Report N1: a 10 x 10 scan under each cached name was used as the
+    500 x 350 one (D = 0.910 published for Fig. 6)."""
+    want = _asked()
+    _cached(tmp_path, _asked)
+    path = _entry(tmp_path)
+    path.unlink()
+    scan(e=(0, 1, 10), u=(0, 1.5, 10), max_iter=200).to_netcdf(path)
+    calls = []
+    got = _cached(tmp_path, lambda: calls.append(1) or _asked())
+    assert calls == [1]
+    xr.testing.assert_identical(got, want)
+    xr.testing.assert_identical(_cached(tmp_path, lambda: pytest.fail("recomputed an intact entry")), want)
+
+
+def test_an_entry_whose_values_were_changed_is_recomputed(tmp_path):
+    """Report N1: status set to 1 in the upper half, shape and attributes
+    kept: used as is ('D = 1.350 ... agrees')."""
+    want = _asked()
+    _cached(tmp_path, _asked)
+    path = _entry(tmp_path)
+    with xr.open_dataset(path) as ds:
+        bad = ds.load()
+    bad["status"].values[bad.sizes["u"] // 2:, :] = 1
+    path.unlink()
+    bad.to_netcdf(path)
+    calls = []
+    xr.testing.assert_identical(_cached(tmp_path, lambda: calls.append(1) or _asked()), want)
+    assert calls == [1]
+
+
+def test_the_cache_key_follows_the_kernels_source_not_the_version(tmp_path, monkeypatch):
+    """Report N1: the key held only ``__version__`` (0.1.0 for 159 commits): an
+    entry made by other kernels was reused by name."""
+    from stairbounce import _cache
+
+    _cached(tmp_path, _asked)
+    real = _cache._kernel_sources()
+    changed = [(name, text + b"\n# changed") if name == "plane.py" else (name, text) for name, text in real]
+    monkeypatch.setattr(_cache, "_kernel_sources", lambda: changed)
+    _cache.kernel_hash.cache_clear()
+    try:
+        calls = []
+        _cached(tmp_path, lambda: calls.append(1) or _asked())
+        assert calls == [1]
+    finally:
+        _cache.kernel_hash.cache_clear()
+
+
+def test_cache_info_clear_and_the_size_bound(tmp_path, capsys, monkeypatch):
+    """Report N1: no way to see or clear the cache, and no size bound."""
+    from stairbounce import _cache
+
+    _cached(tmp_path, _asked)
+    size = _entry(tmp_path).stat().st_size
+    (tmp_path / "mine.txt").write_text("not an entry")
+    code, out, err = run(["cache", "info", "--cache-dir", tmp_path], capsys)
+    assert code == 0 and "1 entry (scan 1)" in out and "bound" in out, (out, err)
+    # a bound below two entries keeps the newest only
+    monkeypatch.setenv("STAIRBOUNCE_CACHE_MAX_BYTES", str(size + size // 2))
+    first = _entry(tmp_path)
+    os.utime(first, (time.time() - 100, time.time() - 100))
+    from stairbounce import figures as F
+
+    other = dict(CACHED, max_iter=201)
+    F._cached(F.Settings(out=tmp_path, cache_dir=tmp_path), "scan", other,
+              lambda: scan(e=(0.0, 1.0, 30), u=(0.0, 1.5, 21), max_iter=201))
+    left = [p for p, _ in _cache.entries(tmp_path)]
+    assert len(left) == 1 and left[0] != first
+    code, out, err = run(["cache", "clear", "--cache-dir", tmp_path], capsys)
+    assert code == 0 and "removed 1 entry" in out, (out, err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.txt"]

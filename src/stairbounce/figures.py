@@ -18,8 +18,6 @@ and fill :attr:`Row.verdict` and :attr:`Row.why`.
 
 from __future__ import annotations
 
-import contextlib
-import hashlib
 import html
 import json
 import math
@@ -188,25 +186,20 @@ def load_border_dimension(path=None):
 
 
 def _cached(settings, kind, inputs, compute):
-    """``compute()`` -> xarray.Dataset, cached as netCDF under a hash of the inputs."""
-    import xarray as xr
+    """``compute()`` -> xarray.Dataset, cached as netCDF under a hash of the
+    request (the inputs and the kernels' source, :mod:`stairbounce._cache`);
+    an entry is used only when its recorded request and data checksum agree."""
+    from . import _cache
 
     if settings.cache_dir is None:
         return compute()
-    key = json.dumps({"kind": kind, "version": __version__, **inputs}, sort_keys=True)
-    path = Path(settings.cache_dir) / f"{kind}-{hashlib.sha256(key.encode()).hexdigest()[:20]}.nc"
-    if path.exists():
-        try:
-            with xr.open_dataset(path) as ds:
-                return ds.load()
-        except (OSError, ValueError, RuntimeError):
-            with contextlib.suppress(OSError):
-                path.unlink()  # a damaged cache entry is recomputed
+    path = _cache.entry_path(settings.cache_dir, kind, inputs)
+    ds = _cache.read_entry(path, kind, inputs)
+    if ds is not None:
+        return ds
     ds = compute()
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path, overwrite=True) as tmp:  # our own cache
-            ds.to_netcdf(tmp)
+        _cache.write_entry(path, ds, kind, inputs)
     except (OSError, ValueError, RuntimeError) as exc:
         # an unwritable or full cache costs time, never a figure (netCDF4
         # reports a full disk as a RuntimeError, report N6)

@@ -1,0 +1,201 @@
+"""The figures' cache of computed datasets (``~/.cache/stairbounce``): what an
+entry is, when it may be used, how big the cache may grow.
+
+An entry is a netCDF file ``KIND-HASH.nc``.  ``HASH`` is a hash of the
+request: the kind, the inputs the recipe asked for (window, pixels,
+``max_iter``, start, ...) and :func:`kernel_hash`, a hash of the source of the
+modules that compute the numbers, so a change of the kernels (not of the
+version string, unchanged across the whole history, report N1) makes new
+entries.  The file carries its request and a checksum of its data in two
+global attributes; an entry is used only when both agree with what is asked
+and with what it holds (and, for a grid, its shape and pixel centres),
+otherwise it is removed and computed again (a stray file under a cached name,
+another tool's file, a damaged or out-of-date entry).
+
+Size: at most :data:`MAX_BYTES` (``$STAIRBOUNCE_CACHE_MAX_BYTES``, default
+2 GiB); after each write the least recently used entries are removed until
+the cache fits.  ``stairbounce cache info`` and ``stairbounce cache clear``
+show and empty it.
+
+Nothing here imports more than numpy at import time (xarray when an entry is read).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import hashlib
+import json
+import os
+import re
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["kernel_hash", "entry_path", "read_entry", "write_entry", "entries", "clear", "max_bytes",
+           "KERNEL_MODULES", "MAX_BYTES"]
+
+# the modules whose code determines the numbers the cache holds
+KERNEL_MODULES = ("model.py", "plane.py", "orbits.py", "nonsliding.py", "symbolic.py")
+MAX_BYTES = 2 << 30
+REQUEST_ATTR = "stairbounce_cache_request"
+CHECKSUM_ATTR = "stairbounce_cache_checksum"
+_ENTRY = re.compile(r"^[a-z_]+-[0-9a-f]{20}\.nc$")
+
+
+def _kernel_sources():
+    here = Path(__file__).resolve().parent
+    return [(name, (here / name).read_bytes()) for name in KERNEL_MODULES]
+
+
+@functools.lru_cache(maxsize=1)
+def kernel_hash() -> str:
+    """SHA-256 (16 hex digits) of the source of :data:`KERNEL_MODULES`."""
+    h = hashlib.sha256()
+    for name, text in _kernel_sources():
+        h.update(name.encode() + b"\0" + text + b"\0")
+    return h.hexdigest()[:16]
+
+
+def max_bytes() -> int:
+    """The size bound: ``$STAIRBOUNCE_CACHE_MAX_BYTES`` (bytes), default :data:`MAX_BYTES`."""
+    try:
+        n = int(os.environ.get("STAIRBOUNCE_CACHE_MAX_BYTES", MAX_BYTES))
+    except ValueError:
+        return MAX_BYTES
+    return max(0, n)
+
+
+def request(kind, inputs) -> str:
+    """The request of an entry as canonical JSON: kind, inputs, kernel hash."""
+    return json.dumps({"kind": kind, "kernel": kernel_hash(), **inputs}, sort_keys=True)
+
+
+def entry_path(folder, kind, inputs) -> Path:
+    """``folder/KIND-HASH.nc`` for the request."""
+    key = request(kind, inputs)
+    return Path(folder) / f"{kind}-{hashlib.sha256(key.encode()).hexdigest()[:20]}.nc"
+
+
+def checksum(ds) -> str:
+    """CRC-32 of every variable and coordinate (name, dtype, shape, bytes, by name)."""
+    c = 0
+    for name in sorted(map(str, ds.variables)):
+        a = np.ascontiguousarray(ds[name].values)
+        c = zlib.crc32(f"{name}{a.dtype.str}{a.shape}".encode(), c)
+        c = zlib.crc32(a.tobytes() if a.dtype.kind != "O" else repr(a.tolist()).encode(), c)
+    return format(c, "08x")
+
+
+def _grid_ok(ds, inputs) -> bool:
+    """For a grid request (``e``, ``u``, ``n_e``, ``n_u``): its shape and pixel centres."""
+    if not all(k in inputs for k in ("e", "u", "n_e", "n_u")):
+        return True
+    from .plane import pixel_centres
+
+    try:
+        for name in ("e", "u"):
+            lo, hi = inputs[name]
+            want = pixel_centres(lo, hi, inputs[f"n_{name}"])
+            if ds.sizes.get(name) != want.size or not np.array_equal(ds[name].values, want):
+                return False
+    except (KeyError, TypeError, ValueError):
+        return False
+    return "max_iter" not in inputs or "max_iter" not in ds.attrs or ds.attrs["max_iter"] == inputs["max_iter"]
+
+
+def _strip(ds):
+    ds.attrs.pop(REQUEST_ATTR, None)
+    ds.attrs.pop(CHECKSUM_ATTR, None)
+    return ds
+
+
+def read_entry(path, kind, inputs):
+    """The dataset of the entry at ``path`` when it is the one asked for and
+    intact, else None (the file, if any, is removed: it is recomputed)."""
+    import xarray as xr
+
+    path = Path(path)
+    if not path.exists():
+        return None
+    try:
+        with xr.open_dataset(path) as ds:
+            ds = ds.load()
+        ok = (ds.attrs.get(REQUEST_ATTR) == request(kind, inputs)
+              and ds.attrs.get(CHECKSUM_ATTR) == checksum(ds)
+              and _grid_ok(ds, inputs))
+    except (OSError, ValueError, RuntimeError, KeyError, TypeError):
+        ok = False
+    if not ok:
+        with contextlib.suppress(OSError):
+            path.unlink()  # a damaged, foreign or out-of-date entry is recomputed
+        return None
+    with contextlib.suppress(OSError):
+        os.utime(path)  # recently used: kept by the size bound
+    return _strip(ds)
+
+
+def write_entry(path, ds, kind, inputs):
+    """Write ``ds`` as the entry at ``path`` (atomically), with its request
+    and checksum; then keep the cache within :func:`max_bytes`.  Errors (a
+    full or unwritable cache) propagate: the caller warns and goes on."""
+    from ._io import atomic_path
+
+    path = Path(path)
+    stored = ds.copy(deep=False)
+    stored.attrs = {**ds.attrs, REQUEST_ATTR: request(kind, inputs), CHECKSUM_ATTR: checksum(ds)}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path, overwrite=True) as tmp:  # our own cache
+        stored.to_netcdf(tmp)
+    bound(path.parent, keep=path)
+
+
+def entries(folder):
+    """The entries in ``folder`` (``KIND-HASH.nc`` files), oldest use first: list of (Path, bytes)."""
+    found = []
+    try:
+        it = list(os.scandir(folder))
+    except OSError:
+        return found
+    for e in it:
+        if _ENTRY.match(e.name) and e.is_file(follow_symlinks=False):
+            with contextlib.suppress(OSError):
+                st = e.stat(follow_symlinks=False)
+                found.append((st.st_mtime, Path(e.path), st.st_size))
+    return [(p, n) for _, p, n in sorted(found)]
+
+
+def bound(folder, keep=None, limit=None):
+    """Remove the least recently used entries until the cache holds at most
+    ``limit`` bytes (default :func:`max_bytes`); never ``keep``.  Returns the removed paths."""
+    limit = max_bytes() if limit is None else limit
+    found = entries(folder)
+    total = sum(n for _, n in found)
+    removed = []
+    for p, n in found:
+        if total <= limit:
+            break
+        if keep is not None and p == Path(keep):
+            continue
+        with contextlib.suppress(OSError):
+            p.unlink()
+            total -= n
+            removed.append(p)
+    return removed
+
+
+def clear(folder):
+    """Remove every entry of the cache in ``folder`` (and temporaries of killed
+    writers); nothing else.  Returns (entries removed, bytes freed)."""
+    from ._io import clean_stale_temporaries
+
+    found = entries(folder)
+    n = freed = 0
+    for p, size in found:
+        with contextlib.suppress(OSError):
+            p.unlink()
+            n += 1
+            freed += size
+    clean_stale_temporaries(folder)
+    return n, freed
