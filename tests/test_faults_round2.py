@@ -445,3 +445,101 @@ def test_cache_info_clear_and_the_size_bound(tmp_path, capsys, monkeypatch):
     code, out, err = run(["cache", "clear", "--cache-dir", tmp_path], capsys)
     assert code == 0 and "removed 1 entry" in out, (out, err)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.txt"]
+
+
+# --------------------------------------------------------------------------- #
+# N4 (finding 4): DNS rebinding; N10 (finding 10): a server on the network     #
+# --------------------------------------------------------------------------- #
+
+SERVER = textwrap.dedent("""
+    from stairbounce.explorer import make_server
+    server = make_server(port=0)
+    print(server.port, flush=True)
+    server.start()
+    server.io_loop.start()
+""")
+
+
+@pytest.fixture(scope="module")
+def explorer_port():
+    pytest.importorskip("panel")
+    proc = subprocess.Popen([sys.executable, "-c", SERVER], env={**os.environ, "PYTHONPATH": SRC},
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        port = int(proc.stdout.readline())
+        yield port
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def _raw(port, request, timeout=60):
+    import socket
+
+    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as s:
+        s.sendall(request.encode("latin-1"))
+        data = b""
+        while b"\r\n\r\n" not in data:
+            chunk = s.recv(65536)
+            if not chunk:
+                break
+            data += chunk
+    return data.split(b"\r\n", 1)[0].decode("latin-1")
+
+
+def _page(port, host):
+    return _raw(port, f"GET / HTTP/1.1\r\nHost: {host}\r\nConnection: close\r\n\r\n")
+
+
+def _websocket(port, host, origin, fetch_site=None):
+    import base64
+
+    lines = [f"GET /ws HTTP/1.1", f"Host: {host}", "Upgrade: websocket", "Connection: Upgrade",
+             f"Sec-WebSocket-Key: {base64.b64encode(os.urandom(16)).decode()}", "Sec-WebSocket-Version: 13",
+             "Sec-WebSocket-Protocol: bokeh, eyJzZXNzaW9uX2lkIjoiZm9vIiwic2Vzc2lvbl9leHBpcnkiOjk5OTk5OTk5OTk5fQ.x",
+             f"Origin: {origin}"]
+    if fetch_site is not None:
+        lines.append(f"Sec-Fetch-Site: {fetch_site}")
+    return _raw(port, "\r\n".join(lines) + "\r\n\r\n")
+
+
+def test_a_foreign_host_header_is_refused_on_every_route(explorer_port):
+    """Report N4: with ``Host: evil.example:PORT`` and ``Origin:
+    http://evil.example:PORT`` (DNS rebinding) Tornado accepted the websocket
+    without asking the origin check (101) and the page was served (200)."""
+    port = explorer_port
+    evil = f"evil.example:{port}"
+    assert " 200 " in _page(port, f"127.0.0.1:{port}") + " "
+    for path in ("/", "/ws", "/static/js/bokeh.min.js", "/autoload.js", "/nothing-here"):
+        line = _raw(port, f"GET {path} HTTP/1.1\r\nHost: {evil}\r\nConnection: close\r\n\r\n")
+        assert " 403 " in line + " ", (path, line)
+    for site in (None, "same-origin", "none"):
+        line = _websocket(port, evil, f"http://{evil}", site)
+        assert " 101 " not in line + " " and " 403 " in line + " ", (site, line)
+    assert " 403 " in _page(port, "evil.example") + " "
+    assert " 403 " in _page(port, "[::1") + " "  # a 500 before (cosmetic)
+    # the origin check itself still holds for a loopback Host
+    assert " 403 " in _websocket(port, f"127.0.0.1:{port}", f"http://{evil}") + " "
+
+
+def test_explore_on_a_network_address_warns_that_there_is_no_login(capsys, monkeypatch):
+    """Report, observations (finding 10): ``explore --host 0.0.0.0`` said
+    nothing about the app being open to the network without a login."""
+    pytest.importorskip("panel")
+    import stairbounce.explorer as X
+
+    served = []
+    monkeypatch.setattr(X, "serve", lambda **kw: served.append(kw["host"]))
+    for host, warned in (("0.0.0.0", True), ("192.0.2.7", True), ("::", True), ("127.0.0.1", False),
+                         ("localhost", False), ("[::1]", False)):
+        code, out, err = run(["explore", "--host", host, "--port", "0", "--no-browser"], capsys)
+        assert code == 0, err
+        said = [line for line in err.splitlines() if "no login" in line]
+        assert len(said) == (1 if warned else 0), (host, err)
+        if warned:
+            assert said[0].startswith("stairbounce: warning:") and "network" in said[0]
+    assert served == ["0.0.0.0", "192.0.2.7", "::", "127.0.0.1", "localhost", "[::1]"]

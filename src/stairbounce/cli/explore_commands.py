@@ -37,7 +37,9 @@ def explore(
         raise CLIError(
             "the browser app needs Panel and Bokeh: pip install 'stairbounce[web]'"
         ) from None
-    from ..explorer import serve
+    from .. import explorer
+
+    _warn_if_public(host, port)
 
     def ready(url):
         typer.echo(f"stairbounce explorer at {url} (Ctrl-C to stop)", err=False)
@@ -46,8 +48,22 @@ def explore(
         typer.echo(text)
 
     try:
-        serve(port=port, host=host, show=not no_browser, on_ready=ready,
+        explorer.serve(port=port, host=host, show=not no_browser, on_ready=ready,
               allow_websocket_origin=allow_websocket_origin, say=say)
     except OSError as exc:  # port in use, address not available
         raise CLIError(f"cannot serve on {host}:{port}: {exc.strerror or exc}") from None
     typer.echo("stairbounce explorer stopped")
+
+
+def _warn_if_public(host: str, port: int) -> None:
+    """Say on the terminal that a server on a non-loopback address is open to
+    the network without a login (report round 2, finding 10)."""
+    import sys
+
+    from ..explorer import _LOOPBACK, normalize_host
+
+    if normalize_host(host).lower() in _LOOPBACK:
+        return
+    print(f"stairbounce: warning: --host {host} serves the explorer to the network: it has no login, so "
+          f"anyone who can reach this machine on port {port or 'chosen'} can use it (its computing time, "
+          "views and exports); serve on 127.0.0.1 (the default) unless that is meant", file=sys.stderr)

@@ -171,6 +171,42 @@ def _guard_long_queries(tornado_app) -> None:
             rule.target = _IPv6WSHandler
 
 
+def _host_key(host: str) -> str:
+    """A ``Host`` header as the allowed names are written: ``name:port``,
+    lower case, port 80 when the header has none (as Bokeh reads an Origin)."""
+    host = host.strip().lower()
+    if host.startswith("["):
+        name, sep, rest = host[1:].partition("]")
+        if not sep or (rest and not rest.startswith(":")):
+            return ""  # malformed: matches no allowed name
+        return f"[{name}]:{rest[1:] or 80}"
+    if host.count(":") > 1:
+        return ""  # an IPv6 address without brackets: not a valid Host
+    name, _, port = host.partition(":")
+    return f"{name}:{port or 80}"
+
+
+def _guard_host(tornado_app) -> None:
+    """Refuse (403) every request, page, websocket, static file or other route,
+    whose ``Host`` header is not one of the names the websocket's origins
+    allow (report N4: a page whose name is rebound to this machine sends its
+    own name as Host and as Origin, and Tornado then accepts the websocket
+    without asking the origin check).  The allowed set is read on every
+    request, so a change of it applies at once."""
+    from tornado.routing import Matcher, Rule
+    from tornado.web import HTTPError, RequestHandler
+
+    class _ForeignHost(Matcher):
+        def match(self, request):
+            return None if _host_key(request.host or "") in tornado_app.websocket_origins else {}
+
+    class _Refuse(RequestHandler):
+        def prepare(self):
+            raise HTTPError(403, reason="Host not allowed")
+
+    tornado_app.default_router.rules.insert(0, Rule(_ForeignHost(), _Refuse))
+
+
 def _page_key(request) -> str:
     """The kept session serving a page request: one per path."""
     return request.path
@@ -228,6 +264,7 @@ def make_server(port=5006, host="127.0.0.1", show=False, allow_websocket_origin=
     origins.clear()
     origins.update(websocket_origins(address, server.port, allow_websocket_origin))
     _guard_long_queries(server._tornado)
+    _guard_host(server._tornado)
     return server
 
 
