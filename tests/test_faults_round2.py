@@ -543,3 +543,27 @@ def test_explore_on_a_network_address_warns_that_there_is_no_login(capsys, monke
         if warned:
             assert said[0].startswith("stairbounce: warning:") and "network" in said[0]
     assert served == ["0.0.0.0", "192.0.2.7", "::", "127.0.0.1", "localhost", "[::1]"]
+
+
+# --------------------------------------------------------------------------- #
+# N10 (finding 9): zero-copy inputs                                            #
+# --------------------------------------------------------------------------- #
+
+
+def test_zero_copy_inputs_are_estimated_before_they_are_materialised():
+    """Report N10: ``np.broadcast_to`` views (no memory until materialised)
+    reached numpy's MemoryError in the range checks, before the memory
+    check.  10**12 elements: more than any machine here has, whatever the load."""
+    import stairbounce as sb
+
+    huge = np.broadcast_to(0.5, (10**12,))
+    with pytest.raises(ValueError, match=r"a scan of 1000000000000 points needs about .* memory"):
+        sb.scan_points(huge, huge)
+    with pytest.raises(ValueError, match=r"no_sliding_curve of 1000000000000 values of e needs about"):
+        sb.no_sliding_curve(huge)
+    with pytest.raises(ValueError, match=r"box counts of an image of 1000000000000 pixels needs about"):
+        sb.box_counts(np.broadcast_to(True, (10**6, 10**6)))
+    # small views still work, with the same answers as real arrays
+    small = np.broadcast_to(0.5, (3,))
+    assert sb.scan_points(small, small).identical(sb.scan_points(np.full(3, 0.5), np.full(3, 0.5)))
+    np.testing.assert_array_equal(sb.no_sliding_curve(small), sb.no_sliding_curve(np.full(3, 0.5)))

@@ -133,6 +133,20 @@ def check_memory(what, nbytes, available=None):
     return nbytes
 
 
+def check_array_memory(what, values, bytes_per_element):
+    """Refuse, before anything is materialised, work on ``values`` (an array
+    or a tuple of arrays) that needs ``bytes_per_element`` bytes for each of
+    its elements: a zero-copy view such as ``np.broadcast_to(0.5, (3e9,))``
+    holds no memory until a range check or a copy materialises it (report
+    N10: numpy's MemoryError before the check).  ``what`` names the argument
+    (e.g. ``"e of 3000000000 points"``; ``{n}`` is replaced by the element
+    count).  Returns the element count."""
+    arrays = values if isinstance(values, tuple) else (values,)
+    n = max((a.size for a in arrays if isinstance(a, np.ndarray)), default=0)
+    check_memory(what.format(n=n), n * bytes_per_element)
+    return n
+
+
 def real_array(name, value):
     """``value`` (a number or a sequence/array of numbers) as a float64 array.
 

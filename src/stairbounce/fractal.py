@@ -359,6 +359,7 @@ def box_counts(image, sizes=None, offsets=1, reduce="mean"):
     2 x 2 blocks (numba, all cores): about 1.3 reads of the image for all sizes.
     Other sizes and shifts use a direct kernel, one read of the image each.
     """
+    _v.check_array_memory("box counts of an image of {n} pixels", image, 3)  # the 0/1 copy, checks, pyramid
     a = _as_uint8(image)
     s = _check_sizes(sizes, a.shape)
     n = check_count("offsets", offsets, 1, _MAX_OFFSETS)

@@ -700,6 +700,8 @@ def scan_points(e, u, max_iter=1000, y0=1.0, v0=0.0, *, prune=True):
 
     Reference: Section 3 of the paper (the scheme of Figures 4 and 5, point by point).
     """
+    # the outputs, contiguous copies of the inputs and their range checks
+    _v.check_array_memory("a scan of {n} points", (e, u), _BYTES_PER_PIXEL + 16 + 20)
     es = _point_coords("e", e)
     us = _point_coords("u", u)
     if es.size != us.size:
@@ -836,6 +838,8 @@ def no_sliding_curve(e):
 
     Vectorised over ``e`` in [0, 1]; infinite at ``e = 0``, 0 at ``e = 1``.
     """
+    # a float copy, its range checks and the curve
+    _v.check_array_memory("no_sliding_curve of {n} values of e", e, 8 + 4 + 8)
     e = _v.real_array("e", e)
     # the curve is drawn over the closed window [0, 1]: e = 1 (u = 0) is its end
     if not np.all(np.isfinite(e) & (e >= 0.0) & (e <= 1.0)):
