@@ -567,3 +567,74 @@ def test_zero_copy_inputs_are_estimated_before_they_are_materialised():
     small = np.broadcast_to(0.5, (3,))
     assert sb.scan_points(small, small).identical(sb.scan_points(np.full(3, 0.5), np.full(3, 0.5)))
     np.testing.assert_array_equal(sb.no_sliding_curve(small), sb.no_sliding_curve(np.full(3, 0.5)))
+
+
+# --------------------------------------------------------------------------- #
+# N8 (finding 7): e below 2^-53                                               #
+# --------------------------------------------------------------------------- #
+
+
+def _clear_cases(e):
+    """Cases like the report's: a fall at |v| = 1e20 or 1e100 onto the step,
+    whose first rebound flies ``2 e s / (1-e)`` (60 digits); the edge at a
+    quarter of that (the ball clearly bounces over it) or at four times it
+    (it clearly slides)."""
+    import mpmath
+
+    with mpmath.workdps(60):
+        for y, v in ((0.0, -1e20), (1.0, -1e20), (0.0, -1e100)):
+            s = mpmath.sqrt(mpmath.mpf(v) ** 2 + 2 * mpmath.mpf(y))
+            flight = (mpmath.mpf(v) + s) + 2 * mpmath.mpf(e) * s / (1 - mpmath.mpf(e))
+            for c in (0.25, 4.0):
+                yield y, v, float(1 / (flight * c))
+
+
+def test_e_below_2_to_the_minus_53_is_refused_and_above_the_sliding_test_is_right():
+    """Report N8: ``poincare_map(0.0, -1e20, 1e-17, 0.7)`` said SLIDING where
+    the 60-digit reference bounces once and flies 1400 up: below 2^-53 the
+    ratio (1+e)/(1-e) rounds to 1, the map is that of e = 0.  Decided by the
+    60-digit reference (tests.naive.precise_step, mpmath): from 2^-53 up the
+    float ratio keeps e (its excess over 1 within half of the exact 2e/(1-e))
+    and every clear case has the reference's impact number; below, the ratio
+    is 1 and the clear cases fail; so 0 < e < 2^-53 is refused by name, and
+    e = 0 (ratio exactly 1, nothing lost) stays."""
+    import mpmath
+
+    import stairbounce as sb
+    from stairbounce import model
+    from tests import naive
+
+    with pytest.raises(ValueError, match=r"e \(restitution coefficient\) must be 0 or in \[2\^-53, 1\)"):
+        sb.poincare_map(0.0, -1e20, 1e-17, 0.7)
+    for call in (lambda: sb.slides(1.0, -1e150, 1e-300, 1e150), lambda: sb.scan_points([2.0**-54], [0.5]),
+                 lambda: sb.orbit_diagram(1e-20, [0.5], transient=1, keep=1), lambda: sb.trajectory(1e-17, 0.7)):
+        with pytest.raises(ValueError, match=r"must be 0 or in \[2\^-53, 1\)"):
+            call()
+    code = subprocess.run([sys.executable, "-c", "from stairbounce.cli import main; main()", "map", "--e",
+                           "1e-17", "--u", "0.7"], capture_output=True, text=True, env={**os.environ, "PYTHONPATH": SRC})
+    assert code.returncode == 2 and one_line_error(code.stderr) and "2^-53" in code.stderr, code.stderr
+
+    def ratio_ok(e):
+        T, ratio = model._constants(e, 1.0)
+        with mpmath.workdps(60):
+            exact = 2 * mpmath.mpf(e) / (1 - mpmath.mpf(e))
+            return abs((mpmath.mpf(ratio) - 1) - exact) <= exact / 2
+
+    def clear_cases_right(e):
+        for y, v, u in _clear_cases(e):
+            T, ratio = model._constants(e, u)
+            k = int(model._step(y, v, e, T, ratio)[2])
+            if k != naive.precise_step(y, v, e, u)[2]:
+                return False
+        return True
+
+    for e in (2.0**-53, 1.5 * 2.0**-53, 2.0**-52, 1e-15, 1e-12, 1e-6):
+        assert ratio_ok(e) and clear_cases_right(e), e
+    for e in (1e-17, 2.0**-54, 1e-300):  # what the bound keeps out
+        assert model._constants(e, 1.0)[1] == 1.0 and not clear_cases_right(e), e
+    # e = 0: the ratio is exactly the true 1, nothing is lost (the test is (2.4) of e = 0 itself)
+    assert model._constants(0.0, 1.0)[1] == 1.0
+    # the report's case just above the bound: one impact, as the reference
+    y, v, k = sb.poincare_map(0.0, -1e20, 2.0**-53, 0.7)
+    ry, rv, rk = (float(x) for x in naive.precise_step(0.0, -1e20, 2.0**-53, 0.7)[:3])
+    assert k == rk == 1 and y == pytest.approx(ry, rel=1e-6) and v == pytest.approx(rv, rel=1e-6)

@@ -30,6 +30,17 @@ V_MAX = 1e150
 U_MIN = 1e-150
 U_MAX = 1e150
 _INT64_MAX = 2**63 - 1
+# e below 2^-53 (but not 0) is lost: (1+e)/(1-e) rounds to 1, the sliding test
+# is that of e = 0 and a bouncing ball "slides" (report round 2, N8; docs/design.md)
+E_MIN = 2.0**-53
+E_TINY_RULE = ("e (restitution coefficient) must be 0 or in [2^-53, 1) (the valid numeric range: "
+               "below 2^-53 = 1.1e-16 the ratio (1+e)/(1-e) rounds to 1 and e would be lost)")
+
+
+def e_too_small(a):
+    """Where ``0 < e < 2^-53`` (:data:`E_MIN`): refused by name."""
+    a = np.asarray(a)
+    return (a > 0.0) & (a < E_MIN)
 
 
 def _is_real(x):

@@ -297,10 +297,13 @@ def _finite(name, x):
 
 
 def check_e(e):
-    """Validate the restitution coefficient: a float in [0, 1)."""
+    """Validate the restitution coefficient: a float in [0, 1), 0 or at least
+    2^-53 (:data:`stairbounce._validate.E_MIN`)."""
     e = _finite("e", e)
     if not 0.0 <= e < 1.0:
         raise ValueError(f"e (restitution coefficient) must be in [0, 1), got {e}")
+    if _v.e_too_small(e):
+        raise ValueError(f"{_v.E_TINY_RULE}, got {e}")
     return e
 
 

@@ -114,8 +114,9 @@ def _parameter(name, value):
         raise ValueError(f"{name} must be a non-empty 1-D array")
     bad = ~np.isfinite(a)
     if name == "e":
-        bad |= ~((a >= 0.0) & (a < 1.0))
-        rule = "e (restitution coefficient) must be in [0, 1)"
+        tiny = _v.e_too_small(a)
+        bad |= ~((a >= 0.0) & (a < 1.0)) | tiny
+        rule = _v.E_TINY_RULE if np.any(tiny) else "e (restitution coefficient) must be in [0, 1)"
     else:
         bad |= ~((a >= _v.U_MIN) & (a <= _v.U_MAX))
         rule = f"u (horizontal speed) must be finite and > 0, in [{_v.U_MIN:g}, {_v.U_MAX:g}]"

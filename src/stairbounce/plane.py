@@ -510,6 +510,8 @@ def _check_values(name, a):
         raise ValueError(
             f"e (restitution coefficient) values must be in [0, 1), got [{a.min()}, {a.max()}]"
         )
+    if name == "e" and np.any(_v.e_too_small(a)):
+        raise ValueError(f"{_v.E_TINY_RULE}, got {a[_v.e_too_small(a)].flat[0]}")
     if name == "u" and not np.all(a > 0.0):
         raise ValueError(f"u (horizontal speed) values must be > 0, got min {a.min()}")
     if name == "u" and not np.all((a >= _v.U_MIN) & (a <= _v.U_MAX)):
