@@ -12,6 +12,11 @@
 3. Resuming a complete tiled store: the checksum read of every tile
    (``verify=True``) against the same call with ``verify=False``, and against
    the time the store took to compute.
+4. ``load`` of that store (issue 23: its coordinates are checked against its
+   window) and a ``figures`` run from a warm cache (issue 23: an entry is
+   checked against its request and a checksum of its data).  Absolute times:
+   to compare two versions, run this script under each back to back
+   (``--only 3,4``; PYTHONPATH selects the version), as benchmarks/README.md says.
 """
 
 from __future__ import annotations
@@ -59,8 +64,19 @@ def main():
     p.add_argument("--repeat", type=int, default=5)
     p.add_argument("--size", type=int, default=1024, help="side of the tiled store (pixels)")
     p.add_argument("--tile", type=int, default=128)
+    p.add_argument("--only", default="1,2,3,4", help="parts to run, e.g. 3,4")
+    p.add_argument("--figures", default="fig4,fig8", help="figures of part 4's cached run")
     args = p.parse_args()
-    print(f"load {os.getloadavg()[0]:.2f}, numba threads {numba.get_num_threads()}")
+    parts = set(args.only.split(","))
+    print(f"load {os.getloadavg()[0]:.2f}, numba threads {numba.get_num_threads()}, stairbounce from "
+          f"{Path(P.__file__).parent}")
+    if parts & {"1", "2"}:
+        kernel_parts(args)
+    if parts & {"3", "4"}:
+        store_parts(args, parts)
+
+
+def kernel_parts(args):
 
     es = P.pixel_centres(0, 1, 500)
     us = P.pixel_centres(0, 1.5, 350)
@@ -86,6 +102,9 @@ def main():
     print(f"2. scan_coords through the helper thread {helper:.3f} s, kernel in place {in_place:.3f} s;"
           f" ratio {helper / in_place:.3f} (includes building the Dataset)")
 
+
+
+def store_parts(args, parts):
     work = Path(tempfile.mkdtemp(prefix="stairbounce-bench-"))
     try:
         store = work / "a.zarr"
@@ -96,10 +115,25 @@ def main():
         verify = best(lambda: scan_to_zarr(store, **kw), args.repeat)[0]
         skip = best(lambda: scan_to_zarr(store, verify=False, **kw), args.repeat)[0]
         n_tiles = (-(-args.size // args.tile)) ** 2
-        print(f"3. resume of a complete {args.size}^2 store ({n_tiles} tiles of {args.tile}): "
-              f"verify {verify:.3f} s, verify=False {skip:.3f} s, computing it took {compute:.2f} s; "
-              f"checksum read = {(verify - skip) / compute:.1%} of the compute time, "
-              f"{args.size ** 2 / max(verify - skip, 1e-9) / 1e6:.0f} M px/s")
+        if "3" in parts:
+            print(f"3. resume of a complete {args.size}^2 store ({n_tiles} tiles of {args.tile}): "
+                  f"verify {verify:.3f} s, verify=False {skip:.3f} s, computing it took {compute:.2f} s; "
+                  f"checksum read = {(verify - skip) / compute:.1%} of the compute time, "
+                  f"{args.size ** 2 / max(verify - skip, 1e-9) / 1e6:.0f} M px/s")
+        if "4" in parts:
+            from stairbounce import figures as F
+            from stairbounce.plane import load
+
+            loaded = best(lambda: load(store), args.repeat)[0]
+            names = args.figures.split(",")
+            settings = F.Settings(out=work / "figs", dpi=60, cache_dir=work / "cache", overwrite=True)
+            (work / "figs").mkdir()
+            t = time.perf_counter()
+            F.make_figures(settings, names)  # fills the cache
+            cold = time.perf_counter() - t
+            warm = best(lambda: F.make_figures(settings, names), args.repeat)[0]
+            print(f"4. load of the {args.size}^2 store {loaded:.3f} s; figures {args.figures} from a warm "
+                  f"cache {warm:.3f} s (best of {args.repeat}; filling the cache took {cold:.1f} s)")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

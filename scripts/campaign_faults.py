@@ -1,6 +1,6 @@
 """The fault part of the reliability campaign (issue 17), as one script with counts.
 
-    python scripts/campaign_faults.py            # 71 cases, 12 min on 2 shared cores at load 10
+    python scripts/campaign_faults.py            # about 110 cases (round 1 and 2), 20 min on 2 shared cores
     python scripts/campaign_faults.py --full     # the report's sizes and more trials
     python scripts/campaign_faults.py --only race,damage
 
@@ -27,7 +27,26 @@ is guaranteed"):
   Defect: still running 20 s later, an exit status other than 130 (or 0 when
   it had finished), a file half-written.
 - ``diskfull``: a 1 MiB tmpfs (root only; skipped otherwise).  Defect: a
-  traceback, exit status other than 2, a partial file.
+  traceback, exit status other than 2, a partial file, a figure lost to a
+  full cache.
+
+Round 2 (issue 23, report ``reliability-round2.md``):
+
+- ``alias``: a store reached through a symlinked name while a scan writes it
+  (a second writer, ``--force`` on either name), then a store replaced under
+  a running writer.  Defect: anything but a refusal naming the holder; the
+  writer succeeding; a chunk in the new store.
+- ``coords``: coordinate and tile-record chunks deleted, rewritten, garbled.
+  Defect: render or load passing wrong coordinates, a traceback, a rerun
+  that does not say and repair it bit for bit.
+- ``readonly``: a complete and an incomplete store on a read-only mount.
+- ``cache``: entries replaced by a 10 x 10 scan or with changed values; the
+  report must equal a ``--no-cache`` run; ``cache info|clear``.
+- ``host``: raw page and websocket requests with a foreign Host (DNS
+  rebinding); ``explore --host 0.0.0.0`` warns.
+- ``numeric``: e below 2^-53 refused by name; zero-copy views under a 6 GB
+  address-space limit refused by the memory estimate.
+- ``dask``: the scheduler SIGKILLed mid-scan, then a new one resumes.
 
 Prints one line per case and a table of counts per part.  Exit status 1 when
 any defect was found.
@@ -367,6 +386,9 @@ def part_diskfull(t, work, args):
             ["orbit-diagram", "--e", "0.1", "--u", "0.3:1", "--n", "2000", "--out", "o.csv"],
             ["trajectory", "--e", "0.05", "--u", "0.93", "--out", "t.png", "--animate", "t.gif"],
             ["figures", "--only", "fig4,fig5", "--scale", "0.5", "--no-cache", "--out", "f"],
+            # round 2 (N5, N6): netCDF's RuntimeError for ENOSPC; Zarr's late writes
+            ["orbit-diagram", "--e", "0.1", "--u", "0.3:1", "--n", "3000", "--out", "o.nc"],
+            ["scan", "--size", "1500x1500", "--max-iter", "20", "--out", "big.zarr"],
         ]
         for cmd in cases:
             before = set(p.name for p in d.iterdir())
@@ -379,6 +401,17 @@ def part_diskfull(t, work, args):
             for p in set(p.name for p in d.iterdir()) - before:
                 if p != "S.zarr":
                     shutil.rmtree(d / p, ignore_errors=True) if (d / p).is_dir() else (d / p).unlink()
+        # N6: a full cache costs no figure (the figure written outside the full disk)
+        with open(d / "filler", "wb") as f:
+            st = os.statvfs(d)
+            f.write(b"\0" * max(0, st.f_bavail * st.f_frsize - 64 * 1024))
+        out = Path(tempfile.mkdtemp(dir=work))
+        r = sb(["figures", "--only", "fig4", "--scale", "0.3", "--dpi", "20", "--out", out / "f",
+                "--cache-dir", d / "cache"], d)
+        t.case("diskfull", "figures with a full cache", r.returncode == 0 and (out / "f" / "fig4.png").exists()
+               and "computing without it" in r.stderr, f"exit {r.returncode}: {r.stderr.strip()[-160:]}")
+        (d / "filler").unlink()
+        shutil.rmtree(d / "cache", ignore_errors=True)
         # the tiled store resumes once there is room
         subprocess.run(["mount", "-o", "remount,size=64m", str(d)], check=True)
         r = sb(cases[0][:-2], d)
@@ -386,6 +419,314 @@ def part_diskfull(t, work, args):
         t.case("diskfull", "tiled store resumed after ENOSPC", r.returncode == 0 and same, why)
     finally:
         subprocess.run(["umount", str(d)], check=False)
+
+
+# --------------------------------------------------------------------------- #
+# Round 2 (issue 23, report reliability-round2.md N1-N10)                     #
+# --------------------------------------------------------------------------- #
+
+
+def _py(code, cwd, timeout=600):
+    """A Python snippet in a child process (stairbounce as this process sees it)."""
+    return subprocess.run([sys.executable, "-c", code], cwd=cwd, capture_output=True, text=True, timeout=timeout)
+
+
+def _stop(p):
+    if p is not None and p.poll() is None:
+        p.send_signal(signal.SIGTERM)
+        try:
+            p.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+
+
+def part_alias(t, work, args):
+    """N3: a store reached through a symlinked name holds the store's own lock."""
+    n, tile = (2048, 128) if args.full else (512, 32)
+    d = Path(tempfile.mkdtemp(dir=work))
+    cmd = ["scan", "--size", f"{n}x{n}", "--tile", str(tile), "--max-iter", "1000", "--out"]
+    a = subprocess.Popen(CLI + cmd + ["real.zarr"], cwd=d, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, preexec_fn=_default_sigint)
+    try:
+        if not _wait_tiles(d / "real.zarr", 2, a):
+            t.case("alias", "writer started", False, a.stderr.read() if a.poll() is not None else "no tile")
+            return
+        (d / "alias.zarr").symlink_to("real.zarr")
+        for name, c in (("second writer through the alias", cmd + ["alias.zarr"]),
+                        ("scan --force on the real name", ["scan", "--size", "32x32", "--out", "real.zarr", "--force"]),
+                        ("scan --force on the alias", ["scan", "--size", "32x32", "--out", "alias.zarr", "--force"])):
+            r = sb(c, d)
+            t.case("alias", name, r.returncode == 2 and one_line(r.stderr) and "another stairbounce process"
+                   in r.stderr, f"exit {r.returncode}: {r.stderr.strip()[-200:]}")
+    finally:
+        if a.poll() is None:
+            a.send_signal(signal.SIGINT)
+        a.communicate(timeout=120)
+    r = sb(cmd + ["alias.zarr"], d)
+    same, why = _store_vs_scan(d / "real.zarr", n, 1000)
+    t.case("alias", "resumed through the alias", r.returncode == 0 and same and not temporaries(d),
+           f"exit {r.returncode}, {why}, left {temporaries(d)}")
+    # a store replaced under a running writer: the writer fails, the new store gets nothing
+    code = f"""
+import os, numba
+from stairbounce.atlas import scan_to_zarr
+from stairbounce.plane import save, scan, load
+other = scan(e=(0.1, 0.2, 4), u=(0.3, 0.4, 4), max_iter=20)
+def swap(done, total):
+    if done >= 1 and not os.path.exists("old.zarr"):
+        os.rename("b.zarr", "old.zarr"); save(other, "b.zarr")
+try:
+    scan_to_zarr("b.zarr", e=(0, 1, 128), u=(0, 1.5, 128), tile=32, progress=swap,
+                 numba_threads=numba.get_num_threads())
+    print("NO ERROR")
+except ValueError as exc:
+    print("REFUSED" if "replaced while the scan was running" in str(exc) else exc)
+print("NEW INTACT", load("b.zarr").identical(other) and not os.path.exists("b.zarr/tiles"))
+"""
+    r = _py(code, d)
+    t.case("alias", "store replaced under a running writer", "REFUSED" in r.stdout and "NEW INTACT True"
+           in r.stdout, (r.stdout + r.stderr)[-300:])
+
+
+def part_coords(t, work, args):
+    """N2, N5: coordinate and tile-record chunks deleted, rewritten or garbled."""
+    n, tile = (1024, 128) if args.full else (128, 32)
+    master = Path(tempfile.mkdtemp(dir=work)) / "S.zarr"
+    cmd = ["scan", "--size", f"{n}x{n}", "--tile", str(tile), "--out"]
+    sb(cmd + [master], master.parent)
+    cases = [("delete", "e/c/0"), ("rewrite", "e"), ("garble", "e/c/0"), ("delete", "u/c/0"),
+             ("garble", "tiles/done/c/0/0"), ("garble", "tiles/crc/c/0/0"), ("garble", "tiles/done/c/1/1")]
+    for how, what in cases:
+        d = Path(tempfile.mkdtemp(dir=work))
+        store = d / "S.zarr"
+        shutil.copytree(master, store)
+        if how == "delete":
+            (store / what).unlink()
+        elif how == "rewrite":
+            _py(f"import zarr; a = zarr.open_group({str(store)!r}, mode='r+')[{what!r}]; a[...] = a[...] + 0.5", d)
+        else:
+            (store / what).write_bytes(b"\x28\xb5\x2f\xfd" + os.urandom(40))
+        rr = sb(["render", store, "--png", d / "r.png", "--dpi", "20"], d)
+        coords = what.split("/")[0] in ("e", "u")
+        render_ok = not traceback_in(rr.stderr) and (rr.returncode == 2 if (coords or "done" in what)
+                                                      else rr.returncode in (0, 2))
+        lo = _py(f"from stairbounce.plane import load\ntry:\n    load({str(store)!r}); print('LOADED')\n"
+                 f"except ValueError as e:\n    print('REFUSED', e)", d)
+        load_ok = ("REFUSED" in lo.stdout) if coords else ("LOADED" in lo.stdout or "REFUSED" in lo.stdout)
+        r = sb(cmd + [store], d)
+        said = "warning" in r.stderr
+        same, why = _store_vs_scan(store, n, 1000)
+        t.case("coords", f"{how} {what}", render_ok and load_ok and r.returncode == 0 and said and same,
+               f"render exit {rr.returncode} {rr.stderr.strip()[-120:]}, load {lo.stdout.strip()[:80]}, "
+               f"rerun {r.returncode} {r.stderr.strip()[-160:]}, said {said}, {why}")
+
+
+def part_readonly(t, work, args):
+    """N9: a complete store on a read-only file system opens read-only."""
+    d = Path(tempfile.mkdtemp(dir=work))
+    if os.geteuid() != 0:
+        t.skip("readonly", "all", "mounting a tmpfs needs root")
+        return
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=8m", "tmpfs", str(d)], capture_output=True, text=True)
+    if r.returncode != 0:
+        t.skip("readonly", "all", r.stderr.strip())
+        return
+    try:
+        cmd = ["scan", "--size", "64x64", "--tile", "16", "--out"]
+        sb(cmd + ["done.zarr"], d)
+        p = subprocess.Popen(CLI + cmd + ["part.zarr"], cwd=d, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             text=True, preexec_fn=_default_sigint)
+        _wait_tiles(d / "part.zarr", 1, p)
+        p.send_signal(signal.SIGINT)
+        p.communicate(timeout=60)
+        subprocess.run(["mount", "-o", "remount,ro", str(d)], check=True)
+        r = sb(cmd + ["done.zarr"], d)
+        t.case("readonly", "complete store resumed", r.returncode == 0 and "already complete" in r.stdout,
+               f"exit {r.returncode}: {r.stderr.strip()[-160:]}")
+        r = sb(cmd + ["part.zarr"], d)
+        t.case("readonly", "incomplete store refused", r.returncode == 2 and one_line(r.stderr),
+               f"exit {r.returncode}: {r.stderr.strip()[-160:]}")
+        r = sb(["render", d / "done.zarr", "--png", Path(work) / "ro.png", "--dpi", "20"], work)
+        t.case("readonly", "render", r.returncode == 0, r.stderr[-160:])
+    finally:
+        subprocess.run(["umount", str(d)], check=False)
+
+
+def _fig_rows(out, name):
+    import json
+
+    manifest = json.loads((Path(out) / "manifest.json").read_text())
+    return [f for f in manifest["figures"] if f.get("name") == name][0].get("rows")
+
+
+def part_cache(t, work, args):
+    """N1: entries that are not what was asked are recomputed; cache info|clear."""
+    d = Path(tempfile.mkdtemp(dir=work))
+    scale = "0.5" if args.full else "0.2"
+    base = ["figures", "--only", "fig6", "--scale", scale, "--dpi", "20"]
+    r0 = sb(base + ["--out", "clean", "--no-cache"], d)
+    r1 = sb(base + ["--out", "first", "--cache-dir", "C"], d)
+    clean = _fig_rows(d / "clean", "fig6") if r0.returncode == 0 else None
+    for how in ("10x10 scan", "status changed"):
+        code = f"""
+import glob, os, xarray as xr, stairbounce as sb
+for f in glob.glob("C/scan-*.nc"):
+    if {how!r} == "10x10 scan":
+        bad = sb.scan(e=(0, 1, 10), u=(0, 1.5, 10))
+    else:
+        with xr.open_dataset(f) as ds:
+            bad = ds.load()
+        bad["status"].values[bad.sizes["u"] // 2:, :] = 1
+    os.unlink(f); bad.to_netcdf(f)
+"""
+        _py(code, d)
+        r = sb(base + ["--out", f"p{len(how)}", "--cache-dir", "C"], d)
+        rows = _fig_rows(d / f"p{len(how)}", "fig6") if r.returncode == 0 else None
+        t.case("cache", f"poisoned entries ({how})", r1.returncode == 0 and rows == clean and clean is not None,
+               f"exit {r.returncode}; rows {str(rows)[:120]} vs clean {str(clean)[:120]}")
+    r = sb(["cache", "info", "--cache-dir", "C"], d)
+    t.case("cache", "cache info", r.returncode == 0 and "entr" in r.stdout and "bound" in r.stdout, r.stdout + r.stderr)
+    r = sb(["cache", "clear", "--cache-dir", "C"], d)
+    left = [p.name for p in (d / "C").iterdir()]
+    t.case("cache", "cache clear", r.returncode == 0 and not left, f"{r.stdout} left {left}")
+
+
+def _raw_http(port, request, timeout=60):
+    import socket
+
+    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as s:
+        s.sendall(request.encode("latin-1"))
+        data = b""
+        while b"\r\n\r\n" not in data:
+            chunk = s.recv(65536)
+            if not chunk:
+                break
+            data += chunk
+    return data.split(b"\r\n", 1)[0].decode("latin-1")
+
+
+def _explorer(cwd, *extra):
+    p = subprocess.Popen(CLI + ["explore", "--port", "0", "--no-browser", *extra], cwd=cwd,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    line = p.stdout.readline()
+    port = int(line.rsplit(":", 1)[1].split("/")[0]) if "explorer at" in line else None
+    return p, port
+
+
+def part_host(t, work, args):
+    """N4: DNS rebinding (foreign Host = Origin); finding 10: the network warning."""
+    import base64
+
+    try:
+        import panel  # noqa: F401
+    except ImportError:
+        t.skip("host", "all", "no panel")
+        return
+    p, port = _explorer(work)
+    try:
+        if port is None:
+            t.case("host", "server started", False, p.stderr.read()[-200:] if p.poll() is not None else "no URL")
+            return
+        ok = _raw_http(port, f"GET / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n")
+        t.case("host", "page with a loopback Host", " 200 " in ok + " ", ok)
+        evil = f"evil.example:{port}"
+        for path in ("/", "/static/js/bokeh.min.js", "/autoload.js"):
+            got = _raw_http(port, f"GET {path} HTTP/1.1\r\nHost: {evil}\r\nConnection: close\r\n\r\n")
+            t.case("host", f"GET {path} with Host {evil}", " 403 " in got + " ", got)
+        for site in (None, "same-origin", "none"):
+            lines = ["GET /ws HTTP/1.1", f"Host: {evil}", "Upgrade: websocket", "Connection: Upgrade",
+                     f"Sec-WebSocket-Key: {base64.b64encode(os.urandom(16)).decode()}",
+                     "Sec-WebSocket-Version: 13", "Sec-WebSocket-Protocol: bokeh, x.y", f"Origin: http://{evil}"]
+            if site:
+                lines.append(f"Sec-Fetch-Site: {site}")
+            got = _raw_http(port, "\r\n".join(lines) + "\r\n\r\n")
+            t.case("host", f"websocket Host = Origin = {evil}, Sec-Fetch-Site {site}", " 101 " not in got + " ", got)
+    finally:
+        _stop(p)
+    p, port = _explorer(work, "--host", "0.0.0.0")
+    _stop(p)
+    err = p.stderr.read()
+    t.case("host", "explore --host 0.0.0.0 warns", "no login" in err and "network" in err, err[-200:])
+
+
+def part_numeric(t, work, args):
+    """N8 (e below 2^-53) and N10 (zero-copy inputs, under a 6 GB address-space limit)."""
+    code = """
+import stairbounce as sb
+for args in [(0.0, -1e20, 1e-17, 0.7), (1.0, -1e150, 1e-300, 1e150)]:
+    try:
+        print("ANSWER", sb.poincare_map(*args))
+    except ValueError as exc:
+        print("REFUSED" if "2^-53" in str(exc) else exc)
+print("AT 2^-53", sb.poincare_map(0.0, -1e20, 2.0**-53, 0.7)[2])
+"""
+    r = _py(code, work)
+    t.case("numeric", "e below 2^-53 refused by name", r.stdout.count("REFUSED") == 2, (r.stdout + r.stderr)[-200:])
+    t.case("numeric", "e = 2^-53 bounces once", "AT 2^-53 1" in r.stdout, r.stdout[-200:])
+    calls = {"scan_points": "sb.scan_points(b, b)", "no_sliding_curve": "sb.no_sliding_curve(np.broadcast_to(0.5, (10**10,)))",
+             "box_counts": "sb.box_counts(np.broadcast_to(True, (200000, 200000)))"}
+    for name, call in calls.items():
+        code = f"""
+import resource
+resource.setrlimit(resource.RLIMIT_AS, (6 << 30, 6 << 30))
+import numpy as np, stairbounce as sb
+b = np.broadcast_to(0.5, (3 * 10**9,))
+try:
+    {call}
+    print("RAN")
+except ValueError as exc:
+    print("REFUSED" if "memory" in str(exc) else exc)
+"""
+        r = _py(code, work, timeout=90)
+        t.case("numeric", f"{name} of a broadcast view", "REFUSED" in r.stdout, (r.stdout + r.stderr)[-200:])
+
+
+def part_dask(t, work, args):
+    """N7: the scheduler killed mid-scan: one line, exit 2; the store resumes bit for bit."""
+    dask_cli = str(Path(sys.executable).with_name("dask"))
+    if not os.path.exists(dask_cli):
+        t.skip("dask", "all", "no dask command")
+        return
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    d = Path(tempfile.mkdtemp(dir=work))
+    n, tile = (1536, 96) if args.full else (256, 32)
+    cmd = ["scan", "--size", f"{n}x{n}", "--tile", str(tile), "--max-iter", "1000", "--scheduler", address,
+           "--out", "S.zarr"]
+    quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+    def cluster():
+        s = subprocess.Popen([dask_cli, "scheduler", "--host", "127.0.0.1", "--port", str(port),
+                              "--no-dashboard"], **quiet)
+        w = subprocess.Popen([dask_cli, "worker", address, "--nworkers", "1", "--nthreads", "1",
+                              "--no-dashboard", "--host", "127.0.0.1"], **quiet)
+        return s, w
+
+    sched, worker = cluster()
+    p = None
+    try:
+        p = subprocess.Popen(CLI + cmd, cwd=d, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        _wait_tiles(d / "S.zarr", 3, p)
+        sched.kill()
+        _, err = p.communicate(timeout=180)
+        t.case("dask", "scheduler killed mid-scan", p.returncode == 2 and one_line(err) and not traceback_in(err),
+               f"exit {p.returncode}: {err.strip()[-300:]}")
+    finally:
+        for x in (p, worker, sched):
+            _stop(x)
+    sched, worker = cluster()
+    try:
+        r = sb(cmd, d)
+    finally:
+        for x in (worker, sched):
+            _stop(x)
+    same, why = _store_vs_scan(d / "S.zarr", n, 1000)
+    t.case("dask", "resumed on a new scheduler", r.returncode == 0 and same, f"exit {r.returncode} {why}")
 
 
 PARTS = {
@@ -396,6 +737,13 @@ PARTS = {
     "damage": part_damage,
     "ctrlc": part_ctrlc,
     "diskfull": part_diskfull,
+    "alias": part_alias,
+    "coords": part_coords,
+    "readonly": part_readonly,
+    "cache": part_cache,
+    "host": part_host,
+    "numeric": part_numeric,
+    "dask": part_dask,
 }
 
 
