@@ -17,6 +17,11 @@
    checked against its request and a checksum of its data).  Absolute times:
    to compare two versions, run this script under each back to back
    (``--only 3,4``; PYTHONPATH selects the version), as benchmarks/README.md says.
+5. ``--baseline-src DIR`` (a checkout's ``src``, e.g. ``git archive ce04da2 src``):
+   parts 3 and 4 for this version and that one in the same process,
+   interleaved (the baseline imported as ``stairbounce_baseline``), on one
+   store: resume (verify=True), load, and a warm-cache ``figures`` run;
+   the ratio this / baseline of the best times.
 """
 
 from __future__ import annotations
@@ -66,6 +71,7 @@ def main():
     p.add_argument("--tile", type=int, default=128)
     p.add_argument("--only", default="1,2,3,4", help="parts to run, e.g. 3,4")
     p.add_argument("--figures", default="fig4,fig8", help="figures of part 4's cached run")
+    p.add_argument("--baseline-src", default=None, help="part 5: a baseline version's src folder")
     args = p.parse_args()
     parts = set(args.only.split(","))
     print(f"load {os.getloadavg()[0]:.2f}, numba threads {numba.get_num_threads()}, stairbounce from "
@@ -74,6 +80,67 @@ def main():
         kernel_parts(args)
     if parts & {"3", "4"}:
         store_parts(args, parts)
+    if args.baseline_src:
+        against_baseline(args)
+
+
+def _baseline(src):
+    """The package in ``src`` imported as ``stairbounce_baseline`` (relative imports only)."""
+    import importlib
+
+    where = Path(tempfile.mkdtemp(prefix="stairbounce-baseline-"))
+    shutil.copytree(Path(src) / "stairbounce", where / "stairbounce_baseline")
+    sys.path.insert(0, str(where))
+    return importlib.import_module("stairbounce_baseline"), where
+
+
+def against_baseline(args):
+    import stairbounce as new
+
+    old, where = _baseline(args.baseline_src)
+    work = Path(tempfile.mkdtemp(prefix="stairbounce-bench-"))
+    try:
+        store = work / "a.zarr"
+        kw = dict(e=(0, 1, args.size), u=(0, 1.5, args.size), max_iter=1000, tile=args.tile)
+        new.scan_to_zarr(store, **kw)
+        names = args.figures.split(",")
+        figs = {}
+        for tag, pkg in (("new", new), ("old", old)):
+            F = importlib_figures(pkg)
+            (work / f"figs-{tag}").mkdir()
+            figs[tag] = (F, F.Settings(out=work / f"figs-{tag}", dpi=60, cache_dir=work / f"cache-{tag}",
+                                       overwrite=True))
+            F.make_figures(figs[tag][1], names)  # fills its cache (and compiles)
+            pkg.scan_to_zarr(store, **kw)
+            pkg.load(store)
+        times = {(tag, what): [] for tag in ("new", "old") for what in ("resume", "load", "figures")}
+        cpu = {key: [] for key in times}  # CPU time of this process: less moved by other processes
+        for i in range(args.repeat):  # interleaved, in turn first: load changes hit both alike
+            for tag, pkg in ((("new", new), ("old", old)) if i % 2 == 0 else (("old", old), ("new", new))):
+                for what, f in (("resume", lambda: pkg.scan_to_zarr(store, **kw)),
+                                ("load", lambda: pkg.load(store)),
+                                ("figures", lambda: figs[tag][0].make_figures(figs[tag][1], names))):
+                    t, c = time.perf_counter(), time.process_time()
+                    f()
+                    times[tag, what].append(time.perf_counter() - t)
+                    cpu[tag, what].append(time.process_time() - c)
+        print(f"5. this version against {args.baseline_src}, same process, interleaved, best of {args.repeat} "
+              f"(load {os.getloadavg()[0]:.2f}):")
+        for what in ("resume", "load", "figures"):
+            a, b = min(times["new", what]), min(times["old", what])
+            ca, cb = min(cpu["new", what]), min(cpu["old", what])
+            print(f"   {what:8s} wall: this {a:.3f} s, baseline {b:.3f} s, ratio {a / b:.3f} "
+                  f"(medians {np.median(times['new', what]):.3f} / {np.median(times['old', what]):.3f}); "
+                  f"CPU: {ca:.3f} / {cb:.3f} s, ratio {ca / cb:.3f}")
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+        shutil.rmtree(where, ignore_errors=True)
+
+
+def importlib_figures(pkg):
+    import importlib
+
+    return importlib.import_module(pkg.__name__ + ".figures")
 
 
 def kernel_parts(args):

@@ -9,15 +9,12 @@ checked against a 60-digit mpmath evaluation of (2.4).
 
 from __future__ import annotations
 
-import errno
-import json
 import os
 import signal
 import subprocess
 import sys
 import textwrap
 import time
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -25,34 +22,20 @@ import pytest
 import xarray as xr
 import zarr
 
-from stairbounce import _io, atlas
+from stairbounce import _io
 from stairbounce.atlas import scan_to_zarr, tiles_done
-from stairbounce.cli import main
 from stairbounce.plane import load, save, scan
 
 from .test_atlas import StopAfter, stop_after
+from .test_faults import SCAN, TILE, WINDOW, reference, run  # noqa: F401  (reference: a fixture)
 
 pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")
 
-WINDOW = dict(e=(0.05, 0.95, 45), u=(0.1, 1.4, 38), max_iter=400)
-TILE = 16  # 3 x 3 tiles
-SCAN = ["scan", "--e", "0.05:0.95", "--u", "0.1:1.4", "--size", "45x38", "--max-iter", "400"]
 SRC = str(Path(__file__).resolve().parents[1] / "src")
 
 
-@pytest.fixture(scope="module")
-def reference():
-    return scan(**WINDOW)
-
-
-def run(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
-
-
 def one_line_error(err):
+    """One error line (warning lines before it allowed), no traceback."""
     lines = [x for x in err.strip().splitlines() if not x.startswith("stairbounce: warning:")]
     return len(lines) == 1 and lines[0].startswith("stairbounce: error:") and "Traceback" not in err
 
