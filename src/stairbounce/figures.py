@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
 from ._io import atomic_path
 
 __all__ = ["FIGURES", "Settings", "Row", "Result", "VERDICTS", "make_figures", "write_report",

@@ -36,6 +36,7 @@ import xarray as xr
 import numba
 from numba import njit, prange
 
+from ._version import __version__
 from . import _validate as _v
 from ._interrupt import halted
 from .model import (
@@ -625,7 +626,6 @@ def _run(es, us, grid, max_iter, y0, v0, prune):
 
 
 def _attrs(max_iter, y0, v0):
-    from . import __version__
 
     return {
         "title": "periodic sliding solutions in the (e, u) plane",

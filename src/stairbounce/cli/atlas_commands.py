@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, plural
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, draw_scan, parse_range, plural
 
 DEFAULT_TILE = 1024
 FIELDS = ("word_length", "period", "jumps", "impacts", "status")
@@ -184,7 +184,6 @@ def draw_store(ds, field, png, dpi, overlay=(), max_pixels=4_000_000, reduce="mo
     line naming the store (``source``), not a traceback.
     """
     from ..atlas import downsample
-    from .scan_commands import _draw
 
     # status too: it tells where there is no periodic sliding solution
     ds = ds[list(dict.fromkeys([field, "status"]))]
@@ -218,5 +217,5 @@ def draw_store(ds, field, png, dpi, overlay=(), max_pixels=4_000_000, reduce="mo
             a[keys[2]] = small.sizes[name] * f
         else:
             a.pop(keys[0], None), a.pop(keys[1], None)
-    _draw(small, field, overlay, png, dpi, overwrite=overwrite)
+    draw_scan(small, field, overlay, png, dpi, overwrite=overwrite)
     return small
