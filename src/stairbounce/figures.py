@@ -213,7 +213,7 @@ def _cached(settings, kind, inputs, compute):
     return ds
 
 
-_CACHE_WARNED = set()
+_CACHE_WARNED: set[str] = set()
 
 
 def _cache_warning(cache_dir, exc):
@@ -619,8 +619,8 @@ def _dimension(name):
 
         width, height, side = 13.0, 7.6, 4.4
         fig = plt.figure(figsize=(width, height), dpi=s.dpi)
-        ax0 = fig.add_axes([0.07, 0.27, side / width, side / height])
-        ax1 = fig.add_axes([0.55, 0.27, 0.42, side / height])
+        ax0 = fig.add_axes((0.07, 0.27, side / width, side / height))
+        ax1 = fig.add_axes((0.55, 0.27, 0.42, side / height))
         plot_border(border, e, u, ax=ax0, title=f"border of the sliding region, {res} x {res} px")
         plot_box_counts(est, ax=ax1)
         fig.suptitle(f"Fig. {name[-1]}: border of the sliding region in "
@@ -799,7 +799,7 @@ def fig9(s: Settings) -> Result:
     fig.suptitle("Fig. 9: orbit diagrams for e = 0.1 (iterates 2001-2200 from (0.1, 0)); "
                  "shaded: the next zoom")
     fig.tight_layout(rect=(0, 0, 0.92, 1))
-    cax = fig.add_axes([0.93, 0.12, 0.015, 0.76])
+    cax = fig.add_axes((0.93, 0.12, 0.015, 0.76))
     cb = fig.colorbar(images[0], cax=cax)
     cb.set_label("iterates per cell (all panels)")
     ratios = [heights[i + 1] / heights[i] for i in range(len(heights) - 1) if heights[i] > 0]

@@ -161,12 +161,13 @@ def render(
             "computed yet; they are drawn blank",
             file=sys.stderr,
         )
+    bounds = None
     if window:
         parts = window.split(",")
         if len(parts) != 2:
             raise CLIError(f"--window must be E0:E1,U0:U1, got {window!r}")
-        window = (parse_range("window", parts[0]), parse_range("window", parts[1]))
-    small = draw_store(ds, field, png, dpi, max_pixels=max_pixels, reduce=reduce, window=window,
+        bounds = (parse_range("window", parts[0]), parse_range("window", parts[1]))
+    small = draw_store(ds, field, png, dpi, max_pixels=max_pixels, reduce=reduce, window=bounds,
                        overwrite=force, source=store)
     f = small.attrs.get("downsampled", 1)
     how = f", blocks of {f} x {f} ({reduce})" if f > 1 else ""
