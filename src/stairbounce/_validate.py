@@ -1,6 +1,6 @@
 """The validation contract of the public API, in one place.
 
-Contract (README, "Valid numeric range"):
+Contract (docs/guide/numerics.md, "Valid numeric range and accuracy"):
 
 * A real parameter is a number: a Python ``int`` or ``float``, a numpy integer
   or floating scalar (any ``numbers.Real`` except ``bool``).  Strings, bools,

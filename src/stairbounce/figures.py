@@ -146,7 +146,7 @@ def _compare(value, paper, ci=None, tol=None, unit=""):
 
 STUDY_FILE = Path(__file__).parent / "data" / "border_dimension.json"
 """The dimension study's best estimate per window (written by the study of
-the border's dimension; see README, 'Fractal dimension')."""
+the border's dimension; see docs/guide/dimension-study.md)."""
 
 
 def load_border_dimension(path=None):
@@ -652,7 +652,7 @@ def _dimension(name):
                 f"D = {auto.dimension:.3f} (95% CI {auto.ci[0]:.3f}..{auto.ci[1]:.3f}), "
                 f"r = {auto.r:.4f}, boxes {auto.fit_range[0]}..{auto.fit_range[1]} px",
                 verdict=v2, why=w2 + "; this range leaves out the pixel scale the paper's "
-                "fit includes (README, 'Fractal dimension')"),
+                "fit includes (docs/guide/dimension-study.md)"),
         ]
         rows.append(_study_row(name, paper, best))
         caption = (f"Left: the border of the region with a periodic sliding solution (status 0, "
@@ -691,8 +691,8 @@ def _study_row(name, paper, best):
 
 def _same_scales(name):
     """The tiled box count beside the best estimate, at the scales both
-    estimators measure (benchmarks/dimension_study.py; README "Fractal
-    dimension"), or "" when the packaged study has none."""
+    estimators measure (benchmarks/dimension_study.py;
+    docs/guide/dimension-study.md), or "" when the packaged study has none."""
     from .fractal import border_dimension_estimates
 
     try:

@@ -899,7 +899,7 @@ def perimeter_dimension(
         numbers are reproduced (within 0.01 at 500 px) by
         ``fit_range=(1, 64)``, all boxes up to an eighth of the picture; the
         automatic range leaves out the pixel scale and gives larger values
-        (README, "Fractal dimension: how far to trust one number").
+        (docs/guide/dimension-study.md, "how far to trust one number").
     y0, v0 : float, default 1, 0
         Initial state of the scan (docs/design.md: ``(1, 0)`` is the state after
         sliding).
