@@ -76,14 +76,17 @@ html_static_path = ["_static"]
 html_css_files = ["stairbounce.css"]
 html_theme_options = {
     "navigation_with_keys": False,
+    "header_links_before_dropdown": 6,
     "show_toc_level": 2,
-    "secondary_sidebar_items": ["page-toc"],
+    # no right-hand column: the article takes its width, so that code lines of
+    # up to 100 characters fit beside the navigation on a 1280 px screen
+    "secondary_sidebar_items": [],
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
     "pygments_light_style": "default",
     "pygments_dark_style": "github-dark",
 }
-html_sidebars = {"gallery": [], "design": []}
+html_sidebars = {"index": [], "gallery": [], "api": []}
 
 # gallery: the paper's figures made by stairbounce.figures at build time,
 # small so that the whole build stays quick (see _ext/sb_gallery.py)
@@ -91,7 +94,7 @@ sb_gallery_scale = float(os.environ.get("SB_GALLERY_SCALE", "0.25"))
 sb_gallery_max_iter = int(os.environ.get("SB_GALLERY_MAX_ITER", "300"))
 
 
-# The user guide's toctree says "guide/*", so that a new page slots in by
+# The user guide's toctree (guide/index.md) says "*", so that a new page slots in by
 # existing; a glob sorts by name, so the pages that exist are listed first in
 # reading order and the glob keeps only for pages not named here.
 GUIDE_ORDER = ["model", "scans", "paper", "dimension", "dimension-study", "borders", "orbits",
@@ -100,13 +103,13 @@ GUIDE_ORDER = ["model", "scans", "paper", "dimension", "dimension-study", "borde
 
 
 def _order_guide(app, docname, source):
-    if docname != "index":
+    if docname != "guide/index":
         return
-    present = {p.stem for p in (HERE / "guide").glob("*.md")}
-    lines = [f"guide/{name}" for name in GUIDE_ORDER if name in present]
+    present = {p.stem for p in (HERE / "guide").glob("*.md")} - {"index"}
+    lines = [name for name in GUIDE_ORDER if name in present]
     if present - set(GUIDE_ORDER):
-        lines.append("guide/*")
-    source[0] = source[0].replace("\nguide/*\n", "\n" + "\n".join(lines) + "\n", 1)
+        lines.append("*")
+    source[0] = source[0].replace("\n*\n", "\n" + "\n".join(lines) + "\n", 1)
 
 
 def setup(app):
