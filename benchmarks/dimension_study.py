@@ -25,8 +25,8 @@ with ``--json`` writes ``src/stairbounce/data/border_dimension.json``.
 
 Run: ``python benchmarks/dimension_study.py --quick`` (10^5 points, max_iter
 1000, 2048^2 px boxes: about a minute on an idle 2-core machine);
-the full study (defaults) took the time recorded in README.md on the machine
-named there.  Stores go under ``--store-dir`` (default
+the full study (defaults) took the time recorded in docs/guide/dimension-study.md
+on the machine named there.  Stores go under ``--store-dir`` (default
 ``/work/scratch/i12``); they are large (about 1.5 GB per 32768^2 window).
 """
 

@@ -5,8 +5,8 @@
     python scripts/campaign_faults.py --only race,damage
 
 Every case runs the real command line in a fresh folder (a child process, as a
-user would) and checks the contract the README states ("Files and stores: what
-is guaranteed"):
+user would) and checks the contract docs/guide/robustness.md states ("Files, stores and
+interruptions: what is guaranteed"):
 
 - ``overwrite``: a folder of the user's at every output path, with and without
   --force; an existing file without --force.  Defect: anything deleted or

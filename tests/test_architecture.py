@@ -1,7 +1,10 @@
 """docs/design.md's one-way data flow: the core imports no plotting, CLI or web code."""
 
+import ast
+import re
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -18,3 +21,55 @@ def test_core_module_imports_no_plotting_cli_or_web(module):
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert r.stdout.strip() == "[]", f"stairbounce.{module} imports {r.stdout.strip()}"
+
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "stairbounce"
+
+
+def _relative_imports(path):
+    """(level, module, names) of every relative import in ``path``, at any depth (inside functions too)."""
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.level:
+            yield node.level, node.module, [a.name for a in node.names]
+
+
+def test_version_lives_in_one_leaf_module_that_no_module_reaches_through_the_package():
+    # the lower modules stamp the version on what they write: they read the leaf
+    # stairbounce._version, not the package's __init__ (an arrow back up the layers)
+    upward = []
+    for path in sorted(SRC.rglob("*.py")):
+        if path.name == "__init__.py" and path.parent == SRC:
+            continue
+        for level, module, names in _relative_imports(path):
+            if "__version__" in names and module != "_version":
+                upward.append(f"{path.relative_to(SRC)}: from {'.' * level}{module or ''} import __version__")
+    assert not upward, upward
+    import stairbounce
+    from stairbounce import _version
+
+    assert stairbounce.__version__ == _version.__version__
+    assert re.fullmatch(r"\d+\.\d+\.\d+", _version.__version__)
+    # the build reads the same file (hatch's dynamic version), and no second literal
+    pyproject = (SRC.parents[1] / "pyproject.toml").read_text()
+    assert 'dynamic = ["version"]' in pyproject
+    assert 'path = "src/stairbounce/_version.py"' in pyproject
+    assert not re.search(r"^version\s*=", pyproject, re.M)
+
+
+def test_cli_modules_import_each_other_one_way():
+    # a cycle between command modules (scan <-> atlas, say) means a shared helper
+    # belongs in cli/_app
+    cli = SRC / "cli"
+    graph = {}
+    for path in cli.glob("*.py"):
+        graph[path.stem] = {(m or "").split(".")[0] or n
+                            for level, m, names in _relative_imports(path) if level == 1
+                            for n in ([m] if m else names)} & {p.stem for p in cli.glob("*.py")}
+    for start in graph:
+        seen, todo = set(), list(graph[start])
+        while todo:
+            node = todo.pop()
+            assert node != start, f"cli/{start}.py imports itself back through {sorted(seen)}"
+            if node not in seen:
+                seen.add(node)
+                todo.extend(graph.get(node, ()))

@@ -1,6 +1,6 @@
 """The validation contract of stairbounce._validate, fuzzed over the public API.
 
-Contract (README, "Valid numeric range"): real parameters are numbers (int,
+Contract (docs/guide/numerics.md, "Valid numeric range and accuracy"): real parameters are numbers (int,
 float, numpy numbers; never bool, str, None, complex, containers); counts are
 integers; the map's state and speed lie in 0 <= y <= 1e300, |v| <= 1e150,
 1e-150 <= u <= 1e150; a refusal is a ValueError naming the parameter, never

@@ -11,8 +11,8 @@ reliability campaign (issue 17; the long runs are ``scripts/campaign_faults.py``
 - Ctrl-C: exit 130 even where Python loses the interrupt (D9),
 - temporaries of killed processes are cleaned by the next run (D11).
 
-Every expected answer here comes from the contract stated in the README
-("Files and stores: what is guaranteed"), not from the code's output.
+Every expected answer here comes from the contract stated in
+docs/guide/robustness.md ("Files, stores and interruptions: what is guaranteed"), not from the code's output.
 """
 
 from __future__ import annotations

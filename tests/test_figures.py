@@ -158,7 +158,7 @@ def test_every_row_has_a_verdict_and_every_figure_a_caption(made):
             assert "|  |" not in line and not line.rstrip().endswith("| |"), line
     # the automatic-range rows: "differs" exactly when the paper's value is
     # outside their interval (at the paper's 500 px it is, for both windows:
-    # README), and they say which scale they leave out
+    # docs/guide/dimension-study.md), and they say which scale they leave out
     by_name = {f["name"]: f for f in manifest["figures"]}
     for name in ("fig6", "fig7"):
         auto = next(r for r in by_name[name]["rows"] if "automatic" in r["quantity"])

@@ -96,7 +96,7 @@ def test_equality_on_the_curve_is_not_pruned():
 def test_e_zero_and_out_of_range_are_never_pruned():
     assert not prunable(0.0, np.array([1e-3, 1.0, 1e6, 1e150])).any()
     # speeds where 1/T^2 or T^2 would overflow are outside the valid numeric
-    # range (README): refused by name rather than pruned or iterated
+    # range (docs/guide/numerics.md): refused by name rather than pruned or iterated
     for u in (1e-300, 1e305):
         with pytest.raises(ValueError, match=r"u \(horizontal speed\) values must be in \[1e-150, 1e\+150\]"):
             prunable(0.5, [u])

@@ -327,7 +327,7 @@ def test_answer_file_schema_and_claims():
         lo, hi = best["ci95"]
         assert lo < best["dimension"] < hi and hi - lo <= 0.04  # the +-0.02 goal of issue 12
         assert best["paper"] == paper and isinstance(best["method"], str) and best["details"]
-        # the README's claim: where both estimators measure, they agree within their intervals
+        # docs/guide/dimension-study.md's claim: where both estimators measure, they agree within their intervals
         same = best["same_scales"]
         ulo, uhi = same["uncertainty"]["ci95"]
         blo, bhi = same["boxes"]["ci95"]

@@ -184,3 +184,16 @@ def test_every_import_of_the_package_is_a_declared_dependency(wheel):
     with zipfile.ZipFile(wheel) as z:
         entry = z.read(next(n for n in z.namelist() if n.endswith("entry_points.txt"))).decode()
     assert "stairbounce = stairbounce.cli:main" in entry
+
+
+def test_wheel_carries_the_one_version_and_the_type_marker(wheel):
+    from stairbounce._version import __version__
+
+    assert wheel.name.startswith(f"stairbounce-{__version__}-")
+    with zipfile.ZipFile(wheel) as z:
+        names = z.namelist()
+        meta = z.read(next(n for n in names if n.endswith(".dist-info/METADATA"))).decode()
+        # the license travels with the wheel (hatch copies LICENSE into the .dist-info)
+        assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names), names
+    assert f"\nVersion: {__version__}\n" in meta
+    assert "stairbounce/py.typed" in names

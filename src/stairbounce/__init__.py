@@ -13,7 +13,6 @@ Panel app, the ``web`` extra).
 """
 
 from importlib import import_module as _import_module
-from importlib.metadata import PackageNotFoundError, version
 
 from .atlas import downsample, scan_to_zarr, tiles_done
 from .fractal import (
@@ -77,11 +76,8 @@ from .symbolic import Word, parse_word, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import normalized_speed, physical_speed, time_scale
 from ._compat import register_alias as _register_alias
+from ._version import __version__
 
-try:
-    __version__ = version("stairbounce")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree
-    __version__ = "0+unknown"
 
 # ``sb.scan`` is the function; it doubles as the old module ``stairbounce.scan``
 # (now ``stairbounce.plane``) so that old imports keep working, with a warning.

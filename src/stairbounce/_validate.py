@@ -1,6 +1,6 @@
 """The validation contract of the public API, in one place.
 
-Contract (README, "Valid numeric range"):
+Contract (docs/guide/numerics.md, "Valid numeric range and accuracy"):
 
 * A real parameter is a number: a Python ``int`` or ``float``, a numpy integer
   or floating scalar (any ``numbers.Real`` except ``bool``).  Strings, bools,
@@ -22,8 +22,13 @@ from __future__ import annotations
 import math
 import numbers
 import os
+from typing import Any, TypeAlias
 
 import numpy as np
+
+# The type of a real parameter in the public API's hints: what _is_real accepts
+# (numbers.Real, which mypy does not treat as a numeric type, less bool)
+Real: TypeAlias = "float | np.floating[Any] | np.integer[Any]"
 
 Y_MAX = 1e300
 V_MAX = 1e150

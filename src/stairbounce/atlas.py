@@ -225,7 +225,7 @@ def _checksum(values):
 # Opened arrays per store, kept by each process for the tiles that follow (opening
 # costs more than writing a small tile).  The token, drawn when the store is
 # created, tells a store apart from another one later made at the same path.
-_OPEN_STORES = {}
+_OPEN_STORES: dict[tuple[str, str], tuple] = {}
 
 
 def _open_store(path, token):

@@ -306,7 +306,7 @@ def store_box_dimension(
     :func:`stairbounce.fractal.box_dimension`, same ``fit_range``, ``tol``,
     ``min_boxes``).  For the perimeter, choose a ``fit_range`` away from
     the pixel scale (boxes of 1-2 px see the raster staircase of the border,
-    README "Fractal dimension").
+    docs/guide/dimension-study.md).
 
     The paper's numbers for its Figs. 6 and 7 windows: 1.324 and 1.403
     (Section 3).

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
 from ._io import atomic_path
 
 __all__ = ["FIGURES", "Settings", "Row", "Result", "VERDICTS", "make_figures", "write_report",
@@ -144,7 +144,7 @@ def _compare(value, paper, ci=None, tol=None, unit=""):
 
 STUDY_FILE = Path(__file__).parent / "data" / "border_dimension.json"
 """The dimension study's best estimate per window (written by the study of
-the border's dimension; see README, 'Fractal dimension')."""
+the border's dimension; see docs/guide/dimension-study.md)."""
 
 
 def load_border_dimension(path=None):
@@ -207,7 +207,7 @@ def _cached(settings, kind, inputs, compute):
     return ds
 
 
-_CACHE_WARNED = set()
+_CACHE_WARNED: set[str] = set()
 
 
 def _cache_warning(cache_dir, exc):
@@ -613,8 +613,8 @@ def _dimension(name):
 
         width, height, side = 13.0, 7.6, 4.4
         fig = plt.figure(figsize=(width, height), dpi=s.dpi)
-        ax0 = fig.add_axes([0.07, 0.27, side / width, side / height])
-        ax1 = fig.add_axes([0.55, 0.27, 0.42, side / height])
+        ax0 = fig.add_axes((0.07, 0.27, side / width, side / height))
+        ax1 = fig.add_axes((0.55, 0.27, 0.42, side / height))
         plot_border(border, e, u, ax=ax0, title=f"border of the sliding region, {res} x {res} px")
         plot_box_counts(est, ax=ax1)
         fig.suptitle(f"Fig. {name[-1]}: border of the sliding region in "
@@ -646,7 +646,7 @@ def _dimension(name):
                 f"D = {auto.dimension:.3f} (95% CI {auto.ci[0]:.3f}..{auto.ci[1]:.3f}), "
                 f"r = {auto.r:.4f}, boxes {auto.fit_range[0]}..{auto.fit_range[1]} px",
                 verdict=v2, why=w2 + "; this range leaves out the pixel scale the paper's "
-                "fit includes (README, 'Fractal dimension')"),
+                "fit includes (docs/guide/dimension-study.md)"),
         ]
         rows.append(_study_row(name, paper, best))
         caption = (f"Left: the border of the region with a periodic sliding solution (status 0, "
@@ -685,8 +685,8 @@ def _study_row(name, paper, best):
 
 def _same_scales(name):
     """The tiled box count beside the best estimate, at the scales both
-    estimators measure (benchmarks/dimension_study.py; README "Fractal
-    dimension"), or "" when the packaged study has none."""
+    estimators measure (benchmarks/dimension_study.py;
+    docs/guide/dimension-study.md), or "" when the packaged study has none."""
     from .fractal import border_dimension_estimates
 
     try:
@@ -793,7 +793,7 @@ def fig9(s: Settings) -> Result:
     fig.suptitle("Fig. 9: orbit diagrams for e = 0.1 (iterates 2001-2200 from (0.1, 0)); "
                  "shaded: the next zoom")
     fig.tight_layout(rect=(0, 0, 0.92, 1))
-    cax = fig.add_axes([0.93, 0.12, 0.015, 0.76])
+    cax = fig.add_axes((0.93, 0.12, 0.015, 0.76))
     cb = fig.colorbar(images[0], cax=cax)
     cb.set_label("iterates per cell (all panels)")
     ratios = [heights[i + 1] / heights[i] for i in range(len(heights) - 1) if heights[i] > 0]

@@ -34,9 +34,12 @@ or grid offset.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from numba import njit, prange
 
 from . import _validate as _v
@@ -116,7 +119,7 @@ def _neighbour_differs(a, connectivity, pad_mode, pad_value=None):
     return out
 
 
-def boundary(mask, connectivity=4, image_edge="ignore"):
+def boundary(mask: ArrayLike, connectivity: int = 4, image_edge: str = "ignore") -> np.ndarray:
     """boundary(mask, connectivity=4, image_edge="ignore") -> bool array
 
     The border pixels of a region: the pixels of the region with a neighbour
@@ -153,7 +156,7 @@ def boundary(mask, connectivity=4, image_edge="ignore"):
     return m & _neighbour_differs(m, connectivity, "constant", False)
 
 
-def label_boundary(labels, connectivity=4):
+def label_boundary(labels: ArrayLike, connectivity: int = 4) -> np.ndarray:
     """label_boundary(labels, connectivity=4) -> bool array
 
     The borders between any two labels of an integer image: the pixels with a
@@ -320,7 +323,9 @@ _MAX_OFFSETS = 64
 _REDUCTIONS = ("mean", "min")
 
 
-def box_counts(image, sizes=None, offsets=1, reduce="mean"):
+def box_counts(
+    image: ArrayLike, sizes: ArrayLike | None = None, offsets: int = 1, reduce: str = "mean"
+) -> tuple[np.ndarray, np.ndarray]:
     """box_counts(image, sizes=None, offsets=1, reduce="mean") -> (sizes, counts)
 
     The number of boxes of side ``s`` pixels that hold at least one nonzero
@@ -418,7 +423,7 @@ class SlopeFit:
     n: int
 
 
-def _check_xy(x, y):
+def _check_xy(x, y) -> tuple[np.ndarray, np.ndarray]:
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     if x.ndim != 1 or x.shape != y.shape:
@@ -446,7 +451,7 @@ def _fit(x, y):
     return slope, intercept, stderr, r
 
 
-def linear_region(x, y, tol=0.1, min_points=3):
+def linear_region(x: ArrayLike, y: ArrayLike, tol: float = 0.1, min_points: int = 3) -> tuple[int, int]:
     """linear_region(x, y, tol=0.1, min_points=3) -> (start, stop)
 
     The largest run of consecutive points that lie on one line, by a heuristic.
@@ -545,7 +550,9 @@ def _linear_region(x, y, tol, min_points):
     return fallback
 
 
-def slope_fit(x, y, range=None, tol=0.1, min_points=3):
+def slope_fit(
+    x: ArrayLike, y: ArrayLike, range: tuple[int, int] | None = None, tol: float = 0.1, min_points: int = 3
+) -> SlopeFit:
     """slope_fit(x, y, range=None, tol=0.1, min_points=3) -> SlopeFit
 
     Least-squares slope of ``y`` against ``x`` with its standard error, 95%
@@ -648,7 +655,7 @@ class PerimeterDimension(BoxDimension):
     (rows along u from ``u_min`` up, columns along e), the window, the
     resolution, ``max_iter`` and which border was measured."""
 
-    border: np.ndarray = field(default=None, repr=False)
+    border: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=bool), repr=False)
     e: tuple[float, float] = (0.0, 0.0)
     u: tuple[float, float] = (0.0, 0.0)
     resolution: int = 0
@@ -675,8 +682,15 @@ def _fit_indices(sizes_used, fit_range):
 
 
 def box_dimension(
-    image, sizes=None, offsets=1, reduce="mean", fit_range=None, tol=0.1, min_boxes=32, min_points=3
-):
+    image: ArrayLike,
+    sizes: ArrayLike | None = None,
+    offsets: int = 1,
+    reduce: str = "mean",
+    fit_range: tuple[float, float] | None = None,
+    tol: float = 0.1,
+    min_boxes: int = 32,
+    min_points: int = 3,
+) -> BoxDimension:
     """box_dimension(image, sizes=None, offsets=1, reduce="mean", fit_range=None, tol=0.1, min_boxes=32, min_points=3) -> BoxDimension
 
     The box-counting dimension of the set of nonzero pixels of an image.
@@ -728,7 +742,14 @@ def box_dimension(
     )
 
 
-def box_dimension_from_counts(sizes, counts, fit_range=None, tol=0.1, min_boxes=32, min_points=3):
+def box_dimension_from_counts(
+    sizes: ArrayLike,
+    counts: ArrayLike,
+    fit_range: tuple[float, float] | None = None,
+    tol: float = 0.1,
+    min_boxes: int = 32,
+    min_points: int = 3,
+) -> BoxDimension:
     """box_dimension_from_counts(sizes, counts, fit_range=None, tol=0.1, min_boxes=32, min_points=3) -> BoxDimension
 
     The fit step of :func:`box_dimension` alone, on box counts measured
@@ -879,7 +900,7 @@ def perimeter_dimension(
         numbers are reproduced (within 0.01 at 500 px) by
         ``fit_range=(1, 64)``, all boxes up to an eighth of the picture; the
         automatic range leaves out the pixel scale and gives larger values
-        (README, "Fractal dimension: how far to trust one number").
+        (docs/guide/dimension-study.md, "how far to trust one number").
     y0, v0 : float, default 1, 0
         Initial state of the scan (docs/design.md: ``(1, 0)`` is the state after
         sliding).
@@ -1026,7 +1047,9 @@ def _check_direction(direction):
     return direction
 
 
-def random_points(window, n_points, seed=0):
+def random_points(
+    window: tuple[tuple[float, float], tuple[float, float]], n_points: int, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """random_points(window, n_points, seed=0) -> (x, y, angle)
 
     The points of :func:`uncertain_fraction`: ``n_points`` independent
@@ -1484,7 +1507,7 @@ def sliding_classifier(max_iter=1000, which="sliding", y0=1.0, v0=0.0, prune=Tru
     return SlidingClassifier(max_iter, which, _finite("y0", y0), _finite("v0", v0), bool(prune))
 
 
-def border_dimension_estimates(path=None):
+def border_dimension_estimates(path: str | os.PathLike[str] | None = None) -> dict[str, Any]:
     """border_dimension_estimates(path=None) -> dict
 
     The measured dimension of the border of the sliding region in the

@@ -26,6 +26,7 @@ import numpy as np
 from numba import njit
 
 from . import _validate as _v
+from ._validate import Real
 
 __all__ = [
     "SLIDING",
@@ -290,13 +291,13 @@ def _iterate(y, v, e, T, ratio, steps, ys, vs, ks):
 # --------------------------------------------------------------------------- #
 
 
-def _finite(name, x):
+def _finite(name: str, x) -> float:
     """``x`` as a finite float, or ValueError naming ``name`` (the contract of
     :mod:`stairbounce._validate`: numbers only, no bools or strings)."""
     return _v.real(name, x)
 
 
-def check_e(e):
+def check_e(e) -> float:
     """Validate the restitution coefficient: a float in [0, 1), 0 or at least
     2^-53 (:data:`stairbounce._validate.E_MIN`)."""
     e = _finite("e", e)
@@ -307,7 +308,7 @@ def check_e(e):
     return e
 
 
-def check_u(u, name="u"):
+def check_u(u, name: str = "u") -> float:
     """Validate the horizontal speed: a float in [1e-150, 1e150] (> 0; the
     bounds keep ``T^2 = 1/u^2`` and ``v T`` far from overflow)."""
     u = _finite(name, u)
@@ -321,7 +322,7 @@ def check_u(u, name="u"):
     return u
 
 
-def check_state(y, v, yname="y", vname="v"):
+def check_state(y, v, yname: str = "y", vname: str = "v") -> tuple[float, float]:
     """Validate an edge state: ``0 <= y <= 1e300`` (the paper's domain is y >= 1;
     heights in [0, 1) are accepted as initial states, as in Section 4) and
     ``|v| <= 1e150``, where ``v^2 + 2y`` cannot overflow."""
@@ -342,7 +343,7 @@ def check_state(y, v, yname="y", vname="v"):
     return y, v
 
 
-def check_count(name, n, minimum, maximum=None):
+def check_count(name: str, n, minimum: int, maximum: int | None = None) -> int:
     """Validate an integer count ``minimum <= n (<= maximum)``; bools are refused."""
     return _v.count(name, n, minimum, maximum)
 
@@ -352,7 +353,7 @@ def check_count(name, n, minimum, maximum=None):
 # --------------------------------------------------------------------------- #
 
 
-def poincare_map(y, v, e, u):
+def poincare_map(y: Real, v: Real, e: Real, u: Real) -> tuple[float, float, int]:
     """poincare_map(y, v, e, u) -> (y_next, v_next, impacts)
 
     One step of the staircase, edge to edge (Prop. 2.3).
@@ -388,7 +389,7 @@ def poincare_map(y, v, e, u):
     return float(yn), float(vn), int(k)
 
 
-def slides(y, v, e, u):
+def slides(y: Real, v: Real, e: Real, u: Real) -> bool:
     """slides(y, v, e, u) -> bool
 
     Whether the impacts accumulate on the first step (Prop. 2.1).
@@ -407,7 +408,7 @@ def slides(y, v, e, u):
     return bool(_slides(y, v, T, ratio))
 
 
-def impact_number(y, v, e, u):
+def impact_number(y: Real, v: Real, e: Real, u: Real) -> int:
     """impact_number(y, v, e, u) -> int
 
     Number of impacts on the first step (Prop. 2.2).
@@ -436,7 +437,7 @@ def impact_number(y, v, e, u):
     return int(k)
 
 
-def impact_times(y, v, e, k):
+def impact_times(y: Real, v: Real, e: Real, k: int) -> tuple[np.ndarray, np.ndarray]:
     """impact_times(y, v, e, k) -> (times, velocities)
 
     The first ``k`` impact times and post-impact velocities on a step, eq. (2.2).
@@ -467,7 +468,7 @@ def _impact_times(v, s, e, times, speeds):
         speeds[j - 1] = _impact_velocity(s, e, j)
 
 
-def no_sliding_bound(e):
+def no_sliding_bound(e: Real) -> float:
     """no_sliding_bound(e) -> float
 
     Corollary 2.1: for ``u >= (1-e) / (2 sqrt(2e))`` no solution slides.
@@ -480,7 +481,7 @@ def no_sliding_bound(e):
     return (1.0 - e) / (2.0 * math.sqrt(2.0 * e))
 
 
-def tongue(n, e):
+def tongue(n: int, e: Real) -> tuple[float, float]:
     """tongue(n, e) -> (u_low, u_high)
 
     Theorem 3.1: the ``(n, 0^inf)`` sliding tongue at restitution ``e``.
@@ -496,7 +497,7 @@ def tongue(n, e):
     return math.sqrt((n - 1) / 2.0), math.sqrt(n / 2.0) * (1.0 - e) / (1.0 + e)
 
 
-def iterate(y, v, e, u, steps):
+def iterate(y: Real, v: Real, e: Real, u: Real, steps: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """iterate(y, v, e, u, steps) -> (ys, vs, impacts)
 
     Poincare iterates ``P^n(y, v)`` for n = 0..steps (Prop. 2.3).

@@ -106,6 +106,7 @@ import numpy as np
 import xarray as xr
 from numba import njit, prange
 
+from ._version import __version__
 from .model import (
     _COUNTED_IMPACTS,
     SLIDING,
@@ -798,7 +799,6 @@ def motion_coords(e_values, u_values, steps=1000, transient=1000, y0=1.0, v0=0.0
         _motion_fast(es, us, y0, v0, transient, steps, _chunking(es.size * us.size), _CHUNK, out)
     else:
         _motion_plain(es, us, y0, v0, transient, steps, out)
-    from . import __version__
 
     data_vars = {}
     for f, (name, desc) in enumerate(MOTION_FIELDS.items()):

@@ -23,6 +23,7 @@ import numpy as np
 import xarray as xr
 from numba import get_num_threads, njit, prange
 
+from ._version import __version__
 from . import _validate as _v
 from ._interrupt import halted
 from .model import _constants, _step, check_count, check_state
@@ -220,7 +221,6 @@ def orbit_diagram(e, u, y0=0.1, v0=0.0, transient=2000, keep=200, warm_start=Fal
     # in a helper thread when called from the main thread: Ctrl-C stops it at once
     run_kernel(kernel, es, us, y0, v0, transient, keep, ys, vs, ks, items)
 
-    from . import __version__
 
     dims = (varied, "iterate")
     return xr.Dataset(

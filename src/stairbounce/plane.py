@@ -36,6 +36,7 @@ import xarray as xr
 import numba
 from numba import njit, prange
 
+from ._version import __version__
 from . import _validate as _v
 from ._interrupt import halted
 from .model import (
@@ -603,7 +604,7 @@ def _check_run(max_iter, y0, v0):
     max_iter = check_count("max_iter", max_iter, 1)
     if max_iter > 2**31 - 1:
         raise ValueError(f"max_iter must be an integer in [1, 2**31 - 1], got {max_iter}")
-    # the map's valid range (README): v0^2, 2 y0 and 1/u^2 far from overflow
+    # the map's valid range (docs/guide/numerics.md): v0^2, 2 y0 and 1/u^2 far from overflow
     y0, v0 = check_state(y0, v0, "y0", "v0")
     return max_iter, y0, v0
 
@@ -627,7 +628,6 @@ def _run(es, us, grid, max_iter, y0, v0, prune):
 
 
 def _attrs(max_iter, y0, v0):
-    from . import __version__
 
     return {
         "title": "periodic sliding solutions in the (e, u) plane",

@@ -27,6 +27,22 @@ app = typer.Typer(
 )
 
 
+def _print_version(value: bool) -> None:
+    if value:
+        from .._version import __version__
+
+        typer.echo(f"stairbounce {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main_options(
+    version: bool = typer.Option(False, "--version", callback=_print_version, is_eager=True,
+                                 help="Print the version and exit."),
+) -> None:
+    """The options of ``stairbounce`` itself (before any command)."""
+
+
 class CLIError(Exception):
     """Bad input from the command line: printed as one line, exit status 2."""
 
@@ -76,6 +92,23 @@ def save_figure(fig, path, dpi: int, overwrite: bool = False) -> None:
             fig.savefig(tmp, dpi=dpi)
     finally:
         plt.close(fig)
+
+
+def draw_scan(ds, field, overlays, png, dpi, overwrite=False) -> None:
+    """Draw ``field`` of a scan dataset (in memory) with
+    :func:`stairbounce.plot.plot_scan` and the ``overlays`` into ``png``:
+    what ``scan --png`` and ``render`` write."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..plot import plot_scan
+
+    fig, ax = plt.subplots(figsize=(8, 6))
+    plot_scan(ds, field=field, ax=ax, overlay=overlays)
+    fig.tight_layout()
+    save_figure(fig, png, dpi, overwrite)
 
 
 def parse_range(name: str, text: str) -> tuple[float, float]:

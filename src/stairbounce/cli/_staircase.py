@@ -69,7 +69,7 @@ class Staircase:
         return f"steps a = {self.a:g} m high, b = {self.b:g} m long, g = {self.g:g} m/s^2"
 
 
-def _number(name: str, value) -> float:
+def _number(name: str, value) -> float | None:
     if value is None:
         return None
     x = float(value)

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, plural
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, draw_scan, parse_range, plural
 
 DEFAULT_TILE = 1024
 FIELDS = ("word_length", "period", "jumps", "impacts", "status")
@@ -190,12 +190,13 @@ def render(
             "computed yet; they are drawn blank",
             file=sys.stderr,
         )
+    bounds = None
     if window:
         parts = window.split(",")
         if len(parts) != 2:
             raise CLIError(f"--window must be E0:E1,U0:U1, got {window!r}")
-        window = (parse_range("window", parts[0]), parse_range("window", parts[1]))
-    small = draw_store(ds, field, png, dpi, max_pixels=max_pixels, reduce=reduce, window=window,
+        bounds = (parse_range("window", parts[0]), parse_range("window", parts[1]))
+    small = draw_store(ds, field, png, dpi, max_pixels=max_pixels, reduce=reduce, window=bounds,
                        overwrite=force, source=store)
     f = small.attrs.get("downsampled", 1)
     how = f", blocks of {f} x {f} ({reduce})" if f > 1 else ""
@@ -213,7 +214,6 @@ def draw_store(ds, field, png, dpi, overlay=(), max_pixels=4_000_000, reduce="mo
     line naming the store (``source``), not a traceback.
     """
     from ..atlas import downsample
-    from .scan_commands import _draw
 
     # status too: it tells where there is no periodic sliding solution
     ds = ds[list(dict.fromkeys([field, "status"]))]
@@ -247,5 +247,5 @@ def draw_store(ds, field, png, dpi, overlay=(), max_pixels=4_000_000, reduce="mo
             a[keys[2]] = small.sizes[name] * f
         else:
             a.pop(keys[0], None), a.pop(keys[1], None)
-    _draw(small, field, overlay, png, dpi, overwrite=overwrite)
+    draw_scan(small, field, overlay, png, dpi, overwrite=overwrite)
     return small

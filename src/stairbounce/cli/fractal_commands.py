@@ -123,7 +123,7 @@ def dimension(
         None, "--method",
         help="'uncertainty' or 'boxes'. Default: uncertainty for a window of the model (the uncertainty "
              "exponent of random points: no picture, so no pixel scale to bias it, and its CI covers the "
-             "sampling noise; it agrees with box counting of 32768^2 px pictures, README), boxes for "
+             "sampling noise; it agrees with box counting of 32768^2 px pictures: docs/guide/dimension-study.md), boxes for "
              "--image and --store (pictures can only be box-counted). 'boxes' on a window scans a "
              "--resolution picture: the paper's method (--fit-range 1:64 at 500 px gives its numbers)."),
     resolution: int = typer.Option(512, "--resolution", help="Boxes: pixels along each axis of the scan (>= 8)."),

@@ -12,12 +12,12 @@ from ._app import (
     check_dpi,
     check_outputs,
     app,
+    draw_scan,
     parse_overlays,
     parse_range,
     parse_size,
     plural,
     progress_bar,
-    save_figure,
     tile_for_workers,
 )
 from .motion_commands import MOTION_FIELD_NAMES, motion_scan_figure
@@ -133,7 +133,7 @@ def scan_(
         sc.save(ds, out, overwrite=force)
         typer.echo(f"wrote {out}")
     if png is not None:
-        _draw(ds, field, overlays, png, dpi, overwrite=force)
+        draw_scan(ds, field, overlays, png, dpi, overwrite=force)
         typer.echo(f"wrote {png}")
     found = ds["status"].values == 0
     frac = found.mean()
@@ -151,17 +151,3 @@ def _scan_with_progress(sc, e, u, max_iter, y0, v0):
     with progress_bar(Console(stderr=True), "scan rows", u[2]) as (bar, task):
         return sc.scan(e, u, max_iter, y0, v0,
                        progress=lambda done, total: bar.update(task, completed=done, total=total))
-
-
-def _draw(ds, field, overlays, png, dpi, overwrite=False):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..plot import plot_scan
-
-    fig, ax = plt.subplots(figsize=(8, 6))
-    plot_scan(ds, field=field, ax=ax, overlay=overlays)
-    fig.tight_layout()
-    save_figure(fig, png, dpi, overwrite)

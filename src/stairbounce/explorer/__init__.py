@@ -69,7 +69,7 @@ def _local_names() -> set[str]:
         if name:
             names.add(name.lower())
             try:
-                names |= {info[4][0] for info in socket.getaddrinfo(name, None)}
+                names |= {str(info[4][0]) for info in socket.getaddrinfo(name, None)}
             except OSError:
                 pass
     try:

@@ -10,6 +10,7 @@ import io
 import math
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -51,11 +52,12 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     w, h = view.width * k / dpi, view.height * k / dpi  # image size, inches
     fw, fh = w + 2.9, h + 1.4
     fig = Figure(figsize=(fw, fh), dpi=dpi)
-    ax = fig.add_axes([1.0 / fw, 0.75 / fh, w / fw, h / fh])
+    ax = fig.add_axes((1.0 / fw, 0.75 / fh, w / fw, h / fh))
     im = ax.imshow(idx, origin="lower", extent=(view.e_lo, view.e_hi, view.u_lo, view.u_hi),
                    aspect="auto", interpolation="nearest", cmap=cmap, norm=norm)
     curves = overlay_curves(view)
-    styles = {"tongues": dict(color="0.6", lw=0.7), "no_sliding": dict(color="C3", lw=1.2, ls="--")}
+    styles: dict[str, dict[str, Any]] = {"tongues": dict(color="0.6", lw=0.7),
+                                        "no_sliding": dict(color="C3", lw=1.2, ls="--")}
     for name in view.overlays:
         for xs, ys in zip(*curves[name]):
             ax.plot(xs, ys, **styles[name])
@@ -70,7 +72,7 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
            else "(white: no periodic sliding solution within max_iter)"),
         fontsize="small",
     )
-    cax = fig.add_axes([(w + 1.2) / fw, 0.75 / fh, 0.2 / fw, h / fh])
+    cax = fig.add_axes(((w + 1.2) / fw, 0.75 / fh, 0.2 / fw, h / fh))
     cb = fig.colorbar(im, cax=cax, ticks=key.ticks)
     cb.ax.set_yticklabels([key.labels[i] for i in key.ticks], fontsize="small")
     cb.set_label(key.title, fontsize="small")

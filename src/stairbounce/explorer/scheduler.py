@@ -33,7 +33,9 @@ import itertools
 import math
 import threading
 import time
+from collections.abc import Generator
 from dataclasses import dataclass, field
+from typing import Any
 
 __all__ = ["Job", "Scheduler", "USAGE_DECAY"]
 
@@ -53,7 +55,7 @@ class Job:
 
     owner: object
     kind: str
-    work: object
+    work: Generator[Any, None, Any]
     on_slice: object = None
     on_done: object = None
     alive: object = None

@@ -23,6 +23,7 @@ the server side of the app can be tested by calling these functions directly:
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from urllib.parse import urlencode
 
@@ -301,7 +302,7 @@ def parse_query(args) -> tuple[View, list[str]]:
     """
     view = DEFAULT_VIEW
     messages: list[str] = []
-    parsers = {
+    parsers: dict[str, Callable[[str], dict]] = {
         "e": lambda t: dict(zip(("e_lo", "e_hi"), parse_window("e", t, 1.0))),
         "u": lambda t: dict(zip(("u_lo", "u_hi"), parse_window("u", t, U_LIMIT))),
         "size": lambda t: dict(zip(("width", "height"), parse_size(t))),
@@ -678,9 +679,10 @@ def classes(ds: xr.Dataset, var: str) -> np.ndarray:
         idx = 1 + np.clip(np.floor((x - lo) / (hi - lo) * _NBINS), 0, _NBINS - 1)
         return np.where((ds["slide_step"].values > 0) | ~np.isfinite(x), 0, idx).astype(np.int64)
     sliding = ds["status"].values == 0
-    if FIELDS[var][2] is None:
+    least = FIELDS[var][2]
+    if least is None:
         return np.where(sliding, 0, 1)
-    v = ds[var].values.astype(np.int64) - FIELDS[var][2]
+    v = ds[var].values.astype(np.int64) - least
     idx = np.searchsorted(np.asarray(_CLASS_STARTS), v, side="right") - 1
     return np.where(sliding, idx, -1)
 
