@@ -32,7 +32,7 @@ def info(cache_dir: Path = typer.Option(None, "--cache-dir", help=CACHE_DIR_HELP
     folder = _folder(cache_dir)
     found = _cache.entries(folder)
     total = sum(n for _, n in found)
-    kinds = {}
+    kinds: dict[str, int] = {}
     for p, _ in found:
         kind = p.name.split("-")[0]
         kinds[kind] = kinds.get(kind, 0) + 1
