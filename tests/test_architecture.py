@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas",
+CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "dimension", "atlas",
         "atlas_boxes", "nonsliding", "_io", "_interrupt"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 

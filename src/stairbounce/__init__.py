@@ -16,7 +16,7 @@ from importlib import import_module as _import_module
 from importlib.metadata import PackageNotFoundError, version
 
 from .atlas import downsample, scan_to_zarr, tiles_done
-from .fractal import (
+from .dimension import (
     BoxDimension,
     PerimeterDimension,
     SlopeFit,
@@ -77,6 +77,7 @@ from .symbolic import Word, parse_word, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import normalized_speed, physical_speed, time_scale
 from ._compat import register_alias as _register_alias
+from . import fractal  # noqa: F401  (the old name of stairbounce.dimension, an alias)
 
 try:
     __version__ = version("stairbounce")

@@ -40,7 +40,7 @@ def _read_region(path: Path, region: str) -> np.ndarray:
 
 
 def _scan_with_progress(kwargs):
-    from ..fractal import perimeter_dimension
+    from ..dimension import perimeter_dimension
 
     n = kwargs["resolution"]
     if n * n * kwargs["max_iter"] < _PROGRESS_WORK:
@@ -75,7 +75,7 @@ def _bar(total_label):
 
 
 def _uncertainty_with_progress(kwargs, work):
-    from ..fractal import perimeter_dimension
+    from ..dimension import perimeter_dimension
 
     if work < _PROGRESS_WORK:
         return perimeter_dimension(**kwargs)
@@ -145,7 +145,7 @@ def dimension(
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
     """Fractal dimension of the border of the sliding region (Figs. 6 and 7), of a picture or of a tiled store."""
-    from ..fractal import boundary, box_dimension
+    from ..dimension import boundary, box_dimension
 
     if png is not None and png.suffix.lower() not in {".png", ".pdf", ".svg"}:
         raise CLIError(f"--png must end in .png, .pdf or .svg, got {str(png)!r}")

@@ -15,7 +15,7 @@ def plot_box_counts(result, ax=None):
 
     Parameters
     ----------
-    result : :class:`stairbounce.fractal.BoxDimension`
+    result : :class:`stairbounce.dimension.BoxDimension`
     ax : matplotlib Axes or None
     """
     if ax is None:
@@ -118,8 +118,8 @@ def plot_box_dimension(result, image=None, axes=None, title=None):
 
     Parameters
     ----------
-    result : :class:`~stairbounce.fractal.BoxDimension` or
-        :class:`~stairbounce.fractal.PerimeterDimension`
+    result : :class:`~stairbounce.dimension.BoxDimension` or
+        :class:`~stairbounce.dimension.PerimeterDimension`
         A perimeter result carries its border image and window; for a plain
         box-dimension result pass the measured ``image``.
     image : 2-D array or None
@@ -164,7 +164,7 @@ def plot_uncertainty(result, axes=None, title=None):
 
     Parameters
     ----------
-    result : :class:`stairbounce.fractal.UncertaintyDimension`
+    result : :class:`stairbounce.dimension.UncertaintyDimension`
     axes : (ax_fraction, ax_local) or None
         None: a new figure of two panels.
     title : str or None
