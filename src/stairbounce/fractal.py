@@ -15,10 +15,10 @@ import sys
 import types
 
 from .dimension import __all__ as _public
-from .dimension import borders, boxes, classifier, fit, perimeter, result, study, uncertainty
+from .dimension import borders, boxes, classifier, fit, perimeter, result, slicing, study, uncertainty
 
 _SAVED = {}
-_MODULES = (boxes, borders, fit, uncertainty, perimeter, classifier, result, study)
+_MODULES = (boxes, borders, fit, uncertainty, slicing, perimeter, classifier, result, study)
 __all__ = list(_public)
 
 

@@ -43,6 +43,7 @@ from .classifier import SlidingClassifier, sliding_classifier
 from .fit import SlopeFit, linear_region, slope_fit
 from .perimeter import PerimeterDimension, perimeter_dimension
 from .result import disagree
+from .slicing import SlicingDimension, slicing_dimension
 from .study import border_dimension_estimates
 from .uncertainty import (
     DEFAULT_EPS,
@@ -58,6 +59,7 @@ __all__ = [
     "BoxDimension",
     "DEFAULT_EPS",
     "PerimeterDimension",
+    "SlicingDimension",
     "SlidingClassifier",
     "SlopeFit",
     "UncertainFraction",
@@ -73,6 +75,7 @@ __all__ = [
     "perimeter_dimension",
     "random_points",
     "sliding_classifier",
+    "slicing_dimension",
     "slope_fit",
     "uncertain_fraction",
     "uncertainty_dimension",

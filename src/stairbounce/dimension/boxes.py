@@ -290,6 +290,13 @@ class BoxDimension(Estimate):
         ls, lc = np.log(s), np.log(c)
         return np.exp(0.5 * (ls[1:] + ls[:-1])), -np.diff(lc) / np.diff(ls)
 
+    def local_band(self):
+        """``(s_mid, D_local, half-width)``: box counts carry no per-size noise
+        model, so the half-width is NaN (the drift across sizes is the
+        measure of their scatter)."""
+        mid, dl = self.local_dimensions
+        return mid, dl, np.full(dl.shape, np.nan)
+
     def summary(self) -> str:
         """D with its drift-covering interval, the scales and max_iter, r
         and the 95% CI of the fit; a second line warns when the drift

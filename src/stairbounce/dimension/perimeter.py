@@ -41,7 +41,7 @@ class PerimeterDimension(BoxDimension):
         return f"boxes {lo}..{hi} px of {n} (= {lo / n:.3g}..{hi / n:.3g} of the window)"
 
 
-_METHODS = ("boxes", "uncertainty")
+_METHODS = ("boxes", "uncertainty", "slicing")
 
 
 def _check_window(name, window):
@@ -103,8 +103,10 @@ def perimeter_dimension(
     eps=None,
     seed=0,
     prune=True,
+    n_lines=64,
+    scales=(1e-10, 1e-2),
 ):
-    """perimeter_dimension(e=(0, 0.333), u=(0.4, 0.733), resolution=512, max_iter=1000, which="sliding", ..., method="boxes") -> PerimeterDimension or UncertaintyDimension
+    """perimeter_dimension(e=(0, 0.333), u=(0.4, 0.733), resolution=512, max_iter=1000, which="sliding", ..., method="boxes") -> PerimeterDimension, UncertaintyDimension or SlicingDimension
 
     The box-counting dimension of the perimeter of the region of periodic
     sliding solutions in a window of the ``(e, u)`` plane (Section 3,
@@ -152,9 +154,16 @@ def perimeter_dimension(
         ``connectivity``, ``sizes``, ``offsets``, ``reduce``, ``tol`` and
         ``min_boxes`` are not used, and ``fit_range`` is ``(eps_min, eps_max)``
         in window units); returns an :class:`UncertaintyDimension`.
+        ``"slicing"``: crossings of the border along ``n_lines`` random lines
+        refined from ``scales[1]`` down to ``scales[0]`` of the window
+        (:func:`stairbounce.dimension.slicing.slicing_dimension`; ``fit_range``
+        is ``(scale_min, scale_max)``); returns a ``SlicingDimension``.
     n_points, eps, seed :
         Only for ``method="uncertainty"``: as in :func:`uncertainty_dimension`
-        (default 100_000 points, :data:`DEFAULT_EPS`, seed 0).
+        (default 100_000 points, :data:`DEFAULT_EPS`, seed 0); ``seed`` also
+        for ``method="slicing"``.
+    n_lines, scales :
+        Only for ``method="slicing"`` (default 64 lines, 1e-10..1e-2).
     prune : bool, default True
         As in :func:`stairbounce.plane.scan` (same answer; False iterates
         the pixels above the Corollary 2.1 curve too).
@@ -168,8 +177,20 @@ def perimeter_dimension(
         raise ValueError(f"which must be one of {_WHICH}, got {which!r}")
     if method not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
+    what = "sliding region" if which == "sliding" else "word-length regions"
+    if method == "slicing":
+        from .slicing import slicing_dimension
+
+        try:
+            lo, hi = (float(v) for v in scales)
+        except (TypeError, ValueError):
+            raise ValueError(f"scales must be a pair (scale_min, scale_max), got {scales!r}") from None
+        return slicing_dimension(
+            sliding_classifier(max_iter=max_iter, which=which, y0=y0, v0=v0, prune=prune), (e, u),
+            n_lines=n_lines, scale_min=lo, scale_max=hi, seed=seed, fit_range=fit_range,
+            progress=progress, label=f"border of the {what}, max_iter {max_iter}",
+        )
     if method == "uncertainty":
-        what = "sliding region" if which == "sliding" else "word-length regions"
         return uncertainty_dimension(
             sliding_classifier(max_iter=max_iter, which=which, y0=y0, v0=v0, prune=prune), (e, u), eps=eps,
             n_points=n_points, seed=seed, fit_range=fit_range, progress=progress,

@@ -304,6 +304,18 @@ class UncertaintyDimension(Estimate):
         le, lf = np.log(e), np.log(f)
         return np.exp(0.5 * (le[1:] + le[:-1])), 2.0 - np.diff(lf) / np.diff(le)
 
+    def local_band(self):
+        """``(eps_mid, D_local, half-width)``: :attr:`local_dimensions` with the
+        95% half-width of the binomial noise of the two fractions behind each."""
+        ok = self.uncertain > 0
+        e, f, c = self.eps[ok], self.fraction[ok], self.uncertain[ok]
+        if e.size < 2:
+            return np.empty(0), np.empty(0), np.empty(0)
+        var = (1.0 - f) / np.maximum(c, 1)  # variance of log f (delta method)
+        mid, dl = self.local_dimensions
+        half = 1.96 * np.sqrt(var[1:] + var[:-1]) / np.diff(np.log(e))
+        return mid, dl, half
+
     def table(self) -> str:
         """The measurement as text: eps, f, uncertain points, fitted or not."""
         lines = [f"{'eps':>10}  {'f(eps)':>11}  {'uncertain':>10}  fitted"]
