@@ -27,7 +27,8 @@ mapped to [0, 1] first, as for the uncertainty exponent):
    next level draws from them.
 3. ``D`` over a range of scales is the mean of the ``D_k`` there (the slope of
    ``log N`` against ``log(1/h)``, as ``log N`` is their cumulative sum), its
-   statistical interval from their standard errors, and its systematic term
+   statistical interval from the larger of their standard errors (clustered
+   by line) and their scatter about the mean, and its systematic term
    the drift between the finer and the coarser half (as every estimate of
    :mod:`stairbounce.dimension.result`).
 
@@ -172,6 +173,20 @@ def _check_scales(scale_min, scale_max, ratio):
     return hi * float(ratio) ** -np.arange(levels + 1)
 
 
+def _line_se(line, values, n_lines):
+    """Standard error of the mean of ``values`` (one per refined box) with the
+    boxes clustered by ``line``: the boxes of one line share its structure
+    (and deeper levels descend from few boxes), the lines are independent."""
+    m = values.size
+    if m < 2:
+        return math.inf
+    z = np.bincount(line, weights=values - values.mean(), minlength=n_lines)
+    used = np.count_nonzero(np.bincount(line, minlength=n_lines))
+    if used < 2:
+        return math.inf
+    return float(math.sqrt(used / (used - 1) * (z @ z)) / m)
+
+
 def slicing_dimension(classify, window, n_lines=64, scale_min=1e-10, scale_max=1e-2, ratio=4,
                       samples=32, max_boxes=400, seed=0, fit_range=None, progress=None, label=""):
     """slicing_dimension(classify, window, n_lines=64, scale_min=1e-10, scale_max=1e-2, ratio=4, samples=32, max_boxes=400, seed=0, fit_range=None, progress=None, label="") -> SlicingDimension
@@ -213,6 +228,13 @@ def slicing_dimension(classify, window, n_lines=64, scale_min=1e-10, scale_max=1
         dimensions' midpoints); None: every level measured.
     progress : callable(done, total) or None
         Called after each level.
+
+    The standard errors are clustered by line (the boxes of one line, and at
+    deep levels the descendants of few boxes, are not independent).  To see
+    whether ``max_iter`` moves the answer, measure again with a larger one and
+    the same seed (the same lines) and compare the local dimensions with both
+    bands: comparing two classifications on the boxes one of them selected
+    would favour that one.
 
     Raises
     ------
@@ -274,7 +296,7 @@ def slicing_dimension(classify, window, n_lines=64, scale_min=1e-10, scale_max=1
         change = (lab[:, 1:] != lab[:, :-1]).reshape(m, ratio, samples).any(axis=2)
         c = change.sum(axis=1).astype(float)
         b = float(c.mean())
-        se_b = float(c.std(ddof=1) / math.sqrt(m)) if m > 1 else math.inf
+        se_b = _line_se(box_line, c, n_lines)
         parents.append(m)
         children.append(b)
         counts.append(counts[-1] * b)
@@ -307,9 +329,17 @@ def slicing_dimension(classify, window, n_lines=64, scale_min=1e-10, scale_max=1
         raise ValueError(f"fewer than 3 measured levels in the fit range (local dimensions at "
                          f"{', '.join(f'{x:.2g}' for x in mid)}): widen fit_range or the scales")
     d = float(dl[idx].mean())
-    sd = float(math.sqrt((se[idx] ** 2).sum()) / idx.size)
-    half = float(stats.norm.ppf(0.975)) * sd
     n = idx.size
+    # the larger of two noises, as for the uncertainty exponent: the levels'
+    # own standard errors, and the scatter of the local dimensions about
+    # their mean (which also holds the correlation between levels that share
+    # boxes)
+    sd_levels = float(math.sqrt((se[idx] ** 2).sum()) / n)
+    sd_scatter = float(dl[idx].std(ddof=1) / math.sqrt(n))
+    if sd_scatter > sd_levels:
+        sd, half = sd_scatter, float(stats.t.ppf(0.975, n - 1)) * sd_scatter
+    else:
+        sd, half = sd_levels, float(stats.norm.ppf(0.975)) * sd_levels
     # the finer and the coarser half (the middle level in both when odd)
     coarse, fine = idx[: (n + 1) // 2], idx[n - (n + 1) // 2:]
     halves = (float(dl[fine].mean()), float(dl[coarse].mean()))

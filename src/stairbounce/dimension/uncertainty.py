@@ -263,7 +263,13 @@ class UncertaintyDimension(Estimate):
     eps; ``fit`` is the :class:`SlopeFit` of ``log f`` on ``log eps``
     (slope ``alpha``, its CI).  ``n_points``, ``seed``, ``direction`` and
     ``window`` reproduce the measurement; ``label`` says what was measured.
+    ``systematic`` and ``halves`` (D over the finer and the coarser half of
+    the fitted eps) measure the drift of the local dimension across the
+    fitted scales; ``interval`` covers it and the statistical ``ci``.
+    ``max_iter`` is the classifier's when it has one.
     """
+
+    scale_unit = "of the window (eps)"
 
     dimension: float
     stderr: float
