@@ -393,7 +393,7 @@ def test_figs_6_and_7_square_and_unaliased_with_the_study(drawn):
         text = "\n".join(t.get_text() for t in fig.texts)
         assert "fit range: boxes 1-" in text and "our reading of the paper" in text
         assert f"paper: D = {F.DIMENSION_WINDOWS[name][1]}" in text
-    assert "D = 1.457 [1.410, 1.500], test fixture" in "\n".join(t.get_text() for t in figs["fig6"].texts)
+    assert "D = 1.457 [1.410, 1.500] with its drift, test fixture" in "\n".join(t.get_text() for t in figs["fig6"].texts)
     assert "no study result" in "\n".join(t.get_text() for t in figs["fig7"].texts)
     row = results["fig6"].rows[-1]
     assert row.verdict == "differs" and row.why.startswith("+0.133")

@@ -178,7 +178,9 @@ def load_border_dimension(path=None):
     """load_border_dimension(path=None) -> dict or None
 
     The dimension study's result, ``{"fig6": {"dimension": D, "ci95": [lo,
-    hi], "method": str, "details": str}, "fig7": {...}}``, read from ``path``
+    hi], "method": str, "details": str, "systematic": s, "interval": [lo - s,
+    hi + s]}, "fig7": {...}}`` (``systematic``: the drift of the estimate
+    across its scales, 0 when the file has none), read from ``path``
     (default :data:`STUDY_FILE`); None when the file is absent, so that a
     figure says "no study result" rather than show a number nobody measured.
 
@@ -199,8 +201,12 @@ def load_border_dimension(path=None):
             d = float(entry["dimension"])
             if not (math.isfinite(d) and lo <= hi):
                 raise ValueError("dimension must be finite and ci95 = [lo, hi] with lo <= hi")
+            sys_ = float(entry.get("systematic", 0.0))
+            if not (math.isfinite(sys_) and sys_ >= 0):
+                raise ValueError("systematic must be a finite number >= 0")
             out[name] = {"dimension": d, "ci95": [lo, hi], "method": str(entry["method"]),
-                         "details": str(entry.get("details", ""))}
+                         "details": str(entry.get("details", "")), "systematic": sys_,
+                         "interval": [lo - sys_, hi + sys_]}
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise ValueError(f"border_dimension: {path} is not a dimension study result "
                          f"({type(exc).__name__}: {exc})") from None
@@ -657,8 +663,9 @@ def _dimension(name):
                      f"[{e[0]:g}, {e[1]:g}] x [{u[0]:g}, {u[1]:g}] and its box counting")
         lo, hi = est.interval
         if best is not None:
-            study_line = (f"dimension study (best estimate): D = {best['dimension']:.3f} "
-                          f"[{best['ci95'][0]:.3f}, {best['ci95'][1]:.3f}], {best['method']}")
+            study_line = (f"dimension study (best estimate, shipped, not recomputed): D = "
+                          f"{best['dimension']:.3f} [{best['interval'][0]:.3f}, "
+                          f"{best['interval'][1]:.3f}] with its drift, {best['method']}")
         else:
             study_line = "dimension study (best estimate): no study result"
         lines = [
@@ -684,6 +691,15 @@ def _dimension(name):
                 "fit includes (README, 'Fractal dimension')"),
         ]
         rows.append(_study_row(name, paper, best))
+        if best is not None:
+            from types import SimpleNamespace
+
+            from .dimension import disagree
+
+            study_est = SimpleNamespace(dimension=best["dimension"], interval=best["interval"])
+            warn = disagree(auto, study_est)
+            if warn:  # one line, on the row of the picture's estimate
+                rows[1].measured += f". {warn[0].upper()}{warn[1:]} (this picture's automatic fit, the study)"
         caption = (f"Left: the border of the region with a periodic sliding solution (status 0, "
                    f"max_iter = {s.max_iter}) in the paper's window [{e[0]:g}, {e[1]:g}] x "
                    f"[{u[0]:g}, {u[1]:g}] at the paper's 500 px (here {res} px), black on white, "
@@ -741,10 +757,13 @@ def _study_row(name, paper, best):
         return Row(quantity, f"D = {paper}", "no study result",
                    verdict="not comparable", why="stairbounce/data/border_dimension.json is absent")
     command, minutes = STUDY_RECOMPUTE.get(name, ("benchmarks/dimension_study.py", 60))
-    v, w = _compare(best["dimension"], paper, best["ci95"])
+    v, w = _compare(best["dimension"], paper, best["interval"])
+    iv = best["interval"]
     return Row(quantity, f"D = {paper}",
-               f"D = {best['dimension']:.3f} [{best['ci95'][0]:.3f}, {best['ci95'][1]:.3f}] "
-               f"({best['method']}){_same_scales(name)}; from the dimension study, not "
+               f"D = {best['dimension']:.3f}, interval [{iv[0]:.3f}, {iv[1]:.3f}] (95% statistical "
+               f"[{best['ci95'][0]:.3f}, {best['ci95'][1]:.3f}], drift +-{best['systematic']:.3f}; "
+               f"{best['method']}, eps 1e-9..1e-3 of the window, max_iter 16000){_same_scales(name)}; "
+               f"from the dimension study, not "
                f"recomputed: `{command}` recomputes it in about {minutes} minutes",
                verdict=v, why=w)
 

@@ -222,7 +222,7 @@ def perimeter_dimension(
         border = label_boundary(labels, connectivity=connectivity)
     est = box_dimension(
         border, sizes=sizes, offsets=offsets, reduce=reduce, fit_range=fit_range, tol=tol,
-        min_boxes=min_boxes,
+        min_boxes=min_boxes, pixel_size=((e[1] - e[0]) / resolution, (u[1] - u[0]) / resolution),
     )
     return PerimeterDimension(
         **{f: getattr(est, f) for f in BoxDimension.__dataclass_fields__ if f != "max_iter"},
