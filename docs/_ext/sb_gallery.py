@@ -31,7 +31,7 @@ class GalleryDirective(SphinxDirective):
         app = self.env.app
         if app.builder.name not in _IMAGE_BUILDERS:
             return [nodes.paragraph(text="(the gallery is made by the HTML build)")]
-        from stairbounce.figures import Settings, make_figures
+        from stairbounce.figures import CRITERION, Settings, make_figures
 
         out = Path(app.doctreedir) / "sb_gallery"
         settings = Settings(out=out, fmt="png", dpi=70, scale=app.config.sb_gallery_scale,
@@ -43,7 +43,8 @@ class GalleryDirective(SphinxDirective):
         note = nodes.paragraph(text=(
             f"Made by stairbounce {app.config.release} while this page was built: "
             f"every pixel count of the paper's grids times {settings.scale:g}, "
-            f"max_iter = {settings.max_iter}. The command stairbounce figures makes them full size."))
+            f"max_iter = {settings.max_iter}. The command stairbounce figures makes them full size. "
+            f"Verdicts as in the report: {CRITERION}").replace("**", ""))
         section_nodes.append(note)
         for res in results:
             if res.error:
@@ -72,12 +73,13 @@ def _table(rows):
         group += nodes.colspec(colwidth=width)
     head = nodes.thead()
     group += head
-    head += _row(["quantity", "paper", "here", "agrees"])
+    head += _row(["quantity", "paper", "here", "verdict"])
     body = nodes.tbody()
     group += body
     for r in rows:
-        ok = "" if r.agrees is None else ("yes" if r.agrees else "no")
-        body += _row([r.quantity, r.paper, r.measured, ok])
+        # the report's own verdict and words (stairbounce.figures.CRITERION):
+        # agrees / differs / not comparable, with why
+        body += _row([r.quantity, r.paper, r.measured, r.verdict_text()])
     return table
 
 
