@@ -243,13 +243,14 @@ def dimension(
     check_dpi(dpi)
     check_outputs(force, png=png)
 
-    if method == "uncertainty":
+    if method in ("uncertainty", "slicing"):
         if max_iter < 1:
             raise CLIError(f"--max-iter must be an integer >= 1, got {max_iter}")
-        if points < 100:
-            raise CLIError(f"--points must be an integer >= 100, got {points}")
         if seed < 0:
             raise CLIError(f"--seed must be an integer >= 0, got {seed}")
+    if method == "uncertainty":
+        if points < 100:
+            raise CLIError(f"--points must be an integer >= 100, got {points}")
         eps_values = _parse_eps(eps)
         fr = None
         if fit_range is not None:
@@ -257,11 +258,15 @@ def dimension(
             if not (0 < fr[0] and fr[1] < 1):
                 raise CLIError(f"--fit-range with --method uncertainty is eps MIN:MAX in (0, 1), got {fit_range!r}")
         ew, uw = parse_range("e", e), parse_range("u", u)
-        result = _uncertainty_with_progress(
-            dict(e=ew, u=uw, max_iter=max_iter, which=which, method="uncertainty", n_points=points,
-                 eps=eps_values, seed=seed, fit_range=fr),
-            points * (1 + 2 * eps_values.size) * max_iter,
-        )
+
+        def run(mi):
+            return _uncertainty_with_progress(
+                dict(e=ew, u=uw, max_iter=mi, which=which, method="uncertainty", n_points=points,
+                     eps=eps_values, seed=seed, fit_range=fr),
+                points * (1 + 2 * eps_values.size) * mi,
+            )
+
+        result = run(max_iter)
         what = "sliding region" if which == "sliding" else "word-length regions"
         typer.echo(
             f"border of the {what} in [{ew[0]:g}, {ew[1]:g}] x [{uw[0]:g}, {uw[1]:g}], max_iter {max_iter}: "
@@ -274,11 +279,7 @@ def dimension(
                    f"binomial {result.stderr_binomial:.4f}, scatter about the line {result.stderr_fit:.4f})")
         compare = ()
         if check_max_iter:
-            again = _uncertainty_with_progress(
-                dict(e=ew, u=uw, max_iter=4 * max_iter, which=which, method="uncertainty", n_points=points,
-                     eps=eps_values, seed=seed, fit_range=fr),
-                points * (1 + 2 * eps_values.size) * 4 * max_iter,
-            )
+            again = run(4 * max_iter)  # the same seed: the same points
             _check_max_iter(result, again, max_iter)
             compare = ((again, f"max_iter {4 * max_iter}"),)
         if png is not None:
@@ -286,12 +287,8 @@ def dimension(
         return
 
     if method == "slicing":
-        if max_iter < 1:
-            raise CLIError(f"--max-iter must be an integer >= 1, got {max_iter}")
         if lines < 1:
             raise CLIError(f"--lines must be an integer >= 1, got {lines}")
-        if seed < 0:
-            raise CLIError(f"--seed must be an integer >= 0, got {seed}")
         smin, smax = parse_range("scales", scales)
         if not (1e-13 <= smin and smax <= 0.25):
             raise CLIError(f"--scales must lie in [1e-13, 0.25] (fractions of the window), got {scales!r}")
