@@ -672,9 +672,9 @@ def _dimension(name):
             f"fit range: boxes {fit_range[0]}-{fit_range[1]} px, {_FIT_WHY_SHORT[0]}",
             _FIT_WHY_SHORT[1],
             f"paper: D = {paper}    this fit: D = {est.dimension:.3f} [{lo:.3f}, {hi:.3f}] "
-            f"(with the drift of the local slope)    "
+            f"(with the drift of the local slope), max_iter {s.max_iter}",
             f"automatic range ({auto.fit_range[0]}-{auto.fit_range[1]} px, excludes the pixel "
-            f"scale): D = {auto.dimension:.3f}",
+            f"scale): D = {auto.dimension:.3f} [{auto.interval[0]:.3f}, {auto.interval[1]:.3f}]",
             study_line,
         ]
         fig.text(0.07, 0.05, "\n".join(lines), fontsize=9, va="bottom", ha="left")

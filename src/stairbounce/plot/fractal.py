@@ -10,7 +10,8 @@ def plot_box_counts(result, ax=None):
 
     Every measured size is a marker (hollow when it was not fitted, grey when
     it has a single box); the fitted line spans the fit range, which is shaded.
-    The title gives D, its 95% confidence interval and r.  Axes are in
+    The title gives D, its interval covering the drift of the local slope
+    (95% statistical and drift half-widths apart) and r.  Axes are in
     natural logarithms with the box side in pixels on a secondary top axis.
 
     Parameters
@@ -42,9 +43,9 @@ def plot_box_counts(result, ax=None):
             label=f"slope {result.dimension:.3f}", zorder=2)
     ax.set_xlabel("log(1/s)   (s: box side in pixels)")
     ax.set_ylabel("log N(s)")
-    ci = result.ci
-    ax.set_title(f"D = {result.dimension:.3f}  95% CI [{ci[0]:.3f}, {ci[1]:.3f}]  r = {result.r:.5f}",
-                 fontsize="medium")
+    iv = result.interval
+    ax.set_title(f"D = {result.dimension:.3f}  [{iv[0]:.3f}, {iv[1]:.3f}]\n(95% +-{result.statistical:.3f}, "
+                 f"drift +-{result.systematic:.3f})  r = {result.r:.4f}", fontsize="medium")
     top = ax.secondary_xaxis(
         "top", functions=(lambda v: np.exp(-v), lambda s: -np.log(np.maximum(s, 1e-300)))
     )
@@ -193,9 +194,9 @@ def plot_uncertainty(result, axes=None, title=None):
               label=f"f ~ eps^{result.alpha:.3f}")
     ax.set_xlabel("eps (fraction of the window)")
     ax.set_ylabel("uncertain fraction f(eps)")
-    ci = result.ci
-    ax.set_title(f"D = 2 - alpha = {result.dimension:.3f}  95% CI [{ci[0]:.3f}, {ci[1]:.3f}]",
-                 fontsize="medium")
+    iv = result.interval
+    ax.set_title(f"D = 2 - alpha = {result.dimension:.3f}  [{iv[0]:.3f}, {iv[1]:.3f}] "
+                 f"(95% +-{result.statistical:.3f}, drift +-{result.systematic:.3f})", fontsize="medium")
     ax.legend(loc="lower right", fontsize="small")
     ax.grid(True, which="both", alpha=0.3)
     plot_local_dimension(result, ax=ax2, label="local 2 - dlog f/dlog eps")
