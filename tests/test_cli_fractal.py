@@ -260,6 +260,10 @@ def test_check_max_iter_shows_the_local_dimension_at_four_times_max_iter(capsys)
     assert code == 0, err
     assert "local dimension at max_iter 50 and 200" in out
     assert ("converged at every scale" in out) != ("is not converged at scales" in out)
+    code, out, err = run([*FIG7, "--method", "boxes", "--resolution", "64", "--max-iter", "50",
+                          "--check-max-iter"], capsys)
+    assert code == 0, err
+    assert "local dimension at max_iter 50 and 200" in out and "+- 0.0300" in out
 
 
 def test_a_small_store_says_which_range_it_fits(small_store, capsys):
