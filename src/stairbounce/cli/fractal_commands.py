@@ -111,6 +111,14 @@ def _print_estimate(result):
         typer.echo(warn)
 
 
+def _measure_again(result, run, max_iter):
+    """``run(4 * max_iter)``, compared scale by scale with ``result``; returns
+    the ``compare`` argument of :func:`stairbounce.plot.plot_local_dimension`."""
+    again = run(4 * max_iter)
+    _check_max_iter(result, again, max_iter)
+    return ((again, f"max_iter {4 * max_iter}"),)
+
+
 def _check_max_iter(result, again, max_iter):
     """Scale by scale: does 4 x max_iter move the local dimension?  The same
     random points at both (same seed): the band is the two bands combined."""
@@ -278,11 +286,8 @@ def dimension(
         typer.echo(f"r = {result.r:.5f}; fit: eps {result.fit_range[0]:.3g}..{result.fit_range[1]:.3g} of the "
                    f"window, {result.fit.n} values, alpha = {result.alpha:.4f}, D = 2 - alpha (stderr "
                    f"binomial {result.stderr_binomial:.4f}, scatter about the line {result.stderr_fit:.4f})")
-        compare = ()
-        if check_max_iter:
-            again = run(4 * max_iter)  # the same seed: the same points
-            _check_max_iter(result, again, max_iter)
-            compare = ((again, f"max_iter {4 * max_iter}"),)
+        # the same seed: the same points
+        compare = _measure_again(result, run, max_iter) if check_max_iter else ()
         if png is not None:
             _draw(png, dpi, force, lambda: _plot_uncertainty(result, ew, uw, compare))
         return
@@ -318,11 +323,8 @@ def dimension(
         )
         typer.echo(result.table())
         _print_estimate(result)
-        compare = ()
-        if check_max_iter:
-            again = run(4 * max_iter)  # the same seed: the same lines
-            _check_max_iter(result, again, max_iter)
-            compare = ((again, f"max_iter {4 * max_iter}"),)
+        # the same seed: the same lines
+        compare = _measure_again(result, run, max_iter) if check_max_iter else ()
         if png is not None:
             def make():
                 import matplotlib.pyplot as plt
@@ -392,7 +394,7 @@ def dimension(
     if check_max_iter:
         # the same picture at 4 x max_iter; box counts have no per-size band,
         # so a move of more than 0.03 in a local slope counts as a change
-        _check_max_iter(result, scan_boxes(4 * max_iter), max_iter)
+        _measure_again(result, scan_boxes, max_iter)
     if png is not None:
         from ..plot import plot_box_dimension
 
