@@ -3,7 +3,6 @@ exponent or by box counting of a scan, a picture or a tiled store."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model import check_count
-
 __all__ = ["boundary", "label_boundary"]
 
 
