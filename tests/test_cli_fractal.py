@@ -247,8 +247,10 @@ def test_every_method_prints_scales_max_iter_and_an_interval_covering_the_drift(
     lo, hi = (float(x) for x in re.search(r"interval = \[([\d.]+), ([\d.]+)\]", out).groups())
     assert lo <= ref.ci[0] and ref.ci[1] <= hi  # the drift widens the statistical interval
     assert lo == pytest.approx(ref.interval[0], abs=5e-5) and hi == pytest.approx(ref.interval[1], abs=5e-5)
-    # the local dimension at every scale, first
+    # the local dimension at every scale, first, drawn as a curve on 1 .. 2
     assert out.index("local dimension against scale") < out.index("D = ")
+    strips = re.findall(r"\[([ *|-]{41})\]", out)
+    assert len(strips) == len(ref.local[1]) and all("*" in t for t in strips)
     assert "max_iter 200" in out and "scales: " in out and "systematic +-" in out
     code, out, err = run([*FIG7, "--max-iter", "200", "--points", "2000", "--eps", "1e-3:0.1:5"], capsys)
     assert code == 0 and "interval = [" in out and "eps" in out and "max_iter 200" in out

@@ -90,12 +90,13 @@ def _print_estimate(result):
     its 95% band where the estimator has one), then D with the interval that
     covers the drift, the scales and max_iter, and the one-line warning."""
     mid, dl, half = result.local_band()
-    typer.echo(f"local dimension against scale ({result.scale_unit}):")
+    typer.echo(f"local dimension against scale ({result.scale_unit}), drawn on 1 .. 2 "
+               "(*: the local dimension, -: its 95% band, |: D):")
     lo, hi = result.scales
     for m, d, h in zip(mid, dl, half):
-        band = f"  +- {h:.4f}" if np.isfinite(h) else ""
-        inside = "  fitted" if lo <= m <= hi else ""
-        typer.echo(f"  {m:10.3g}  {d:8.4f}{band}{inside}")
+        band = f"  +- {h:.4f}" if np.isfinite(h) else "          "
+        inside = "fitted" if lo <= m <= hi else "      "
+        typer.echo(f"  {m:10.3g}  {d:8.4f}{band}  {inside}  {_strip(d, h, result.dimension)}")
     typer.echo(f"D = {result.dimension:.4f}")
     ilo, ihi = result.interval
     typer.echo(f"interval = [{ilo:.4f}, {ihi:.4f}]  (95% statistical +-{result.statistical:.4f}, "
@@ -108,6 +109,22 @@ def _print_estimate(result):
     warn = result.warning()
     if warn:
         typer.echo(warn)
+
+
+def _strip(d, half, dim, width=41):
+    """One row of the local-dimension curve as text: the range 1..2 in
+    ``width`` characters, ``*`` at ``d``, ``-`` over ``d -+ half``, ``|`` at ``dim``."""
+    def at(x):
+        return int(round((min(max(x, 1.0), 2.0) - 1.0) * (width - 1)))
+
+    row = [" "] * width
+    if np.isfinite(half):
+        for k in range(at(d - half), at(d + half) + 1):
+            row[k] = "-"
+    row[at(dim)] = "|"
+    if np.isfinite(d):
+        row[at(d)] = "*"
+    return "[" + "".join(row) + "]"
 
 
 def _measure_again(result, run, max_iter):
