@@ -188,7 +188,7 @@ def test_store_is_box_counted_tile_by_tile(small_store, capsys):
 @pytest.mark.parametrize(
     "argv, message",
     [
-        (["--method", "mass"], "--method must be boxes or uncertainty"),
+        (["--method", "mass"], "--method must be boxes, uncertainty or slicing"),
         (["--method", "uncertainty", "--store", "{tmp}/x.zarr"], "--method uncertainty classifies points"),
         (["--points", "99"], "--points must be an integer >= 100"),
         (["--eps", "0:0.1:5"], "--eps must have 0 < MIN < MAX < 1"),
@@ -228,3 +228,48 @@ def test_incomplete_store_exits_2(tmp_path, capsys):
                      numba_threads=2)
     code, out, err = run(["--store", str(path)], capsys)
     assert code == 2 and "is not complete" in err and err.count("\n") == 1
+
+
+# --------------------------------------------------------------------------- #
+# issue 24: the scale-resolved view, the drift-covering interval, max_iter    #
+# --------------------------------------------------------------------------- #
+
+
+def test_every_method_prints_scales_max_iter_and_an_interval_covering_the_drift(capsys):
+    from stairbounce.dimension import sliding_classifier, slicing_dimension
+
+    code, out, err = run([*FIG7, "--method", "slicing", "--max-iter", "200", "--lines", "8",
+                          "--scales", "1e-5:1e-2", "--seed", "2"], capsys)
+    assert code == 0, err
+    ref = slicing_dimension(sliding_classifier(200), ((0.155, 0.2138), (0.6, 0.658)), n_lines=8,
+                            scale_min=1e-5, scale_max=1e-2, seed=2)
+    assert number(r"D = ([\d.]+)", out) == pytest.approx(ref.dimension, abs=5e-5)
+    lo, hi = (float(x) for x in re.search(r"interval = \[([\d.]+), ([\d.]+)\]", out).groups())
+    assert lo <= ref.ci[0] and ref.ci[1] <= hi  # the drift widens the statistical interval
+    assert lo == pytest.approx(ref.interval[0], abs=5e-5) and hi == pytest.approx(ref.interval[1], abs=5e-5)
+    # the local dimension at every scale, first, drawn as a curve on 1 .. 2
+    assert out.index("local dimension against scale") < out.index("D = ")
+    strips = re.findall(r"\[([ *|-]{41})\]", out)
+    assert len(strips) == len(ref.local[1]) and all("*" in t for t in strips)
+    assert "max_iter 200" in out and "scales: " in out and "systematic +-" in out
+    code, out, err = run([*FIG7, "--max-iter", "200", "--points", "2000", "--eps", "1e-3:0.1:5"], capsys)
+    assert code == 0 and "interval = [" in out and "eps" in out and "max_iter 200" in out
+
+
+def test_check_max_iter_shows_the_local_dimension_at_four_times_max_iter(capsys):
+    code, out, err = run([*FIG7, "--max-iter", "50", "--points", "2000", "--eps", "1e-3:0.1:5",
+                          "--check-max-iter"], capsys)
+    assert code == 0, err
+    assert "local dimension at max_iter 50 and 200" in out
+    assert ("converged at every scale" in out) != ("is not converged at scales" in out)
+    code, out, err = run([*FIG7, "--method", "boxes", "--resolution", "64", "--max-iter", "50",
+                          "--check-max-iter"], capsys)
+    assert code == 0, err
+    assert "local dimension at max_iter 50 and 200" in out and "+- 0.0300" in out
+
+
+def test_a_small_store_says_which_range_it_fits(small_store, capsys):
+    # 96 px: too small for 16 px .. 1/32; the command says so rather than fall back silently
+    code, out, err = run(["--store", str(small_store)], capsys)
+    assert code == 0, err
+    assert "too small for a fit clear of the pixel scale" in out

@@ -157,15 +157,21 @@ def test_every_row_has_a_verdict_and_every_figure_a_caption(made):
         if line.startswith("| ") and not line.startswith("| quantity"):
             assert "|  |" not in line and not line.rstrip().endswith("| |"), line
     # the automatic-range rows: "differs" exactly when the paper's value is
-    # outside their interval (at the paper's 500 px it is, for both windows:
-    # docs/guide/dimension-study.md), and they say which scale they leave out
+    # outside their drift-covering interval (at the paper's 500 px it is, for
+    # both windows: docs/guide/dimension-study.md), "not comparable" when that interval leaves [1, 2]
+    # (a failed fit, as at this small scale), and they say which scale they
+    # leave out
     by_name = {f["name"]: f for f in manifest["figures"]}
     for name in ("fig6", "fig7"):
         auto = next(r for r in by_name[name]["rows"] if "automatic" in r["quantity"])
-        lo, hi = (float(x) for x in re.search(r"95% CI (\S+?)\.\.(\S+?)\)", auto["measured"]).groups())
+        lo, hi = (float(x) for x in re.search(r"interval \[(\S+?), (\S+?)\]", auto["measured"]).groups())
         paper = F.DIMENSION_WINDOWS[name][1]
-        assert auto["verdict"] == ("agrees" if lo <= paper <= hi else "differs")
+        expected = ("not comparable" if not (1 <= lo and hi <= 2)
+                    else "agrees" if lo <= paper <= hi else "differs")
+        assert auto["verdict"] == expected
         assert "pixel scale" in auto["why"]
+    assert F.CRITERION[:40] in report
+    assert report.rstrip().splitlines()[-1].startswith("Tally: ")
 
 
 def test_row_verdicts():
@@ -178,7 +184,7 @@ def test_row_verdicts():
     # the paper's value inside the interval agrees; outside it differs by the signed gap
     assert F._compare(1.40, 1.324, ci=(1.30, 1.50))[0] == "agrees"
     assert F._compare(1.53, 1.403, ci=(1.52, 1.55)) == (
-        "differs", "+0.127 (the paper's value is outside our 95% CI)")
+        "differs", "+0.127: the paper's 1.403 is outside our interval [1.520, 1.550]")
 
 
 def test_partial_run_keeps_the_full_report(made, tmp_path, capsys):
@@ -387,7 +393,7 @@ def test_figs_6_and_7_square_and_unaliased_with_the_study(drawn):
         text = "\n".join(t.get_text() for t in fig.texts)
         assert "fit range: boxes 1-" in text and "our reading of the paper" in text
         assert f"paper: D = {F.DIMENSION_WINDOWS[name][1]}" in text
-    assert "D = 1.457 [1.410, 1.500], test fixture" in "\n".join(t.get_text() for t in figs["fig6"].texts)
+    assert "D = 1.457 [1.410, 1.500] with its drift, test fixture" in "\n".join(t.get_text() for t in figs["fig6"].texts)
     assert "no study result" in "\n".join(t.get_text() for t in figs["fig7"].texts)
     row = results["fig6"].rows[-1]
     assert row.verdict == "differs" and row.why.startswith("+0.133")
@@ -498,3 +504,21 @@ def test_no_legend_entry_for_a_curve_outside_the_window():
     plot_orbit_diagram(od, ax=ax, overlay=("tongues",))
     assert ax.get_legend() is None
     plt.close("all")
+
+
+def test_compare_agrees_only_inside_the_interval():
+    # the criterion stated in the report's header: the paper's number inside our interval
+    assert F._compare(1.40, 1.324, (1.30, 1.50))[0] == "agrees"
+    # issue 24: Fig. 6 at --scale 2 gave 1.366 [1.264, 1.468]; an interval that
+    # excludes the paper's value differs, whatever its distance
+    verdict, why = F._compare(1.366, 1.324, (1.33, 1.40))
+    assert verdict == "differs" and "outside" in why and "[1.330, 1.400]" in why
+    # an interval reaching below 1 (or above 2) is a failed fit, never agreement
+    verdict, why = F._compare(1.014, 1.324, (-0.909, 2.937))
+    assert verdict == "not comparable" and "failed fit" in why
+
+
+def test_ours_rows_quote_no_paper():
+    row = F._ours("x", "measured 3", False, "criterion")
+    assert row.paper == "-" and row.quantity.startswith("ours: ") and "FAILS" in row.measured
+    assert row.verdict == "not comparable"

@@ -365,6 +365,9 @@ def test_replicates_figs_6_and_7_of_campos_et_al(window, paper):
     est = perimeter_dimension(**window, resolution=500, max_iter=1000, fit_range=(1, 64))
     assert abs(est.dimension - paper) < 0.08, est.summary()
     assert est.r > 0.99
+    # the report's criterion (issue 24): the paper's number inside our interval,
+    # which here is wide because the local slope drifts across 1..64 px
+    assert est.interval[0] <= paper <= est.interval[1] and est.systematic > est.statistical
     assert est.border.shape == (500, 500)
     assert 0.0 < est.region_fraction < 1.0
 
@@ -411,7 +414,12 @@ def test_plot_box_dimension_draws_border_and_fitted_line():
     img_ax, log_ax = fig.axes[:2]
     assert img_ax.images[0].get_array().shape == (64, 64)
     assert img_ax.images[0].get_extent() == [*FIG7["e"], *FIG7["u"]]
-    assert f"D = {est.dimension:.3f}" in log_ax.get_title() and "CI" in log_ax.get_title()
+    # D with its interval covering the drift, both terms apart (issue 24)
+    iv = f"[{est.interval[0]:.3f}, {est.interval[1]:.3f}]"
+    assert f"D = {est.dimension:.3f}" in log_ax.get_title() and iv in log_ax.get_title()
+    assert "drift +-" in log_ax.get_title()
+    # the third panel: the local slope against box size
+    assert fig.axes[2].get_ylabel() == "local dimension"
     line = [ln for ln in log_ax.lines if ln.get_label().startswith("slope")][0]
     x, y = line.get_data()
     assert np.allclose(y, est.fit.intercept + est.dimension * x)

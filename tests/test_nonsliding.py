@@ -459,8 +459,37 @@ def test_motion_figures_answer_chaotic_or_just_complicated(tmp_path):
     res = F.make_figures(F.Settings(out=tmp_path, dpi=40, scale=0.1), only=["motion_lyap", "motion_cut"])
     assert [r.error for r in res] == [None, None]
     row = res[0].rows[0]
-    assert row.quantity == "chaotic or just complicated?" and row.agrees is True
+    # a claim of ours (issue 24): the paper column quotes only the paper
+    assert row.quantity.startswith("ours: chaotic or just complicated?") and row.paper == "-"
+    assert row.verdict == "not comparable" and "; holds (" in row.measured
+    # the picture is the convergence diagnostic N lambda_1 against N, not a map of lambda_1
+    assert res[0].params["lengths"] == list(F.LYAP_LENGTHS)
+    nl = F._lyap_convergence([0.5], [1.0])
+    assert nl.shape == (1, len(F.LYAP_LENGTHS)) and np.abs(nl).max() <= 4 * F.ZERO_EFOLDS
     assert (tmp_path / "motion_lyap.png").exists() and (tmp_path / "motion_cut.png").exists()
+
+
+def test_motion_k_masks_unconverged_pixels(tmp_path):
+    # issue 24: pixels still gaining energy after the transient get their own colour and key entry
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from stairbounce import figures as F
+    from stairbounce.plot.motion import UNCONVERGED_COLOUR, plot_motion
+
+    ds = motion_scan(e=(0.5, 0.999, 16), u=(0.5, 1.0, 8), steps=1000, transient=1000)
+    mask = F._unconverged(ds)
+    assert mask.any() and not mask.all()
+    fig, ax = plt.subplots()
+    plot_motion(ds, field="k_mean", ax=ax, unconverged=mask)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(t.startswith("unconverged") for t in labels)
+    shown = ax.images[-2].get_array()  # the values: masked where unconverged
+    assert np.ma.getmaskarray(shown)[mask].all()
+    assert matplotlib.colors.to_hex(ax.images[-1].cmap(0.5)) == UNCONVERGED_COLOUR
+    plt.close(fig)
 
 
 def test_the_guide_page_examples_run():

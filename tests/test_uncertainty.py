@@ -345,8 +345,13 @@ def test_figures_report_row_carries_paper_and_estimate():
     row = _study_row("fig6", 1.324, best)
     boxes = border_dimension_estimates()["fig6"]["same_scales"]["boxes"]
     assert row.paper == "D = 1.324"
-    assert f"D = {best['dimension']:.3f} [{best['ci95'][0]:.3f}, {best['ci95'][1]:.3f}]" in row.measured
+    iv = best["interval"]
+    assert f"D = {best['dimension']:.3f}, interval [{iv[0]:.3f}, {iv[1]:.3f}]" in row.measured
+    assert f"[{best['ci95'][0]:.3f}, {best['ci95'][1]:.3f}]" in row.measured
     assert best["method"] in row.measured and f"{boxes['dimension']:.3f}" in row.measured
+    # shipped data, labelled so, with the command that recomputes it (issue 24)
+    assert "not recomputed" in row.quantity and "stairbounce dimension --e 0:0.333" in row.measured
+    assert iv == [best["ci95"][0] - best["systematic"], best["ci95"][1] + best["systematic"]]
     # the paper's 1.324 lies outside the study's interval: the row says it differs
     assert row.verdict == "differs" and row.why.startswith(f"{best['dimension'] - 1.324:+.3f}")
     missing = _study_row("fig6", 1.324, None)

@@ -15,9 +15,10 @@ Panel app, the ``web`` extra).
 from importlib import import_module as _import_module
 
 from .atlas import downsample, scan_to_zarr, tiles_done
-from .fractal import (
+from .dimension import (
     BoxDimension,
     PerimeterDimension,
+    SlicingDimension,
     SlopeFit,
     UncertainFraction,
     UncertaintyDimension,
@@ -30,6 +31,7 @@ from .fractal import (
     linear_region,
     perimeter_dimension,
     random_points,
+    slicing_dimension,
     sliding_classifier,
     slope_fit,
     uncertain_fraction,
@@ -77,6 +79,7 @@ from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, traject
 from .units import normalized_speed, physical_speed, time_scale
 from ._compat import register_alias as _register_alias
 from ._version import __version__
+from . import fractal  # noqa: F401  (the old name of stairbounce.dimension, an alias)
 
 
 # ``sb.scan`` is the function; it doubles as the old module ``stairbounce.scan``
@@ -90,6 +93,7 @@ __all__ = [
     "Impact",
     "PerimeterDimension",
     "SLIDING",
+    "SlicingDimension",
     "Slide",
     "SlopeFit",
     "Trajectory",
@@ -135,6 +139,7 @@ __all__ = [
     "scan_coords",
     "scan_points",
     "scan_to_zarr",
+    "slicing_dimension",
     "slides",
     "sliding_classifier",
     "sliding_word",

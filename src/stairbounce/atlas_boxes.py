@@ -6,8 +6,8 @@ measured here without ever holding more than one tile and its halo:
 
 - each tile reads its ``status`` (and ``word_length`` for the borders between
   words) with a one-pixel halo from the neighbouring tiles, so that its border
-  pixels are exactly those of :func:`stairbounce.fractal.boundary` (or
-  :func:`~stairbounce.fractal.label_boundary`) of the whole image: a pixel's
+  pixels are exactly those of :func:`stairbounce.dimension.boundary` (or
+  :func:`~stairbounce.dimension.label_boundary`) of the whole image: a pixel's
   neighbours across a tile edge are read, and at the image edge the same
   edge rule applies (``image_edge="ignore"``);
 - box sides ``s`` that divide the tile size: the boxes of the image grid never
@@ -18,7 +18,7 @@ measured here without ever holding more than one tile and its halo:
   whose box counts at side ``s / G`` are ``N(s)`` (a box holds a border pixel
   exactly when one of its blocks does).
 
-The counts equal, count for count, :func:`stairbounce.fractal.box_counts` of
+The counts equal, count for count, :func:`stairbounce.dimension.box_counts` of
 the whole border in memory (``tests/test_atlas_boxes.py``).  Tiles run in a
 pool of threads of this process or as tasks of a Dask cluster (the one that
 made the store, say), like the scan itself.
@@ -37,14 +37,9 @@ from pathlib import Path
 import numpy as np
 
 from .atlas import _check_client, _connect, _dask_each, tile_slices, tiles_done
-from .fractal import (
-    _check_sizes,
-    _WHICH,
-    box_counts,
-    box_dimension_from_counts,
-    boundary,
-    label_boundary,
-)
+from .dimension.borders import boundary, label_boundary
+from .dimension.boxes import _check_sizes, box_counts, box_dimension_from_counts
+from .dimension.classifier import _WHICH
 
 __all__ = ["store_box_counts", "store_box_dimension", "store_info"]
 
@@ -141,7 +136,7 @@ def _plan(sizes, tile):
 def store_box_counts(path, which="sliding", connectivity=4, sizes=None, client=None, progress=None, threads=None):
     """store_box_counts(path, which="sliding", connectivity=4, sizes=None, client=None, progress=None, threads=None) -> (sizes, counts)
 
-    :func:`stairbounce.fractal.box_counts` of the border of a finished atlas
+    :func:`stairbounce.dimension.box_counts` of the border of a finished atlas
     store, computed tile by tile.
 
     ``N(s)`` = number of boxes of side ``s`` pixels of the image grid
@@ -150,7 +145,7 @@ def store_box_counts(path, which="sliding", connectivity=4, sizes=None, client=N
     border is ``boundary(status == 0)`` (``which="sliding"``, the perimeter
     of Figs. 6-7) or ``label_boundary`` of the word lengths with -1 where
     nothing slides (``which="words"``), exactly as
-    :func:`stairbounce.fractal.perimeter_dimension` takes it from a scan.
+    :func:`stairbounce.dimension.perimeter_dimension` takes it from a scan.
 
     Parameters
     ----------
@@ -302,8 +297,8 @@ def store_box_dimension(
 
     The box-counting dimension of the border in a finished atlas store:
     :func:`store_box_counts` then
-    :func:`stairbounce.fractal.box_dimension_from_counts` (the fit of
-    :func:`stairbounce.fractal.box_dimension`, same ``fit_range``, ``tol``,
+    :func:`stairbounce.dimension.box_dimension_from_counts` (the fit of
+    :func:`stairbounce.dimension.box_dimension`, same ``fit_range``, ``tol``,
     ``min_boxes``).  For the perimeter, choose a ``fit_range`` away from
     the pixel scale (boxes of 1-2 px see the raster staircase of the border,
     docs/guide/dimension-study.md).

@@ -78,6 +78,11 @@ def figures(
                    f"({', '.join(kept)}), merged by figure")
     if failed:
         typer.echo(f"failed: {', '.join(failed)} (see {out / 'report.md'})", err=True)
+    from ..figures import read_manifest, verdict_tally
+
+    # the figures of the whole report (an earlier run's kept ones included)
+    typer.echo(f"verdicts: {verdict_tally(read_manifest(out))} (report.md states the criterion)")
+    if failed:
         raise typer.Exit(1)
 
 

@@ -40,7 +40,7 @@ def _read_region(path: Path, region: str) -> np.ndarray:
 
 
 def _scan_with_progress(kwargs):
-    from ..fractal import perimeter_dimension
+    from ..dimension import perimeter_dimension
 
     n = kwargs["resolution"]
     if n * n * kwargs["max_iter"] < _PROGRESS_WORK:
@@ -75,7 +75,7 @@ def _bar(total_label):
 
 
 def _uncertainty_with_progress(kwargs, work):
-    from ..fractal import perimeter_dimension
+    from ..dimension import perimeter_dimension
 
     if work < _PROGRESS_WORK:
         return perimeter_dimension(**kwargs)
@@ -83,6 +83,88 @@ def _uncertainty_with_progress(kwargs, work):
         task = bar.add_task("points", total=None)
         return perimeter_dimension(
             **kwargs, progress=lambda done, total: bar.update(task, completed=done, total=total))
+
+
+def _print_estimate(result):
+    """The scale-resolved view first (local dimension against scale, with
+    its 95% band where the estimator has one), then D with the interval that
+    covers the drift, the scales and max_iter, and the one-line warning."""
+    mid, dl, half = result.local_band()
+    typer.echo(f"local dimension against scale ({result.scale_unit}), drawn on 1 .. 2 "
+               "(*: the local dimension, -: its 95% band, |: D):")
+    lo, hi = result.scales
+    for m, d, h in zip(mid, dl, half):
+        band = f"  +- {h:.4f}" if np.isfinite(h) else "          "
+        inside = "fitted" if lo <= m <= hi else "      "
+        typer.echo(f"  {m:10.3g}  {d:8.4f}{band}  {inside}  {_strip(d, h, result.dimension)}")
+    typer.echo(f"D = {result.dimension:.4f}")
+    ilo, ihi = result.interval
+    typer.echo(f"interval = [{ilo:.4f}, {ihi:.4f}]  (95% statistical +-{result.statistical:.4f}, "
+               f"systematic +-{result.systematic:.4f}: {result.halves[0]:.4f} over the finer, "
+               f"{result.halves[1]:.4f} over the coarser half of the scales)")
+    clo, chi = result.ci
+    typer.echo(f"95% CI = [{clo:.4f}, {chi:.4f}]  (statistical only, stderr {result.stderr:.4f})")
+    mi = "" if result.max_iter is None else f", max_iter {result.max_iter}"
+    typer.echo(f"scales: {result.scales_text()}{mi}")
+    warn = result.warning()
+    if warn:
+        typer.echo(warn)
+
+
+def _strip(d, half, dim, width=41):
+    """One row of the local-dimension curve as text: the range 1..2 in
+    ``width`` characters, ``*`` at ``d``, ``-`` over ``d -+ half``, ``|`` at ``dim``."""
+    def at(x):
+        return int(round((min(max(x, 1.0), 2.0) - 1.0) * (width - 1)))
+
+    row = [" "] * width
+    if np.isfinite(half):
+        for k in range(at(d - half), at(d + half) + 1):
+            row[k] = "-"
+    row[at(dim)] = "|"
+    if np.isfinite(d):
+        row[at(d)] = "*"
+    return "[" + "".join(row) + "]"
+
+
+def _measure_again(result, run, max_iter):
+    """``run(4 * max_iter)``, compared scale by scale with ``result``; returns
+    the ``compare`` argument of :func:`stairbounce.plot.plot_local_dimension`."""
+    again = run(4 * max_iter)
+    _check_max_iter(result, again, max_iter)
+    return ((again, f"max_iter {4 * max_iter}"),)
+
+
+def _check_max_iter(result, again, max_iter):
+    """Scale by scale: does 4 x max_iter move the local dimension?  The same
+    random points at both (same seed): the band is the two bands combined."""
+    m1, d1, h1 = result.local_band()
+    m2, d2, h2 = again.local_band()
+    n = min(len(m1), len(m2))
+    _print_check(m1[:n], d1[:n], d2[:n], np.hypot(h1[:n], h2[:n]), max_iter)
+
+
+def _print_check(mid, d1, d2, band, max_iter):
+    """Both local dimensions, their difference and the scales where it
+    exceeds its 95% band: where max_iter is not converged."""
+    typer.echo(f"max_iter check: local dimension at max_iter {max_iter} and {4 * max_iter} "
+               "(difference, and the band it is held to: the two 95% bands combined, or 0.03 where "
+               "the estimator has no noise model)")
+    moved = []
+    for k in range(len(mid)):
+        tol = band[k] if np.isfinite(band[k]) else 0.03
+        diff = d2[k] - d1[k]
+        flag = abs(diff) > tol
+        if flag:
+            moved.append(mid[k])
+        typer.echo(f"  {mid[k]:10.3g}  {d1[k]:8.4f}  {d2[k]:8.4f}  {diff:+.4f} +- {tol:.4f}"
+                   f"{'  moved' if flag else ''}")
+    if moved:
+        typer.echo(f"warning: max_iter {max_iter} is not converged at scales {min(moved):.3g}..{max(moved):.3g}: "
+                   f"the local dimension moves with max_iter {4 * max_iter} there; fit scales above "
+                   f"{max(moved):.3g} (--fit-range) or raise --max-iter")
+    else:
+        typer.echo(f"max_iter {max_iter} converged at every scale measured (within the band)")
 
 
 def _store_dimension(store, which, connectivity, fit_range, scheduler):
@@ -96,10 +178,19 @@ def _store_dimension(store, which, connectivity, fit_range, scheduler):
     except ValueError as exc:
         raise CLIError(f"--store: {exc}") from None
     n = min(int(attrs.get("n_e", 0)), int(attrs.get("n_u", 0)))
-    if fit_range is None and n // 32 >= 64:
+    if fit_range is None:
         # the study's range: away from the pixel scale (1-2 px see the raster
         # staircase), below the sizes dominated by the window's extent
-        fit_range = (16, n // 32)
+        if n // 32 >= 64:
+            fit_range = (16, n // 32)
+        elif n // 16 >= 16:
+            fit_range = (4, n // 16)
+            typer.echo(f"{store}: {n} px: the documented range, 16 px to 1/32 of the picture "
+                       f"(= {n // 32} px), holds fewer than the 3 box sizes a fit needs; fitting "
+                       f"4..{n // 16} px instead (still clear of the 1-2 px pixel scale)")
+        else:
+            typer.echo(f"{store}: {n} px is too small for a fit clear of the pixel scale; using the "
+                       "automatic range (it may include the pixel scale)")
     with _bar("counting tiles") as bar:
         task = bar.add_task("tiles", total=None)
         result = store_box_dimension(
@@ -121,7 +212,8 @@ def dimension(
     u: str = typer.Option("0.4:0.733", "--u", help="Window along u, MIN:MAX (default: the paper's Fig. 6)."),
     method: str = typer.Option(
         None, "--method",
-        help="'uncertainty' or 'boxes'. Default: uncertainty for a window of the model (the uncertainty "
+        help="'uncertainty', 'slicing' or 'boxes'. 'slicing': crossings of the border along --lines random "
+             "lines refined down to 1e-10 of the window (--scales). Default: uncertainty for a window of the model (the uncertainty "
              "exponent of random points: no picture, so no pixel scale to bias it, and its CI covers the "
              "sampling noise; it agrees with box counting of 32768^2 px pictures: docs/guide/dimension-study.md), boxes for "
              "--image and --store (pictures can only be box-counted). 'boxes' on a window scans a "
@@ -130,7 +222,10 @@ def dimension(
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps before a point counts as non-sliding (>= 1)."),
     points: int = typer.Option(100_000, "--points", help="Uncertainty: random points (>= 100)."),
     eps: str = typer.Option("1e-6:0.1:11", "--eps", help="Uncertainty: perturbations MIN:MAX:N, log-spaced fractions of the window."),
-    seed: int = typer.Option(0, "--seed", help="Uncertainty: seed of the random points (same seed, same answer)."),
+    seed: int = typer.Option(0, "--seed", help="Uncertainty, slicing: seed of the random points or lines (same seed, same answer)."),
+    lines: int = typer.Option(64, "--lines", help="Slicing: random lines (>= 1)."),
+    scales: str = typer.Option("1e-10:1e-2", "--scales", help="Slicing: smallest and largest box length along the lines, MIN:MAX fractions of the window."),
+    check_max_iter: bool = typer.Option(False, "--check-max-iter", help="A window of the model, any method: measure again at 4 x --max-iter and show, scale by scale, whether the local dimension moves (and where not to fit)."),
     image: Path = typer.Option(None, "--image", help="Measure the border of the region of this black-and-white picture instead of scanning."),
     store: Path = typer.Option(None, "--store", help="Measure the border in a finished tiled store (stairbounce scan --tile ... --out X.zarr), tile by tile: no memory limit."),
     scheduler: str = typer.Option(None, "--scheduler", help="With --store: count the tiles on this Dask scheduler (tcp://host:port)."),
@@ -145,7 +240,7 @@ def dimension(
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
     """Fractal dimension of the border of the sliding region (Figs. 6 and 7), of a picture or of a tiled store."""
-    from ..fractal import boundary, box_dimension
+    from ..dimension import boundary, box_dimension
 
     if png is not None and png.suffix.lower() not in {".png", ".pdf", ".svg"}:
         raise CLIError(f"--png must end in .png, .pdf or .svg, got {str(png)!r}")
@@ -163,21 +258,24 @@ def dimension(
         raise CLIError("--scheduler counts the tiles of a --store: give --store too")
     if method is None:
         method = "boxes" if (image is not None or store is not None) else "uncertainty"
-    if method not in ("boxes", "uncertainty"):
-        raise CLIError(f"--method must be boxes or uncertainty, got {method!r}")
-    if method == "uncertainty" and (image is not None or store is not None):
-        raise CLIError("--method uncertainty classifies points of the model: give a window (--e, --u), "
+    if method not in ("boxes", "uncertainty", "slicing"):
+        raise CLIError(f"--method must be boxes, uncertainty or slicing, got {method!r}")
+    if method in ("uncertainty", "slicing") and (image is not None or store is not None):
+        raise CLIError(f"--method {method} classifies points of the model: give a window (--e, --u), "
                        "not --image or --store")
+    if check_max_iter and (image is not None or store is not None):
+        raise CLIError("--check-max-iter measures a window of the model again: not with --image or --store")
     check_dpi(dpi)
     check_outputs(force, png=png)
 
-    if method == "uncertainty":
+    if method in ("uncertainty", "slicing"):
         if max_iter < 1:
             raise CLIError(f"--max-iter must be an integer >= 1, got {max_iter}")
-        if points < 100:
-            raise CLIError(f"--points must be an integer >= 100, got {points}")
         if seed < 0:
             raise CLIError(f"--seed must be an integer >= 0, got {seed}")
+    if method == "uncertainty":
+        if points < 100:
+            raise CLIError(f"--points must be an integer >= 100, got {points}")
         eps_values = _parse_eps(eps)
         fr = None
         if fit_range is not None:
@@ -185,26 +283,77 @@ def dimension(
             if not (0 < fr[0] and fr[1] < 1):
                 raise CLIError(f"--fit-range with --method uncertainty is eps MIN:MAX in (0, 1), got {fit_range!r}")
         ew, uw = parse_range("e", e), parse_range("u", u)
-        result = _uncertainty_with_progress(
-            dict(e=ew, u=uw, max_iter=max_iter, which=which, method="uncertainty", n_points=points,
-                 eps=eps_values, seed=seed, fit_range=fr),
-            points * (1 + 2 * eps_values.size) * max_iter,
-        )
+
+        def run(mi):
+            return _uncertainty_with_progress(
+                dict(e=ew, u=uw, max_iter=mi, which=which, method="uncertainty", n_points=points,
+                     eps=eps_values, seed=seed, fit_range=fr),
+                points * (1 + 2 * eps_values.size) * mi,
+            )
+
+        result = run(max_iter)
         what = "sliding region" if which == "sliding" else "word-length regions"
         typer.echo(
             f"border of the {what} in [{ew[0]:g}, {ew[1]:g}] x [{uw[0]:g}, {uw[1]:g}], max_iter {max_iter}: "
             f"uncertainty exponent of {points} random points (seed {seed}, random directions)"
         )
-        lo, hi = result.ci
-        typer.echo(f"D = {result.dimension:.4f}")
-        typer.echo(f"95% CI = [{lo:.4f}, {hi:.4f}]  (stderr {result.stderr:.4f}: binomial "
-                   f"{result.stderr_binomial:.4f}, scatter about the line {result.stderr_fit:.4f})")
-        typer.echo(f"r = {result.r:.5f}")
-        typer.echo(f"fit: eps {result.fit_range[0]:.3g}..{result.fit_range[1]:.3g} of the window, "
-                   f"{result.fit.n} values, alpha = {result.alpha:.4f}, D = 2 - alpha")
         typer.echo(result.table())
+        _print_estimate(result)
+        typer.echo(f"r = {result.r:.5f}; fit: eps {result.fit_range[0]:.3g}..{result.fit_range[1]:.3g} of the "
+                   f"window, {result.fit.n} values, alpha = {result.alpha:.4f}, D = 2 - alpha (stderr "
+                   f"binomial {result.stderr_binomial:.4f}, scatter about the line {result.stderr_fit:.4f})")
+        # the same seed: the same points
+        compare = _measure_again(result, run, max_iter) if check_max_iter else ()
         if png is not None:
-            _draw(png, dpi, force, lambda: _plot_uncertainty(result, ew, uw))
+            _draw(png, dpi, force, lambda: _plot_uncertainty(result, ew, uw, compare))
+        return
+
+    if method == "slicing":
+        if lines < 1:
+            raise CLIError(f"--lines must be an integer >= 1, got {lines}")
+        smin, smax = parse_range("scales", scales)
+        if not (1e-13 <= smin and smax <= 0.25):
+            raise CLIError(f"--scales must lie in [1e-13, 0.25] (fractions of the window), got {scales!r}")
+        fr = None
+        if fit_range is not None:
+            fr = parse_range("fit-range", fit_range)
+        ew, uw = parse_range("e", e), parse_range("u", u)
+
+        from ..dimension import sliding_classifier, slicing_dimension
+
+        what = "sliding region" if which == "sliding" else "word-length regions"
+
+        def run(mi):
+            try:
+                return _with_bar("refining levels", lambda progress: slicing_dimension(
+                    sliding_classifier(max_iter=mi, which=which), (ew, uw), n_lines=lines,
+                    scale_min=smin, scale_max=smax, seed=seed, fit_range=fr, progress=progress,
+                    label=f"border of the {what}, max_iter {mi}"))
+            except ValueError as exc:
+                raise CLIError(str(exc)) from None
+
+        result = run(max_iter)
+        typer.echo(
+            f"border of the {what} in [{ew[0]:g}, {ew[1]:g}] x [{uw[0]:g}, {uw[1]:g}], max_iter {max_iter}: "
+            f"slicing, {lines} random lines (seed {seed}), {result.evaluations} points classified"
+        )
+        typer.echo(result.table())
+        _print_estimate(result)
+        # the same seed: the same lines
+        compare = _measure_again(result, run, max_iter) if check_max_iter else ()
+        if png is not None:
+            def make():
+                import matplotlib.pyplot as plt
+                from ..plot import plot_local_dimension
+
+                fig, ax = plt.subplots(figsize=(8, 5))
+                plot_local_dimension(result, ax=ax, compare=compare, label=f"slicing, max_iter {max_iter}",
+                                     title=f"slicing of the border in [{ew[0]:g}, {ew[1]:g}] x "
+                                           f"[{uw[0]:g}, {uw[1]:g}]")
+                fig.tight_layout()
+                return fig
+
+            _draw(png, dpi, force, make)
         return
 
     fr = _parse_fit_range(fit_range)
@@ -235,10 +384,13 @@ def dimension(
         if max_iter < 1:
             raise CLIError(f"--max-iter must be an integer >= 1, got {max_iter}")
         ew, uw = parse_range("e", e), parse_range("u", u)
-        result = _scan_with_progress(dict(
-            e=ew, u=uw, resolution=resolution, max_iter=max_iter, which=which,
-            connectivity=connectivity, offsets=offsets, fit_range=fr,
-        ))
+        def scan_boxes(mi):
+            return _scan_with_progress(dict(
+                e=ew, u=uw, resolution=resolution, max_iter=mi, which=which,
+                connectivity=connectivity, offsets=offsets, fit_range=fr,
+            ))
+
+        result = scan_boxes(max_iter)
         what = "sliding region" if which == "sliding" else "word-length regions"
         typer.echo(
             f"border of the {what} in [{ew[0]:g}, {ew[1]:g}] x [{uw[0]:g}, {uw[1]:g}], "
@@ -248,15 +400,17 @@ def dimension(
         plot_image = None
         used = fr
 
-    lo, hi = result.ci
-    typer.echo(f"D = {result.dimension:.4f}")
-    typer.echo(f"95% CI = [{lo:.4f}, {hi:.4f}]  (stderr {result.stderr:.4f})")
+    _print_estimate(result)
     typer.echo(f"r = {result.r:.5f}")
     auto = " (automatic: largest linear region, a heuristic)" if used is None else ""
     typer.echo(f"fit: boxes of {result.fit_range[0]}..{result.fit_range[1]} px, {result.fit.n} sizes{auto}")
     typer.echo("sizes:  " + " ".join(f"{int(s)}" for s in result.sizes))
     typer.echo("counts: " + " ".join(f"{c:g}" for c in np.asarray(result.counts, dtype=float)))
 
+    if check_max_iter:
+        # the same picture at 4 x max_iter; box counts have no per-size band,
+        # so a move of more than 0.03 in a local slope counts as a change
+        _measure_again(result, scan_boxes, max_iter)
     if png is not None:
         from ..plot import plot_box_dimension
 
@@ -264,11 +418,22 @@ def dimension(
             result, image=plot_image, title=str(image) if image is not None else None))
 
 
-def _plot_uncertainty(result, ew, uw):
-    from ..plot import plot_uncertainty
+def _plot_uncertainty(result, ew, uw, compare=()):
+    from ..plot import plot_local_dimension, plot_uncertainty
 
-    return plot_uncertainty(
+    fig = plot_uncertainty(
         result, title=f"uncertainty exponent of the border in [{ew[0]:g}, {ew[1]:g}] x [{uw[0]:g}, {uw[1]:g}]")
+    if compare:
+        ax = fig.axes[1]
+        ax.clear()
+        plot_local_dimension(result, ax=ax, compare=compare, label=f"max_iter {result.max_iter}")
+    return fig
+
+
+def _with_bar(label, call):
+    with _bar(label) as bar:
+        task = bar.add_task("levels", total=None)
+        return call(lambda done, total: bar.update(task, completed=done, total=total))
 
 
 def _draw(png, dpi, force, make):

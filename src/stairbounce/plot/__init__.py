@@ -14,6 +14,7 @@ computed by                    drawn by
 ``sb.perimeter_dimension``     :func:`plot_box_dimension` (Figs. 6, 7),
                                :func:`plot_box_counts`, :func:`plot_border`
 ``sb.uncertainty_dimension``   :func:`plot_uncertainty`
+``sb.slicing_dimension``       :func:`plot_local_dimension` (any estimate, scale by scale)
 ``sb.trajectory``              :func:`plot_trajectory` (Fig. 1),
                                :func:`animate_trajectory`
 ``sb.iterate``                 :func:`plot_poincare_section`
@@ -23,7 +24,7 @@ computed by                    drawn by
 """
 
 from .._compat import register_alias as _register_alias
-from .fractal import plot_border, plot_box_counts, plot_box_dimension, plot_uncertainty
+from .fractal import plot_border, plot_box_counts, plot_box_dimension, plot_local_dimension, plot_uncertainty
 from .motion import plot_motion, plot_motion_cut
 from .orbits import plot_orbit_diagram
 from .plane import plot_scan
@@ -38,6 +39,7 @@ __all__ = [
     "plot_border",
     "plot_box_counts",
     "plot_box_dimension",
+    "plot_local_dimension",
     "plot_motion",
     "plot_motion_cut",
     "plot_orbit_diagram",

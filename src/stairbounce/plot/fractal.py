@@ -10,12 +10,13 @@ def plot_box_counts(result, ax=None):
 
     Every measured size is a marker (hollow when it was not fitted, grey when
     it has a single box); the fitted line spans the fit range, which is shaded.
-    The title gives D, its 95% confidence interval and r.  Axes are in
+    The title gives D, its interval covering the drift of the local slope
+    (95% statistical and drift half-widths apart) and r.  Axes are in
     natural logarithms with the box side in pixels on a secondary top axis.
 
     Parameters
     ----------
-    result : :class:`stairbounce.fractal.BoxDimension`
+    result : :class:`stairbounce.dimension.BoxDimension`
     ax : matplotlib Axes or None
     """
     if ax is None:
@@ -42,9 +43,9 @@ def plot_box_counts(result, ax=None):
             label=f"slope {result.dimension:.3f}", zorder=2)
     ax.set_xlabel("log(1/s)   (s: box side in pixels)")
     ax.set_ylabel("log N(s)")
-    ci = result.ci
-    ax.set_title(f"D = {result.dimension:.3f}  95% CI [{ci[0]:.3f}, {ci[1]:.3f}]  r = {result.r:.5f}",
-                 fontsize="medium")
+    iv = result.interval
+    ax.set_title(f"D = {result.dimension:.3f}  [{iv[0]:.3f}, {iv[1]:.3f}]\n(95% +-{result.statistical:.3f}, "
+                 f"drift +-{result.systematic:.3f})  r = {result.r:.4f}", fontsize="medium")
     top = ax.secondary_xaxis(
         "top", functions=(lambda v: np.exp(-v), lambda s: -np.log(np.maximum(s, 1e-300)))
     )
@@ -118,13 +119,14 @@ def plot_box_dimension(result, image=None, axes=None, title=None):
 
     Parameters
     ----------
-    result : :class:`~stairbounce.fractal.BoxDimension` or
-        :class:`~stairbounce.fractal.PerimeterDimension`
+    result : :class:`~stairbounce.dimension.BoxDimension` or
+        :class:`~stairbounce.dimension.PerimeterDimension`
         A perimeter result carries its border image and window; for a plain
         box-dimension result pass the measured ``image``.
     image : 2-D array or None
-    axes : (ax_image, ax_plot) or None
-        None: a new figure of two panels.
+    axes : (ax_image, ax_plot) or (ax_image, ax_plot, ax_local) or None
+        None: a new figure of three panels, the third the local slope
+        against box size (:func:`plot_local_dimension`).
     title : str or None
         Figure title; default names the window, resolution and max_iter of a
         perimeter result.
@@ -134,7 +136,7 @@ def plot_box_dimension(result, image=None, axes=None, title=None):
     import matplotlib.pyplot as plt
 
     if axes is None:
-        fig, axes = plt.subplots(1, 2, figsize=(11, 5), gridspec_kw={"width_ratios": [1, 1.1]})
+        fig, axes = plt.subplots(1, 3, figsize=(16, 5), gridspec_kw={"width_ratios": [1, 1.1, 1.1]})
     else:
         fig = axes[0].figure
     border = image if image is not None else getattr(result, "border", None)
@@ -148,6 +150,8 @@ def plot_box_dimension(result, image=None, axes=None, title=None):
         panel = f"border of the {what}, {result.resolution} x {result.resolution} px"
     plot_border(border, e, u, ax=axes[0], title=panel)
     plot_box_counts(result, ax=axes[1])
+    if len(axes) > 2:
+        plot_local_dimension(result, ax=axes[2], label="local slope between box sizes")
     if title is None and e is not None and getattr(result, "border", None) is not None:
         title = (f"perimeter of the periodic sliding region in [{e[0]:g}, {e[1]:g}] x "
                  f"[{u[0]:g}, {u[1]:g}]  (max_iter = {result.max_iter}, boxes of "
@@ -164,7 +168,7 @@ def plot_uncertainty(result, axes=None, title=None):
 
     Parameters
     ----------
-    result : :class:`stairbounce.fractal.UncertaintyDimension`
+    result : :class:`stairbounce.dimension.UncertaintyDimension`
     axes : (ax_fraction, ax_local) or None
         None: a new figure of two panels.
     title : str or None
@@ -190,20 +194,61 @@ def plot_uncertainty(result, axes=None, title=None):
               label=f"f ~ eps^{result.alpha:.3f}")
     ax.set_xlabel("eps (fraction of the window)")
     ax.set_ylabel("uncertain fraction f(eps)")
-    ci = result.ci
-    ax.set_title(f"D = 2 - alpha = {result.dimension:.3f}  95% CI [{ci[0]:.3f}, {ci[1]:.3f}]",
-                 fontsize="medium")
+    iv = result.interval
+    ax.set_title(f"D = 2 - alpha = {result.dimension:.3f}  [{iv[0]:.3f}, {iv[1]:.3f}] "
+                 f"(95% +-{result.statistical:.3f}, drift +-{result.systematic:.3f})", fontsize="medium")
     ax.legend(loc="lower right", fontsize="small")
     ax.grid(True, which="both", alpha=0.3)
-    mid, local = result.local_dimensions
-    ax2.semilogx(mid, local, "o-", color="C0", label="local 2 - dlog f/dlog eps")
-    ax2.axhline(result.dimension, color="C3", lw=1, label="fitted D")
-    ax2.axhspan(ci[0], ci[1], color="C3", alpha=0.1, lw=0, label="95% CI")
-    ax2.set_xlabel("eps (fraction of the window)")
-    ax2.set_ylabel("local dimension")
-    ax2.legend(loc="best", fontsize="small")
-    ax2.grid(True, which="both", alpha=0.3)
+    plot_local_dimension(result, ax=ax2, label="local 2 - dlog f/dlog eps")
     if title:
         fig.suptitle(title)
     fig.tight_layout()
     return fig
+
+
+def plot_local_dimension(result, ax=None, compare=(), label="local dimension", title=None):
+    """plot_local_dimension(result, ax=None, compare=(), label="local dimension", title=None) -> Axes
+
+    The scale-resolved view of a dimension estimate, its primary output: the
+    local dimension against scale (with its 95% band where the estimator
+    has a noise model), the fitted ``D`` over the fitted scales, its
+    statistical 95% interval (dark) and the interval that also covers the
+    drift of the local slope (light).
+
+    Parameters
+    ----------
+    result : a dimension estimate (``BoxDimension``, ``UncertaintyDimension``
+        or ``SlicingDimension``): anything with ``local_band()``,
+        ``dimension``, ``ci``, ``interval`` and ``scales``.
+    compare : sequence of (estimate, label)
+        Further estimates whose local dimensions are drawn on the same axes
+        (for instance the same measurement at a larger ``max_iter``).
+    """
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(6, 4.5))
+    for k, (res, name) in enumerate([(result, label), *compare]):
+        mid, dl, half = res.local_band()
+        colour = f"C{k}"
+        ax.plot(mid, dl, "o-", color=colour, ms=4, label=name)
+        if np.isfinite(half).any():
+            ax.fill_between(mid, dl - half, dl + half, color=colour, alpha=0.15, lw=0)
+    lo, hi = result.scales
+    ci, iv = result.ci, result.interval
+    ax.fill_between([lo, hi], iv[0], iv[1], color="C3", alpha=0.1, lw=0,
+                    label=f"interval with drift [{iv[0]:.3f}, {iv[1]:.3f}]")
+    ax.fill_between([lo, hi], ci[0], ci[1], color="C3", alpha=0.25, lw=0,
+                    label=f"95% statistical [{ci[0]:.3f}, {ci[1]:.3f}]")
+    ax.plot([lo, hi], [result.dimension] * 2, "-", color="C3", lw=1.2,
+            label=f"D = {result.dimension:.3f} over the fitted scales")
+    ax.set_xscale("log")
+    unit = getattr(result, "scale_unit", "")
+    ax.set_xlabel(f"scale ({unit})" if unit else "scale")
+    ax.set_ylabel("local dimension")
+    mi = getattr(result, "max_iter", None)
+    ax.set_title(title or ("local dimension against scale" + (f", max_iter {mi}" if mi else "")),
+                 fontsize="medium")
+    ax.legend(loc="best", fontsize="x-small")
+    ax.grid(True, which="both", alpha=0.3)
+    return ax

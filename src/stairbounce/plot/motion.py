@@ -48,8 +48,12 @@ def _families(ax, e_lo, e_hi, u_lo, u_hi, color):
         first = False
 
 
-def plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=OVERLAYS, colorbar=True, title=None):
-    """plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=("families", "bound"), colorbar=True, title=None) -> Axes
+UNCONVERGED_COLOUR = "#d6249f"
+
+
+def plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=OVERLAYS, colorbar=True, title=None,
+                unconverged=None):
+    """plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=("families", "bound"), colorbar=True, title=None, unconverged=None) -> Axes
 
     Draw a motion scan: non-sliding pixels coloured by ``field``.
 
@@ -66,6 +70,9 @@ def plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=OVERLAYS, col
     sliding : optional scan dataset of the same grid (word lengths).
     overlay : among "families" (:func:`stairbounce.nonsliding.one_impact_family`)
         and "bound" (Corollary 2.1).
+    unconverged : optional boolean array of the grid's shape (u, e)
+        Pixels whose value has not converged (still transient): drawn in one
+        distinct colour (magenta) with a legend entry, not by their value.
     """
     import matplotlib.colors as mcolors
     import matplotlib.pyplot as plt
@@ -101,7 +108,14 @@ def plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=OVERLAYS, col
         raw = np.maximum(raw, 1e-6)  # 0 on the families (to rounding): the bottom colour
     else:
         raw = np.asarray(ds[field].values, dtype=float)
-    data = np.ma.masked_invalid(np.where(slides, np.nan, raw))
+    hide = slides
+    if unconverged is not None:
+        unconverged = np.asarray(unconverged, dtype=bool)
+        if unconverged.shape != slides.shape:
+            raise ValueError(f"unconverged must have the grid's shape {slides.shape}, got {unconverged.shape}")
+        unconverged = unconverged & ~slides
+        hide = slides | unconverged
+    data = np.ma.masked_invalid(np.where(hide, np.nan, raw))
     vals = data.compressed()
     if field == "speed_spread":
         # >= 0, and 0 on the one-impact families: log scale from 1e-4
@@ -123,6 +137,15 @@ def plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=OVERLAYS, col
         extend = "max" if pos.size and pos.max() > top else "neither"
     im = ax.imshow(data, origin="lower", extent=ext, aspect="auto", interpolation="nearest",
                    cmap=cm.with_extremes(bad=(0, 0, 0, 0)), norm=norm)
+    if unconverged is not None and unconverged.any():
+        import matplotlib.patches as mpatches
+
+        ax.imshow(np.ma.masked_array(np.ones(slides.shape), mask=~unconverged), origin="lower",
+                  extent=ext, aspect="auto", interpolation="nearest",
+                  cmap=mcolors.ListedColormap([UNCONVERGED_COLOUR]).with_extremes(bad=(0, 0, 0, 0)))
+        ax.add_patch(mpatches.Rectangle((e_lo, u_lo), 0, 0, color=UNCONVERGED_COLOUR,
+                                        label=f"unconverged (still transient): "
+                                              f"{100 * unconverged.mean():.1f}% of pixels"))
     if "families" in overlay:
         _families(ax, e_lo, e_hi, u_lo, u_hi, "black" if field == "lyap1" else "white")
     if "bound" in overlay:
@@ -143,7 +166,7 @@ def plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=OVERLAYS, col
     if colorbar:
         cb = ax.figure.colorbar(im, ax=ax, extend=extend)
         cb.set_label(MOTION_PLOT_FIELDS[field] + " (greys: the orbit slides, as Fig. 4)")
-    if overlay:
+    if overlay or (unconverged is not None and unconverged.any()):
         ax.legend(loc="upper right", fontsize="small", framealpha=0.8)
     return ax
 

@@ -1,0 +1,236 @@
+"""The dimension of the border of the sliding region in a window of the
+``(e, u)`` plane (Section 3, Figs. 6 and 7): a scan and box counting, or the
+uncertainty exponent or slicing of the model's classification."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import _validate as _v
+from ..model import check_count
+from ..plane import pixel_centres, scan, scan_coords
+from .borders import boundary, label_boundary
+from .boxes import BoxDimension, box_dimension
+from .classifier import _WHICH, sliding_classifier
+from .uncertainty import uncertainty_dimension
+
+__all__ = ["PerimeterDimension", "perimeter_dimension"]
+
+
+@dataclass(frozen=True)
+class PerimeterDimension(BoxDimension):
+    """:class:`BoxDimension` of the border of the region of periodic sliding
+    solutions in a window of the ``(e, u)`` plane, with the border image
+    (rows along u from ``u_min`` up, columns along e), the window, the
+    resolution, ``max_iter`` and which border was measured."""
+
+    border: np.ndarray = field(default=None, repr=False)
+    e: tuple[float, float] = (0.0, 0.0)
+    u: tuple[float, float] = (0.0, 0.0)
+    resolution: int = 0
+    max_iter: int = 0
+    which: str = "sliding"
+    region_fraction: float = 0.0
+
+    def scales_text(self) -> str:
+        lo, hi = self.fit_range
+        n = max(self.resolution, 1)
+        return f"boxes {lo}..{hi} px of {n} (= {lo / n:.3g}..{hi / n:.3g} of the window)"
+
+
+_METHODS = ("boxes", "uncertainty", "slicing")
+
+
+def _check_window(name, window):
+    try:
+        lo, hi = (float(v) for v in window)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a window (min, max), got {window!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ValueError(f"{name} must be a finite window (min, max) with min < max, got {window!r}")
+    return lo, hi
+
+
+_PERIMETER_BYTES_PER_PIXEL = 30
+
+
+def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64, prune=True):
+    """``status`` and ``word_length`` of the scan of the window, rows along u.
+
+    With a ``progress`` callback the rows are scanned in bands cut out of the
+    whole grid of pixel centres, which :mod:`stairbounce.plane` guarantees to
+    be bit-identical to one scan of the window.
+    """
+    if progress is None:
+        ds = scan(e=(e[0], e[1], resolution), u=(u[0], u[1], resolution), max_iter=max_iter, y0=y0, v0=v0,
+                  prune=prune)
+        return ds["status"].transpose("u", "e").values, ds["word_length"].transpose("u", "e").values
+    es = pixel_centres(e[0], e[1], resolution)
+    us = pixel_centres(u[0], u[1], resolution)
+    status = np.empty((resolution, resolution), dtype=np.uint8)
+    word_length = np.empty((resolution, resolution), dtype=np.int64)
+    progress(0, resolution)
+    for i0 in range(0, resolution, band):
+        i1 = min(i0 + band, resolution)
+        ds = scan_coords(es, us[i0:i1], max_iter=max_iter, y0=y0, v0=v0, prune=prune)
+        status[i0:i1] = ds["status"].transpose("u", "e").values
+        word_length[i0:i1] = ds["word_length"].transpose("u", "e").values
+        progress(i1, resolution)
+    return status, word_length
+
+
+def perimeter_dimension(
+    e=(0.0, 0.333),
+    u=(0.4, 0.733),
+    resolution=512,
+    max_iter=1000,
+    which="sliding",
+    connectivity=4,
+    sizes=None,
+    offsets=1,
+    reduce="mean",
+    fit_range=None,
+    tol=0.1,
+    min_boxes=32,
+    y0=1.0,
+    v0=0.0,
+    progress=None,
+    method="boxes",
+    n_points=100_000,
+    eps=None,
+    seed=0,
+    prune=True,
+    n_lines=64,
+    scales=(1e-10, 1e-2),
+):
+    """perimeter_dimension(e=(0, 0.333), u=(0.4, 0.733), resolution=512, max_iter=1000, which="sliding", ..., method="boxes") -> PerimeterDimension, UncertaintyDimension or SlicingDimension
+
+    The box-counting dimension of the perimeter of the region of periodic
+    sliding solutions in a window of the ``(e, u)`` plane (Section 3,
+    Figs. 6 and 7).
+
+    Scans the window on ``resolution x resolution`` pixel centres
+    (:func:`stairbounce.plane.scan`; status 0: the orbit of ``(y0, v0)``
+    slides again within ``max_iter`` steps), takes the border of the status-0
+    region (:func:`boundary`, ``image_edge="ignore"``: the frame of the
+    window is not part of the perimeter) and measures it
+    (:func:`box_dimension`).
+
+    Parameters
+    ----------
+    e, u : (min, max)
+        The window; default the paper's Fig. 6, ``[0, 0.333] x [0.4, 0.733]``.
+        Fig. 7 is ``e=(0.155, 0.2138), u=(0.6, 0.658)``.
+    resolution : int >= 8, default 512
+        Pixels along each axis.
+    max_iter : int >= 1, default 1000
+        Steps of the Poincare map before a pixel counts as non-sliding.
+    which : "sliding" or "words", default "sliding"
+        ``"sliding"``: the border of the sliding region (the paper's
+        "perimeter").  ``"words"``: the borders between regions of different
+        word length, the non-sliding region as one more label
+        (:func:`label_boundary`); every curve drawn in Figs. 4-7.
+    connectivity, sizes, offsets, reduce, fit_range, tol, min_boxes :
+        As in :func:`boundary` and :func:`box_dimension`.  The paper's
+        numbers are reproduced (within 0.01 at 500 px) by
+        ``fit_range=(1, 64)``, all boxes up to an eighth of the picture; the
+        automatic range leaves out the pixel scale and gives larger values
+        (docs/guide/dimension-study.md, "how far to trust one number").
+    y0, v0 : float, default 1, 0
+        Initial state of the scan (docs/design.md: ``(1, 0)`` is the state after
+        sliding).
+    progress : callable(done, total) or None, default None
+        Called after each band of rows of the scan (the scan then runs in
+        bands of :func:`stairbounce.plane.scan_coords`, bit-identical to one
+        call); for a progress bar.
+    method : "boxes" or "uncertainty", default "boxes"
+        ``"boxes"``: box counting on a scanned picture (everything above).
+        ``"uncertainty"``: the uncertainty exponent of random points of the
+        window (:func:`uncertainty_dimension` with
+        :func:`sliding_classifier`; no picture, so ``resolution``,
+        ``connectivity``, ``sizes``, ``offsets``, ``reduce``, ``tol`` and
+        ``min_boxes`` are not used, and ``fit_range`` is ``(eps_min, eps_max)``
+        in window units); returns an :class:`UncertaintyDimension`.
+        ``"slicing"``: crossings of the border along ``n_lines`` random lines
+        refined from ``scales[1]`` down to ``scales[0]`` of the window
+        (:func:`stairbounce.dimension.slicing.slicing_dimension`; ``fit_range``
+        is ``(scale_min, scale_max)``); returns a ``SlicingDimension``.
+    n_points, eps, seed :
+        Only for ``method="uncertainty"``: as in :func:`uncertainty_dimension`
+        (default 100_000 points, :data:`DEFAULT_EPS`, seed 0); ``seed`` also
+        for ``method="slicing"``.
+    n_lines, scales :
+        Only for ``method="slicing"`` (default 64 lines, 1e-10..1e-2).
+    prune : bool, default True
+        As in :func:`stairbounce.plane.scan` (same answer; False iterates
+        the pixels above the Corollary 2.1 curve too).
+
+    The paper reports 1.324 (Fig. 6) and 1.403 (Fig. 7) with r > 0.99.
+    """
+    e = _check_window("e", e)
+    u = _check_window("u", u)
+    max_iter = check_count("max_iter", max_iter, 1)
+    if which not in _WHICH:
+        raise ValueError(f"which must be one of {_WHICH}, got {which!r}")
+    if method not in _METHODS:
+        raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
+    what = "sliding region" if which == "sliding" else "word-length regions"
+    if method == "slicing":
+        from .slicing import slicing_dimension
+
+        try:
+            lo, hi = (float(v) for v in scales)
+        except (TypeError, ValueError):
+            raise ValueError(f"scales must be a pair (scale_min, scale_max), got {scales!r}") from None
+        return slicing_dimension(
+            sliding_classifier(max_iter=max_iter, which=which, y0=y0, v0=v0, prune=prune), (e, u),
+            n_lines=n_lines, scale_min=lo, scale_max=hi, seed=seed, fit_range=fit_range,
+            progress=progress, label=f"border of the {what}, max_iter {max_iter}",
+        )
+    if method == "uncertainty":
+        return uncertainty_dimension(
+            sliding_classifier(max_iter=max_iter, which=which, y0=y0, v0=v0, prune=prune), (e, u), eps=eps,
+            n_points=n_points, seed=seed, fit_range=fit_range, progress=progress,
+            label=f"border of the {what}, max_iter {max_iter}",
+        )
+    resolution = check_count("resolution", resolution, 8)
+    # measured peak (tracemalloc, resolution 1000): 25-28 bytes a pixel, the
+    # scan's outputs or its status and word length and the border images; the
+    # scan's own check saw only its outputs, and none with progress (report D3)
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
+    _v.check_memory(f"resolution = {resolution}", _PERIMETER_BYTES_PER_PIXEL * resolution * resolution)
+    status, word_length = _scan_window(e, u, resolution, max_iter, y0, v0, progress, prune=prune)
+    region = status == 0
+    if not region.any():
+        raise ValueError(
+            f"no periodic sliding solution in the window e = {e}, u = {u} (max_iter = {max_iter}): "
+            "the region is empty, it has no border"
+        )
+    if region.all():
+        raise ValueError(
+            f"every pixel of the window e = {e}, u = {u} has a periodic sliding solution: "
+            "the region fills the window, it has no border inside it"
+        )
+    if which == "sliding":
+        border = boundary(region, connectivity=connectivity)
+    else:
+        labels = np.where(region, word_length, -1).astype(np.int64)
+        border = label_boundary(labels, connectivity=connectivity)
+    est = box_dimension(
+        border, sizes=sizes, offsets=offsets, reduce=reduce, fit_range=fit_range, tol=tol,
+        min_boxes=min_boxes, pixel_size=((e[1] - e[0]) / resolution, (u[1] - u[0]) / resolution),
+    )
+    return PerimeterDimension(
+        **{f: getattr(est, f) for f in BoxDimension.__dataclass_fields__ if f != "max_iter"},
+        border=border,
+        e=e,
+        u=u,
+        resolution=resolution,
+        max_iter=max_iter,
+        which=which,
+        region_fraction=float(region.mean()),
+    )

@@ -1,0 +1,78 @@
+"""What every dimension estimate states beside its number: the scales it
+covers, ``max_iter``, the local dimension against scale, and an interval that
+covers both the statistical noise of the fit and the drift of the local slope
+across the fitted scales (a systematic term, reported separately).
+
+A dimension is a limit ``s -> 0``; a fit over a finite range of scales gives
+the average slope there, and the slope may drift with the scale (a border not
+equally rough at all scales, a finite ``max_iter`` that truncates the fractal
+below some scale, the pixel staircase).  The systematic term is the largest
+distance from ``D`` of the slopes fitted over the finer and the coarser half of
+the fitted scales (:func:`stairbounce.dimension.fit.half_slopes`):
+``interval = (ci_low - systematic, ci_high + systematic)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["Estimate", "disagree"]
+
+
+class Estimate:
+    """Mixin of the dimension result types (fields ``dimension``, ``ci``,
+    ``systematic``, ``halves``, ``max_iter``): the drift-covering interval,
+    the scales in words and the one-line warnings."""
+
+    #: unit of :attr:`scales` (set by each result type)
+    scale_unit = ""
+
+    @property
+    def scales(self) -> tuple[float, float]:
+        """``(smallest, largest)`` fitted scale, in :attr:`scale_unit`."""
+        lo, hi = self.fit_range
+        return float(lo), float(hi)
+
+    @property
+    def statistical(self) -> float:
+        """Half-width of the statistical 95% interval :attr:`ci`."""
+        return 0.5 * (self.ci[1] - self.ci[0])
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """The 95% interval widened on each side by :attr:`systematic`, the
+        drift of the local slope across the fitted scales."""
+        return (self.ci[0] - self.systematic, self.ci[1] + self.systematic)
+
+    def scales_text(self) -> str:
+        lo, hi = self.scales
+        return f"{_g(lo)}..{_g(hi)} {self.scale_unit}".rstrip()
+
+    def warning(self) -> str:
+        """One line when the drift exceeds the statistical interval, else ""."""
+        if not math.isfinite(self.systematic) or self.systematic <= self.statistical:
+            return ""
+        fine, coarse = self.halves
+        return (f"warning: the local slope drifts across the fitted scales ({fine:.3f} over the "
+                f"finer half, {coarse:.3f} over the coarser) by more than the statistical "
+                f"interval +-{self.statistical:.3f}: the number depends on the range of scales")
+
+    def interval_text(self) -> str:
+        lo, hi = self.interval
+        mi = "" if self.max_iter is None else f", max_iter {self.max_iter}"
+        return (f"D = {self.dimension:.4f}  interval [{lo:.4f}, {hi:.4f}] (95% statistical "
+                f"+-{self.statistical:.4f}, systematic +-{self.systematic:.4f}) over "
+                f"{self.scales_text()}{mi}")
+
+
+def disagree(a, b) -> str:
+    """One line when two estimates' intervals do not overlap, else ""."""
+    (alo, ahi), (blo, bhi) = a.interval, b.interval
+    if ahi < blo or bhi < alo:
+        return (f"warning: two methods disagree beyond their intervals: {a.dimension:.3f} "
+                f"[{alo:.3f}, {ahi:.3f}] against {b.dimension:.3f} [{blo:.3f}, {bhi:.3f}]")
+    return ""
+
+
+def _g(x):
+    return f"{x:.3g}" if abs(x) < 1e-2 or abs(x) >= 1e4 else f"{x:g}"
