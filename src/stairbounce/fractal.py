@@ -17,7 +17,7 @@ import types
 from .dimension import __all__ as _public
 from .dimension import borders, boxes, classifier, fit, perimeter, result, slicing, study, uncertainty
 
-_SAVED = {}
+_SAVED: dict = {}
 _MODULES = (boxes, borders, fit, uncertainty, slicing, perimeter, classifier, result, study)
 __all__ = list(_public)
 

@@ -27,7 +27,7 @@ class PerimeterDimension(BoxDimension):
     (rows along u from ``u_min`` up, columns along e), the window, the
     resolution, ``max_iter`` and which border was measured."""
 
-    border: np.ndarray = field(default=None, repr=False)
+    border: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=bool), repr=False)
     e: tuple[float, float] = (0.0, 0.0)
     u: tuple[float, float] = (0.0, 0.0)
     resolution: int = 0

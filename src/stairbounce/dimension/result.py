@@ -15,6 +15,7 @@ the fitted scales (:func:`stairbounce.dimension.fit.half_slopes`):
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 __all__ = ["Estimate", "disagree"]
 
@@ -26,6 +27,14 @@ class Estimate:
 
     #: unit of :attr:`scales` (set by each result type)
     scale_unit = ""
+
+    if TYPE_CHECKING:  # the fields each result type declares (for the type checker only)
+        dimension: float
+        ci: tuple[float, float]
+        systematic: float
+        halves: tuple[float, float]
+        max_iter: int | None
+        fit_range: tuple[float, float]
 
     @property
     def scales(self) -> tuple[float, float]:
