@@ -342,3 +342,17 @@ def test_border_points_refuses_a_scan_it_cannot_use():
         sb.border_points(ds)
     with pytest.raises(ValueError, match="status"):
         sb.border_points(ds.drop_vars("status"))
+
+
+def test_a_set_halt_flag_stops_the_kernel_before_any_pair():
+    ds = sb.scan(**SMALL)
+    es, us, period, max_iter = borders._grid_input(ds)
+    a, b, axis = borders._pairs(period, us.size, es.size)
+    found = np.zeros(a.size, np.bool_)
+    out = np.full((a.size, borders._OUT), 7.0)
+    borders._border_kernel(es, us, period, a, b, axis, max_iter, int(period.max()), found, out,
+                           np.ones(1, np.int64))
+    assert not found.any() and (out == 7.0).all()
+    borders._border_kernel(es, us, period, a, b, axis, max_iter, int(period.max()), found, out,
+                           np.zeros(1, np.int64))
+    assert found.sum() == sb.border_points(ds).sizes["point"]

@@ -197,7 +197,7 @@ def _at(x, f, axis):
 
 
 @njit(cache=True)
-def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out):
+def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt):
     """One pair of neighbouring pixels at ``xa``, ``xb`` along ``axis`` (the
     other coordinate ``f``), with the periods ``pa``, ``pb`` of their words
     (0: no slide within max_iter).
@@ -254,6 +254,8 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out):
         po = j
     else:
         for n in range(j, max_iter):
+            if (n & 0xFFFF) == 0 and halted(halt):  # Ctrl-C on a long max_iter
+                break
             yo, vo, k = _step(yo, vo, eo, To, ro)
             if k == SLIDING:
                 po = n + 1
@@ -300,7 +302,7 @@ def _border_kernel(es, us, period, a_idx, b_idx, axis, max_iter, ref_len, found,
             xa, xb, f = es[a % ne], es[b % ne], us[a // ne]
         else:
             xa, xb, f = us[a // ne], us[b // ne], es[a % ne]
-        found[p] = _bisect_pair(xa, xb, f, axis[p], period[a], period[b], max_iter, ref, out[p])
+        found[p] = _bisect_pair(xa, xb, f, axis[p], period[a], period[b], max_iter, ref, out[p], halt)
 
 
 # --------------------------------------------------------------------------- #
