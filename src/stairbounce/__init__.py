@@ -73,7 +73,7 @@ from .plane import (
     tongue_mask,
 )
 from .plane import scan as _scan_function
-from .borders import border_points, itinerary
+from .borders import border_points, itinerary, word_table
 from .symbolic import Word, parse_word, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import normalized_speed, physical_speed, time_scale
@@ -159,6 +159,7 @@ __all__ = [
     "uncertain_fraction",
     "uncertainty_dimension",
     "uncertainty_dimension_from_counts",
+    "word_table",
 ]
 
 # heavy submodules, imported on first use (PEP 562)

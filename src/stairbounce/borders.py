@@ -43,7 +43,7 @@ from .model import (
     check_u,
 )
 
-__all__ = ["itinerary", "border_points"]
+__all__ = ["itinerary", "border_points", "word_table"]
 
 GRAZE, EDGE, CHATTER = 0, 1, 2
 """Event codes of the compiled functions (``kind`` argument of :func:`_margin`)."""
@@ -197,7 +197,94 @@ def _at(x, f, axis):
 
 
 @njit(cache=True)
-def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt):
+def _trial(x, f, axis, ref, pc, j, kind, index):
+    """Follow the orbit of ``(1, 0)`` at ``x`` along ``ref[:pc]``.
+
+    Returns ``(follows, dev, kdev, F, G)``: whether all ``pc`` impact numbers
+    are ``ref``'s (the outcome of ``ref``); else ``dev``, the first step that
+    differs, and its impact number ``kdev``.  ``F``: the margin of the event ``(kind, index)`` at step ``j``
+    (NaN when the orbit deviates before step ``j``); ``G``: when the orbit
+    deviates at step ``dev``, the margin there of the event that separates
+    its impact number from ``ref``'s (NaN otherwise).
+    """
+    e, u = _at(x, f, axis)
+    T, ratio = _constants(e, u)
+    y, v = 1.0, 0.0
+    F = math.nan
+    for n in range(pc):
+        if n == j - 1:
+            F = _event_margin(y, v, e, T, ratio, kind, index)
+        yn, vn, k = _step(y, v, e, T, ratio)
+        if k != ref[n]:
+            kd, idx = _event_of(ref[n], k)
+            return False, n + 1, k, F, _event_margin(y, v, e, T, ratio, kd, idx)
+        y, v = yn, vn
+    return True, 0, 0, F, math.nan
+
+
+@njit(cache=True)
+def _event_of(ka, kb):
+    """The event (kind, index) that separates impact numbers ``ka != kb`` of one step."""
+    if ka == SLIDING or kb == SLIDING:
+        return CHATTER, 0
+    if min(ka, kb) == 0:
+        return GRAZE, 1
+    return EDGE, max(ka, kb)
+
+
+@njit(cache=True)
+def _shrink_secant(xc, xo, f, axis, ref, pc):
+    """Shrink the bracket ``[xc, xo]`` (``xc`` has the outcome ``ref``, ``xo``
+    another one) to adjacent floats.
+
+    Every trial point is decided by the exact outcome test, as in bisection;
+    only its place differs: where the first step ``j`` at which ``xo``
+    deviates from ``ref`` and its event are known at both ends, the trial is
+    the secant root of the event's margin (Illinois: the margin of an end kept
+    twice is halved), a bisection otherwise, and whenever two trials in a row
+    shrank the bracket by less than half.  The margin is smooth along the
+    bracket while the two ends share their first ``j - 1`` impact numbers, so
+    this converges superlinearly; the bisection steps bound the work by about
+    twice plain bisection.
+    """
+    _, j, ko, _, Fo = _trial(xo, f, axis, ref, pc, 0, 0, 0)
+    kind, index = _event_of(ref[j - 1], ko)
+    Fc = _trial(xc, f, axis, ref, pc, j, kind, index)[3]
+    slow = 0
+    last = 0  # which end moved last: 1 c, -1 o
+    while True:
+        width = abs(xo - xc)
+        m = 0.5 * (xc + xo)
+        if m == xc or m == xo:
+            break
+        if slow < 2 and math.isfinite(Fc) and math.isfinite(Fo) and Fc != Fo and (Fc >= 0.0) != (Fo >= 0.0):
+            s = xc - Fc * (xo - xc) / (Fo - Fc)
+            if min(xc, xo) < s < max(xc, xo):
+                m = s
+        follows, dev, kdev, F, G = _trial(m, f, axis, ref, pc, j, kind, index)
+        if follows:
+            xc, Fc = m, F
+            if last == 1:
+                Fo *= 0.5
+            last = 1
+        else:
+            xo = m
+            if dev == j:
+                Fo = F
+            else:  # a border of an earlier step: its event, at both ends
+                j = dev
+                kind, index = _event_of(ref[j - 1], kdev)
+                Fo = G
+                Fc = _trial(xc, f, axis, ref, pc, j, kind, index)[3]
+            if last == -1:
+                Fc *= 0.5
+            last = -1
+        slow = slow + 1 if abs(xo - xc) > 0.5 * width else 0
+    return xc, xo
+
+
+@njit(cache=True)
+def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt, secant):
     """One pair of neighbouring pixels at ``xa``, ``xb`` along ``axis`` (the
     other coordinate ``f``), with the periods ``pa``, ``pb`` of their words
     (0: no slide within max_iter).
@@ -212,7 +299,9 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt):
     its outcome exactly when its first ``p_c`` impact numbers are ``c``'s, so
     every bisection step costs at most ``p_c`` map steps; the other end keeps
     a different outcome.  The bracket ``[c, o]`` always has different outcomes
-    at its ends, so it ends on a border.
+    at its ends, so it ends on a border.  ``secant``: the trial points are
+    placed by :func:`_shrink_secant` (same invariant, fewer steps); otherwise
+    at the midpoints (plain bisection).
     """
     if pa == 0 and pb == 0:
         return False
@@ -225,15 +314,18 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt):
     eo, uo = _at(xo, f, axis)
     if pa != 0 and pb != 0 and pa == pb and _follows(eo, uo, ref, pc):
         return False
-    while True:
-        m = 0.5 * (xc + xo)
-        if m == xc or m == xo:
-            break
-        em, um = _at(m, f, axis)
-        if _follows(em, um, ref, pc):
-            xc = m
-        else:
-            xo = m
+    if secant:
+        xc, xo = _shrink_secant(xc, xo, f, axis, ref, pc)
+    else:
+        while True:
+            m = 0.5 * (xc + xo)
+            if m == xc or m == xo:
+                break
+            em, um = _at(m, f, axis)
+            if _follows(em, um, ref, pc):
+                xc = m
+            else:
+                xo = m
     # the first step where the two ends differ, and the event there
     ec, uc = _at(xc, f, axis)
     eo, uo = _at(xo, f, axis)
@@ -260,12 +352,7 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt):
             if k == SLIDING:
                 po = n + 1
                 break
-    if kc == SLIDING or ko == SLIDING:
-        kind, index = CHATTER, 0
-    elif min(kc, ko) == 0:
-        kind, index = GRAZE, 1
-    else:
-        kind, index = EDGE, max(kc, ko)
+    kind, index = _event_of(kc, ko)
     low_is_c = xc < xo
     out[0] = min(xc, xo)
     out[1] = abs(xo - xc)
@@ -283,7 +370,7 @@ _OUT = 9
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _border_kernel(es, us, period, a_idx, b_idx, axis, max_iter, ref_len, found, out, halt):
+def _border_kernel(es, us, period, a_idx, b_idx, axis, max_iter, ref_len, secant, found, out, halt):
     """Pairs ``(a_idx[p], b_idx[p])`` of 4-neighbouring pixels (flat row-major
     indices of the ``n_u x n_e`` grid ``us x es``; ``axis[p]`` 0 along e, 1 along
     u), each bisected by :func:`_bisect_pair` into ``out[p]``; ``found[p]`` says
@@ -302,7 +389,8 @@ def _border_kernel(es, us, period, a_idx, b_idx, axis, max_iter, ref_len, found,
             xa, xb, f = es[a % ne], es[b % ne], us[a // ne]
         else:
             xa, xb, f = us[a // ne], us[b // ne], es[a % ne]
-        found[p] = _bisect_pair(xa, xb, f, axis[p], period[a], period[b], max_iter, ref, out[p], halt)
+        found[p] = _bisect_pair(xa, xb, f, axis[p], period[a], period[b], max_iter, ref, out[p], halt,
+                                 secant)
 
 
 # --------------------------------------------------------------------------- #
@@ -446,7 +534,7 @@ def _pairs(period, n_u, n_e):
     return a, b, axis
 
 
-def _run_pairs(es, us, period, a, b, axis, max_iter, progress):
+def _run_pairs(es, us, period, a, b, axis, max_iter, progress, secant=True):
     """:func:`_border_kernel` over the pairs, in blocks (progress, Ctrl-C)."""
     from ._interrupt import run_kernel
 
@@ -460,7 +548,7 @@ def _run_pairs(es, us, period, a, b, axis, max_iter, progress):
     for s in range(0, n, block):
         sl = slice(s, min(s + block, n))
         run_kernel(_border_kernel, es, us, period, a[sl], b[sl], axis[sl], max_iter, ref_len,
-                   found[sl], out[sl])
+                   secant, found[sl], out[sl])
         if progress is not None:
             progress(sl.stop, n)
     return found, out
@@ -493,25 +581,36 @@ def _word_text(ks):
     return "(" + ", ".join(letters) + ", 0^inf)"
 
 
-def _words(e, u, periods):
-    """Word text of each side: ASCII ``(2, 0, 1, 0^inf)`` or :data:`NONE_WORD`.
+def _word_groups(e, u, periods):
+    """The distinct words of the orbits of ``(1, 0)`` at ``(e[i], u[i])``.
 
-    The impact numbers of all sides are computed in one parallel pass; sides
-    with the same period are grouped and their distinct rows formatted once
-    (exact: rows are compared whole, no hashing)."""
+    ``periods[i]``: the period of the word there (0: no slide, id -1).
+    Returns ``(ids, rows)``: ``rows[ids[i]]`` is the impact numbers of point
+    i's period.  All impact numbers are computed in one parallel pass; points
+    with the same period are grouped and their rows compared whole (exact, no
+    hashing)."""
     periods = np.asarray(periods, np.int64)
-    texts = np.full(e.size, NONE_WORD, dtype=object)
+    ids = np.full(e.size, -1, np.int64)
     offsets = np.concatenate([[0], np.cumsum(periods)]).astype(np.int64)
-    _v.check_memory(f"the words of {e.size} border sides", 8 * int(offsets[-1]))
+    _v.check_memory(f"the words of {e.size} points", 8 * int(offsets[-1]))
     flat = np.empty(int(offsets[-1]), np.int64)
-    _fill_impacts(np.ascontiguousarray(e), np.ascontiguousarray(u), periods, offsets, flat)
+    _fill_impacts(np.ascontiguousarray(e, np.float64), np.ascontiguousarray(u, np.float64),
+                  periods, offsets, flat)
+    rows = []
     for p in np.unique(periods[periods > 0]):
         where = np.flatnonzero(periods == p)
-        rows = flat[offsets[where][:, None] + np.arange(p)]
-        distinct, inverse = np.unique(rows, axis=0, return_inverse=True)
-        names = np.array([_word_text(r) for r in distinct], dtype=object)
-        texts[where] = names[inverse.ravel()]
-    return texts
+        block = flat[offsets[where][:, None] + np.arange(p)]
+        distinct, inverse = np.unique(block, axis=0, return_inverse=True)
+        ids[where] = len(rows) + inverse.ravel()
+        rows.extend(distinct)
+    return ids, rows
+
+
+def _words(e, u, periods):
+    """Word text of each point: ASCII ``(2, 0, 1, 0^inf)`` or :data:`NONE_WORD`."""
+    ids, rows = _word_groups(e, u, periods)
+    names = np.array([_word_text(r) for r in rows] + [NONE_WORD], dtype=object)
+    return names[ids]  # id -1: the last name
 
 
 def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progress=None):
@@ -628,3 +727,130 @@ def _table(es, us, a, axis, out, max_iter, attrs):
     }
     return xr.Dataset(data, attrs={"title": "borders of the (e, u) plane to rounding",
                                    "max_iter": max_iter, "convention": _CONVENTION, **attrs})
+
+
+def _scan_input(e, u, max_iter, progress):
+    """A scan Dataset from window arguments (as :func:`stairbounce.scan`) or the
+    Dataset itself, with the window attributes to carry on."""
+    from . import plane
+
+    if isinstance(e, xr.Dataset):
+        _grid_input(e)  # checked here, once
+        return e
+    e_min, e_max, n_e = plane._window("e", e, 0.0, 1.0, "[0, 1]")
+    u_min, u_max, n_u = plane._window("u", u, 0.0, math.inf, "[0, inf)")
+    max_iter = _check_max_iter(max_iter)
+    return plane.scan(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=max_iter,
+                      progress=progress)
+
+
+def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=None, progress=None):
+    """word_table(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, *, points=None, progress=None) -> xarray.Dataset
+
+    The distinct words of the periodic sliding solutions in a window, one row each,
+    and the number of distinct words by period, N(p).
+
+    Every pixel centre of the window (as :func:`stairbounce.scan`; or pass a
+    scan Dataset as ``e``) gets the whole word of its periodic sliding
+    solution (not only its length).  The border points (:func:`border_points`
+    of the same pixels, or ``points`` when given) are counted per word on
+    either side, by kind.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``word`` (most pixels first, then by text): ``text`` (ASCII,
+        ``(2, 0, 1, 0^inf)``), ``letters`` (number of letters = word length),
+        ``period`` (steps per period = sum of the letters), ``impacts``
+        (finite impacts per period), ``pixels``, ``area_fraction`` (of all the
+        window's pixels), ``e_rep``, ``u_rep`` (a pixel centre of the word, the
+        nearest to the centroid of its pixels), ``e_min``, ``e_max``,
+        ``u_min``, ``u_max`` (the bounding box of its pixel centres),
+        ``graze``, ``edge``, ``chatter`` (its border points by kind).
+        Dimension ``p`` (the periods present): ``distinct_words`` = N(p).
+        Attributes: ``pixels`` (all), ``sliding_pixels``, ``max_iter`` and the
+        window.
+
+    Raises
+    ------
+    ValueError
+        As :func:`border_points`.
+    """
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
+    ds = _scan_input(e, u, max_iter, progress)
+    es, us, period, max_iter = _grid_input(ds)
+    if points is None:
+        points = border_points(ds, progress=progress)
+    elif not (isinstance(points, xr.Dataset) and "kind" in points and "word_low" in points):
+        raise ValueError("points must be a Dataset from border_points")
+    E, U = np.meshgrid(es, us)
+    E, U = E.ravel(), U.ravel()
+    ids, rows = _word_groups(E, U, period)
+    nw = len(rows)
+    texts = [_word_text(r) for r in rows]
+    sliding = ids >= 0
+    idx = ids[sliding]
+    pix = np.bincount(idx, minlength=nw)
+    Es, Us = E[sliding], U[sliding]
+
+    def per_word(values, fn):
+        out = np.full(nw, np.nan)
+        order = np.argsort(idx, kind="stable")
+        starts = np.concatenate([[0], np.cumsum(pix)])
+        sv = values[order]
+        for w in range(nw):
+            out[w] = fn(sv[starts[w]:starts[w + 1]])
+        return out, order, starts
+
+    e_min, order, starts = per_word(Es, np.min)
+    e_max = per_word(Es, np.max)[0]
+    u_min = per_word(Us, np.min)[0]
+    u_max = per_word(Us, np.max)[0]
+    ce = np.bincount(idx, Es, minlength=nw) / np.maximum(pix, 1)
+    cu = np.bincount(idx, Us, minlength=nw) / np.maximum(pix, 1)
+    # a pixel of the word nearest its centroid, in units of the window's pixels
+    de = (es[-1] - es[0]) / max(es.size - 1, 1) or 1.0
+    du = (us[-1] - us[0]) / max(us.size - 1, 1) or 1.0
+    e_rep = np.empty(nw)
+    u_rep = np.empty(nw)
+    for w in range(nw):
+        sel = order[starts[w]:starts[w + 1]]
+        d = ((Es[sel] - ce[w]) / de) ** 2 + ((Us[sel] - cu[w]) / du) ** 2
+        k = sel[int(np.argmin(d))]
+        e_rep[w], u_rep[w] = Es[k], Us[k]
+    counts = {k: np.zeros(nw, np.int64) for k in KINDS}
+    where = {t: i for i, t in enumerate(texts)}
+    for side in ("word_low", "word_high"):
+        for t, kind in zip(points[side].values, points["kind"].values):
+            w = where.get(t)
+            if w is not None:
+                counts[kind][w] += 1
+    letters = np.array([t.count(",") for t in texts], np.int64)  # "(a, b, 0^inf)": letters + 1 items
+    periods = np.array([int(r.size) for r in rows], np.int64)
+    impacts = np.array([int(np.sum(np.where(r > 0, r, 0))) for r in rows], np.int64)
+    rank = np.lexsort((np.array(texts, dtype=object).astype(str), -pix)) if nw else np.zeros(0, np.int64)
+    dim = ("word",)
+    p_values, n_p = np.unique(periods, return_counts=True)
+    data = {
+        "text": (dim, np.array(texts, dtype=object)[rank], {"long_name": "the word (ASCII)"}),
+        "letters": (dim, letters[rank], {"long_name": "letters (word length, impacts + 1)"}),
+        "period": (dim, periods[rank], {"long_name": "steps per period (sum of the letters)"}),
+        "impacts": (dim, impacts[rank], {"long_name": "finite impacts per period"}),
+        "pixels": (dim, pix[rank], {"long_name": "pixel centres with this word"}),
+        "area_fraction": (dim, pix[rank] / E.size, {"long_name": "share of the window's pixels"}),
+        "e_rep": (dim, e_rep[rank], {"long_name": "e of a representative pixel centre"}),
+        "u_rep": (dim, u_rep[rank], {"long_name": "u of a representative pixel centre"}),
+        "e_min": (dim, e_min[rank], {"long_name": "bounding box of its pixel centres"}),
+        "e_max": (dim, e_max[rank], {"long_name": "bounding box of its pixel centres"}),
+        "u_min": (dim, u_min[rank], {"long_name": "bounding box of its pixel centres"}),
+        "u_max": (dim, u_max[rank], {"long_name": "bounding box of its pixel centres"}),
+        **{k: (dim, counts[k][rank], {"long_name": f"{k} border points with this word on a side"})
+           for k in KINDS},
+        "distinct_words": (("p",), n_p, {"long_name": "N(p): distinct words of period p"}),
+    }
+    attrs = {k: ds.attrs[k] for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u") if k in ds.attrs}
+    return xr.Dataset(data, coords={"p": ("p", p_values, {"long_name": "period (steps)"})},
+                      attrs={"title": "words of the periodic sliding solutions in a window",
+                             "pixels": E.size, "sliding_pixels": int(sliding.sum()),
+                             "max_iter": max_iter, **attrs})
