@@ -427,3 +427,15 @@ def test_word_table_computes_its_points_and_takes_a_scan():
         sb.word_table(**SMALL, points=sb.scan(**SMALL))
     with pytest.raises(ValueError, match="n_u"):
         sb.word_table(e=(0.0, 1.0, 5), u=(0.0, 1.0, -1))
+
+
+def test_word_groups_fall_back_to_whole_rows_on_a_hash_collision(monkeypatch):
+    E, U = np.meshgrid(sb.pixel_centres(*FIG5A["e"]), sb.pixel_centres(*FIG5A["u"]))
+    ds = sb.scan(**FIG5A)
+    period = np.where(ds.status.values == 0, ds.period.values, 0).ravel()
+    ids, rows = borders._word_groups(E.ravel(), U.ravel(), period)
+    monkeypatch.setattr(borders, "_rows_equal", lambda *a: False)
+    ids2, rows2 = borders._word_groups(E.ravel(), U.ravel(), period)
+    texts = np.array([borders._word_text(r) for r in rows] + [borders.NONE_WORD], dtype=object)
+    texts2 = np.array([borders._word_text(r) for r in rows2] + [borders.NONE_WORD], dtype=object)
+    assert np.array_equal(texts[ids], texts2[ids2]) and len(rows) == len(rows2) > 20

@@ -586,9 +586,10 @@ def _word_groups(e, u, periods):
 
     ``periods[i]``: the period of the word there (0: no slide, id -1).
     Returns ``(ids, rows)``: ``rows[ids[i]]`` is the impact numbers of point
-    i's period.  All impact numbers are computed in one parallel pass; points
-    with the same period are grouped and their rows compared whole (exact, no
-    hashing)."""
+    i's period.  All impact numbers are computed in one parallel pass and
+    grouped by a hash; every row is then compared whole with its group's
+    first row (exact: on a collision the rows are grouped by comparing them
+    whole, period by period)."""
     periods = np.asarray(periods, np.int64)
     ids = np.full(e.size, -1, np.int64)
     offsets = np.concatenate([[0], np.cumsum(periods)]).astype(np.int64)
@@ -596,6 +597,17 @@ def _word_groups(e, u, periods):
     flat = np.empty(int(offsets[-1]), np.int64)
     _fill_impacts(np.ascontiguousarray(e, np.float64), np.ascontiguousarray(u, np.float64),
                   periods, offsets, flat)
+    hashes = np.empty(e.size, np.uint64)
+    _hash_rows(periods, offsets, flat, hashes)
+    sl = np.flatnonzero(periods > 0)
+    keys, first, inverse = np.unique(hashes[sl], return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    rep = sl[first]
+    if _rows_equal(periods, offsets, flat, sl, rep[inverse]):
+        ids[sl] = inverse
+        rows = [flat[offsets[r]:offsets[r] + periods[r]] for r in rep]
+        return ids, rows
+    # a hash collision (never seen): compare whole rows, period by period
     rows = []
     for p in np.unique(periods[periods > 0]):
         where = np.flatnonzero(periods == p)
@@ -604,6 +616,29 @@ def _word_groups(e, u, periods):
         ids[where] = len(rows) + inverse.ravel()
         rows.extend(distinct)
     return ids, rows
+
+
+@njit(cache=True, parallel=True)
+def _hash_rows(periods, offsets, flat, out):
+    """A 64-bit FNV-1a hash of each row ``flat[offsets[i]:offsets[i] + periods[i]]``."""
+    for i in prange(periods.shape[0]):
+        h = np.uint64(14695981039346656037)
+        for n in range(offsets[i], offsets[i] + periods[i]):
+            h = (h ^ np.uint64(flat[n] & 0xFFFFFFFFFFFF)) * np.uint64(1099511628211)
+        out[i] = h ^ np.uint64(periods[i])
+
+
+@njit(cache=True)
+def _rows_equal(periods, offsets, flat, rows, reps):
+    """Whether each row ``rows[i]`` equals the row ``reps[i]``, element by element."""
+    for i in range(rows.shape[0]):
+        a, b = rows[i], reps[i]
+        if periods[a] != periods[b]:
+            return False
+        for n in range(periods[a]):
+            if flat[offsets[a] + n] != flat[offsets[b] + n]:
+                return False
+    return True
 
 
 def _words(e, u, periods):
