@@ -98,3 +98,19 @@ def test_an_existing_file_is_kept_without_force(tmp_path, capsys):
     assert code == 2 and target.read_text() == "mine"
     code, _, err = run(["borders", *WINDOW, "--out", str(target), "--force"], capsys)
     assert code == 0 and target.read_text() != "mine"
+
+
+def test_borders_outcome_sliding(tmp_path, capsys):
+    code, out, err = run(["borders", *WINDOW, "--outcome", "sliding", "--out", str(tmp_path / "s.nc")],
+                         capsys)
+    assert code == 0, err
+    ref = sb.border_points(e=(0.0, 0.3, 30), u=(0.3, 0.7, 30), max_iter=500, outcome="sliding")
+    got = xr.open_dataset(tmp_path / "s.nc").load()
+    np.testing.assert_array_equal(got.e.values, ref.e.values)
+    assert got.sliding_border.values.all() and f"{ref.sizes['point']} on the border" in out
+
+
+def test_borders_bad_outcome(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run(["borders", "--outcome", "status", "--out", "x.nc"], capsys)
+    assert code == 2 and "--outcome must be word or sliding" in err and len(err.strip().splitlines()) == 1

@@ -177,14 +177,14 @@ def _impacts_from_rest(e, u, steps, ks):
 def _follows(e, u, ref, p):
     """Whether the orbit of ``(1, 0)`` at ``(e, u)`` has the impact numbers
     ``ref[:p]`` (the last one ``SLIDING``): the same outcome, word for word.
-    Stops at the first step that differs."""
+    Stops at the first step that differs; returns ``(follows, steps done)``."""
     T, ratio = _constants(e, u)
     y, v = 1.0, 0.0
     for n in range(p):
         y, v, k = _step(y, v, e, T, ratio)
         if k != ref[n]:
-            return False
-    return True
+            return False, n + 1
+    return True, p
 
 
 @njit(cache=True)
@@ -250,6 +250,8 @@ def _shrink_secant(xc, xo, f, axis, ref, pc):
     _, j, ko, _, Fo = _trial(xo, f, axis, ref, pc, 0, 0, 0)
     kind, index = _event_of(ref[j - 1], ko)
     Fc = _trial(xc, f, axis, ref, pc, j, kind, index)[3]
+    trials = 2
+    steps = j + pc
     slow = 0
     last = 0  # which end moved last: 1 c, -1 o
     while True:
@@ -262,6 +264,8 @@ def _shrink_secant(xc, xo, f, axis, ref, pc):
             if min(xc, xo) < s < max(xc, xo):
                 m = s
         follows, dev, kdev, F, G = _trial(m, f, axis, ref, pc, j, kind, index)
+        trials += 1
+        steps += pc if follows else dev
         if follows:
             xc, Fc = m, F
             if last == 1:
@@ -276,11 +280,13 @@ def _shrink_secant(xc, xo, f, axis, ref, pc):
                 kind, index = _event_of(ref[j - 1], kdev)
                 Fo = G
                 Fc = _trial(xc, f, axis, ref, pc, j, kind, index)[3]
+                trials += 1
+                steps += pc
             if last == -1:
                 Fc *= 0.5
             last = -1
         slow = slow + 1 if abs(xo - xc) > 0.5 * width else 0
-    return xc, xo
+    return xc, xo, trials, steps
 
 
 @njit(cache=True)
@@ -290,10 +296,11 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt, secant):
     (0: no slide within max_iter).
 
     Returns False when the two have the same outcome.  Otherwise bisects to
-    adjacent floats and writes into ``out`` (float64[9]): the low end of the
+    adjacent floats and writes into ``out`` (float64[11]): the low end of the
     bracket, its width, the step j, the kind code, the event index, the impact
     numbers at step j on the low and high side, the period of the low and high
-    side (0: none within max_iter).
+    side (0: none within max_iter), and for the benchmarks the outcome tests
+    (trial points) and the map steps they took.
 
     The reference end ``c`` is a sliding one (the shorter period): a point has
     its outcome exactly when its first ``p_c`` impact numbers are ``c``'s, so
@@ -312,17 +319,21 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt, secant):
     ec, uc = _at(xc, f, axis)
     _impacts_from_rest(ec, uc, pc, ref)
     eo, uo = _at(xo, f, axis)
-    if pa != 0 and pb != 0 and pa == pb and _follows(eo, uo, ref, pc):
+    if pa != 0 and pb != 0 and pa == pb and _follows(eo, uo, ref, pc)[0]:
         return False
     if secant:
-        xc, xo = _shrink_secant(xc, xo, f, axis, ref, pc)
+        xc, xo, trials, steps = _shrink_secant(xc, xo, f, axis, ref, pc)
     else:
+        trials = steps = 0
         while True:
             m = 0.5 * (xc + xo)
             if m == xc or m == xo:
                 break
             em, um = _at(m, f, axis)
-            if _follows(em, um, ref, pc):
+            follows, n = _follows(em, um, ref, pc)
+            trials += 1
+            steps += n
+            if follows:
                 xc = m
             else:
                 xo = m
@@ -363,18 +374,95 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt, secant):
     out[6] = ko if low_is_c else kc
     out[7] = pc if low_is_c else po
     out[8] = po if low_is_c else pc
+    out[9] = trials
+    out[10] = steps
     return True
 
 
-_OUT = 9
+_OUT = 11
+
+# what a kernel call locates: word borders (trial points at the secant root, or
+# plain midpoints), or the border of the sliding region (midpoints)
+_WORD, _WORD_BISECT, _SLIDING = 0, 1, 2
+
+
+@njit(cache=True)
+def _slide_period(e, u, max_iter, halt):
+    """The period of the orbit of ``(1, 0)`` (steps up to and including its
+    slide), 0 when it does not slide within ``max_iter`` steps (or once
+    ``halt[0]`` is set, read every 2**16 steps)."""
+    T, ratio = _constants(e, u)
+    y, v = 1.0, 0.0
+    for n in range(max_iter):
+        if (n & 0xFFFF) == 0xFFFF and halted(halt):
+            return 0
+        y, v, k = _step(y, v, e, T, ratio)
+        if k == SLIDING:
+            return n + 1
+    return 0
+
+
+@njit(cache=True)
+def _bisect_sliding_pair(xa, xb, f, axis, pa, pb, max_iter, out, halt):
+    """A pair of pixels of which exactly one slides within ``max_iter``:
+    bisected with the outcome "slides within max_iter" (not the word), so it
+    ends on the border of the sliding region.  Writes ``out`` as
+    :func:`_bisect_pair` does; returns False for any other pair."""
+    if (pa == 0) == (pb == 0):
+        return False
+    if pa != 0:
+        xc, xo, pc = xa, xb, pa
+    else:
+        xc, xo, pc = xb, xa, pb
+    trials = steps = 0
+    while True:
+        m = 0.5 * (xc + xo)
+        if m == xc or m == xo:
+            break
+        em, um = _at(m, f, axis)
+        pm = _slide_period(em, um, max_iter, halt)
+        trials += 1
+        steps += pm if pm else max_iter
+        if pm:
+            xc, pc = m, pm
+        else:
+            xo = m
+    ec, uc = _at(xc, f, axis)
+    eo, uo = _at(xo, f, axis)
+    Tc, rc = _constants(ec, uc)
+    To, ro = _constants(eo, uo)
+    yc, vc, yo, vo = 1.0, 0.0, 1.0, 0.0
+    j = 0
+    kc = ko = 0
+    for n in range(pc):
+        yc, vc, kc = _step(yc, vc, ec, Tc, rc)
+        yo, vo, ko = _step(yo, vo, eo, To, ro)
+        if kc != ko:
+            j = n + 1
+            break
+    kind, index = _event_of(kc, ko)
+    low_is_c = xc < xo
+    out[0] = min(xc, xo)
+    out[1] = abs(xo - xc)
+    out[2] = j
+    out[3] = kind
+    out[4] = index
+    out[5] = kc if low_is_c else ko
+    out[6] = ko if low_is_c else kc
+    out[7] = pc if low_is_c else 0
+    out[8] = 0 if low_is_c else pc
+    out[9] = trials
+    out[10] = steps
+    return True
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _border_kernel(es, us, period, a_idx, b_idx, axis, max_iter, ref_len, secant, found, out, halt):
+def _border_kernel(es, us, period, a_idx, b_idx, axis, max_iter, ref_len, method, found, out, halt):
     """Pairs ``(a_idx[p], b_idx[p])`` of 4-neighbouring pixels (flat row-major
     indices of the ``n_u x n_e`` grid ``us x es``; ``axis[p]`` 0 along e, 1 along
-    u), each bisected by :func:`_bisect_pair` into ``out[p]``; ``found[p]`` says
-    whether the outcomes differ.  Pairs are independent: the answers do not
+    u), each bisected by :func:`_bisect_pair` (``method`` ``_WORD`` or
+    ``_WORD_BISECT``) or :func:`_bisect_sliding_pair` (``_SLIDING``) into
+    ``out[p]``; ``found[p]`` says whether the outcomes differ.  Pairs are independent: the answers do not
     depend on the thread count or on which pairs are computed together.  Returns
     early once ``halt[0]`` is set (the outputs are then incomplete)."""
     ne = es.shape[0]
@@ -384,13 +472,17 @@ def _border_kernel(es, us, period, a_idx, b_idx, axis, max_iter, ref_len, secant
             continue
         a = a_idx[p]
         b = b_idx[p]
-        ref = np.empty(ref_len, np.int64)
         if axis[p] == 0:
             xa, xb, f = es[a % ne], es[b % ne], us[a // ne]
         else:
             xa, xb, f = us[a // ne], us[b // ne], es[a % ne]
-        found[p] = _bisect_pair(xa, xb, f, axis[p], period[a], period[b], max_iter, ref, out[p], halt,
-                                 secant)
+        if method == _SLIDING:
+            found[p] = _bisect_sliding_pair(xa, xb, f, axis[p], period[a], period[b], max_iter,
+                                            out[p], halt)
+        else:
+            ref = np.empty(ref_len, np.int64)
+            found[p] = _bisect_pair(xa, xb, f, axis[p], period[a], period[b], max_iter, ref,
+                                    out[p], halt, method == _WORD)
 
 
 # --------------------------------------------------------------------------- #
@@ -519,13 +611,18 @@ def _grid_input(data):
     return es, us, period.ravel(), max_iter
 
 
-def _pairs(period, n_u, n_e):
+def _pairs(period, n_u, n_e, sliding=False):
     """Flat indices ``(a, b)`` and axis of the 4-neighbour pairs where at least
-    one pixel slides, in the order of ``a`` then axis (e before u)."""
+    one pixel slides (``sliding``: exactly one), in the order of ``a`` then
+    axis (e before u)."""
     idx = np.arange(n_u * n_e, dtype=np.int64).reshape(n_u, n_e)
-    p = period.reshape(n_u, n_e)
-    ah = idx[:, :-1][(p[:, :-1] != 0) | (p[:, 1:] != 0)]
-    av = idx[:-1, :][(p[:-1, :] != 0) | (p[1:, :] != 0)]
+    s = period.reshape(n_u, n_e) != 0
+    if sliding:
+        ah = idx[:, :-1][s[:, :-1] != s[:, 1:]]
+        av = idx[:-1, :][s[:-1, :] != s[1:, :]]
+    else:
+        ah = idx[:, :-1][s[:, :-1] | s[:, 1:]]
+        av = idx[:-1, :][s[:-1, :] | s[1:, :]]
     a = np.concatenate([ah, av])
     axis = np.concatenate([np.zeros(ah.size, np.int64), np.ones(av.size, np.int64)])
     order = np.argsort(2 * a + axis, kind="stable")
@@ -534,7 +631,7 @@ def _pairs(period, n_u, n_e):
     return a, b, axis
 
 
-def _run_pairs(es, us, period, a, b, axis, max_iter, progress, secant=True):
+def _run_pairs(es, us, period, a, b, axis, max_iter, progress, secant=True, sliding=False):
     """:func:`_border_kernel` over the pairs, in blocks (progress, Ctrl-C)."""
     from ._interrupt import run_kernel
 
@@ -542,13 +639,14 @@ def _run_pairs(es, us, period, a, b, axis, max_iter, progress, secant=True):
     found = np.zeros(n, np.bool_)
     out = np.zeros((n, _OUT))
     ref_len = int(max(period.max(initial=0), 1))
+    method = _SLIDING if sliding else (_WORD if secant else _WORD_BISECT)
     block = max(1, -(-n // 50)) if progress is not None else max(n, 1)
     if progress is not None:
         progress(0, n)
     for s in range(0, n, block):
         sl = slice(s, min(s + block, n))
         run_kernel(_border_kernel, es, us, period, a[sl], b[sl], axis[sl], max_iter, ref_len,
-                   secant, found[sl], out[sl])
+                   method, found[sl], out[sl])
         if progress is not None:
             progress(sl.stop, n)
     return found, out
@@ -648,8 +746,9 @@ def _words(e, u, periods):
     return names[ids]  # id -1: the last name
 
 
-def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progress=None):
-    """border_points(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, *, progress=None) -> xarray.Dataset
+def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, outcome="word",
+                  progress=None):
+    """border_points(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, *, outcome="word", progress=None) -> xarray.Dataset
 
     Every border between neighbouring pixels of a scan, located to rounding and
     labelled by the event that makes it.
@@ -669,10 +768,23 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progre
     - ``"edge"``: the ``index``-th impact (``index - 1`` <-> ``index``, index >= 2);
     - ``"chatter"``: the accumulation point (finite <-> sliding on step j).
 
+    ``outcome="sliding"`` takes "slides within max_iter" as the outcome
+    instead of the word: only the pairs of which one pixel slides and the
+    other does not are bisected, and every point lies on the border of the
+    sliding region (between some word and "none within max_iter"), one per
+    crossing.  With the word as the outcome such a pair may end on the border
+    of another word met on the way (the sliding region's border is made of
+    many words' borders).
+
     Kernel: pairs in parallel (numba ``prange``), each independent of the
-    others, so the thread count and the tiling change no bit.  Each bisection
-    step follows the orbit of the midpoint only as long as the sliding end's
-    word, at most its period.
+    others, so the thread count and the tiling change no bit.  Each trial
+    point is decided exactly (its whole word against the sliding end's, which
+    follows the orbit at most that word's period); it is placed at the root
+    of the secant through the two ends' margins of the event that separates
+    them (the margins of :func:`itinerary`; a bisection step whenever that
+    does not shrink the bracket by half), about 24 trial points per border
+    point on the paper's grid instead of 46.  ``outcome="sliding"`` bisects
+    at midpoints, a trial on the non-sliding side costing max_iter steps.
 
     Parameters
     ----------
@@ -680,6 +792,8 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progre
         ``(y0, v0) = (1, 0)``, its ``max_iter`` attribute used; ``u`` and
         ``max_iter`` are then ignored).
     max_iter : int >= 1, default 1000
+    outcome : "word" (default) or "sliding"
+        What two sides must differ in: the word, or whether they slide.
     progress : callable ``progress(done, total)``, optional
         Called for the scan's rows (as :func:`stairbounce.scan` does) and
         then for the pairs, in about 50 blocks each.
@@ -696,8 +810,10 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progre
         ``impacts_low``, ``impacts_high`` (the impact numbers at step j on the
         sides of smaller and larger coordinate), ``word_low``, ``word_high``
         (ASCII words, or ``"none within max_iter"``), ``sliding_border``
-        (one side does not slide within max_iter), ``i_e``, ``i_u`` (the
-        pixel of the pair with the smaller indices).  ``.to_dataframe()``
+        (one side of the point does not slide within max_iter: the point is
+        on the border of the sliding region), ``sliding_pair`` (one pixel of
+        the pair slides, the other does not: the pair crosses that border),
+        ``i_e``, ``i_u`` (the pixel of the pair with the smaller indices).  ``.to_dataframe()``
         gives the table as pandas.
 
     Raises
@@ -710,6 +826,8 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progre
 
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
+    _v.among("outcome", (outcome,), ("word", "sliding"))
+    sliding = outcome == "sliding"
     if isinstance(e, xr.Dataset):
         es, us, period, max_iter = _grid_input(e)
         attrs = {k: e.attrs[k] for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u") if k in e.attrs}
@@ -722,12 +840,14 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progre
         es, us, period, _ = _grid_input(ds)
         attrs = dict(e_min=e_min, e_max=e_max, n_e=n_e, u_min=u_min, u_max=u_max, n_u=n_u)
     n_e, n_u = es.size, us.size
-    a, b, axis = _pairs(period, n_u, n_e)
-    found, out = _run_pairs(es, us, period, a, b, axis, max_iter, progress)
-    return _table(es, us, a[found], axis[found], out[found], max_iter, attrs)
+    a, b, axis = _pairs(period, n_u, n_e, sliding)
+    found, out = _run_pairs(es, us, period, a, b, axis, max_iter, progress, sliding=sliding)
+    pair = (period[a[found]] == 0) != (period[b[found]] == 0)
+    return _table(es, us, a[found], axis[found], out[found], max_iter,
+                  {**attrs, "outcome": outcome}, pair)
 
 
-def _table(es, us, a, axis, out, max_iter, attrs):
+def _table(es, us, a, axis, out, max_iter, attrs, pair=None):
     """The labelled Dataset of :func:`border_points` from the kernel's rows."""
     n_e = es.size
     i_e, i_u = a % n_e, a // n_e
@@ -757,6 +877,8 @@ def _table(es, us, a, axis, out, max_iter, attrs):
         "word_high": (dim, _words(e_high, u_high, p_high), {"long_name": "word on the high side"}),
         "sliding_border": (dim, (p_low == 0) | (p_high == 0),
                            {"long_name": "one side does not slide within max_iter"}),
+        "sliding_pair": (dim, np.zeros(x.size, bool) if pair is None else pair,
+                         {"long_name": "one pixel of the pair slides within max_iter, the other not"}),
         "i_e": (dim, i_e, {"long_name": "e index of the pair's first pixel"}),
         "i_u": (dim, i_u, {"long_name": "u index of the pair's first pixel"}),
     }

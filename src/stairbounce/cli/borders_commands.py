@@ -99,6 +99,8 @@ def borders_(
     g: float = st.g_option(),
     size: str = typer.Option("500x350", "--size", help="Pixels WIDTHxHEIGHT (along e x along u)."),
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
+    outcome: str = typer.Option("word", "--outcome", help="What the two sides differ in: word (every border) "
+                                "or sliding (the border of the sliding region, one point per crossing)."),
     out: Path = typer.Option(None, "--out", help="The border points: .nc (netCDF) or .csv (one row per point)."),
     png: Path = typer.Option(None, "--png", help="Figure (.png, .pdf or .svg): the borders over the scan, coloured by kind."),
     dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
@@ -109,10 +111,13 @@ def borders_(
     (the accumulation point)."""
     from .. import borders, plane
 
+    if outcome not in ("word", "sliding"):
+        raise CLIError(f"--outcome must be word or sliding, got {outcome!r}")
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force)
     ds = _with_progress("scan rows",
                         lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
-    pts = _with_progress("border pairs", lambda p: borders.border_points(ds, progress=p))
+    pts = _with_progress("border pairs",
+                         lambda p: borders.border_points(ds, outcome=outcome, progress=p))
     if out is not None:
         _write(pts, out, force, "point")
         typer.echo(f"wrote {out}")
