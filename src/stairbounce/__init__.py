@@ -73,7 +73,7 @@ from .plane import (
     tongue_mask,
 )
 from .plane import scan as _scan_function
-from .borders import border_points, itinerary, word_table
+from .borders import bifurcations, border_points, itinerary, word_table
 from .symbolic import Word, parse_word, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import normalized_speed, physical_speed, time_scale
@@ -102,6 +102,7 @@ __all__ = [
     "UncertaintyDimension",
     "Word",
     "__version__",
+    "bifurcations",
     "border_dimension_estimates",
     "border_points",
     "boundary",
