@@ -723,6 +723,22 @@ def _orbits(settings, e, u_window, n):
     )
 
 
+def _bifurcation_marks(settings, e, u_window, n, ax):
+    """Mark the discontinuity-induced bifurcations (sb.bifurcations, located to
+    rounding and labelled graze / edge / chatter) found between ``n`` values of
+    u on an orbit diagram's axes; returns their count."""
+    from .borders import bifurcations
+    from .plot import plot_bifurcations
+
+    settings.note(f"bifurcations e = {e:g}, u in [{u_window[0]:g}, {u_window[1]:g}], {n} values")
+    b = _cached(settings, "bifurcations", {"e": e, "u": list(u_window), "n": n, "y0": 0.1,
+                                           "v0": 0.0, "transient": 2000, "keep": 200},
+                lambda: bifurcations(e, np.linspace(u_window[0], u_window[1], n), y0=0.1, v0=0.0,
+                                     transient=2000, keep=200))
+    plot_bifurcations(b, ax=ax)
+    return b.sizes["bifurcation"]
+
+
 def _distinct(row):
     return np.unique(np.round(row, 9)).size
 
@@ -738,6 +754,7 @@ def fig8(s: Settings) -> Result:
     # left of the first grazing at u = sqrt(1/2) there is one branch, at y = 1:
     # the legend goes above it, clear of the bifurcation and of the tongue numbers
     plot_orbit_diagram(ds, ax=ax, overlay=("tongues",), legend="center left")
+    _bifurcation_marks(s, e, window, s.px(500), ax)
     ax.set_title(f"Fig. 8: orbit diagram, e = {e} (iterates 2001-2200 from (0.1, 0))")
     fig.tight_layout()
     counts, ok = [], True
@@ -759,7 +776,10 @@ def fig8(s: Settings) -> Result:
                f"cells coloured by how many iterates fall in each (white: none). e = {e} is the "
                f"paper's. Dashed/dotted lines: where tongue n of Theorem 3.1 begins "
                f"(u = sqrt((n-1)/2), a grazing bifurcation) and ends; at this e the two nearly "
-               f"coincide; each tongue is numbered at its middle.")
+               f"coincide; each tongue is numbered at its middle. Ticks at the bottom: the "
+               f"discontinuity-induced bifurcations found between {s.px(500)} values of u "
+               f"(stairbounce.bifurcations: where the itinerary of iterates 2001-2200 changes, "
+               f"located to rounding), coloured by their event.")
     return Result("fig8", "Orbit diagram, e = 0.001", [_save(fig, s, "fig8")], rows,
                   {"e": e, "u": window, "n": n, "y0": 0.1, "v0": 0.0, "transient": 2000,
                    "keep": 200}, caption=caption)
@@ -792,6 +812,7 @@ def fig9(s: Settings) -> Result:
                                range=(1.0 - 0.1 * unit, 1.0 + 1.3 * unit),
                                label=f"(y - 1) / $10^{{-{2 * k}}}$")
             ax.set_title(f"zoom {k}: u in [{window[0]:g}, {window[1]:g}]", fontsize="medium")
+        _bifurcation_marks(s, e, window, s.px(300), ax)
         images += ax.get_images()
         if k < len(FIG9_WINDOWS) - 1:
             nxt = FIG9_WINDOWS[k + 1]
