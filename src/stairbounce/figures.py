@@ -66,6 +66,8 @@ class Settings:
     border_dimension: Path | None = None
     # replace existing files that are not from an earlier run into this folder
     overwrite: bool = False
+    # draw the exact borders (stairbounce.border_points) over Figs. 4 and 5a-e
+    borders: bool = False
 
     def px(self, n):
         """A pixel count of the default set, scaled (at least 16)."""
@@ -77,7 +79,10 @@ class Settings:
 
     def record(self):
         """The settings as they go into the manifest (paths as text)."""
-        return {"fmt": self.fmt, "dpi": self.dpi, "scale": self.scale, "max_iter": self.max_iter}
+        out = {"fmt": self.fmt, "dpi": self.dpi, "scale": self.scale, "max_iter": self.max_iter}
+        if self.borders:
+            out["borders"] = True
+        return out
 
 
 VERDICTS = ("agrees", "differs", "not comparable")
@@ -458,6 +463,22 @@ def fig3(s: Settings) -> Result:
                   {"n_max": n_max}, caption=caption)
 
 
+def _draw_borders(settings, ds, ax, label):
+    """With ``settings.borders``: the exact borders of the scan ``ds``
+    (stairbounce.border_points, located to rounding) over its picture,
+    coloured by kind; returns a caption sentence ("" without)."""
+    if not settings.borders:
+        return ""
+    from .borders import border_points
+    from .plot import plot_borders
+
+    settings.note(f"{label}: exact borders")
+    pts = border_points(ds)
+    plot_borders(pts, ax=ax, title=ax.get_title(), legend="lower left")
+    return (f" Dots: the {pts.sizes['point']} borders between neighbouring pixels located to "
+            f"rounding (stairbounce.border_points), coloured by their event (graze, edge, chatter).")
+
+
 def _key_caption(s):
     return (f"Colours: one fixed scale shared by Figs. 4 and 5a-e, word length 1 (black, the "
             f"tongues), 2, 3, 4, 5, 6-7, 8-10, 11-15, ... (the explorer's classes); white: no "
@@ -477,6 +498,7 @@ def fig4(s: Settings) -> Result:
     fig, ax = _subplots(s, figsize=(8.5, 6))
     plot_scan(ds, field="word_length", ax=ax, overlay=("tongues", "bound"),
               title=f"Fig. 4: word length of the periodic sliding solution ({n_e} x {n_u} px)")
+    exact = _draw_borders(s, ds, ax, "fig4")
     fig.tight_layout()
     E, U = np.meshgrid(ds.e.values, ds.u.values)
     wl1 = ds.word_length.values == 1
@@ -501,7 +523,7 @@ def fig4(s: Settings) -> Result:
                f"{500} x {350} grid (here {n_e} x {n_u}), iterated from (1, 0) as in the paper, "
                f"coloured by the length of the word of its periodic sliding solution "
                f"({100 * sliding.mean():.1f}% of pixels have one). {_key_caption(s)} Grey "
-               f"dashed: the Corollary 2.1 curve.")
+               f"dashed: the Corollary 2.1 curve.{exact}")
     return Result("fig4", "The fractal pattern in the (e, u) plane", [_save(fig, s, "fig4")], rows,
                   {"e": e, "u": u, "size": [n_e, n_u], "max_iter": s.max_iter}, caption=caption)
 
@@ -538,6 +560,7 @@ def _blowup(name):
         fig, ax = _subplots(s, figsize=(7, 6.2))
         plot_scan(ds, field="word_length", ax=ax, overlay=("tongues",), legend="below",
                   title=f"Fig. 5{letter}: [{e[0]:g}, {e[1]:g}] x [{u[0]:g}, {u[1]:g}]")
+        exact = _draw_borders(s, ds, ax, name)
         fig.tight_layout()
         sliding = ds.status.values == 0
         lengths = np.unique(ds.word_length.values[sliding])
@@ -569,7 +592,7 @@ def _blowup(name):
                 why=f"each band's structure fills it up to the tongue tip within {worst:.4f} "
                     f"(pixel {pixel:.4f}); the paper gives no scale factor"))
         caption = (f"Blow-up {letter}) of Fig. 4: the paper's window [{e[0]:g}, {e[1]:g}] x "
-                   f"[{u[0]:g}, {u[1]:g}], {n} x {n} px (ours). {_key_caption(s)}")
+                   f"[{u[0]:g}, {u[1]:g}], {n} x {n} px (ours). {_key_caption(s)}{exact}")
         return Result(name, f"Blow-up {letter})", [_save(fig, s, name)], rows,
                       {"e": e, "u": u, "size": [n, n], "max_iter": s.max_iter}, caption=caption)
 
