@@ -551,3 +551,23 @@ def test_long_run_itinerary_is_a_pattern_up_to_its_phase():
 def test_bifurcations_bad_input(kw, name):
     with pytest.raises(ValueError, match=name):
         sb.bifurcations(**kw)
+
+
+def test_report_measures_on_known_answers():
+    # the tongue window at a coarse grid: every (n, 0^inf) border point within 1e-14
+    (e0, e1), (u0, u1) = borders.TONGUE_WINDOW
+    pts = sb.border_points(e=(e0, e1, 30), u=(u0, u1, 120), max_iter=200)
+    t = borders.tongue_distances(pts)
+    assert t["points"] > 30 and t["wrong_kind"] == 0 and t["max_relative"] <= 1e-14
+    assert t["kinds"][1] == {"chatter"} and t["kinds"][5] == {"graze", "chatter"}
+    # a point moved off its curve by 1e-9 is measured as such
+    moved = pts.copy(deep=True)
+    i = int(np.flatnonzero(moved.word_low.values == "(3, 0^inf)")[0])
+    moved["u"].values[i] *= 1 + 1e-9
+    assert borders.tongue_distances(moved)["max_relative"] > 5e-10
+    assert borders.above_no_sliding_curve(pts) == 0
+    moved["u"].values[i] = 10.0
+    assert borders.above_no_sliding_curve(moved) == 1
+    ds = sb.scan(**FIG5A)
+    share, near = borders.side_agreement(sb.border_points(ds), ds)
+    assert near > 100 and 0.8 < share <= 1.0
