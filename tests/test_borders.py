@@ -597,3 +597,15 @@ def test_plot_borders_and_bifurcations_draw_one_mark_per_point(fig5a, fig8_bifur
     with pytest.raises(ValueError, match="bifurcations"):
         sb.plot.plot_bifurcations(fig5a, ax=ax)
     plt.close("all")
+
+
+def test_explorer_border_overlay_is_the_library_points():
+    from stairbounce.explorer import view as V
+
+    v = V.View(0.0, 0.3, 0.3, 0.7, 60, 50, 500, "word_length", ("borders",), None)
+    got = V.border_overlay(v)
+    ref = sb.border_points(e=(0.0, 0.3, 60), u=(0.3, 0.7, 50), max_iter=500)
+    assert got["e"] == ref.e.values.tolist() and got["kind"] == ref.kind.values.tolist()
+    assert got["word_low"] == ref.word_low.values.tolist()
+    assert V.parse_overlays("borders,tongues") == ("tongues", "borders")
+    assert V.View().overlays == ("tongues", "no_sliding")
