@@ -1185,3 +1185,15 @@ def test_exact_borders_overlay_shows_the_views_border_points(explorer):
     assert "overlays=borders" in app.history_out.text
     app.overlays.value = []
     assert app.border_src.data["e"] == []
+
+
+def test_png_export_draws_the_exact_borders_overlay():
+    from PIL import Image
+
+    from stairbounce.explorer.export import view_png
+
+    view = V.View(0.0, 0.3, 0.3, 0.7, 60, 50, max_iter=200, overlays=("tongues", "borders"))
+    ds = V.compute_view(view)
+    plain = view_png(ds, V.View(0.0, 0.3, 0.3, 0.7, 60, 50, max_iter=200, overlays=("tongues",)))
+    png = view_png(ds, view)
+    assert Image.open(io.BytesIO(png)).format == "PNG" and png != plain
