@@ -609,3 +609,23 @@ def test_explorer_border_overlay_is_the_library_points():
     assert got["word_low"] == ref.word_low.values.tolist()
     assert V.parse_overlays("borders,tongues") == ("tongues", "borders")
     assert V.View().overlays == ("tongues", "no_sliding")
+
+
+def test_figures_borders_option_draws_the_exact_borders(tmp_path, monkeypatch):
+    from stairbounce import figures as F
+
+    figs = {}
+    real = F._save
+
+    def keep(fig, settings, name):
+        figs[name] = fig
+        return real(fig, settings, name)
+
+    monkeypatch.setattr(F, "_save", keep)
+    settings = F.Settings(out=tmp_path, scale=0.1, dpi=30, borders=True)
+    (res,) = F.make_figures(settings, only=["fig5e"])
+    assert res.error is None and "located to rounding" in res.caption
+    labels = [c.get_label() for c in figs["fig5e"].axes[0].collections]
+    assert any(label.startswith("chatter (") for label in labels)
+    assert settings.record()["borders"] is True
+    assert "borders" not in F.Settings(out=tmp_path).record()
