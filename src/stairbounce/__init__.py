@@ -74,6 +74,7 @@ from .plane import (
     tongue_mask,
 )
 from .plane import scan as _scan_function
+from .borders import bifurcations, border_points, itinerary, word_table
 from .symbolic import Word, parse_word, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import normalized_speed, physical_speed, time_scale
@@ -101,7 +102,9 @@ __all__ = [
     "UncertaintyDimension",
     "Word",
     "__version__",
+    "bifurcations",
     "border_dimension_estimates",
+    "border_points",
     "boundary",
     "box_counts",
     "box_dimension",
@@ -112,6 +115,7 @@ __all__ = [
     "impact_number",
     "impact_times",
     "iterate",
+    "itinerary",
     "k_mean_bound",
     "label_boundary",
     "linear_region",
@@ -157,6 +161,7 @@ __all__ = [
     "uncertain_fraction",
     "uncertainty_dimension",
     "uncertainty_dimension_from_counts",
+    "word_table",
 ]
 
 # heavy submodules, imported on first use (PEP 562)

@@ -1,0 +1,1385 @@
+"""The borders of the (e, u) plane, located to rounding and labelled by their event.
+
+Along a fixed itinerary (the impact numbers ``k_1, k_2, ...`` of the steps from
+the departure at ``(1, 0)``) the state after each step is a smooth closed-form
+function of ``(e, u)`` (Prop. 2.3).  Two neighbouring regions of the plane are
+therefore separated by a piece of a smooth curve on which one event of one step
+``j`` happens exactly at the edge of that step (``T = 1/u``):
+
+- ``graze``: the first contact falls on the edge (``k_j`` changes 0 <-> 1,
+  ``t_1 = T``);
+- ``edge``: the ``(k+1)``-th impact falls on the edge (``k_j`` changes
+  k <-> k+1 with k >= 1, ``t_{k+1} = T``);
+- ``chatter``: the accumulation point of the impacts falls on the edge
+  (``k_j`` changes from finite to sliding, equality in (2.4)).
+
+Every event is measured by a signed time margin, ``T - t_event``: the event
+happens on the step (before or at its edge) exactly when the margin is >= 0, with
+the arithmetic of :func:`stairbounce.model._step` (one source of truth), so the
+margins' signs reproduce the impact numbers.
+
+Nothing here imports matplotlib, Typer or the web stack.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import xarray as xr
+from numba import njit, prange
+
+from . import _validate as _v
+from ._interrupt import halted
+from .model import (
+    _COUNTED_IMPACTS,
+    SLIDING,
+    _constants,
+    _impact_time_log,
+    _step,
+    check_count,
+    check_e,
+    check_state,
+    check_u,
+)
+
+__all__ = ["itinerary", "border_points", "word_table", "bifurcations"]
+
+GRAZE, EDGE, CHATTER = 0, 1, 2
+"""Event codes of the compiled functions (``kind`` argument of :func:`_margin`)."""
+KINDS = ("graze", "edge", "chatter")
+"""Event names, indexed by the codes above."""
+
+# steps per call of the itinerary kernel: memory grows with the steps taken,
+# not with max_iter, and Ctrl-C is seen between blocks
+_BLOCK = 1 << 16
+
+
+# --------------------------------------------------------------------------- #
+# Compiled scalars                                                            #
+# --------------------------------------------------------------------------- #
+
+
+@njit(cache=True)
+def _impact_time_at(v, s, e, index):
+    """Time ``t_index`` of the ``index``-th impact (index >= 1) on a step
+    entered with velocity ``v`` and first impact speed ``s``, as
+    :func:`stairbounce.model._step` computes it: ``t_1 = v + s``, then
+    ``t_{i+1} = t_i + 2 w_i``, ``w_1 = e s``, ``w_{i+1} = e w_i`` up to
+    ``_COUNTED_IMPACTS``; past that, the closed form that
+    :func:`stairbounce.model._step_closed` uses (eq. 2.2)."""
+    if index <= _COUNTED_IMPACTS:
+        t = v + s
+        w = e * s
+        for _ in range(index - 1):
+            t = t + 2.0 * w
+            w *= e
+        return t
+    log_e = math.log(e) if e > 0.0 else -math.inf
+    return _impact_time_log(v, s, e, index, log_e)
+
+
+@njit(cache=True)
+def _event_margin(y, v, e, T, ratio, kind, index):
+    """Signed time margin ``T - t_event`` of one event on a step entered at ``(y, v)``.
+
+    ``kind``: ``GRAZE`` (the first contact ``t_1 = v + s``), ``EDGE`` (the
+    ``index``-th impact, :func:`_impact_time_at`; index 1 is the first
+    contact), ``CHATTER`` (the accumulation point ``t_inf = v + ratio s``,
+    Prop. 2.1).  The event happens on the step exactly when the margin is >= 0:
+    ``_step`` flies over iff ``t_1 > T``, slides iff ``v + ratio s <= T``, and
+    has at least ``i`` impacts iff ``t_i <= T`` (float subtraction keeps the
+    sign of a comparison, so the tests agree bit for bit).
+    """
+    s = math.sqrt(v * v + 2.0 * y)
+    if kind == CHATTER:
+        return T - (v + ratio * s)
+    if kind == GRAZE:
+        return T - (v + s)
+    return T - _impact_time_at(v, s, e, index)
+
+
+@njit(cache=True)
+def _next_margin(y, v, e, T, k):
+    """``T - t_{k+1}``: the margin of the impact after the last one on a step
+    with ``k >= 0`` finite impacts (negative; NaN for a sliding step)."""
+    if k == SLIDING:
+        return math.nan
+    s = math.sqrt(v * v + 2.0 * y)
+    return T - _impact_time_at(v, s, e, k + 1)
+
+
+@njit(cache=True)
+def _itinerary_block(y, v, e, T, ratio, steps, ks, ys, vs, contact, nxt, accum):
+    """Up to ``steps`` steps from ``(y, v)``, stopping after a slide.
+
+    Fills, per step ``n`` (0-based), the entry state ``ys[n], vs[n]``, the
+    margins of the first contact, of the next impact and of the accumulation
+    point, and the impact number ``ks[n]`` of :func:`stairbounce.model._step`.
+    Returns ``(filled, y, v, slid)``.
+    """
+    for n in range(steps):
+        ys[n] = y
+        vs[n] = v
+        contact[n] = _event_margin(y, v, e, T, ratio, GRAZE, 1)
+        accum[n] = _event_margin(y, v, e, T, ratio, CHATTER, 0)
+        yn, vn, k = _step(y, v, e, T, ratio)
+        ks[n] = k
+        nxt[n] = _next_margin(y, v, e, T, k)
+        y, v = yn, vn
+        if k == SLIDING:
+            return n + 1, y, v, True
+    return steps, y, v, False
+
+
+@njit(cache=True)
+def _margin(e, u, j, kind, index, y0, v0, prefix):
+    """Signed margin of event ``kind`` at step ``j`` (1 = the first step from
+    ``(y0, v0)``) as a function of ``(e, u)``: ``F(e, u) = 0`` is the border arc.
+
+    ``kind``: ``GRAZE`` (0), ``EDGE`` (1) with ``index`` the impact (its
+    border separates ``index - 1`` from ``index`` impacts, ``index >= 2``), or
+    ``CHATTER`` (2); see :func:`_event_margin`.  Steps ``1..j-1`` are iterated
+    with :func:`stairbounce.model._step`; ``prefix`` (an int64 array) holds
+    their expected impact numbers: where one differs (the point has left the
+    arc's domain) or a step before ``j`` slides, the result is NaN.  An empty
+    ``prefix`` checks only for slides.  >= 0: the event happens on step ``j``.
+    """
+    T, ratio = _constants(e, u)
+    y, v = y0, v0
+    for i in range(j - 1):
+        y, v, k = _step(y, v, e, T, ratio)
+        if k == SLIDING or (i < prefix.shape[0] and prefix[i] != k):
+            return math.nan
+    return _event_margin(y, v, e, T, ratio, kind, index)
+
+
+# --------------------------------------------------------------------------- #
+# The border kernel                                                           #
+# --------------------------------------------------------------------------- #
+
+
+@njit(cache=True)
+def _impacts_from_rest(e, u, steps, ks):
+    """Impact numbers of the orbit of ``(1, 0)`` into ``ks[:n]``, up to the first
+    slide; returns ``n`` (0 when it does not slide within ``steps`` steps)."""
+    T, ratio = _constants(e, u)
+    y, v = 1.0, 0.0
+    for n in range(steps):
+        y, v, k = _step(y, v, e, T, ratio)
+        ks[n] = k
+        if k == SLIDING:
+            return n + 1
+    return 0
+
+
+@njit(cache=True)
+def _follows(e, u, ref, p):
+    """Whether the orbit of ``(1, 0)`` at ``(e, u)`` has the impact numbers
+    ``ref[:p]`` (the last one ``SLIDING``): the same outcome, word for word.
+    Stops at the first step that differs; returns ``(follows, steps done)``."""
+    T, ratio = _constants(e, u)
+    y, v = 1.0, 0.0
+    for n in range(p):
+        y, v, k = _step(y, v, e, T, ratio)
+        if k != ref[n]:
+            return False, n + 1
+    return True, p
+
+
+@njit(cache=True)
+def _at(x, f, axis):
+    """``(e, u)`` of the point at ``x`` along ``axis`` (0: e varies, 1: u) and
+    ``f`` across it."""
+    if axis == 0:
+        return x, f
+    return f, x
+
+
+@njit(cache=True)
+def _trial(x, f, axis, ref, pc, j, kind, index):
+    """Follow the orbit of ``(1, 0)`` at ``x`` along ``ref[:pc]``.
+
+    Returns ``(follows, dev, kdev, F, G)``: whether all ``pc`` impact numbers
+    are ``ref``'s (the outcome of ``ref``); else ``dev``, the first step that
+    differs, and its impact number ``kdev``.  ``F``: the margin of the event ``(kind, index)`` at step ``j``
+    (NaN when the orbit deviates before step ``j``); ``G``: when the orbit
+    deviates at step ``dev``, the margin there of the event that separates
+    its impact number from ``ref``'s (NaN otherwise).
+    """
+    e, u = _at(x, f, axis)
+    T, ratio = _constants(e, u)
+    y, v = 1.0, 0.0
+    F = math.nan
+    for n in range(pc):
+        if n == j - 1:
+            F = _event_margin(y, v, e, T, ratio, kind, index)
+        yn, vn, k = _step(y, v, e, T, ratio)
+        if k != ref[n]:
+            kd, idx = _event_of(ref[n], k)
+            return False, n + 1, k, F, _event_margin(y, v, e, T, ratio, kd, idx)
+        y, v = yn, vn
+    return True, 0, 0, F, math.nan
+
+
+@njit(cache=True)
+def _event_of(ka, kb):
+    """The event (kind, index) that separates impact numbers ``ka != kb`` of one step."""
+    if ka == SLIDING or kb == SLIDING:
+        return CHATTER, 0
+    if min(ka, kb) == 0:
+        return GRAZE, 1
+    return EDGE, max(ka, kb)
+
+
+@njit(cache=True)
+def _shrink_secant(xc, xo, f, axis, ref, pc):
+    """Shrink the bracket ``[xc, xo]`` (``xc`` has the outcome ``ref``, ``xo``
+    another one) to adjacent floats.
+
+    Every trial point is decided by the exact outcome test, as in bisection;
+    only its place differs: where the first step ``j`` at which ``xo``
+    deviates from ``ref`` and its event are known at both ends, the trial is
+    the secant root of the event's margin (Illinois: the margin of an end kept
+    twice is halved), a bisection otherwise, and whenever two trials in a row
+    shrank the bracket by less than half.  The margin is smooth along the
+    bracket while the two ends share their first ``j - 1`` impact numbers, so
+    this converges superlinearly; the bisection steps bound the work by about
+    twice plain bisection.
+    """
+    _, j, ko, _, Fo = _trial(xo, f, axis, ref, pc, 0, 0, 0)
+    kind, index = _event_of(ref[j - 1], ko)
+    Fc = _trial(xc, f, axis, ref, pc, j, kind, index)[3]
+    trials = 2
+    steps = j + pc
+    slow = 0
+    last = 0  # which end moved last: 1 c, -1 o
+    while True:
+        width = abs(xo - xc)
+        m = 0.5 * (xc + xo)
+        if m == xc or m == xo:
+            break
+        if slow < 2 and math.isfinite(Fc) and math.isfinite(Fo) and Fc != Fo and (Fc >= 0.0) != (Fo >= 0.0):
+            s = xc - Fc * (xo - xc) / (Fo - Fc)
+            if min(xc, xo) < s < max(xc, xo):
+                m = s
+        follows, dev, kdev, F, G = _trial(m, f, axis, ref, pc, j, kind, index)
+        trials += 1
+        steps += pc if follows else dev
+        if follows:
+            xc, Fc = m, F
+            if last == 1:
+                Fo *= 0.5
+            last = 1
+        else:
+            xo = m
+            if dev == j:
+                Fo = F
+            else:  # a border of an earlier step: its event, at both ends
+                j = dev
+                kind, index = _event_of(ref[j - 1], kdev)
+                Fo = G
+                Fc = _trial(xc, f, axis, ref, pc, j, kind, index)[3]
+                trials += 1
+                steps += pc
+            if last == -1:
+                Fc *= 0.5
+            last = -1
+        slow = slow + 1 if abs(xo - xc) > 0.5 * width else 0
+    return xc, xo, trials, steps
+
+
+@njit(cache=True)
+def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt, secant):
+    """One pair of neighbouring pixels at ``xa``, ``xb`` along ``axis`` (the
+    other coordinate ``f``), with the periods ``pa``, ``pb`` of their words
+    (0: no slide within max_iter).
+
+    Returns False when the two have the same outcome.  Otherwise bisects to
+    adjacent floats and writes into ``out`` (float64[11]): the low end of the
+    bracket, its width, the step j, the kind code, the event index, the impact
+    numbers at step j on the low and high side, the period of the low and high
+    side (0: none within max_iter), and for the benchmarks the outcome tests
+    (trial points) and the map steps they took.
+
+    The reference end ``c`` is a sliding one (the shorter period): a point has
+    its outcome exactly when its first ``p_c`` impact numbers are ``c``'s, so
+    every bisection step costs at most ``p_c`` map steps; the other end keeps
+    a different outcome.  The bracket ``[c, o]`` always has different outcomes
+    at its ends, so it ends on a border.  ``secant``: the trial points are
+    placed by :func:`_shrink_secant` (same invariant, fewer steps); otherwise
+    at the midpoints (plain bisection).
+    """
+    if pa == 0 and pb == 0:
+        return False
+    if pa != 0 and (pb == 0 or pa <= pb):
+        xc, xo, pc = xa, xb, pa
+    else:
+        xc, xo, pc = xb, xa, pb
+    ec, uc = _at(xc, f, axis)
+    _impacts_from_rest(ec, uc, pc, ref)
+    eo, uo = _at(xo, f, axis)
+    if pa != 0 and pb != 0 and pa == pb and _follows(eo, uo, ref, pc)[0]:
+        return False
+    if secant:
+        xc, xo, trials, steps = _shrink_secant(xc, xo, f, axis, ref, pc)
+    else:
+        trials = steps = 0
+        while True:
+            m = 0.5 * (xc + xo)
+            if m == xc or m == xo:
+                break
+            em, um = _at(m, f, axis)
+            follows, n = _follows(em, um, ref, pc)
+            trials += 1
+            steps += n
+            if follows:
+                xc = m
+            else:
+                xo = m
+    j, kc, ko, yo, vo = _first_difference(xc, xo, f, axis, pc)
+    # the other end's outcome: its period, or 0 when it does not slide within max_iter
+    po = 0
+    if ko == SLIDING:
+        po = j
+    else:
+        eo, uo = _at(xo, f, axis)
+        To, ro = _constants(eo, uo)
+        for n in range(j, max_iter):
+            if (n & 0xFFFF) == 0 and halted(halt):  # Ctrl-C on a long max_iter
+                break
+            yo, vo, k = _step(yo, vo, eo, To, ro)
+            if k == SLIDING:
+                po = n + 1
+                break
+    _write_point(out, xc, xo, j, kc, ko, pc, po, trials, steps)
+    return True
+
+
+@njit(cache=True)
+def _first_difference(xc, xo, f, axis, pc):
+    """Follow the orbits of ``(1, 0)`` at both ends (``xc`` slides at step
+    ``pc``, ``xo`` has another outcome) to the first step ``j`` whose impact
+    numbers ``kc``, ``ko`` differ; returns ``(j, kc, ko, y, v)`` with the
+    state of ``xo`` after step ``j``."""
+    ec, uc = _at(xc, f, axis)
+    eo, uo = _at(xo, f, axis)
+    Tc, rc = _constants(ec, uc)
+    To, ro = _constants(eo, uo)
+    yc, vc, yo, vo = 1.0, 0.0, 1.0, 0.0
+    kc = ko = 0
+    for n in range(pc):
+        yc, vc, kc = _step(yc, vc, ec, Tc, rc)
+        yo, vo, ko = _step(yo, vo, eo, To, ro)
+        if kc != ko:
+            return n + 1, kc, ko, yo, vo
+    return 0, kc, ko, yo, vo
+
+
+@njit(cache=True)
+def _write_point(out, xc, xo, j, kc, ko, pc, po, trials, steps):
+    """One row of the border kernels (layout in :func:`_bisect_pair`), the
+    sides ordered low/high along the axis."""
+    kind, index = _event_of(kc, ko)
+    low_is_c = xc < xo
+    out[0] = min(xc, xo)
+    out[1] = abs(xo - xc)
+    out[2] = j
+    out[3] = kind
+    out[4] = index
+    out[5] = kc if low_is_c else ko
+    out[6] = ko if low_is_c else kc
+    out[7] = pc if low_is_c else po
+    out[8] = po if low_is_c else pc
+    out[9] = trials
+    out[10] = steps
+
+
+_OUT = 11
+
+# what a kernel call locates: word borders (trial points at the secant root, or
+# plain midpoints), or the border of the sliding region (midpoints)
+_WORD, _WORD_BISECT, _SLIDING = 0, 1, 2
+
+
+@njit(cache=True)
+def _slide_period(e, u, max_iter, halt):
+    """The period of the orbit of ``(1, 0)`` (steps up to and including its
+    slide), 0 when it does not slide within ``max_iter`` steps (or once
+    ``halt[0]`` is set, read every 2**16 steps)."""
+    T, ratio = _constants(e, u)
+    y, v = 1.0, 0.0
+    for n in range(max_iter):
+        if (n & 0xFFFF) == 0xFFFF and halted(halt):
+            return 0
+        y, v, k = _step(y, v, e, T, ratio)
+        if k == SLIDING:
+            return n + 1
+    return 0
+
+
+@njit(cache=True)
+def _bisect_sliding_pair(xa, xb, f, axis, pa, pb, max_iter, out, halt):
+    """A pair of pixels of which exactly one slides within ``max_iter``:
+    bisected with the outcome "slides within max_iter" (not the word), so it
+    ends on the border of the sliding region.  Writes ``out`` as
+    :func:`_bisect_pair` does; returns False for any other pair."""
+    if (pa == 0) == (pb == 0):
+        return False
+    if pa != 0:
+        xc, xo, pc = xa, xb, pa
+    else:
+        xc, xo, pc = xb, xa, pb
+    trials = steps = 0
+    while True:
+        m = 0.5 * (xc + xo)
+        if m == xc or m == xo:
+            break
+        em, um = _at(m, f, axis)
+        pm = _slide_period(em, um, max_iter, halt)
+        trials += 1
+        steps += pm if pm else max_iter
+        if pm:
+            xc, pc = m, pm
+        else:
+            xo = m
+    j, kc, ko, _, _ = _first_difference(xc, xo, f, axis, pc)
+    _write_point(out, xc, xo, j, kc, ko, pc, 0, trials, steps)
+    return True
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _border_kernel(es, us, period, a_idx, b_idx, axis, max_iter, ref_len, method, found, out, halt):
+    """Pairs ``(a_idx[p], b_idx[p])`` of 4-neighbouring pixels (flat row-major
+    indices of the ``n_u x n_e`` grid ``us x es``; ``axis[p]`` 0 along e, 1 along
+    u), each bisected by :func:`_bisect_pair` (``method`` ``_WORD`` or
+    ``_WORD_BISECT``) or :func:`_bisect_sliding_pair` (``_SLIDING``) into
+    ``out[p]``; ``found[p]`` says whether the outcomes differ.  Pairs are independent: the answers do not
+    depend on the thread count or on which pairs are computed together.  Returns
+    early once ``halt[0]`` is set (the outputs are then incomplete)."""
+    ne = es.shape[0]
+    npair = a_idx.shape[0]
+    for p in prange(npair):
+        if halted(halt):
+            continue
+        a = a_idx[p]
+        b = b_idx[p]
+        if axis[p] == 0:
+            xa, xb, f = es[a % ne], es[b % ne], us[a // ne]
+        else:
+            xa, xb, f = us[a // ne], us[b // ne], es[a % ne]
+        if method == _SLIDING:
+            found[p] = _bisect_sliding_pair(xa, xb, f, axis[p], period[a], period[b], max_iter,
+                                            out[p], halt)
+        else:
+            ref = np.empty(ref_len, np.int64)
+            found[p] = _bisect_pair(xa, xb, f, axis[p], period[a], period[b], max_iter, ref,
+                                    out[p], halt, method == _WORD)
+
+
+# --------------------------------------------------------------------------- #
+# Public API                                                                  #
+# --------------------------------------------------------------------------- #
+
+
+def _check_max_iter(max_iter):
+    max_iter = check_count("max_iter", max_iter, 1)
+    if max_iter > 2**31 - 1:
+        raise ValueError(f"max_iter must be an integer in [1, 2**31 - 1], got {max_iter}")
+    return max_iter
+
+
+def itinerary(e, u, max_iter=1000, y0=1.0, v0=0.0):
+    """itinerary(e, u, max_iter=1000, y0=1.0, v0=0.0) -> xarray.Dataset
+
+    The impact numbers of the steps from ``(y0, v0)`` up to the first slide,
+    with the signed time margins of the three events that can change them.
+
+    Iterates :func:`stairbounce.model._step` (Prop. 2.3) until a step slides
+    (that step included) or ``max_iter`` steps.  At every step, entered at
+    ``(y, v)`` with ``T = 1/u`` and ``s = sqrt(v^2 + 2y)``, three margins
+    ``T - t`` (time units; >= 0: the event happens on this step, at or before
+    its edge; < 0: after it):
+
+    - ``contact``: the first contact, ``t_1 = v + s``. The step has an impact
+      (``impacts != 0``) iff ``contact >= 0``; where it crosses 0 a *graze*
+      border.
+    - ``next_impact``: the impact after the last one, ``t_{k+1}`` (eq. 2.2,
+      as ``_step`` sums it); always < 0 on a step with ``k`` finite impacts
+      (it equals ``contact`` when ``k = 0``), NaN on the sliding step; where
+      it crosses 0 an *edge* border.
+    - ``accumulation``: the accumulation point, ``t_inf = v + (1+e)/(1-e) s``
+      (Prop. 2.1); the step slides (``impacts == SLIDING``) iff
+      ``accumulation >= 0`` (test (2.4)); where it crosses 0 a *chatter*
+      border.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``step`` (coordinate 1, 2, ...: 1 is the first step after
+        the start). Variables ``impacts`` (int64: 0, k >= 1 or ``SLIDING``),
+        ``y``, ``v`` (the state entering the step), ``contact``,
+        ``next_impact``, ``accumulation`` (float64 margins).  Attributes:
+        ``e``, ``u``, ``max_iter``, ``y0``, ``v0`` and ``slid`` (1 when the
+        last step slides, 0 when ``max_iter`` steps passed without a slide).
+
+    Raises
+    ------
+    ValueError
+        A parameter out of its range (naming it).
+    """
+    e = check_e(e)
+    u = check_u(u)
+    max_iter = _check_max_iter(max_iter)
+    y0, v0 = check_state(y0, v0, "y0", "v0")
+    T, ratio = _constants(e, u)
+    names = ("impacts", "y", "v", "contact", "next_impact", "accumulation")
+    parts = {k: [] for k in names}
+    y, v, left, slid = y0, v0, max_iter, False
+    while left > 0 and not slid:
+        m = min(left, _BLOCK)
+        _v.check_memory(f"an itinerary of {max_iter - left + m} steps", 48 * (max_iter - left + m))
+        block = {k: np.empty(m, dtype=np.int64 if k == "impacts" else np.float64) for k in names}
+        n, y, v, slid = _itinerary_block(y, v, e, T, ratio, m, *(block[k] for k in names))
+        for k in names:
+            parts[k].append(block[k][:n])
+        left -= n
+    data = {k: np.concatenate(parts[k]) for k in names}
+    steps = np.arange(1, data["impacts"].size + 1, dtype=np.int64)
+    desc = {
+        "impacts": "impact number of the step (0 flies over, k >= 1, -1 = SLIDING)",
+        "y": "height above the step's floor entering the step",
+        "v": "vertical velocity entering the step",
+        "contact": "T - t_1: margin of the first contact (>= 0: the step has an impact)",
+        "next_impact": "T - t_(k+1): margin of the impact after the last one (< 0; NaN when sliding)",
+        "accumulation": "T - t_inf: margin of the accumulation point (>= 0: the step slides)",
+    }
+    ds = xr.Dataset(
+        {k: (("step",), data[k], {"long_name": desc[k]}) for k in names},
+        coords={"step": ("step", steps, {"long_name": "step (1 = the first after the start)"})},
+        attrs={"e": e, "u": u, "max_iter": max_iter, "y0": y0, "v0": v0, "slid": int(slid),
+               "margins": "T - t_event in time units; >= 0: the event happens on the step"},
+    )
+    return ds
+
+
+NONE_WORD = "none within max_iter"
+"""The word given to a side whose orbit of ``(1, 0)`` does not slide within max_iter steps."""
+
+_CONVENTION = (
+    "one point per pair of 4-neighbouring pixel centres whose outcomes differ (the outcome is "
+    "the whole word of the periodic sliding solution through (1, 0), or 'none within max_iter'), "
+    "bisected along the pair's axis until the bracket [x, x + width] has no float inside; "
+    "e, u: the low end of the bracket (the other coordinate is the pixels' own); low/high: the "
+    "sides of smaller/larger coordinate along the axis; step: the first step (1 = the first after "
+    "the departure at (1, 0)) whose impact numbers differ on the two sides; kind: graze (0 <-> 1 "
+    "impacts, first contact t_1 = T), edge (k <-> k+1 impacts, k >= 1, t_index = T), chatter "
+    "(finite <-> sliding, accumulation point t_inf = T); sliding_border: one side does not "
+    "slide within max_iter (the border of the sliding region)"
+)
+
+
+def _grid_input(data):
+    """Coordinates, status and period of a scan Dataset, checked."""
+    for name in ("status", "period"):
+        if name not in getattr(data, "data_vars", {}):
+            raise ValueError(f"data must be a scan Dataset with a {name!r} variable (sb.scan)")
+    if data.status.dims != ("u", "e"):
+        raise ValueError(f"data must be a scan Dataset with dims ('u', 'e'), got {data.status.dims}")
+    from .plane import _coords
+
+    es = _coords("e", data.e.values)
+    us = _coords("u", data.u.values)
+    status = np.asarray(data.status.values)
+    if not np.all((status == 0) | (status == 1)):
+        raise ValueError("data has pixels that are not computed (status not 0 or 1): a missing tile?")
+    y0, v0 = data.attrs.get("y0", 1.0), data.attrs.get("v0", 0.0)
+    if y0 != 1.0 or v0 != 0.0:
+        raise ValueError(f"data must be a scan from (y0, v0) = (1, 0), got ({y0}, {v0})")
+    if "max_iter" not in data.attrs:
+        raise ValueError("data must carry its max_iter attribute (a Dataset made by sb.scan)")
+    max_iter = _check_max_iter(int(data.attrs["max_iter"]))
+    period = np.where(status == 0, np.asarray(data.period.values), 0).astype(np.int64)
+    return es, us, period.ravel(), max_iter
+
+
+def _pairs(period, n_u, n_e, sliding=False):
+    """Flat indices ``(a, b)`` and axis of the 4-neighbour pairs where at least
+    one pixel slides (``sliding``: exactly one), in the order of ``a`` then
+    axis (e before u)."""
+    idx = np.arange(n_u * n_e, dtype=np.int64).reshape(n_u, n_e)
+    s = period.reshape(n_u, n_e) != 0
+    if sliding:
+        ah = idx[:, :-1][s[:, :-1] != s[:, 1:]]
+        av = idx[:-1, :][s[:-1, :] != s[1:, :]]
+    else:
+        ah = idx[:, :-1][s[:, :-1] | s[:, 1:]]
+        av = idx[:-1, :][s[:-1, :] | s[1:, :]]
+    a = np.concatenate([ah, av])
+    axis = np.concatenate([np.zeros(ah.size, np.int64), np.ones(av.size, np.int64)])
+    order = np.argsort(2 * a + axis, kind="stable")
+    a, axis = a[order], axis[order]
+    b = np.where(axis == 0, a + 1, a + n_e)
+    return a, b, axis
+
+
+def _run_pairs(es, us, period, a, b, axis, max_iter, progress, secant=True, sliding=False):
+    """:func:`_border_kernel` over the pairs, in blocks (progress, Ctrl-C)."""
+    from ._interrupt import run_kernel
+
+    n = a.size
+    found = np.zeros(n, np.bool_)
+    out = np.zeros((n, _OUT))
+    ref_len = int(max(period.max(initial=0), 1))
+    method = _SLIDING if sliding else (_WORD if secant else _WORD_BISECT)
+    block = max(1, -(-n // 50)) if progress is not None else max(n, 1)
+    if progress is not None:
+        progress(0, n)
+    for s in range(0, n, block):
+        sl = slice(s, min(s + block, n))
+        run_kernel(_border_kernel, es, us, period, a[sl], b[sl], axis[sl], max_iter, ref_len,
+                   method, found[sl], out[sl])
+        if progress is not None:
+            progress(sl.stop, n)
+    return found, out
+
+
+@njit(cache=True, parallel=True)
+def _fill_impacts(e, u, periods, offsets, flat):
+    """Impact numbers of the orbit of ``(1, 0)`` at each ``(e[i], u[i])`` into
+    ``flat[offsets[i]:offsets[i] + periods[i]]`` (sides that slide only)."""
+    for i in prange(e.shape[0]):
+        p = periods[i]
+        if p > 0:
+            _impacts_from_rest(e[i], u[i], p, flat[offsets[i]:offsets[i] + p])
+
+
+def _word_text(ks):
+    """ASCII text of the word of one period from its impact numbers (the last
+    ``SLIDING``): the text of ``symbolic.word_from_impacts(ks).format(ascii=True)``
+    (a test compares them) without validating every letter again."""
+    letters = []
+    jump = 0
+    for k in ks.tolist():
+        jump += 1
+        if k == 0:
+            continue
+        letters.append(str(jump))
+        jump = 0
+        if k > 1:
+            letters.extend(["0"] * (k - 1))
+    return "(" + ", ".join(letters) + ", 0^inf)"
+
+
+def _word_groups(e, u, periods):
+    """The distinct words of the orbits of ``(1, 0)`` at ``(e[i], u[i])``.
+
+    ``periods[i]``: the period of the word there (0: no slide, id -1).
+    Returns ``(ids, rows)``: ``rows[ids[i]]`` is the impact numbers of point
+    i's period.  All impact numbers are computed in one parallel pass and
+    grouped by a hash; every row is then compared whole with its group's
+    first row (exact: on a collision the rows are grouped by comparing them
+    whole, period by period)."""
+    periods = np.asarray(periods, np.int64)
+    ids = np.full(e.size, -1, np.int64)
+    offsets = np.concatenate([[0], np.cumsum(periods)]).astype(np.int64)
+    _v.check_memory(f"the words of {e.size} points", 8 * int(offsets[-1]))
+    flat = np.empty(int(offsets[-1]), np.int64)
+    _fill_impacts(np.ascontiguousarray(e, np.float64), np.ascontiguousarray(u, np.float64),
+                  periods, offsets, flat)
+    hashes = np.empty(e.size, np.uint64)
+    _hash_rows(periods, offsets, flat, hashes)
+    sl = np.flatnonzero(periods > 0)
+    keys, first, inverse = np.unique(hashes[sl], return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    rep = sl[first]
+    if _rows_equal(periods, offsets, flat, sl, rep[inverse]):
+        ids[sl] = inverse
+        rows = [flat[offsets[r]:offsets[r] + periods[r]] for r in rep]
+        return ids, rows
+    # a hash collision (never seen): compare whole rows, period by period
+    rows = []
+    for p in np.unique(periods[periods > 0]):
+        where = np.flatnonzero(periods == p)
+        block = flat[offsets[where][:, None] + np.arange(p)]
+        distinct, inverse = np.unique(block, axis=0, return_inverse=True)
+        ids[where] = len(rows) + inverse.ravel()
+        rows.extend(distinct)
+    return ids, rows
+
+
+@njit(cache=True, parallel=True)
+def _hash_rows(periods, offsets, flat, out):
+    """A 64-bit FNV-1a hash of each row ``flat[offsets[i]:offsets[i] + periods[i]]``."""
+    for i in prange(periods.shape[0]):
+        h = np.uint64(14695981039346656037)
+        for n in range(offsets[i], offsets[i] + periods[i]):
+            h = (h ^ np.uint64(flat[n] & 0xFFFFFFFFFFFF)) * np.uint64(1099511628211)
+        out[i] = h ^ np.uint64(periods[i])
+
+
+@njit(cache=True)
+def _rows_equal(periods, offsets, flat, rows, reps):
+    """Whether each row ``rows[i]`` equals the row ``reps[i]``, element by element."""
+    for i in range(rows.shape[0]):
+        a, b = rows[i], reps[i]
+        if periods[a] != periods[b]:
+            return False
+        for n in range(periods[a]):
+            if flat[offsets[a] + n] != flat[offsets[b] + n]:
+                return False
+    return True
+
+
+def _words(e, u, periods):
+    """Word text of each point: ASCII ``(2, 0, 1, 0^inf)`` or :data:`NONE_WORD`."""
+    ids, rows = _word_groups(e, u, periods)
+    names = np.array([_word_text(r) for r in rows] + [NONE_WORD], dtype=object)
+    return names[ids]  # id -1: the last name
+
+
+def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, outcome="word",
+                  progress=None):
+    """border_points(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, *, outcome="word", progress=None) -> xarray.Dataset
+
+    Every border between neighbouring pixels of a scan, located to rounding and
+    labelled by the event that makes it.
+
+    The window is that of :func:`stairbounce.scan` (the same pixel centres), or
+    pass a scan Dataset as the first argument (``sb.border_points(ds)``; a tile
+    cut out of a whole scan gives the same points as the whole scan on its
+    pairs).  For every pair of 4-neighbouring pixel centres whose outcomes
+    differ (the outcome is the whole word; "no slide within max_iter" is one
+    outcome, so two pixels that never slide have no border between them) the
+    segment between them is bisected until no float lies inside the bracket.
+    At the end the two sides' itineraries (:func:`stairbounce.model._step`
+    from ``(1, 0)``) agree up to a step ``j - 1`` and differ at step ``j`` by
+    one event at the step's edge ``T = 1/u``:
+
+    - ``"graze"``: the first contact (0 <-> 1 impacts on step j);
+    - ``"edge"``: the ``index``-th impact (``index - 1`` <-> ``index``, index >= 2;
+      where the bounces are shorter than the rounding of ``T``, as for small
+      ``e`` after a few impacts, several impacts reach the edge within one ulp
+      and the impact number jumps by more than one, up to ``index``);
+    - ``"chatter"``: the accumulation point (finite <-> sliding on step j).
+
+    ``outcome="sliding"`` takes "slides within max_iter" as the outcome
+    instead of the word: only the pairs of which one pixel slides and the
+    other does not are bisected, and every point lies on the border of the
+    sliding region (between some word and "none within max_iter"), one per
+    crossing.  With the word as the outcome such a pair may end on the border
+    of another word met on the way (the sliding region's border is made of
+    many words' borders).
+
+    Kernel: pairs in parallel (numba ``prange``), each independent of the
+    others, so the thread count and the tiling change no bit.  Each trial
+    point is decided exactly (its whole word against the sliding end's, which
+    follows the orbit at most that word's period); it is placed at the root
+    of the secant through the two ends' margins of the event that separates
+    them (the margins of :func:`itinerary`; a bisection step whenever that
+    does not shrink the bracket by half), about 24 trial points per border
+    point on the paper's grid instead of 46.  ``outcome="sliding"`` bisects
+    at midpoints, a trial on the non-sliding side costing max_iter steps.
+
+    Parameters
+    ----------
+    e, u : as in :func:`stairbounce.scan`, or ``e`` a scan Dataset (from
+        ``(y0, v0) = (1, 0)``, its ``max_iter`` attribute used; ``u`` and
+        ``max_iter`` are then ignored).
+    max_iter : int >= 1, default 1000
+    outcome : "word" (default) or "sliding"
+        What two sides must differ in: the word, or whether they slide.
+    progress : callable ``progress(done, total)``, optional
+        Called for the scan's rows (as :func:`stairbounce.scan` does) and
+        then for the pairs, in about 50 blocks each.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``point``, one per border crossing, in the order of the
+        pairs' first pixel (row-major) then axis.  Variables: ``e``, ``u``
+        (the low end of the final bracket along ``axis``), ``width`` (the
+        bracket, about an ulp), ``axis`` (``"e"`` or ``"u"``: the coordinate
+        bisected), ``kind``, ``step`` (j), ``index`` (the impact whose time
+        equals T: 1 for graze, k + 1 for edge, 0 for chatter),
+        ``impacts_low``, ``impacts_high`` (the impact numbers at step j on the
+        sides of smaller and larger coordinate), ``word_low``, ``word_high``
+        (ASCII words, or ``"none within max_iter"``), ``sliding_border``
+        (one side of the point does not slide within max_iter: the point is
+        on the border of the sliding region), ``sliding_pair`` (one pixel of
+        the pair slides, the other does not: the pair crosses that border),
+        ``i_e``, ``i_u`` (the pixel of the pair with the smaller indices).  ``.to_dataframe()``
+        gives the table as pandas.
+
+    Raises
+    ------
+    ValueError
+        A window, size or max_iter out of range (naming it), a Dataset that
+        is not a complete scan from (1, 0).
+    """
+    from . import plane
+
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
+    _v.among("outcome", (outcome,), ("word", "sliding"))
+    sliding = outcome == "sliding"
+    if isinstance(e, xr.Dataset):
+        es, us, period, max_iter = _grid_input(e)
+        attrs = {k: e.attrs[k] for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u") if k in e.attrs}
+    else:
+        e_min, e_max, n_e = plane._window("e", e, 0.0, 1.0, "[0, 1]")
+        u_min, u_max, n_u = plane._window("u", u, 0.0, math.inf, "[0, inf)")
+        max_iter = _check_max_iter(max_iter)
+        ds = plane.scan(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=max_iter,
+                        progress=progress)
+        es, us, period, _ = _grid_input(ds)
+        attrs = dict(e_min=e_min, e_max=e_max, n_e=n_e, u_min=u_min, u_max=u_max, n_u=n_u)
+    n_e, n_u = es.size, us.size
+    a, b, axis = _pairs(period, n_u, n_e, sliding)
+    found, out = _run_pairs(es, us, period, a, b, axis, max_iter, progress, sliding=sliding)
+    pair = (period[a[found]] == 0) != (period[b[found]] == 0)
+    return _table(es, us, a[found], axis[found], out[found], max_iter,
+                  {**attrs, "outcome": outcome}, pair)
+
+
+def _table(es, us, a, axis, out, max_iter, attrs, pair=None):
+    """The labelled Dataset of :func:`border_points` from the kernel's rows."""
+    n_e = es.size
+    i_e, i_u = a % n_e, a // n_e
+    along_e = axis == 0
+    x = out[:, 0]
+    e = np.where(along_e, x, es[i_e])
+    u = np.where(along_e, us[i_u], x)
+    width = out[:, 1]
+    e_high = np.where(along_e, x + width, e)
+    u_high = np.where(along_e, u, x + width)
+    kinds = np.array(KINDS, dtype=object)[out[:, 3].astype(np.int64)]
+    p_low = out[:, 7].astype(np.int64)
+    p_high = out[:, 8].astype(np.int64)
+    dim = ("point",)
+    data = {
+        "e": (dim, e, {"long_name": "restitution coefficient e of the bracket's low end"}),
+        "u": (dim, u, {"long_name": "horizontal speed u of the bracket's low end"}),
+        "width": (dim, width, {"long_name": "width of the final bracket along axis"}),
+        "axis": (dim, np.where(along_e, "e", "u").astype(object), {"long_name": "coordinate bisected"}),
+        "kind": (dim, kinds, {"long_name": "event at the edge: graze, edge or chatter"}),
+        "step": (dim, out[:, 2].astype(np.int64), {"long_name": "step j where the itineraries first differ"}),
+        "index": (dim, out[:, 4].astype(np.int64),
+                  {"long_name": "impact whose time equals T (1 graze, k+1 edge, 0 chatter)"}),
+        "impacts_low": (dim, out[:, 5].astype(np.int64), {"long_name": "impact number at step j, low side"}),
+        "impacts_high": (dim, out[:, 6].astype(np.int64), {"long_name": "impact number at step j, high side"}),
+        "word_low": (dim, _words(e, u, p_low), {"long_name": "word on the low side"}),
+        "word_high": (dim, _words(e_high, u_high, p_high), {"long_name": "word on the high side"}),
+        "sliding_border": (dim, (p_low == 0) | (p_high == 0),
+                           {"long_name": "one side does not slide within max_iter"}),
+        "sliding_pair": (dim, np.zeros(x.size, bool) if pair is None else pair,
+                         {"long_name": "one pixel of the pair slides within max_iter, the other not"}),
+        "i_e": (dim, i_e, {"long_name": "e index of the pair's first pixel"}),
+        "i_u": (dim, i_u, {"long_name": "u index of the pair's first pixel"}),
+    }
+    return xr.Dataset(data, attrs={"title": "borders of the (e, u) plane to rounding",
+                                   "max_iter": max_iter, "convention": _CONVENTION, **attrs})
+
+
+def _scan_input(e, u, max_iter, progress):
+    """A scan Dataset from window arguments (as :func:`stairbounce.scan`) or the
+    Dataset itself, with the window attributes to carry on."""
+    from . import plane
+
+    if isinstance(e, xr.Dataset):
+        _grid_input(e)  # checked here, once
+        return e
+    e_min, e_max, n_e = plane._window("e", e, 0.0, 1.0, "[0, 1]")
+    u_min, u_max, n_u = plane._window("u", u, 0.0, math.inf, "[0, inf)")
+    max_iter = _check_max_iter(max_iter)
+    return plane.scan(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=max_iter,
+                      progress=progress)
+
+
+def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=None, progress=None):
+    """word_table(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, *, points=None, progress=None) -> xarray.Dataset
+
+    The distinct words of the periodic sliding solutions in a window, one row each,
+    and the number of distinct words by period, N(p).
+
+    Every pixel centre of the window (as :func:`stairbounce.scan`; or pass a
+    scan Dataset as ``e``) gets the whole word of its periodic sliding
+    solution (not only its length).  The border points (:func:`border_points`
+    of the same pixels, or ``points`` when given) are counted per word on
+    either side, by kind.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``word`` (most pixels first, then by text): ``text`` (ASCII,
+        ``(2, 0, 1, 0^inf)``), ``letters`` (number of letters = word length),
+        ``period`` (steps per period = sum of the letters), ``impacts``
+        (finite impacts per period), ``pixels``, ``area_fraction`` (of all the
+        window's pixels), ``e_rep``, ``u_rep`` (a pixel centre of the word, the
+        nearest to the centroid of its pixels), ``e_min``, ``e_max``,
+        ``u_min``, ``u_max`` (the bounding box of its pixel centres),
+        ``graze``, ``edge``, ``chatter`` (its border points by kind).
+        Dimension ``p`` (the periods present): ``distinct_words`` = N(p).
+        Attributes: ``pixels`` (all), ``sliding_pixels``, ``max_iter`` and the
+        window.
+
+    Raises
+    ------
+    ValueError
+        As :func:`border_points`.
+    """
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
+    ds = _scan_input(e, u, max_iter, progress)
+    es, us, period, max_iter = _grid_input(ds)
+    if points is None:
+        points = border_points(ds, progress=progress)
+    elif not (isinstance(points, xr.Dataset) and "kind" in points and "word_low" in points):
+        raise ValueError("points must be a Dataset from border_points")
+    E, U = np.meshgrid(es, us)
+    E, U = E.ravel(), U.ravel()
+    ids, rows = _word_groups(E, U, period)
+    nw = len(rows)
+    texts = [_word_text(r) for r in rows]
+    sliding = ids >= 0
+    idx = ids[sliding]
+    pix = np.bincount(idx, minlength=nw)
+    Es, Us = E[sliding], U[sliding]
+
+    def per_word(values, fn):
+        out = np.full(nw, np.nan)
+        order = np.argsort(idx, kind="stable")
+        starts = np.concatenate([[0], np.cumsum(pix)])
+        sv = values[order]
+        for w in range(nw):
+            out[w] = fn(sv[starts[w]:starts[w + 1]])
+        return out, order, starts
+
+    e_min, order, starts = per_word(Es, np.min)
+    e_max = per_word(Es, np.max)[0]
+    u_min = per_word(Us, np.min)[0]
+    u_max = per_word(Us, np.max)[0]
+    ce = np.bincount(idx, Es, minlength=nw) / np.maximum(pix, 1)
+    cu = np.bincount(idx, Us, minlength=nw) / np.maximum(pix, 1)
+    # a pixel of the word nearest its centroid, in units of the window's pixels
+    de = (es[-1] - es[0]) / max(es.size - 1, 1) or 1.0
+    du = (us[-1] - us[0]) / max(us.size - 1, 1) or 1.0
+    e_rep = np.empty(nw)
+    u_rep = np.empty(nw)
+    for w in range(nw):
+        sel = order[starts[w]:starts[w + 1]]
+        d = ((Es[sel] - ce[w]) / de) ** 2 + ((Us[sel] - cu[w]) / du) ** 2
+        k = sel[int(np.argmin(d))]
+        e_rep[w], u_rep[w] = Es[k], Us[k]
+    counts = {k: np.zeros(nw, np.int64) for k in KINDS}
+    where = {t: i for i, t in enumerate(texts)}
+    for side in ("word_low", "word_high"):
+        for t, kind in zip(points[side].values, points["kind"].values):
+            w = where.get(t)
+            if w is not None:
+                counts[kind][w] += 1
+    letters = np.array([t.count(",") for t in texts], np.int64)  # "(a, b, 0^inf)": letters + 1 items
+    periods = np.array([int(r.size) for r in rows], np.int64)
+    impacts = np.array([int(np.sum(np.where(r > 0, r, 0))) for r in rows], np.int64)
+    rank = np.lexsort((np.array(texts, dtype=object).astype(str), -pix)) if nw else np.zeros(0, np.int64)
+    dim = ("word",)
+    p_values, n_p = np.unique(periods, return_counts=True)
+    data = {
+        "text": (dim, np.array(texts, dtype=object)[rank], {"long_name": "the word (ASCII)"}),
+        "letters": (dim, letters[rank], {"long_name": "letters (word length, impacts + 1)"}),
+        "period": (dim, periods[rank], {"long_name": "steps per period (sum of the letters)"}),
+        "impacts": (dim, impacts[rank], {"long_name": "finite impacts per period"}),
+        "pixels": (dim, pix[rank], {"long_name": "pixel centres with this word"}),
+        "area_fraction": (dim, pix[rank] / E.size, {"long_name": "share of the window's pixels"}),
+        "e_rep": (dim, e_rep[rank], {"long_name": "e of a representative pixel centre"}),
+        "u_rep": (dim, u_rep[rank], {"long_name": "u of a representative pixel centre"}),
+        "e_min": (dim, e_min[rank], {"long_name": "bounding box of its pixel centres"}),
+        "e_max": (dim, e_max[rank], {"long_name": "bounding box of its pixel centres"}),
+        "u_min": (dim, u_min[rank], {"long_name": "bounding box of its pixel centres"}),
+        "u_max": (dim, u_max[rank], {"long_name": "bounding box of its pixel centres"}),
+        **{k: (dim, counts[k][rank], {"long_name": f"{k} border points with this word on a side"})
+           for k in KINDS},
+        "distinct_words": (("p",), n_p, {"long_name": "N(p): distinct words of period p"}),
+    }
+    attrs = {k: ds.attrs[k] for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u") if k in ds.attrs}
+    return xr.Dataset(data, coords={"p": ("p", p_values, {"long_name": "period (steps)"})},
+                      attrs={"title": "words of the periodic sliding solutions in a window",
+                             "pixels": E.size, "sliding_pixels": int(sliding.sum()),
+                             "max_iter": max_iter, **attrs})
+
+
+# --------------------------------------------------------------------------- #
+# Discontinuity-induced bifurcations along an orbit diagram's parameter       #
+# --------------------------------------------------------------------------- #
+
+
+@njit(cache=True)
+def _long_run(e, u, y0, v0, transient, keep, buf, halt):
+    """The long-run itinerary at ``(e, u)`` from ``(y0, v0)``: the impact numbers
+    of steps ``transient + 1 .. transient + keep`` (the orbit diagram's kept
+    steps) into ``buf[:keep]``, then their period ``P`` (the smallest
+    ``P <= keep // 2`` with ``k[i] = k[i + P]`` over the window; 0: none, the
+    itinerary is not periodic within the window) and, when ``P > 0``, the
+    pattern rotated to its smallest lexicographic rotation in ``buf[:P]``, so
+    that two parameters with the same periodic itinerary give the same
+    ``(P, buf[:P])`` whatever their phase."""
+    T, ratio = _constants(e, u)
+    y, v = y0, v0
+    for n in range(transient):
+        if (n & 0xFFFF) == 0xFFFF and halted(halt):
+            return 0
+        y, v, k = _step(y, v, e, T, ratio)
+    for n in range(keep):
+        y, v, k = _step(y, v, e, T, ratio)
+        buf[n] = k
+    P = 0
+    for p in range(1, keep // 2 + 1):
+        same = True
+        for i in range(keep - p):
+            if buf[i] != buf[i + p]:
+                same = False
+                break
+        if same:
+            P = p
+            break
+    if P == 0:
+        return 0
+    best = 0
+    for r in range(1, P):
+        for i in range(P):
+            a = buf[(r + i) % P]
+            b = buf[(best + i) % P]
+            if a != b:
+                if a < b:
+                    best = r
+                break
+    tmp = buf[keep:keep + P]
+    for i in range(P):
+        tmp[i] = buf[(best + i) % P]
+    for i in range(P):
+        buf[i] = tmp[i]
+    return P
+
+
+@njit(cache=True)
+def _same_run(pa, a, pb, b):
+    """Whether two long-run itineraries ``(P, pattern)`` are the same."""
+    if pa != pb:
+        return False
+    for i in range(pa):
+        if a[i] != b[i]:
+            return False
+    return True
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _long_run_kernel(xs, f, axis, y0, v0, transient, keep, periods, patterns, halt):
+    """:func:`_long_run` at every swept value ``xs[i]`` (the other parameter ``f``)."""
+    for i in prange(xs.shape[0]):
+        if halted(halt):
+            continue
+        e, u = _at(xs[i], f, axis)
+        periods[i] = _long_run(e, u, y0, v0, transient, keep, patterns[i], halt)
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _bifurcation_kernel(xa, xb, pa, pb, f, axis, y0, v0, transient, keep, pat_a, pat_b, out, halt):
+    """Bisect each interval ``[xa[i], xb[i]]`` whose ends have different long-run
+    itineraries (``pa``/``pat_a``, ``pb``/``pat_b``, updated in place to the
+    final low and high ends') to adjacent floats, keeping the itinerary of a
+    periodic end (the shorter period) as the reference, so that the border
+    found is that reference's; ``out[i]``: the low end, the width, the
+    first step from ``(y0, v0)`` where the two ends' impact numbers differ, the
+    event's kind code and index, the impact numbers there (low, high)."""
+    for i in prange(xa.shape[0]):
+        if halted(halt):
+            continue
+        buf = np.empty(2 * keep, np.int64)
+        # the reference end: a periodic one (the shorter period), as in border_points
+        a_ref = pa[i] != 0 and (pb[i] == 0 or pa[i] <= pb[i])
+        xr_, xo = (xa[i], xb[i]) if a_ref else (xb[i], xa[i])
+        pr = pa[i] if a_ref else pb[i]
+        ref = pat_a[i].copy() if a_ref else pat_b[i].copy()
+        po = pb[i] if a_ref else pa[i]
+        pat_o = pat_b[i].copy() if a_ref else pat_a[i].copy()
+        while True:
+            m = 0.5 * (xr_ + xo)
+            if m == xr_ or m == xo:
+                break
+            e, u = _at(m, f, axis)
+            pm = _long_run(e, u, y0, v0, transient, keep, buf, halt)
+            if _same_run(pm, buf, pr, ref):
+                xr_ = m
+            else:
+                xo = m
+                po = pm
+                for n in range(2 * keep):
+                    pat_o[n] = buf[n]
+        lo, hi = min(xr_, xo), max(xr_, xo)
+        low_ref = xr_ < xo
+        pa[i] = pr if low_ref else po
+        pb[i] = po if low_ref else pr
+        for n in range(2 * keep):
+            pat_a[i, n] = ref[n] if low_ref else pat_o[n]
+            pat_b[i, n] = pat_o[n] if low_ref else ref[n]
+        el, ul = _at(lo, f, axis)
+        eh, uh = _at(hi, f, axis)
+        Tl, rl = _constants(el, ul)
+        Th, rh = _constants(eh, uh)
+        yl, vl, yh, vh = y0, v0, y0, v0
+        j = 0
+        kl = kh = 0
+        for n in range(transient + keep):
+            yl, vl, kl = _step(yl, vl, el, Tl, rl)
+            yh, vh, kh = _step(yh, vh, eh, Th, rh)
+            if kl != kh:
+                j = n + 1
+                break
+        kind, index = _event_of(kl, kh)
+        out[i, 0] = lo
+        out[i, 1] = hi - lo
+        out[i, 2] = j
+        out[i, 3] = kind
+        out[i, 4] = index
+        out[i, 5] = kl
+        out[i, 6] = kh
+        out[i, 7] = low_ref
+
+
+def _run_text(p, pattern):
+    """Text of a long-run itinerary: the word of a periodic sliding solution, the
+    impact numbers of one period of a periodic orbit, or "not periodic"."""
+    if p == 0:
+        return "not periodic within keep"
+    ks = np.asarray(pattern[:p])
+    if np.any(ks == SLIDING):
+        # rotate so that the period ends with its slide: the orbit of (1, 0)
+        last = int(np.flatnonzero(ks == SLIDING)[-1])
+        return _word_text(np.roll(ks, p - 1 - last))
+    return "periodic, impacts (" + ", ".join(str(int(k)) for k in ks) + ") per period"
+
+
+# rounds of bisection per interval between two swept values (changes found in one)
+_MAX_ROUNDS = 64
+
+
+def bifurcations(e, u, y0=0.1, v0=0.0, transient=2000, keep=200):
+    """bifurcations(e, u, y0=0.1, v0=0.0, transient=2000, keep=200) -> xarray.Dataset
+
+    The discontinuity-induced bifurcations along an orbit diagram's parameter
+    range, located to rounding and labelled by their event.
+
+    Arguments as :func:`stairbounce.orbit_diagram`: exactly one of ``e``,
+    ``u`` is a 1-D array (the swept values, sorted here), the orbit starts at
+    ``(y0, v0)``, ``transient`` steps are discarded and the next ``keep`` give
+    the long-run itinerary (their impact numbers, as a periodic pattern up to
+    its phase, or "not periodic" when no period ``<= keep/2`` repeats over
+    the window).  Between consecutive swept values whose long-run
+    itineraries differ the parameter is bisected (the outcome: the long-run
+    itinerary; the reference is a periodic end, the shorter period) until no
+    float lies in between; the rest of the interval, beyond the change found,
+    is bisected again while its ends differ (up to 64 changes per interval).  The orbits from ``(y0, v0)``
+    at the two final ends then agree up to a step ``j - 1`` and differ at
+    step ``j`` by one event at the step's edge, labelled as in
+    :func:`border_points`: ``graze`` (the grazing bifurcations of Section 4
+    where new branches of Fig. 8 arise), ``edge`` or ``chatter``.  Changes
+    between two values that both are not periodic are not bisected (chaos
+    has no single itinerary), nor is a cascade whose far end is not periodic
+    beyond its first change; a change that happens and undoes itself between
+    two swept values is not seen.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``bifurcation``; variables: ``value`` (the swept parameter
+        at the low end of the final bracket), ``width``, ``kind``, ``step``
+        (j, from the start, transient included), ``index``,
+        ``impacts_low``, ``impacts_high`` (at step j), ``period_low``,
+        ``period_high`` (steps per period of the long-run itinerary, 0 when
+        not periodic), ``itinerary_low``, ``itinerary_high`` (text: a sliding
+        solution's word, or a periodic orbit's impact numbers per period).
+        Attributes: ``varied``, the fixed parameter, ``y0``, ``v0``,
+        ``transient``, ``keep``.
+
+    Raises
+    ------
+    ValueError
+        As :func:`stairbounce.orbit_diagram`.
+    """
+    from ._interrupt import run_kernel
+    from .orbits import _parameter
+
+    ea, e_swept = _parameter("e", e)
+    ua, u_swept = _parameter("u", u)
+    if e_swept == u_swept:
+        raise ValueError("exactly one of e, u must be a 1-D array (the swept parameter) and the other "
+                         f"a float, got {'two arrays' if e_swept else 'two floats'}")
+    y0, v0 = check_state(y0, v0, "y0", "v0")
+    transient = check_count("transient", transient, 0)
+    keep = check_count("keep", keep, 2, 10**6)
+    varied = "e" if e_swept else "u"
+    xs = np.unique(ea if e_swept else ua)
+    f = float(ua if e_swept else ea)
+    axis = 0 if e_swept else 1
+    _v.check_memory(f"{xs.size} long-run itineraries of {keep} steps", 16 * keep * xs.size)
+    periods = np.zeros(xs.size, np.int64)
+    patterns = np.zeros((xs.size, 2 * keep), np.int64)
+    run_kernel(_long_run_kernel, xs, f, axis, y0, v0, transient, keep, periods, patterns)
+    differ = np.zeros(max(xs.size - 1, 0), bool)
+    for i in range(xs.size - 1):
+        if periods[i] == 0 and periods[i + 1] == 0:
+            continue
+        differ[i] = not _same_run(periods[i], patterns[i], periods[i + 1], patterns[i + 1])
+    idx = np.flatnonzero(differ)
+    # each round bisects every open interval once; the part of an interval on
+    # the far side of the change found is bisected again in the next round
+    # while its ends still differ (a cascade of changes between two values)
+    xa, xb = xs[idx], xs[idx + 1]
+    qa, qb = periods[idx], periods[idx + 1]
+    ra, rb = patterns[idx], patterns[idx + 1]
+    found = []
+    for _ in range(_MAX_ROUNDS):
+        if xa.size == 0:
+            break
+        pa, pb, pat_a, pat_b = qa.copy(), qb.copy(), ra.copy(), rb.copy()
+        out = np.zeros((xa.size, 8))
+        run_kernel(_bifurcation_kernel, xa, xb, pa, pb, f, axis, y0, v0, transient, keep,
+                   pat_a, pat_b, out)
+        found.append((out, pa, pb, pat_a, pat_b))
+        low_ref = out[:, 7] == 1
+        lo, hi = out[:, 0], out[:, 0] + out[:, 1]
+        # the rest: [hi, xb] (the reference was the low end) or [xa, lo]
+        na = np.where(low_ref, hi, xa)
+        nb = np.where(low_ref, xb, lo)
+        npa = np.where(low_ref, pb, qa)
+        npb = np.where(low_ref, qb, pa)
+        nra = np.where(low_ref[:, None], pat_b, ra)
+        nrb = np.where(low_ref[:, None], rb, pat_a)
+        keep_on = np.array([na[i] < nb[i] and not (npa[i] == 0 and npb[i] == 0)
+                            and not _same_run(npa[i], nra[i], npb[i], nrb[i]) for i in range(na.size)],
+                           dtype=bool)
+        xa, xb, qa, qb, ra, rb = (na[keep_on], nb[keep_on], npa[keep_on], npb[keep_on],
+                                  nra[keep_on], nrb[keep_on])
+    if found:
+        out = np.concatenate([o for o, *_ in found])
+        pa = np.concatenate([p for _, p, *_ in found])
+        pb = np.concatenate([p for _, _, p, *_ in found])
+        pat_a = np.concatenate([p for *_, p, _ in found])
+        pat_b = np.concatenate([p for *_, p in found])
+        order = np.argsort(out[:, 0], kind="stable")
+        out, pa, pb, pat_a, pat_b = out[order], pa[order], pb[order], pat_a[order], pat_b[order]
+    else:
+        out = np.zeros((0, 8))
+        pa = pb = np.zeros(0, np.int64)
+        pat_a = pat_b = np.zeros((0, 2 * keep), np.int64)
+    dim = ("bifurcation",)
+    kinds = np.array(KINDS, dtype=object)[out[:, 3].astype(np.int64)]
+    data = {
+        "value": (dim, out[:, 0], {"long_name": f"{varied} at the low end of the final bracket"}),
+        "width": (dim, out[:, 1], {"long_name": "width of the final bracket"}),
+        "kind": (dim, kinds, {"long_name": "event at the step's edge: graze, edge or chatter"}),
+        "step": (dim, out[:, 2].astype(np.int64), {"long_name": "first step from (y0, v0) that differs"}),
+        "index": (dim, out[:, 4].astype(np.int64), {"long_name": "impact whose time equals T"}),
+        "impacts_low": (dim, out[:, 5].astype(np.int64), {"long_name": "impact number at the step, low side"}),
+        "impacts_high": (dim, out[:, 6].astype(np.int64), {"long_name": "impact number at the step, high side"}),
+        "period_low": (dim, pa, {"long_name": "period of the long-run itinerary, low side (0: not periodic)"}),
+        "period_high": (dim, pb, {"long_name": "period of the long-run itinerary, high side (0: not periodic)"}),
+        "itinerary_low": (dim, np.array([_run_text(p, r) for p, r in zip(pa, pat_a)], dtype=object),
+                          {"long_name": "long-run itinerary, low side"}),
+        "itinerary_high": (dim, np.array([_run_text(p, r) for p, r in zip(pb, pat_b)], dtype=object),
+                           {"long_name": "long-run itinerary, high side"}),
+    }
+    fixed = "u" if e_swept else "e"
+    return xr.Dataset(data, attrs={"title": "discontinuity-induced bifurcations", "varied": varied,
+                                   fixed: f, "y0": y0, "v0": v0, "transient": transient, "keep": keep})
+
+
+# --------------------------------------------------------------------------- #
+# Checks the report can print                                                 #
+# --------------------------------------------------------------------------- #
+
+TONGUE_WINDOW = ((0.0, 0.25), (0.05, 2.05))
+"""A window holding the tongues n = 1..8 of Theorem 3.1 (and their tips)."""
+
+
+def tongue_distances(points, n_max=8):
+    """tongue_distances(points, n_max=8) -> dict
+
+    The border points of the words ``(n, 0^inf)``, n = 1..n_max, against
+    Theorem 3.1: their lower border is the graze curve ``u^2 = (n-1)/2``,
+    their upper border the chatter curve ``u^2 = n/2 ((1-e)/(1+e))^2``.
+    Returns ``points`` (how many), ``wrong_kind`` (neither graze on the lower
+    curve nor chatter on the upper one), ``max_relative`` (the largest
+    relative distance in u of a bracket to its curve: for a bracket along u,
+    ``|u - u_curve(e)| / u_curve`` with the nearer end; along e, the nearer
+    of its two ends), ``kinds`` (n -> set of kinds seen).
+    """
+    word = points["word_low"].values
+    high = points["word_high"].values
+    kind = points["kind"].values
+    e, u, w = points["e"].values, points["u"].values, points["width"].values
+    along_u = points["axis"].values == "u"
+    worst, count, wrong, kinds = 0.0, 0, 0, {}
+    for n in range(1, n_max + 1):
+        text = f"({n}, 0^inf)"
+        for i in np.flatnonzero((word == text) | (high == text)):
+            count += 1
+            kinds.setdefault(n, set()).add(kind[i])
+            ends_e = (e[i], e[i]) if along_u[i] else (e[i], e[i] + w[i])
+            ends_u = (u[i], u[i] + w[i]) if along_u[i] else (u[i], u[i])
+            if kind[i] == "graze" and n >= 2:
+                target = [math.sqrt((n - 1) / 2.0)] * 2
+            elif kind[i] == "chatter":
+                target = [math.sqrt(n / 2.0) * (1.0 - x) / (1.0 + x) for x in ends_e]
+            else:
+                wrong += 1
+                continue
+            d = min(abs(a - b) / b for a, b in zip(ends_u, target))
+            worst = max(worst, d)
+    return {"points": count, "wrong_kind": wrong, "max_relative": worst, "kinds": kinds}
+
+
+def above_no_sliding_curve(points):
+    """above_no_sliding_curve(points) -> int
+
+    Corollary 2.1: the border points strictly above ``u = (1-e)/(2 sqrt(2e))``
+    (none can be there: no solution slides above the curve, so no two sides
+    differ)."""
+    e, u = points["e"].values, points["u"].values
+    with np.errstate(divide="ignore"):
+        bound = (1.0 - e) / (2.0 * np.sqrt(2.0 * e))
+    return int(np.sum(u > bound))
+
+
+def side_agreement(points, scan, radius=0.5):
+    """side_agreement(points, scan, radius=0.5) -> (float, int)
+
+    The share of the pixel centres of ``scan`` whose word equals the word on
+    their side of the nearest border point (distances in pixels; the side is
+    taken along the point's axis), among the pixels within ``radius`` pixels
+    of a border point (every point lies on a segment between two pixel
+    centres; farther pixels are inside a region, where the nearest point
+    says nothing), and how many pixels that is.  A pixel disagrees where a
+    region narrower than a pixel lies between it and its neighbour: its
+    side of the border found is that region's.  NaN when no pixel is near."""
+    from scipy.spatial import cKDTree
+
+    es, us, period, _ = _grid_input(scan)
+    E, U = np.meshgrid(es, us)
+    E, U = E.ravel(), U.ravel()
+    de = (es[-1] - es[0]) / max(es.size - 1, 1) or 1.0
+    du = (us[-1] - us[0]) / max(us.size - 1, 1) or 1.0
+    if points.sizes.get("point", 0) == 0:
+        return math.nan, 0
+    tree = cKDTree(np.column_stack([points["e"].values / de, points["u"].values / du]))
+    dist, k = tree.query(np.column_stack([E / de, U / du]))
+    near = dist <= radius
+    if not near.any():
+        return math.nan, 0
+    words = _words(E[near], U[near], period[near])
+    k = k[near]
+    along_e = points["axis"].values[k] == "e"
+    x = np.where(along_e, E[near], U[near])
+    low = x < np.where(along_e, points["e"].values[k], points["u"].values[k])
+    side = np.where(low, points["word_low"].values[k], points["word_high"].values[k])
+    return float(np.mean(side == words)), int(near.sum())
