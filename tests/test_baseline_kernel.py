@@ -3,7 +3,8 @@ answers as the production scan does: a yardstick that measures the same work."""
 
 from __future__ import annotations
 
-import importlib.util
+import importlib
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -16,10 +17,12 @@ _PATH = Path(__file__).resolve().parent.parent / "benchmarks" / "baseline_kernel
 
 @pytest.fixture(scope="module")
 def baseline():
-    spec = importlib.util.spec_from_file_location("baseline_kernel", _PATH)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    # imported under its own name (numba's cache keys compiled code by the module)
+    sys.path.insert(0, str(_PATH.parent))
+    try:
+        return importlib.import_module("baseline_kernel")
+    finally:
+        sys.path.remove(str(_PATH.parent))
 
 
 def test_frozen_header_and_no_stairbounce_import():
@@ -44,7 +47,7 @@ def test_baseline_agrees_with_the_production_scan(baseline, window, size, max_it
         assert out[k].dtype == ds[k].dtype, k
         assert np.array_equal(out[k], ds[k].values), k
     # not a trivial window: periodic sliding solutions with impacts are found
-    assert (out["impacts"] > 0).sum() > 0.1 * out["status"].size
+    assert (out["impacts"] > 0).sum() >= 20
 
 
 def test_baseline_transient_from_another_start(baseline):
