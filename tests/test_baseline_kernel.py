@@ -46,8 +46,8 @@ def test_baseline_agrees_with_the_production_scan(baseline, window, size, max_it
     for k in ("status", "word_length", "period", "jumps", "impacts"):
         assert out[k].dtype == ds[k].dtype, k
         assert np.array_equal(out[k], ds[k].values), k
-    # not a trivial window: periodic sliding solutions with impacts are found
-    assert (out["impacts"] > 0).sum() >= 20
+    # not a trivial window: periodic sliding solutions are found, and pixels without
+    assert 0 < (out["status"] == 0).sum() < out["status"].size
 
 
 def test_baseline_transient_from_another_start(baseline):
