@@ -144,23 +144,41 @@ def _impact_number_closed(y, v, e, T):
         return 0
     if e == 0.0:  # plastic impact: it sticks at its first contact
         return SLIDING
+    return _impacts_and_time(v, s, e, T, math.log(e))[0]
+
+
+@njit(cache=True)
+def _impacts_and_time(v, s, e, T, log_e):
+    """The impact number ``k`` of :func:`_impact_number_closed` and ``t_k``, given
+    ``s``, ``log_e = log(e)``, ``e > 0`` and a first impact before the edge
+    (``v + s <= T``); ``(SLIDING, 0)`` where the logarithm's argument is not
+    positive.  ``t_k`` is the value :func:`_impact_time` gives: the one the
+    correction loop computed for the final ``k`` when it did, so it is not
+    computed twice.
+    """
     q = (1.0 - e) * ((T - v + s) / (2.0 * s))
     if q >= 1.0:
-        return SLIDING
-    log_e = math.log(e)
+        return SLIDING, 0.0
     kf = math.floor(math.log1p(-q) / log_e)
     k = max(int(min(kf, _MAX_IMPACTS)), 1)
     # rounding of log: move k until t_k <= T < t_{k+1}, a step or two at most
     # wherever the bounces are longer than the rounding of t_k (elsewhere k is
     # only known to a relative 1e-15, and so is the answer's phase)
+    known, t_known = 0, 0.0  # the last impact time computed, and its index
     for _ in range(4):
-        if k > 1 and _impact_time_log(v, s, e, k, log_e) > T:
-            k -= 1
-        elif _impact_time_log(v, s, e, k + 1, log_e) <= T:
+        if k > 1:
+            t = _impact_time_log(v, s, e, k, log_e)
+            known, t_known = k, t
+            if t > T:
+                k -= 1
+                continue
+        t = _impact_time_log(v, s, e, k + 1, log_e)
+        known, t_known = k + 1, t
+        if t <= T:
             k += 1
         else:
             break
-    return k
+    return k, (t_known if known == k else _impact_time_log(v, s, e, k, log_e))
 
 
 @njit(cache=True)
@@ -172,15 +190,27 @@ def _step_closed(y, v, e, T, ratio):
     impact-by-impact loop of ``tests/naive.py`` and against a 60-digit
     reference (``tests/test_precision.py``).
     """
+    return _step_closed_log(y, v, e, T, ratio, math.log(e) if e > 0.0 else -math.inf)
+
+
+@njit(cache=True)
+def _step_closed_log(y, v, e, T, ratio, log_e):
+    """:func:`_step_closed` with ``log_e = log(e)`` given (a kernel computes it once per pixel).
+
+    The same operations on the same values, so the same bits, with ``t_k``
+    taken from the correction loop of the impact number
+    (:func:`_impacts_and_time`) instead of computed again.
+    """
     if _slides(y, v, T, ratio):
         return 1.0, 0.0, SLIDING
     s = math.sqrt(v * v + 2.0 * y)
-    k = _impact_number_closed(y, v, e, T)
+    if v + s > T:  # first impact after the edge: the ball flies over
+        return y + v * T - 0.5 * T * T + 1.0, v - T, 0
+    if e == 0.0:  # plastic impact: it sticks at its first contact
+        return 1.0, 0.0, SLIDING
+    k, tk = _impacts_and_time(v, s, e, T, log_e)
     if k == SLIDING:  # rounding at the boundary of (2.4)
         return 1.0, 0.0, SLIDING
-    if k == 0:
-        return y + v * T - 0.5 * T * T + 1.0, v - T, 0
-    tk = _impact_time(v, s, e, k)
     vk = _impact_velocity(s, e, k)
     # t_k <= T < t_{k+1} = t_k + 2 v_k up to the rounding of t_k and v_k (a
     # few ulp of T): the clamp keeps that rounding from putting the ball a few
