@@ -244,13 +244,15 @@ def _prunable(es, us, energy0, out):
 # per AVX-512 register, and it only enters the vector body for 16 lanes or more;
 # 32 measured fastest on the development machine (see benchmarks/README.md).
 LANES = 32
-# Pixels per unit of parallel work: small enough to share the uneven plane
-# between threads, large enough that lanes rarely idle at the end of a chunk.
+# Pixels listed at a time (the segments of a unit of parallel work, _chunking)
 _CHUNK_MAX = 1024
+# Units of parallel work per thread, and the fewest pixels in one (_chunking)
+_UNITS_PER_THREAD = 4
+_UNIT_MIN = 4096
 # Rows of the lane state block of _run_chunk (one float64 row of LANES per field)
 _Y, _V, _E, _T, _R, _H, _TS, _WS, _LOGE = range(9)
 # and of its integer block
-_N, _IMP, _JMP, _SL, _MORE, _FIN, _LIVE, _PER, _PIX = range(9)
+_N, _IMP, _JMP, _MORE, _LIVE, _PER, _PIX, _FIN, _SL = range(9)
 
 
 @njit(cache=True)
@@ -351,26 +353,52 @@ def _load(l, q, todo, F, y0, v0, from_rest, S, I):
     I[_LIVE, l] = 1
 
 
-@njit(cache=True)
-def _run_chunk(es, us, grid, cols, rows, max_iter, y0, v0, prune, start, stop,
-               status, word_length, jumps, period, impacts, halt):
-    """Pixels ``start..stop-1`` (flat indices), LANES at a time in lockstep.
+@njit(cache=True, inline="always")
+def _take(l, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune, y0, v0, from_rest, S, I,
+          status, word_length, jumps, period, impacts):
+    """Lane ``l`` takes the next pixel of its unit that needs iterating; False when none is left.
 
-    The pixels that need iterating are listed first (:func:`_list_chunk`,
-    which answers the pruned ones); a lane takes the next listed pixel as
-    soon as its own finishes, so lanes stay busy whatever the mix of cheap
-    and expensive pixels.  Each pixel sees exactly the sequence of
-    operations of ``_slide_or_steps`` with ``model._step``.  Returns the
-    number of pixels pruned.  Returns early, leaving pixels unwritten, once
-    ``halt[0]`` is set (Ctrl-C, :mod:`stairbounce._interrupt`); it is read
-    once per lockstep step.
+    ``pos = (next listed, listed, next segment, pruned)``: when the list is
+    used up, the unit's next segment (``chunk`` pixels from
+    ``segs[...] * chunk``; -1 ends the unit) is listed by :func:`_list_chunk`.
+    """
+    while pos[0] == pos[1]:
+        if pos[2] == segs.shape[0] or segs[pos[2]] < 0:
+            return False
+        start = segs[pos[2]] * chunk
+        pos[2] += 1
+        n, pruned = _list_chunk(es, us, grid, cols, rows, prune, y0 + v0 * v0, start, min(start + chunk, npix),
+                                todo, F, status, word_length, jumps, period, impacts)
+        pos[0] = 0
+        pos[1] = n
+        pos[3] += pruned
+    _load(l, pos[0], todo, F, y0, v0, from_rest, S, I)
+    pos[0] += 1
+    return True
+
+
+@njit(cache=True)
+def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, npix,
+              status, word_length, jumps, period, impacts, halt):
+    """The pixels of the segments ``segs`` (``chunk`` flat indices from
+    ``segs[i] * chunk`` each; -1 pads), LANES at a time in lockstep.
+
+    The pixels that need iterating are listed a segment at a time
+    (:func:`_list_chunk`, which answers the pruned ones); a lane takes the
+    next listed pixel as soon as its own finishes, across segments, so lanes
+    stay busy whatever the mix of cheap and expensive pixels and idle only at
+    the end of the unit.  Each pixel sees exactly the sequence of operations
+    of ``_slide_or_steps`` with ``model._step``.  Returns the number of
+    pixels pruned.  Returns early, leaving pixels unwritten, once ``halt[0]``
+    is set (Ctrl-C, :mod:`stairbounce._interrupt`); it is read once per
+    lockstep step.
     """
     L = LANES
+    # phase start (the "# phase" comments mark where benchmarks/scan_phases.py times phases)
     from_rest = y0 == 1.0 and v0 == 0.0
-    todo = np.empty(stop - start, np.int64)
-    F = np.empty((4, stop - start))
-    ntodo, pruned = _list_chunk(es, us, grid, cols, rows, prune, y0 + v0 * v0, start, stop, todo, F,
-                                status, word_length, jumps, period, impacts)
+    todo = np.empty(chunk, np.int64)
+    F = np.empty((4, chunk))
+    pos = np.zeros(4, np.int64)
     # lane state: one block of float rows and one of integer rows (row indices
     # _Y.. and _N..), so that the compiler sees the rows cannot overlap
     S = np.zeros((9, L))
@@ -378,11 +406,10 @@ def _run_chunk(es, us, grid, cols, rows, max_iter, y0, v0, prune, start, stop,
     S[_T] = 1.0
     S[_R] = 3.0
     I = np.zeros((9, L), np.int64)
-    q = 0
+    M = np.empty((L, 6))  # kept values of the closed form (_closed)
     active = 0
-    while active < L and q < ntodo:
-        _load(active, q, todo, F, y0, v0, from_rest, S, I)
-        q += 1
+    while active < L and _take(active, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune,
+                               y0, v0, from_rest, S, I, status, word_length, jumps, period, impacts):
         active += 1
 
     Y = S[_Y]
@@ -396,13 +423,14 @@ def _run_chunk(es, us, grid, cols, rows, max_iter, y0, v0, prune, start, stop,
     N = I[_N]
     IMP = I[_IMP]
     JMP = I[_JMP]
-    SL = I[_SL]
     MORE = I[_MORE]
-    FIN = I[_FIN]
     LIVE = I[_LIVE]
+    FIN = I[_FIN]  # 1: the pixel (or its transient) ends with this step
+    SL = I[_SL]  # 1: it slid
+    # phase 1: listing the first segments, loading the lanes
     while active > 0:
         if halted(halt):
-            return pruned
+            return pos[3]
         # the common step (model._step up to its first impact) and its
         # bookkeeping, vectorised over lanes; a lane with a second impact
         # keeps its state and goes on below
@@ -443,6 +471,7 @@ def _run_chunk(es, us, grid, cols, rows, max_iter, y0, v0, prune, start, stop,
             f = live if (slide or (done and n >= max_iter)) else 0
             FIN[l] = f
             nfin += f
+        # phase 2 if active == LANES else 3: the common step, all lanes live or a tail
         if nmore > 0:
             # impacts 2, 3, ... counted on along t += 2w, w *= e as model._step
             # does, up to its _COUNTED_IMPACTS; past that, its closed form
@@ -450,9 +479,14 @@ def _run_chunk(es, us, grid, cols, rows, max_iter, y0, v0, prune, start, stop,
             while nmore > 0:
                 k += 1
                 if k == _COUNTED_IMPACTS:
+                    # phase 4: impacts 2 to 7
                     for l in range(L):
                         if MORE[l]:
-                            nfin += _closed(l, max_iter, S, I)
+                            r = _closed(l, max_iter, S, I, M)
+                            FIN[l] = 1 if r > 0 else 0
+                            SL[l] = 1 if r == 2 else 0
+                            nfin += FIN[l]
+                    # phase 5: the closed form past _COUNTED_IMPACTS
                     break
                 nmore = 0
                 for l in range(L):
@@ -477,39 +511,44 @@ def _run_chunk(es, us, grid, cols, rows, max_iter, y0, v0, prune, start, stop,
                     m = m if nxt else 0
                     MORE[l] = m
                     nmore += m
+                # phase 4: impacts 2 to 7
         if nfin == 0:
             continue
         for l in range(L):
-            if FIN[l] == 0:
+            f = FIN[l]
+            if f == 0:
                 continue
             FIN[l] = 0
-            if SL[l] and I[_PER, l] == 0:
+            sl = SL[l]
+            if sl and I[_PER, l] == 0:
                 # end of the transient: the ball leaves the edge at (1, 0)
                 I[_PER, l] = 1
                 N[l] = 0
                 IMP[l] = 0
                 JMP[l] = 0
                 continue
-            _store(I[_PIX, l], N[l] if SL[l] else 0, IMP[l], JMP[l],
+            _store(I[_PIX, l], N[l] if sl else 0, IMP[l], JMP[l],
                    status, word_length, jumps, period, impacts)
-            if q < ntodo:
-                _load(l, q, todo, F, y0, v0, from_rest, S, I)
-                q += 1
-            else:
+            if not _take(l, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune,
+                         y0, v0, from_rest, S, I, status, word_length, jumps, period, impacts):
                 LIVE[l] = 0
                 active -= 1
-    return pruned
+        # phase 6: finished pixels stored, lanes reloaded (and segments listed)
+    return pos[3]
 
 
 @njit(cache=True)
-def _closed(l, max_iter, S, I):
+def _closed(l, max_iter, S, I, M):
     """Lane ``l``'s step by the closed form of ``model._step`` (past
-    ``_COUNTED_IMPACTS`` impacts), from its state before the step; its
-    bookkeeping as in the lane loops.  Returns 1 when the lane finishes."""
+    ``_COUNTED_IMPACTS`` impacts), from its state before the step, and its
+    bookkeeping as in the lane loops.  Returns 2 when it slid, 1 when the
+    pixel reached max_iter, else 0.  ``M[l]``: the values of ``expm1`` and
+    ``pow`` kept for the lane's pixel (``model._geometric_memo``)."""
     e = S[_E, l]
-    if S[_LOGE, l] > 0.0:  # log(e) once per pixel
+    if S[_LOGE, l] > 0.0:  # log(e) once per pixel, and nothing kept yet
         S[_LOGE, l] = math.log(e) if e > 0.0 else -math.inf
-    yn, vn, k = _step_closed_log(S[_Y, l], S[_V, l], e, S[_T, l], S[_R, l], S[_LOGE, l])
+        M[l] = -1.0
+    yn, vn, k = _step_closed_log(S[_Y, l], S[_V, l], e, S[_T, l], S[_R, l], S[_LOGE, l], M[l])
     S[_Y, l] = yn
     S[_V, l] = vn
     I[_MORE, l] = 0
@@ -517,18 +556,17 @@ def _closed(l, max_iter, S, I):
     if k > 0:
         I[_IMP, l] += k
     I[_JMP, l] += 1
-    I[_SL, l] = 1 if k == SLIDING else 0
-    if k == SLIDING or I[_N, l] >= max_iter:
-        I[_FIN, l] = 1
-        return 1
-    return 0
+    if k == SLIDING:
+        return 2
+    return 1 if I[_N, l] >= max_iter else 0
 
 
 @njit(cache=True, parallel=True, nogil=True)
 def _scan_fast(es, us, grid, max_iter, y0, v0, prune, order, chunk,
                status, word_length, jumps, period, impacts, halt):
-    """Fast kernel: chunks of ``chunk`` pixels in the order ``order``, LANES
-    pixels of a chunk in lockstep (:func:`_run_chunk`).
+    """Fast kernel: the units ``order[u]`` (rows of segment indices, -1 padded)
+    in parallel, segments of ``chunk`` pixels, LANES pixels of a unit in
+    lockstep (:func:`_run_unit`).
 
     ``grid``: the pixels are the row-major ``n_u x n_e`` grid ``us x es``;
     otherwise the points ``(es[p], us[p])``.  Outputs are flat, one entry per
@@ -543,25 +581,31 @@ def _scan_fast(es, us, grid, max_iter, y0, v0, prune, order, chunk,
         cols, rows = np.empty((5, 0)), np.empty((4, 0))
     pruned = np.zeros(order.shape[0], np.int64)
     for c in prange(order.shape[0]):
-        s = order[c] * chunk
-        pruned[c] = _run_chunk(es, us, grid, cols, rows, max_iter, y0, v0, prune, s, min(s + chunk, npix),
-                               status, word_length, jumps, period, impacts, halt)
+        pruned[c] = _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, order[c], chunk, npix,
+                              status, word_length, jumps, period, impacts, halt)
     return pruned.sum()
 
 
 def _chunking(npix, threads):
-    """Chunk size and chunk order for :func:`_scan_fast`.
+    """Segment size and the units of :func:`_scan_fast`: ``(chunk, order)``.
 
-    prange hands each thread one contiguous block of iterations; the order
-    ``0, 16, 32, ..., 1, 17, ...`` makes every block sample the whole plane,
-    so threads get similar work although low u slides in a step or two and
-    high u runs to max_iter.  Results do not depend on either choice.
+    A unit's lanes idle only at its end, while its last pixels run (up to
+    max_iter steps), so units are few and large: _UNITS_PER_THREAD per thread,
+    at least _UNIT_MIN pixels each.  prange hands each thread a contiguous
+    block of units, and the plane is uneven (low u slides in a step or two,
+    high u runs to max_iter, above the Corollary 2.1 curve nothing is
+    iterated), so unit ``k`` takes segments ``k, k + n, k + 2n, ...`` of the
+    ``n`` units: every unit samples the whole plane and the work is shared
+    evenly.  Results do not depend on any of these choices.
     """
-    chunk = int(min(_CHUNK_MAX, max(4 * LANES, -(-npix // (16 * max(threads, 1))))))
-    n = -(-npix // chunk)
-    if n == 0:
-        return chunk, np.zeros(0, np.int64)
-    order = np.concatenate([np.arange(k, n, 16) for k in range(min(16, n))]).astype(np.int64)
+    chunk = int(min(_CHUNK_MAX, max(LANES, -(-npix // (16 * max(threads, 1))))))
+    nseg = -(-npix // chunk)
+    units = int(max(1, min(_UNITS_PER_THREAD * max(threads, 1), npix // _UNIT_MIN, nseg)))
+    per = -(-nseg // units)
+    order = np.full((units, per), -1, np.int64)
+    for k in range(units):
+        segs = np.arange(k, nseg, units)
+        order[k, : segs.size] = segs
     return chunk, order
 
 
