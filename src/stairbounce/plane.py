@@ -7,13 +7,16 @@ colour of the point (the paper's Figures 3, 4 and 5).
 
 The public wrappers validate, allocate and call a private numba kernel:
 
-- ``_scan_fast``: the kernel used by :func:`scan` and :func:`scan_coords`,
-  the map of :func:`stairbounce.model._step` (impacts counted along the
-  geometric series, no log/pow) evaluated on several pixels in lockstep,
-  parallel over both cores with interleaved work so that cheap and expensive
-  parts of the plane are shared evenly.
-- ``_scan_plain``: the baseline, one pixel at a time with the plain closed
-  form :func:`stairbounce.model._step_closed`, ``prange`` over rows.
+- ``_scan_fast``: the kernel used by :func:`scan`, :func:`scan_coords` and
+  :func:`scan_points`, the map of :func:`stairbounce.model._step` (impacts
+  counted along the geometric series, no log/pow below 8 impacts) evaluated
+  on LANES pixels in lockstep, parallel over a few units of work per thread,
+  each streaming strided segments of the plane (so that cheap and expensive
+  parts are shared evenly and lanes idle only at a unit's end).
+- ``_scan_plain``: the plain kernel, one pixel at a time with the closed
+  form :func:`stairbounce.model._step_closed`, ``prange`` over rows.  Speed
+  is measured against the frozen copy of its first version,
+  ``benchmarks/baseline_kernel.py``.
 
 Pruning: above the curve of Corollary 2.1 no state with ``y >= 1`` slides,
 so those pixels are status 1 whatever max_iter; ``_scan_fast`` stores that
