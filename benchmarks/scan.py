@@ -13,9 +13,13 @@ nothing there), and ``scan_points`` on random points of the Fig. 7 window
   iterating), JIT warm, all numba threads;
 - the same with ``prune=False`` (every pixel iterated): the kernel alone;
 - the pruned scan on one thread (how much the second core gives);
-- ``_scan_plain``: the baseline, per pixel the closed form ``_step_closed``
-  (log and pow), ``prange`` over rows, every pixel iterated; the factor
-  against it is split into the kernel's (prune=False) and the pruning's;
+- the frozen baseline (``benchmarks/baseline_kernel.py``, never edited: per
+  pixel the printed closed form, ``prange`` over rows, every pixel iterated):
+  every factor is against it (issue 26);
+- ``_scan_plain``: today's plain kernel, the same loop with the
+  cancellation-free closed form ``_step_closed`` (1.6-1.7x slower per step
+  than the frozen one since issue 17), beside it; the factor against it is
+  split into the kernel's (prune=False) and the pruning's;
 - NumPy (paper grid only): ``numpy_scan`` below, the map vectorised over the
   pixels still running (compacted every step), impacts counted with masked
   array updates.
@@ -37,6 +41,9 @@ import time
 
 import numba
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from baseline_kernel import baseline_scan  # noqa: E402  (the frozen yardstick, benchmarks/)
 
 from stairbounce.model import _COUNTED_IMPACTS
 from stairbounce.plane import _FIELDS, _scan_plain, pixel_centres, prunable, scan, scan_points
@@ -176,12 +183,15 @@ def case(name, e, u, max_iter, repeat, plain_stride, numpy_stride=None):
         numba.set_num_threads(THREADS)
 
     sub_p = slice(None, None, plain_stride)
+    (t_fr, c_fr), fr = best(lambda: baseline_scan(es, us[sub_p], max_iter), 1 if plain_stride > 1 else 2)
     (t_pl, c_pl), pl = best(lambda: plain(es, us[sub_p], max_iter), 1 if plain_stride > 1 else 2)
     ref_p = ds.isel(u=sub_p)
     work_p = useful_iterations(ref_p)
     agree_p = np.mean(np.all([pl[k] == ref_p[k].values for k in _FIELDS], axis=0))
+    agree_f = np.mean(np.all([fr[k] == ref_p[k].values for k in _FIELDS], axis=0))
     # a subsample is scaled to the whole grid by useful iterations
     t_pl, c_pl = t_pl * work / work_p, c_pl * work / work_p
+    t_fr, c_fr = t_fr * work / work_p, c_fr * work / work_p
 
     ghz = _clock_ghz()
     print(f"\n{name}: {ds.sizes['e']} x {ds.sizes['u']} pixels, max_iter {max_iter}, "
@@ -197,6 +207,9 @@ def case(name, e, u, max_iter, repeat, plain_stride, numpy_stride=None):
     _row("scan (prune=True), 1 thread", t_one, c_one, work,
          f"  x{t_one / t_pr:.2f} the wall time on {THREADS} threads")
     sub = "" if plain_stride == 1 else f", every {plain_stride}th row, scaled"
+    _row("frozen baseline (prange)", t_fr, c_fr, work,
+         f"  x{t_fr / t_pr:.1f} / x{c_fr / c_pr:.1f} the pruned scan, x{t_fr / t_fast:.1f} / "
+         f"x{c_fr / c_fast:.1f} the unpruned (wall / CPU){sub}; same answer at {100 * agree_f:.3f}% of pixels")
     _row("_scan_plain (prange)", t_pl, c_pl, work,
          f"  x{t_pl / t_pr:.1f} / x{c_pl / c_pr:.1f} the pruned scan = kernel x{t_pl / t_fast:.1f} "
          f"(x{c_pl / c_fast:.1f} CPU) * pruning x{t_fast / t_pr:.1f} (x{c_fast / c_pr:.1f} CPU)"
@@ -224,20 +237,30 @@ def points_case(n, max_iter, repeat, window=((0.155, 0.2138), (0.6, 0.658))):
     mask = prunable(e, u)
     (t_pr, c_pr), ds = best(lambda: scan_points(e, u, max_iter), repeat)
     (t_full, c_full), full = best(lambda: scan_points(e, u, max_iter, prune=False), repeat)
-    same = all(np.array_equal(ds[k].values, full[k].values) for k in _FIELDS)
     side = int(round(math.sqrt(n)))
+    # the frozen baseline has no point path: its rate on every 16th row of the same
+    # window as a side x side grid, scaled to the points' useful iterations
+    ge, gu = pixel_centres(e0, e1, side), pixel_centres(u0, u1, side)[::16]
+    (t_fr, c_fr), fr = best(lambda: baseline_scan(ge, gu, max_iter), 1)
+    work_fr = int(np.where(fr["status"] == 0, fr["period"], max_iter).sum())
+    same = all(np.array_equal(ds[k].values, full[k].values) for k in _FIELDS)
     (t_grid, c_grid), grid = best(lambda: scan((e0, e1, side), (u0, u1, side), max_iter), repeat)
-    work = int(np.where(ds.status.values == 0, ds.period.values, max_iter).sum())
-    done = int(np.where(ds.status.values == 0, ds.period.values, max_iter)[~mask].sum())
+    per = np.where(ds.status.values == 0, ds.period.values, max_iter)
+    work = int(per.sum())
+    done = int(per[~mask].sum())
+    t_fr, c_fr = t_fr * work / work_fr, c_fr * work / work_fr
     print(f"\nscan_points, {n} random points in [{e0}, {e1}] x [{u0}, {u1}], max_iter {max_iter}: "
           f"{work / 1e6:.1f} M useful iterations, pruned {100 * mask.mean():.1f} % of the points, "
           f"{100 * (1 - done / work):.1f} % of the iterations")
-    _row("scan_points (prune=True)", t_pr, c_pr, work, f"  {n / t_pr / 1e6:.2f} M points/s")
+    _row("scan_points (prune=True)", t_pr, c_pr, work,
+         f"  {n / t_pr / 1e6:.2f} M points/s; x{t_fr / t_pr:.1f} / x{c_fr / c_pr:.1f} the frozen baseline")
     _row("scan_points (prune=False)", t_full, c_full, work,
          f"  x{t_full / t_pr:.2f} / x{c_full / c_pr:.2f} the pruned time; identical arrays: {same}")
     wg = useful_iterations(grid)
     _row(f"scan, {side} x {side} grid", t_grid, c_grid, wg,
          "  same window as a grid, for comparison (pruned)")
+    _row("frozen baseline (scaled)", t_fr, c_fr, work,
+         "  its rate on every 16th row of the grid, scaled to the points' useful iterations")
 
 
 def _clock_ghz():
@@ -265,6 +288,7 @@ def main(argv=None):
     scan((0.0, 1.0, 40), (0.0, 1.5, 30), 50, prune=False)
     scan_points([0.5, 0.1], [0.5, 3.0], 5)
     plain(pixel_centres(0.0, 1.0, 4), pixel_centres(0.0, 1.5, 3), 5)
+    baseline_scan(pixel_centres(0.0, 1.0, 4), pixel_centres(0.0, 1.5, 3), 5)
 
     print(f"machine: {os.cpu_count()} CPUs, numba {numba.__version__} ({numba.threading_layer()} "
           f"layer, {THREADS} threads), clock {_clock_ghz()} GHz, "

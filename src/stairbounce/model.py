@@ -145,23 +145,82 @@ def _impact_number_closed(y, v, e, T):
         return 0
     if e == 0.0:  # plastic impact: it sticks at its first contact
         return SLIDING
+    return _impacts_and_time(v, s, e, T, math.log(e), None)[0]
+
+
+@njit(cache=True, inline="always")
+def _geometric_memo(e, n, log_e, memo):
+    """:func:`_geometric`, or with ``memo`` (not None) its value kept from an earlier call.
+
+    ``memo`` is a float array of 6 of one ``e``: ``[n, G(n)]`` for an even
+    and for an odd ``n`` (the two the impact number needs, ``k-1`` and ``k``,
+    have different parities) and ``[k, e^k]`` (:func:`_power_memo`); -1 where
+    nothing is kept.  The kept value is the one :func:`_geometric` computed,
+    so the answer is the same bits either way.  Along an orbit the impact
+    number of the steps with many impacts repeats (99.8 % of those values
+    are found kept on the paper's grid), and this saves their ``expm1``.
+    """
+    if memo is None:
+        return _geometric(e, n, log_e)
+    slot = 2 * (n & 1)
+    if memo[slot] == n:
+        return memo[slot + 1]
+    g = _geometric(e, n, log_e)
+    memo[slot] = n
+    memo[slot + 1] = g
+    return g
+
+
+@njit(cache=True, inline="always")
+def _power_memo(s, e, k, memo):
+    """:func:`_impact_velocity`, with ``e^k`` kept in ``memo[4:6]`` (:func:`_geometric_memo`)."""
+    if memo is None:
+        return _impact_velocity(s, e, k)
+    if memo[4] != k:
+        memo[4] = k
+        memo[5] = math.pow(e, float(k))
+    return memo[5] * s
+
+
+@njit(cache=True, inline="always")
+def _impact_time_memo(v, s, e, k, log_e, memo):
+    """:func:`_impact_time_log` through :func:`_geometric_memo` (the same operations)."""
+    return v + s + 2.0 * e * s * _geometric_memo(e, k - 1, log_e, memo)
+
+
+@njit(cache=True)
+def _impacts_and_time(v, s, e, T, log_e, memo):
+    """The impact number ``k`` of :func:`_impact_number_closed` and ``t_k``, given
+    ``s``, ``log_e = log(e)``, ``e > 0`` and a first impact before the edge
+    (``v + s <= T``); ``(SLIDING, 0)`` where the logarithm's argument is not
+    positive.  ``t_k`` is the value :func:`_impact_time` gives: the one the
+    correction loop computed for the final ``k`` when it did, so it is not
+    computed twice.  ``memo``: None, or the values kept for this ``e``
+    (:func:`_geometric_memo`).
+    """
     q = (1.0 - e) * ((T - v + s) / (2.0 * s))
     if q >= 1.0:
-        return SLIDING
-    log_e = math.log(e)
+        return SLIDING, 0.0
     kf = math.floor(math.log1p(-q) / log_e)
     k = max(int(min(kf, _MAX_IMPACTS)), 1)
     # rounding of log: move k until t_k <= T < t_{k+1}, a step or two at most
     # wherever the bounces are longer than the rounding of t_k (elsewhere k is
     # only known to a relative 1e-15, and so is the answer's phase)
+    known, t_known = 0, 0.0  # the last impact time computed, and its index
     for _ in range(4):
-        if k > 1 and _impact_time_log(v, s, e, k, log_e) > T:
-            k -= 1
-        elif _impact_time_log(v, s, e, k + 1, log_e) <= T:
+        if k > 1:
+            t = _impact_time_memo(v, s, e, k, log_e, memo)
+            known, t_known = k, t
+            if t > T:
+                k -= 1
+                continue
+        t = _impact_time_memo(v, s, e, k + 1, log_e, memo)
+        known, t_known = k + 1, t
+        if t <= T:
             k += 1
         else:
             break
-    return k
+    return k, (t_known if known == k else _impact_time_memo(v, s, e, k, log_e, memo))
 
 
 @njit(cache=True)
@@ -173,16 +232,31 @@ def _step_closed(y, v, e, T, ratio):
     impact-by-impact loop of ``tests/naive.py`` and against a 60-digit
     reference (``tests/test_precision.py``).
     """
+    return _step_closed_log(y, v, e, T, ratio, math.log(e) if e > 0.0 else -math.inf, None)
+
+
+@njit(cache=True)
+def _step_closed_log(y, v, e, T, ratio, log_e, memo):
+    """:func:`_step_closed` with ``log_e = log(e)`` given (a kernel computes it once per pixel).
+
+    The same operations on the same values, so the same bits, with ``t_k``
+    taken from the correction loop of the impact number
+    (:func:`_impacts_and_time`) instead of computed again, and with
+    ``memo`` (None, or an array of 6 kept for this ``e``, -1 when new) the
+    values ``expm1`` and ``pow`` gave at the same impact numbers before
+    (:func:`_geometric_memo`).
+    """
     if _slides(y, v, T, ratio):
         return 1.0, 0.0, SLIDING
     s = math.sqrt(v * v + 2.0 * y)
-    k = _impact_number_closed(y, v, e, T)
+    if v + s > T:  # first impact after the edge: the ball flies over
+        return y + v * T - 0.5 * T * T + 1.0, v - T, 0
+    if e == 0.0:  # plastic impact: it sticks at its first contact
+        return 1.0, 0.0, SLIDING
+    k, tk = _impacts_and_time(v, s, e, T, log_e, memo)
     if k == SLIDING:  # rounding at the boundary of (2.4)
         return 1.0, 0.0, SLIDING
-    if k == 0:
-        return y + v * T - 0.5 * T * T + 1.0, v - T, 0
-    tk = _impact_time(v, s, e, k)
-    vk = _impact_velocity(s, e, k)
+    vk = _power_memo(s, e, k, memo)
     # t_k <= T < t_{k+1} = t_k + 2 v_k up to the rounding of t_k and v_k (a
     # few ulp of T): the clamp keeps that rounding from putting the ball a few
     # ulp below the edge; it moves d by no more than the error of t_k

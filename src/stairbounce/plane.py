@@ -7,13 +7,16 @@ colour of the point (the paper's Figures 3, 4 and 5).
 
 The public wrappers validate, allocate and call a private numba kernel:
 
-- ``_scan_fast``: the kernel used by :func:`scan` and :func:`scan_coords`,
-  the map of :func:`stairbounce.model._step` (impacts counted along the
-  geometric series, no log/pow) evaluated on several pixels in lockstep,
-  parallel over both cores with interleaved work so that cheap and expensive
-  parts of the plane are shared evenly.
-- ``_scan_plain``: the baseline, one pixel at a time with the plain closed
-  form :func:`stairbounce.model._step_closed`, ``prange`` over rows.
+- ``_scan_fast``: the kernel used by :func:`scan`, :func:`scan_coords` and
+  :func:`scan_points`, the map of :func:`stairbounce.model._step` (impacts
+  counted along the geometric series, no log/pow below 8 impacts) evaluated
+  on LANES pixels in lockstep, parallel over a few units of work per thread,
+  each streaming strided segments of the plane (so that cheap and expensive
+  parts are shared evenly and lanes idle only at a unit's end).
+- ``_scan_plain``: the plain kernel, one pixel at a time with the closed
+  form :func:`stairbounce.model._step_closed`, ``prange`` over rows.  Speed
+  is measured against the frozen copy of its first version,
+  ``benchmarks/baseline_kernel.py``.
 
 Pruning: above the curve of Corollary 2.1 no state with ``y >= 1`` slides,
 so those pixels are status 1 whatever max_iter; ``_scan_fast`` stores that
@@ -46,6 +49,7 @@ from .model import (
     _finite,
     _slide_or_steps_with,
     _step_closed,
+    _step_closed_log,
     check_count,
     check_state,
 )
@@ -200,14 +204,35 @@ def _never_slides(e, T, ratio, energy0):
     ``e = 0``: ``r = 1``, the bound is infinite: never pruned (nor where
     ``T^2`` underflows or anything overflows: the test is then False).
     """
-    rm1 = ratio - 1.0  # exact for ratio >= 1
+    TT, a = _prune_row(T, energy0)
+    rm1, threshold, c = _prune_column(ratio)
+    return _prune_pixel(T, TT, a, rm1, threshold, c)
+
+
+@njit(cache=True, inline="always")
+def _prune_row(T, energy0):
+    """The factors of :func:`_never_slides` that depend on ``u`` only: ``(T^2, 1/T^2 + 1 + energy0)``."""
     TT = T * T
+    return TT, (1.0 / TT + 1.0 + energy0) if TT > 0.0 else 0.0
+
+
+@njit(cache=True, inline="always")
+def _prune_column(ratio):
+    """The factors of :func:`_never_slides` that depend on ``e`` only:
+    ``(r - 1, sqrt(2 (r-1)(r+1)), r + r/(r-1))``."""
+    rm1 = ratio - 1.0  # exact for ratio >= 1
+    threshold = math.sqrt(2.0 * (rm1 * (ratio + 1.0)))
+    return rm1, threshold, (ratio + ratio / rm1) if rm1 > 0.0 else 0.0
+
+
+@njit(cache=True, inline="always")
+def _prune_pixel(T, TT, a, rm1, threshold, c):
+    """:func:`_never_slides` from its row and column factors (the same operations, the same bits)."""
     if not (rm1 > 0.0 and TT > 0.0):  # e = 0, or u so large that T^2 underflows
         return False
-    threshold = math.sqrt(2.0 * (rm1 * (ratio + 1.0)))
     if not T < threshold:  # below the curve (most iterated pixels): the test below is False too
         return False
-    size = TT + (1.0 / TT + 1.0 + energy0) * (ratio + ratio / rm1)
+    size = TT + a * c
     return T * (1.0 + _PRUNE_MARGIN + _PRUNE_ROUNDING * size) < threshold
 
 
@@ -223,216 +248,329 @@ def _prunable(es, us, energy0, out):
 # per AVX-512 register, and it only enters the vector body for 16 lanes or more;
 # 32 measured fastest on the development machine (see benchmarks/README.md).
 LANES = 32
-# Pixels per unit of parallel work: small enough to share the uneven plane
-# between threads, large enough that lanes rarely idle at the end of a chunk.
+# Pixels listed at a time (the segments of a unit of parallel work, _chunking)
 _CHUNK_MAX = 1024
-
-
-@njit(cache=True, inline="always")
-def _lane_step(y, v, e, T, ratio, half_TT):
-    """One step of :func:`stairbounce.model._step` for the common cases, branch-free.
-
-    Same operations in the same order as ``_step``, so bit-identical where it
-    answers: sliding, flying over, or exactly one impact.  ``more`` is set when
-    a second impact happens on this step; the caller then counts on from
-    ``(t, w)`` (first impact time, velocity after it).
-    """
-    s = math.sqrt(v * v + 2.0 * y)
-    slide = v + ratio * s <= T
-    t = v + s
-    fly = t > T
-    w = e * s
-    more = (t + 2.0 * w <= T) and not fly and not slide
-    d = T - t
-    y_bounce = -0.5 * d * d + w * d + 1.0
-    v_bounce = w - d
-    y_fly = y + v * T - half_TT + 1.0
-    v_fly = v - T
-    yn = 1.0 if slide else (y_fly if fly else y_bounce)
-    vn = 0.0 if slide else (v_fly if fly else v_bounce)
-    k = SLIDING if slide else (0 if fly else 1)
-    return yn, vn, k, more, t, w
+# Units of parallel work per thread, and the fewest pixels in one (_chunking)
+_UNITS_PER_THREAD = 4
+_UNIT_MIN = 4096
+# Rows of the lane state block of _run_chunk (one float64 row of LANES per field)
+_Y, _V, _E, _T, _R, _H, _TS, _WS, _LOGE = range(9)
+# and of its integer block
+_N, _IMP, _JMP, _MORE, _LIVE, _PER, _PIX, _FIN, _SL = range(9)
 
 
 @njit(cache=True)
-def _run_chunk(es, us, grid, max_iter, y0, v0, prune, start, stop,
-               status, word_length, jumps, period, impacts, halt):
-    """Pixels ``start..stop-1`` (flat indices, :func:`_pixel`), LANES at a time.
+def _grid_factors(es, us, energy0):
+    """Per column ``(e, ratio, r - 1, threshold, c)`` and per row ``(T, T^2, a, T^2/2)`` of a grid:
+    the constants of :func:`stairbounce.model._constants`, the half ``0.5 T T`` of
+    ``model._step`` and the factors of the pruning test, computed once per scan."""
+    cols = np.empty((5, es.shape[0]))
+    rows = np.empty((4, us.shape[0]))
+    for j in range(es.shape[0]):
+        _, ratio = _constants(es[j], 1.0)
+        rm1, threshold, c = _prune_column(ratio)
+        cols[0, j] = es[j]
+        cols[1, j] = ratio
+        cols[2, j] = rm1
+        cols[3, j] = threshold
+        cols[4, j] = c
+    for i in range(us.shape[0]):
+        T, _ = _constants(0.0, us[i])
+        TT, a = _prune_row(T, energy0)
+        rows[0, i] = T
+        rows[1, i] = TT
+        rows[2, i] = a
+        rows[3, i] = 0.5 * T * T  # as model._step evaluates it
+    return cols, rows
 
-    A lane takes the next pixel as soon as its own finishes, so lanes stay busy
-    whatever the mix of cheap and expensive pixels.  Each pixel sees exactly
-    the sequence of operations of ``_slide_or_steps`` with ``model._step``,
-    except pixels where :func:`_never_slides` proves the answer (``prune``):
-    they get status 1 without a step.  Returns the number of those.
-    Returns early, leaving pixels unwritten, once ``halt[0]`` is set (Ctrl-C,
-    :mod:`stairbounce._interrupt`); it is read once per lockstep step.
+
+@njit(cache=True)
+def _list_chunk(es, us, grid, cols, rows, prune, energy0, start, stop, todo, F,
+                status, word_length, jumps, period, impacts):
+    """The pixels ``start..stop-1`` that need iterating, listed; the others answered.
+
+    With ``prune``, a pixel that :func:`_never_slides` proves gets status 1
+    here (by its row and column factors on a grid, :func:`_prune_pixel`).
+    The others go to ``todo[:n]`` (flat index) with their constants in
+    ``F[0:4, :n]`` (e, T, ratio, 0.5 T T).  Returns ``(n, pruned)``.
+    """
+    n = 0
+    pruned = 0
+    if grid:
+        ne = es.shape[0]
+        i = start // ne
+        j = start - i * ne
+        p = start
+        while p < stop:
+            jend = min(ne, j + (stop - p))
+            T = rows[0, i]
+            TT = rows[1, i]
+            a = rows[2, i]
+            half = rows[3, i]
+            for jj in range(j, jend):
+                q = p + jj - j
+                if prune and _prune_pixel(T, TT, a, cols[2, jj], cols[3, jj], cols[4, jj]):
+                    _store(q, 0, 0, 0, status, word_length, jumps, period, impacts)
+                    pruned += 1
+                else:
+                    todo[n] = q
+                    F[0, n] = cols[0, jj]
+                    F[1, n] = T
+                    F[2, n] = cols[1, jj]
+                    F[3, n] = half
+                    n += 1
+            p += jend - j
+            i += 1
+            j = 0
+    else:
+        for q in range(start, stop):
+            e = es[q]
+            T, ratio = _constants(e, us[q])
+            if prune and _never_slides(e, T, ratio, energy0):
+                _store(q, 0, 0, 0, status, word_length, jumps, period, impacts)
+                pruned += 1
+            else:
+                todo[n] = q
+                F[0, n] = e
+                F[1, n] = T
+                F[2, n] = ratio
+                F[3, n] = 0.5 * T * T  # as model._step evaluates it
+                n += 1
+    return n, pruned
+
+
+@njit(cache=True, inline="always")
+def _load(l, q, todo, F, y0, v0, from_rest, S, I):
+    """Lane ``l`` takes listed pixel ``q`` (:func:`_list_chunk`), from ``(y0, v0)``."""
+    S[_E, l] = F[0, q]
+    S[_T, l] = F[1, q]
+    S[_R, l] = F[2, q]
+    S[_H, l] = F[3, q]
+    S[_LOGE, l] = 1.0  # log(e) not computed yet (it is <= 0)
+    S[_Y, l] = 1.0 if from_rest else y0
+    S[_V, l] = 0.0 if from_rest else v0
+    I[_PER, l] = 1 if from_rest else 0
+    I[_PIX, l] = todo[q]
+    I[_N, l] = 0
+    I[_IMP, l] = 0
+    I[_JMP, l] = 0
+    I[_LIVE, l] = 1
+
+
+@njit(cache=True, inline="always")
+def _take(l, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune, y0, v0, from_rest, S, I,
+          status, word_length, jumps, period, impacts):
+    """Lane ``l`` takes the next pixel of its unit that needs iterating; False when none is left.
+
+    ``pos = (next listed, listed, next segment, pruned)``: when the list is
+    used up, the unit's next segment (``chunk`` pixels from
+    ``segs[...] * chunk``; -1 ends the unit) is listed by :func:`_list_chunk`.
+    """
+    while pos[0] == pos[1]:
+        if pos[2] == segs.shape[0] or segs[pos[2]] < 0:
+            return False
+        start = segs[pos[2]] * chunk
+        pos[2] += 1
+        n, pruned = _list_chunk(es, us, grid, cols, rows, prune, y0 + v0 * v0, start, min(start + chunk, npix),
+                                todo, F, status, word_length, jumps, period, impacts)
+        pos[0] = 0
+        pos[1] = n
+        pos[3] += pruned
+    _load(l, pos[0], todo, F, y0, v0, from_rest, S, I)
+    pos[0] += 1
+    return True
+
+
+@njit(cache=True)
+def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, npix,
+              status, word_length, jumps, period, impacts, halt):
+    """The pixels of the segments ``segs`` (``chunk`` flat indices from
+    ``segs[i] * chunk`` each; -1 pads), LANES at a time in lockstep.
+
+    The pixels that need iterating are listed a segment at a time
+    (:func:`_list_chunk`, which answers the pruned ones); a lane takes the
+    next listed pixel as soon as its own finishes, across segments, so lanes
+    stay busy whatever the mix of cheap and expensive pixels and idle only at
+    the end of the unit.  Each pixel sees exactly the sequence of operations
+    of ``_slide_or_steps`` with ``model._step``.  Returns the number of
+    pixels pruned.  Returns early, leaving pixels unwritten, once ``halt[0]``
+    is set (Ctrl-C, :mod:`stairbounce._interrupt`); it is read once per
+    lockstep step.
     """
     L = LANES
+    # phase start (the "# phase" comments mark where benchmarks/scan_phases.py times phases)
     from_rest = y0 == 1.0 and v0 == 0.0
-    energy0 = y0 + v0 * v0
-    Y = np.ones(L)
-    V = np.zeros(L)
-    E = np.zeros(L)
-    TT = np.ones(L)
-    RATIO = np.ones(L)
-    HALF_TT = np.full(L, 0.5)
-    YN = np.empty(L)
-    VN = np.empty(L)
-    K = np.zeros(L, np.int64)
-    MORE = np.zeros(L, np.int64)
-    TS = np.empty(L)
-    WS = np.empty(L)
-    KS = np.zeros(L, np.int64)
-    CLOSED = np.zeros(L, np.int64)
-    N = np.zeros(L, np.int64)  # steps in the current phase
-    IMP = np.zeros(L, np.int64)
-    JMP = np.zeros(L, np.int64)
-    PERIODIC = np.zeros(L, np.int64)  # 0: transient from (y0, v0), 1: period from (1, 0)
-    PIX = np.full(L, -1, np.int64)
-    LIVE = np.zeros(L, np.int64)
-
-    nxt = start
+    todo = np.empty(chunk, np.int64)
+    F = np.empty((4, chunk))
+    pos = np.zeros(4, np.int64)
+    # lane state: one block of float rows and one of integer rows (row indices
+    # _Y.. and _N..), so that the compiler sees the rows cannot overlap
+    S = np.zeros((9, L))
+    S[_E] = 0.5
+    S[_T] = 1.0
+    S[_R] = 3.0
+    I = np.zeros((9, L), np.int64)
+    M = np.empty((L, 6))  # kept values of the closed form (_closed)
     active = 0
-    pruned = 0
-    for l in range(L):
-        nxt, loaded, npr = _load_next(l, nxt, stop, es, us, grid, y0, v0, from_rest, prune, energy0,
-                                      Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX,
-                                      status, word_length, jumps, period, impacts)
-        pruned += npr
-        if loaded:
-            LIVE[l] = 1
-            active += 1
+    while active < L and _take(active, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune,
+                               y0, v0, from_rest, S, I, status, word_length, jumps, period, impacts):
+        active += 1
 
+    Y = S[_Y]
+    V = S[_V]
+    E = S[_E]
+    TT = S[_T]
+    RATIO = S[_R]
+    HALF = S[_H]
+    TS = S[_TS]
+    WS = S[_WS]
+    N = I[_N]
+    IMP = I[_IMP]
+    JMP = I[_JMP]
+    MORE = I[_MORE]
+    LIVE = I[_LIVE]
+    FIN = I[_FIN]  # 1: the pixel (or its transient) ends with this step
+    SL = I[_SL]  # 1: it slid
+    # phase 1: listing the first segments, loading the lanes
     while active > 0:
         if halted(halt):
-            return pruned
-        # the common step, vectorised over lanes
+            return pos[3]
+        # the common step (model._step up to its first impact) and its
+        # bookkeeping, vectorised over lanes; a lane with a second impact
+        # keeps its state and goes on below
         nmore = 0
+        nfin = 0
         for l in range(L):
-            yn, vn, k, more, t, w = _lane_step(Y[l], V[l], E[l], TT[l], RATIO[l], HALF_TT[l])
-            YN[l] = yn
-            VN[l] = vn
-            K[l] = k
-            MORE[l] = more
+            y = Y[l]
+            v = V[l]
+            e = E[l]
+            T = TT[l]
+            s = math.sqrt(v * v + 2.0 * y)
+            slide = v + RATIO[l] * s <= T
+            t = v + s
+            fly = t > T
+            w = e * s
+            more = (t + 2.0 * w <= T) and not fly and not slide
+            d = T - t
+            y_bounce = -0.5 * d * d + w * d + 1.0
+            v_bounce = w - d
+            y_fly = y + v * T - HALF[l] + 1.0
+            v_fly = v - T
+            yn = 1.0 if slide else (y_fly if fly else y_bounce)
+            vn = 0.0 if slide else (v_fly if fly else v_bounce)
+            Y[l] = y if more else yn
+            V[l] = v if more else vn
             TS[l] = t
             WS[l] = w
-            KS[l] = 1
-            nmore += more
+            live = LIVE[l]
+            m = live if more else 0
+            MORE[l] = m
+            nmore += m
+            done = 0 if more else 1
+            n = N[l] + done
+            N[l] = n
+            IMP[l] += 0 if (more or slide or fly) else 1
+            JMP[l] += 0 if (more or fly) else 1
+            SL[l] = 1 if slide else 0
+            f = live if (slide or (done and n >= max_iter)) else 0
+            FIN[l] = f
+            nfin += f
+        # phase 2 if active == LANES else 3: the common step, all lanes live or a tail
         if nmore > 0:
-            # lanes with two impacts or more: count on along t += 2w, w *= e as
-            # model._step does, up to its _COUNTED_IMPACTS; past that, its closed form
-            nclosed = 0
+            # impacts 2, 3, ... counted on along t += 2w, w *= e as model._step
+            # does, up to its _COUNTED_IMPACTS; past that, its closed form
+            k = 1
             while nmore > 0:
+                k += 1
+                if k == _COUNTED_IMPACTS:
+                    # phase 4: impacts 2 to 7
+                    for l in range(L):
+                        if MORE[l]:
+                            r = _closed(l, max_iter, S, I, M)
+                            FIN[l] = 1 if r > 0 else 0
+                            SL[l] = 1 if r == 2 else 0
+                            nfin += FIN[l]
+                    # phase 5: the closed form past _COUNTED_IMPACTS
+                    break
                 nmore = 0
                 for l in range(L):
                     m = MORE[l]
                     T = TT[l]
-                    t = TS[l] + 2.0 * WS[l] if m else TS[l]
-                    w = WS[l] * E[l] if m else WS[l]
-                    k = KS[l] + m
-                    closed = m & (k >= _COUNTED_IMPACTS)
-                    more = m & (1 - closed) & (t + 2.0 * w <= T)
-                    last = m & (1 - closed) & (1 - more)
+                    t = TS[l] + 2.0 * WS[l]
+                    w = WS[l] * E[l]
+                    nxt = t + 2.0 * w <= T
+                    last = m if not nxt else 0
                     d = T - t
-                    YN[l] = (-0.5 * d * d + w * d + 1.0) if last else YN[l]
-                    VN[l] = (w - d) if last else VN[l]
-                    K[l] = k if last else K[l]
+                    Y[l] = (-0.5 * d * d + w * d + 1.0) if last else Y[l]
+                    V[l] = (w - d) if last else V[l]
+                    n = N[l] + last
+                    N[l] = n
+                    IMP[l] += k if last else 0
+                    JMP[l] += last
+                    f = last if n >= max_iter else 0
+                    FIN[l] |= f
+                    nfin += f
                     TS[l] = t
                     WS[l] = w
-                    KS[l] = k
-                    CLOSED[l] = CLOSED[l] | closed
-                    MORE[l] = more
-                    nmore += more
-                    nclosed += closed
-            if nclosed > 0:
-                for l in range(L):
-                    if CLOSED[l]:
-                        CLOSED[l] = 0
-                        YN[l], VN[l], K[l] = _step_closed(Y[l], V[l], E[l], TT[l], RATIO[l])
-        # bookkeeping, vectorised over lanes
-        nfin = 0
-        for l in range(L):
-            k = K[l]
-            N[l] += 1
-            IMP[l] += k if k > 0 else 0
-            JMP[l] += 1 if k != 0 else 0
-            Y[l] = YN[l]
-            V[l] = VN[l]
-            nfin += LIVE[l] & ((k == SLIDING) | (N[l] >= max_iter))
+                    m = m if nxt else 0
+                    MORE[l] = m
+                    nmore += m
+                # phase 4: impacts 2 to 7
         if nfin == 0:
             continue
         for l in range(L):
-            if LIVE[l] == 0 or (K[l] != SLIDING and N[l] < max_iter):
+            f = FIN[l]
+            if f == 0:
                 continue
-            if K[l] == SLIDING and PERIODIC[l] == 0:
+            FIN[l] = 0
+            sl = SL[l]
+            if sl and I[_PER, l] == 0:
                 # end of the transient: the ball leaves the edge at (1, 0)
-                PERIODIC[l] = 1
+                I[_PER, l] = 1
                 N[l] = 0
                 IMP[l] = 0
                 JMP[l] = 0
                 continue
-            n = N[l] if K[l] == SLIDING else 0
-            _store(PIX[l], n, IMP[l], JMP[l], status, word_length, jumps, period, impacts)
-            N[l] = 0
-            IMP[l] = 0
-            JMP[l] = 0
-            nxt, loaded, npr = _load_next(l, nxt, stop, es, us, grid, y0, v0, from_rest, prune, energy0,
-                                          Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX,
-                                          status, word_length, jumps, period, impacts)
-            pruned += npr
-            if not loaded:
+            _store(I[_PIX, l], N[l] if sl else 0, IMP[l], JMP[l],
+                   status, word_length, jumps, period, impacts)
+            if not _take(l, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune,
+                         y0, v0, from_rest, S, I, status, word_length, jumps, period, impacts):
                 LIVE[l] = 0
                 active -= 1
-    return pruned
+        # phase 6: finished pixels stored, lanes reloaded (and segments listed)
+    return pos[3]
 
 
-@njit(cache=True, inline="always")
-def _pixel(p, es, us, grid):
-    """Parameters ``(e, u)`` of pixel ``p``: of the row-major ``n_u x n_e`` grid
-    ``us x es`` when ``grid``, else of the point list ``(es[p], us[p])``."""
-    if grid:
-        ne = es.shape[0]
-        return es[p % ne], us[p // ne]
-    return es[p], us[p]
-
-
-@njit(cache=True, inline="always")
-def _load_next(l, p, stop, es, us, grid, y0, v0, from_rest, prune, energy0,
-               Y, V, E, TT, RATIO, HALF_TT, PERIODIC, PIX,
-               status, word_length, jumps, period, impacts):
-    """Load the first pixel from ``p`` on that needs iterating into lane ``l``.
-
-    With ``prune``, the pixels before it that :func:`_never_slides` proves get
-    status 1 here.  Returns the index after the loaded pixel (``stop`` when
-    none is left, the lane then untouched), whether one was loaded, and the
-    number pruned.
-    """
-    n = 0
-    while p < stop:
-        e, u = _pixel(p, es, us, grid)
-        T, ratio = _constants(e, u)
-        if prune and _never_slides(e, T, ratio, energy0):
-            _store(p, 0, 0, 0, status, word_length, jumps, period, impacts)
-            n += 1
-            p += 1
-            continue
-        E[l] = e
-        TT[l] = T
-        RATIO[l] = ratio
-        HALF_TT[l] = 0.5 * T * T  # as model._step evaluates it
-        Y[l] = 1.0 if from_rest else y0
-        V[l] = 0.0 if from_rest else v0
-        PERIODIC[l] = 1 if from_rest else 0
-        PIX[l] = p
-        return p + 1, True, n
-    return p, False, n
+@njit(cache=True)
+def _closed(l, max_iter, S, I, M):
+    """Lane ``l``'s step by the closed form of ``model._step`` (past
+    ``_COUNTED_IMPACTS`` impacts), from its state before the step, and its
+    bookkeeping as in the lane loops.  Returns 2 when it slid, 1 when the
+    pixel reached max_iter, else 0.  ``M[l]``: the values of ``expm1`` and
+    ``pow`` kept for the lane's pixel (``model._geometric_memo``)."""
+    e = S[_E, l]
+    if S[_LOGE, l] > 0.0:  # log(e) once per pixel, and nothing kept yet
+        S[_LOGE, l] = math.log(e) if e > 0.0 else -math.inf
+        M[l] = -1.0
+    yn, vn, k = _step_closed_log(S[_Y, l], S[_V, l], e, S[_T, l], S[_R, l], S[_LOGE, l], M[l])
+    S[_Y, l] = yn
+    S[_V, l] = vn
+    I[_MORE, l] = 0
+    I[_N, l] += 1
+    if k > 0:
+        I[_IMP, l] += k
+    I[_JMP, l] += 1
+    if k == SLIDING:
+        return 2
+    return 1 if I[_N, l] >= max_iter else 0
 
 
 @njit(cache=True, parallel=True, nogil=True)
 def _scan_fast(es, us, grid, max_iter, y0, v0, prune, order, chunk,
                status, word_length, jumps, period, impacts, halt):
-    """Fast kernel: chunks of ``chunk`` pixels in the order ``order``, LANES
-    pixels of a chunk in lockstep (:func:`_run_chunk`).
+    """Fast kernel: the units ``order[u]`` (rows of segment indices, -1 padded)
+    in parallel, segments of ``chunk`` pixels, LANES pixels of a unit in
+    lockstep (:func:`_run_unit`).
 
     ``grid``: the pixels are the row-major ``n_u x n_e`` grid ``us x es``;
     otherwise the points ``(es[p], us[p])``.  Outputs are flat, one entry per
@@ -441,27 +579,37 @@ def _scan_fast(es, us, grid, max_iter, y0, v0, prune, order, chunk,
     the outputs are incomplete and must be dropped).
     """
     npix = es.shape[0] * us.shape[0] if grid else es.shape[0]
+    if grid:
+        cols, rows = _grid_factors(es, us, y0 + v0 * v0)
+    else:
+        cols, rows = np.empty((5, 0)), np.empty((4, 0))
     pruned = np.zeros(order.shape[0], np.int64)
     for c in prange(order.shape[0]):
-        s = order[c] * chunk
-        pruned[c] = _run_chunk(es, us, grid, max_iter, y0, v0, prune, s, min(s + chunk, npix),
-                               status, word_length, jumps, period, impacts, halt)
+        pruned[c] = _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, order[c], chunk, npix,
+                              status, word_length, jumps, period, impacts, halt)
     return pruned.sum()
 
 
 def _chunking(npix, threads):
-    """Chunk size and chunk order for :func:`_scan_fast`.
+    """Segment size and the units of :func:`_scan_fast`: ``(chunk, order)``.
 
-    prange hands each thread one contiguous block of iterations; the order
-    ``0, 16, 32, ..., 1, 17, ...`` makes every block sample the whole plane,
-    so threads get similar work although low u slides in a step or two and
-    high u runs to max_iter.  Results do not depend on either choice.
+    A unit's lanes idle only at its end, while its last pixels run (up to
+    max_iter steps), so units are few and large: _UNITS_PER_THREAD per thread,
+    at least _UNIT_MIN pixels each.  prange hands each thread a contiguous
+    block of units, and the plane is uneven (low u slides in a step or two,
+    high u runs to max_iter, above the Corollary 2.1 curve nothing is
+    iterated), so unit ``k`` takes segments ``k, k + n, k + 2n, ...`` of the
+    ``n`` units: every unit samples the whole plane and the work is shared
+    evenly.  Results do not depend on any of these choices.
     """
-    chunk = int(min(_CHUNK_MAX, max(4 * LANES, -(-npix // (16 * max(threads, 1))))))
-    n = -(-npix // chunk)
-    if n == 0:
-        return chunk, np.zeros(0, np.int64)
-    order = np.concatenate([np.arange(k, n, 16) for k in range(min(16, n))]).astype(np.int64)
+    chunk = int(min(_CHUNK_MAX, max(LANES, -(-npix // (16 * max(threads, 1))))))
+    nseg = -(-npix // chunk)
+    units = int(max(1, min(_UNITS_PER_THREAD * max(threads, 1), npix // _UNIT_MIN, nseg)))
+    per = -(-nseg // units)
+    order = np.full((units, per), -1, np.int64)
+    for k in range(units):
+        segs = np.arange(k, nseg, units)
+        order[k, : segs.size] = segs
     return chunk, order
 
 

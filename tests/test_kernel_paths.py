@@ -1,0 +1,155 @@
+"""The scan kernel's own paths (issue 26), each checked against what it replaces.
+
+- ``model._step_closed_log`` with kept values (``_geometric_memo``) is
+  ``model._step_closed`` bit for bit, kept values hit or missed;
+- the pruning test from row and column factors (``plane._prune_pixel``) is
+  ``plane._never_slides`` pixel by pixel;
+- a unit of parallel work streams its segments through its lanes: any
+  segment size and any split into units give the arrays of one pixel at a time
+  (``model._slide_or_steps``), transients, pruning and closed-form steps
+  included.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import pytest
+
+from stairbounce import plane as sc
+from stairbounce.model import (
+    _constants,
+    _slide_or_steps,
+    _step_closed,
+    _step_closed_log,
+    iterate,
+    no_sliding_bound,
+)
+
+FIELDS = ("status", "word_length", "jumps", "period", "impacts")
+
+
+@numba.njit
+def _closed_both(ys, vs, es, us, out):
+    """Per state: _step_closed, then _step_closed_log with a memo kept across
+    the states of one e (as a lane keeps it across its pixel's steps); counts
+    the states where the two differ in any bit, and the memo hits."""
+    memo = np.full(6, -1.0)
+    last = -1.0
+    bad = 0
+    for i in range(ys.size):
+        T, r = _constants(es[i], us[i])
+        if es[i] != last:
+            memo[:] = -1.0
+            last = es[i]
+        a = _step_closed(ys[i], vs[i], es[i], T, r)
+        le = math.log(es[i]) if es[i] > 0.0 else -math.inf
+        b = _step_closed_log(ys[i], vs[i], es[i], T, r, le, memo)
+        c = _step_closed_log(ys[i], vs[i], es[i], T, r, le, None)
+        same = True
+        for x, y in ((a[0], b[0]), (a[1], b[1]), (a[0], c[0]), (a[1], c[1])):
+            if not (x == y or (x != x and y != y)):
+                same = False
+        if not same or a[2] != b[2] or a[2] != c[2]:
+            bad += 1
+        out[i] = a[2]
+    return bad
+
+
+def test_closed_form_with_kept_values_is_the_closed_form():
+    rng = np.random.default_rng(3)
+    # runs of states sharing e (the memo is kept across them), from e = 0 to e one ulp below 1
+    base = np.concatenate([rng.uniform(0.0, 1.0, 300), 1.0 - 10.0 ** rng.uniform(-15.9, -1, 300),
+                           10.0 ** rng.uniform(-12, -1, 100), [0.0, np.nextafter(1.0, 0.0)]])
+    es = np.repeat(base, 400)
+    n = es.size
+    ys = 10.0 ** rng.uniform(-2, 2, n)
+    vs = rng.normal(0.0, 2.0, n)
+    us = 10.0 ** rng.uniform(-2, 0.5, n)
+    ks = np.empty(n, np.int64)
+    assert _closed_both(ys, vs, es, us, ks) == 0
+    # the states do reach the closed form's many-impact answers, and repeats of them
+    assert (ks >= 8).sum() > 10_000 and (ks == -1).sum() > 1000 and (ks == 0).sum() > 1000
+
+
+def test_row_and_column_factors_give_the_pruning_test():
+    rng = np.random.default_rng(4)
+    e = np.concatenate([rng.uniform(0.0, 1.0, 300), 1.0 - 10.0 ** rng.uniform(-12, -1, 60),
+                        10.0 ** rng.uniform(-12, -1, 60), [0.0]])
+    u = np.concatenate([np.array([no_sliding_bound(x) for x in e[e > 0][:200]])
+                        * (1 + 10.0 ** rng.uniform(-12, -3, 200) * rng.choice([-1, 1], 200)),
+                        10.0 ** rng.uniform(-3, 3, 200), [1e-150, 1e150]])
+    for energy0 in (1.0, 0.0, 5e3):
+        cols, rows = sc._grid_factors(e, u, energy0)
+        grid = np.array([[sc._prune_pixel(rows[0, i], rows[1, i], rows[2, i], cols[2, j], cols[3, j], cols[4, j])
+                          for j in range(e.size)] for i in range(u.size)])
+        direct = np.array([[sc._never_slides(e[j], *_constants(e[j], u[i]), energy0) for j in range(e.size)]
+                           for i in range(u.size)])
+        assert np.array_equal(grid, direct)
+        assert 0 < grid.sum() < grid.size  # both answers occur, near the curve too
+
+
+def _pixel_by_pixel(es, us, max_iter, y0, v0):
+    """model._slide_or_steps pixel after pixel: the arrays every kernel path must give."""
+    out = {k: np.zeros((us.size, es.size), dtype=dt) for k, (dt, _) in sc._FIELDS.items()}
+    for i, u in enumerate(us):
+        for j, e in enumerate(es):
+            T, ratio = _constants(e, u)
+            n = 1
+            if (y0, v0) != (1.0, 0.0):
+                n = _slide_or_steps(y0, v0, e, T, ratio, max_iter)[0]
+            imp = jmp = 0
+            if n:
+                n, imp, jmp = _slide_or_steps(1.0, 0.0, e, T, ratio, max_iter)
+            out["status"][i, j] = 0 if n else 1
+            out["word_length"][i, j] = imp + 1 if n else 0
+            out["jumps"][i, j] = jmp if n else 0
+            out["period"][i, j] = n
+            out["impacts"][i, j] = imp if n else 0
+    return out
+
+
+def _units(nseg, units):
+    """Unit k takes segments k, k + units, ... (as _chunking lays them out), -1 padded."""
+    per = -(-nseg // units)
+    order = np.full((units, per), -1, np.int64)
+    for k in range(units):
+        s = np.arange(k, nseg, units)
+        order[k, : s.size] = s
+    return order
+
+
+@pytest.mark.parametrize("y0, v0", [(1.0, 0.0), (2.5, -0.7)])
+def test_any_segments_and_units_give_the_pixel_by_pixel_arrays(y0, v0):
+    # a window across the Corollary 2.1 curve with many-impact steps (closed
+    # form), short and long periods, and pixels that never slide
+    es = np.linspace(0.05, 0.95, 23)
+    us = np.linspace(0.03, 1.2, 19)
+    max_iter = 300
+    ref = _pixel_by_pixel(es, us, max_iter, y0, v0)
+    npix = es.size * us.size
+    for chunk, units in ((7, 1), (37, 3), (64, 5), (npix, 1), (5, 40)):
+        for prune in (True, False):
+            nseg = -(-npix // chunk)
+            outs = [np.full(npix, 77, dtype=dt) for dt, _ in sc._FIELDS.values()]
+            sc._scan_fast(es, us, True, max_iter, y0, v0, prune, _units(nseg, min(units, nseg)), chunk,
+                          *outs, np.zeros(1, np.int64))
+            for k, o in zip(FIELDS, outs):
+                assert np.array_equal(o.reshape(us.size, es.size), ref[k]), (chunk, units, prune, k)
+    # the window exercises what it is meant to: periods of several steps,
+    # pixels that never slide, pruned pixels and steps past 8 impacts
+    assert (ref["status"] == 1).any() and (ref["period"] > 5).any()
+    assert sc.prunable(*np.meshgrid(es, us), y0, v0).any()
+    ks = np.concatenate([iterate(1.0, 0.0, e, u, 100)[2] for e in es[::2] for u in us[::2]])
+    assert (ks >= 8).sum() > 50
+
+
+def test_chunking_covers_every_pixel_once():
+    for npix in (1, 31, 32, 4095, 4096, 8193, 175_000, 360_000, 1_000_003):
+        for threads in (1, 2, 16):
+            chunk, order = sc._chunking(npix, threads)
+            segs = order[order >= 0]
+            assert np.array_equal(np.sort(segs), np.arange(-(-npix // chunk)))
+            assert order.shape[0] <= max(1, sc._UNITS_PER_THREAD * threads)
