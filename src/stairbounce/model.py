@@ -501,12 +501,14 @@ def impact_number(y: Real, v: Real, e: Real, u: Real) -> int:
     T, ratio = _constants(e, check_u(u))
     if _slides(y, v, T, ratio):
         raise ValueError(
-            "the solution slides on this step (Prop. 2.1): its impact number is infinite"
+            f"the solution from (y, v) = ({y!r}, {v!r}) with e = {e!r}, u = {u!r} slides on this "
+            "step (Prop. 2.1): its impact number is infinite (test with slides(y, v, e, u) first)"
         )
     k = _impact_number_closed(y, v, e, T)
     if k == SLIDING:
         raise ValueError(
-            "the solution slides on this step (Prop. 2.1): its impact number is infinite"
+            f"the solution from (y, v) = ({y!r}, {v!r}) with e = {e!r}, u = {u!r} slides on this "
+            "step (Prop. 2.1): its impact number is infinite (test with slides(y, v, e, u) first)"
         )
     return int(k)
 
