@@ -75,7 +75,7 @@ from .plane import (
 from .plane import scan as _scan_function
 from .symbolic import Word, parse_word, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
-from .units import normalized_speed, physical_speed, time_scale
+from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, physical_speed, time_scale
 from ._compat import register_alias as _register_alias
 
 try:
@@ -96,6 +96,10 @@ __all__ = [
     "SLIDING",
     "Slide",
     "SlopeFit",
+    "Speed",
+    "SpeedWindow",
+    "Speeds",
+    "Staircase",
     "Trajectory",
     "UncertainFraction",
     "UncertaintyDimension",

@@ -106,6 +106,7 @@ import numpy as np
 import xarray as xr
 from numba import njit, prange
 
+from .units import staircase_of, with_speed
 from .model import (
     _COUNTED_IMPACTS,
     SLIDING,
@@ -820,7 +821,7 @@ def motion_coords(e_values, u_values, steps=1000, transient=1000, y0=1.0, v0=0.0
         "stairbounce_version": __version__,
         "reference": "Campos, Romero-Valles, Torres, Prop. 2.3; issue 13",
     }
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    return with_speed(xr.Dataset(data_vars, coords=coords, attrs=attrs), staircase_of(u_values))
 
 
 def motion_scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), steps=1000, transient=1000, y0=1.0, v0=0.0,
@@ -867,7 +868,7 @@ def motion_scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), steps=1000, transient=1000
             progress(min(r + block, n_u), n_u)
         ds = xr.concat(parts, dim="u", combine_attrs="override") if len(parts) > 1 else parts[0]
     ds.attrs.update(e_min=e_min, e_max=e_max, n_e=n_e, u_min=u_min, u_max=u_max, n_u=n_u)
-    return ds
+    return with_speed(ds, staircase_of(u))
 
 
 # --------------------------------------------------------------------------- #

@@ -45,7 +45,7 @@ def word(
     typer.echo(f"word:    {text}")
     typer.echo(f"length:  {len(w)}")
     typer.echo(f"period:  {w.period} steps"
-               + ("" if stairs is None else f" = {w.period * stairs.b / stairs.speed(u):.6g} s"))
+               + ("" if stairs is None else f" = {w.period * stairs.step_length / stairs.to_speed(u):.6g} s"))
     typer.echo(f"impacts: {w.impacts} per period (plus the accumulation)")
 
 
@@ -67,7 +67,7 @@ def map_(
     u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
     ys, vs, ks = iterate(y0, v0, e, u, steps)
     # (y, v) normalised, then (y a, v sqrt(a g)) in SI units when a staircase was given
-    si = () if stairs is None else (stairs.a, stairs.velocity_unit)
+    si = () if stairs is None else (stairs.step_height, stairs.velocity_unit)
     if as_csv:
         w = csv.writer(sys.stdout, lineterminator="\n")
         w.writerow(["n", "y", "v", "impacts"] + (["y_m", "v_m_per_s"] if si else []))

@@ -9,6 +9,7 @@ import typer
 
 from .._io import atomic_path
 from ..model import check_count
+from ..units import with_speed
 from . import _staircase as st
 from ._app import (
     FORCE_HELP,
@@ -140,6 +141,9 @@ def orbit_diagram_(
     varied = "e" if e_swept else "u"
 
     ds = _sweep(ev, uv, varied, y0, v0, transient, keep, warm_start)
+    # on a real staircase: the coordinate (or attribute) speed in m/s, and the
+    # figure's axes in m/s and metres
+    ds = with_speed(ds, stairs, "u")
     fixed = "u" if e_swept else "e"
     summary = (f"{ds.sizes[varied]} values of {varied} x {ds.sizes['iterate']} iterates "
                f"({ds.sizes[varied] * ds.sizes['iterate']} points), {fixed} = {ds.attrs[fixed]:g}")

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from . import _units
 from .. import _validate as _v
 from ..model import tongue
 from ..orbits import _LONG_NAMES, _varied, orbit_density
@@ -158,11 +159,31 @@ def plot_orbit_diagram(ds, component="y", density=True, ax=None, overlay=(), bin
     ax.set_ylabel(label if label is not None else _LONG_NAMES[component])
     # never "1e-5+1" above the axis: the offset is in the label instead
     ax.ticklabel_format(axis="y", useOffset=False)
+    stairs = _units.staircase(ds)
+    fixed_text = f"{fixed_name} = {float(a[fixed_name]):g}"
+    if stairs is not None:
+        _physical_axes(ax, stairs, varied, component, offset, unit, label)
+        fixed_text = (f"{fixed_text} (U = {float(a[fixed_name]) * stairs.speed_unit:.4g} m/s)"
+                      if fixed_name == "u" else fixed_text) + f", {_units.describe(stairs)}"
     first, last = int(ds["iterate"].values[0]), int(ds["iterate"].values[-1])
-    ax.set_title(f"orbit diagram, {fixed_name} = {float(a[fixed_name]):g}, "
+    ax.set_title(f"orbit diagram, {fixed_text}, "
                  f"iterates {first}..{last} from ({float(a['y0']):g}, {float(a['v0']):g})"
                  + (", warm start" if int(a.get("warm_start", 0)) else ""), fontsize="medium")
     return ax
+
+
+def _physical_axes(ax, stairs, varied, component, offset, unit, label):
+    """An orbit diagram on a real staircase: the swept speed in m/s, the
+    component in metres or m/s (when it is drawn as it is: no offset or unit)."""
+    if varied == "u":
+        _units.speed_axis(ax.xaxis, stairs)
+    if offset == 0.0 and unit == 1.0 and label is None:
+        if component == "y":
+            _units.scaled_axis(ax.yaxis, stairs.step_height)
+            ax.set_ylabel("height at the edge (m)")
+        else:
+            _units.scaled_axis(ax.yaxis, stairs.velocity_unit)
+            ax.set_ylabel("vertical velocity at the edge (m/s)")
 
 
 def _draw_tongue_lines(ax, ds, varied, legend):
