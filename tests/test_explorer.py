@@ -471,6 +471,11 @@ def test_explorer_tap_shows_the_word(explorer):
     assert len(app.orbit_src.data["x"]) == 300 * 200
     app._on_tap(SimpleNamespace(x=0.99, y=0.2))  # outside the window: taken as it is
     assert app.view.point == (0.99, 0.2)
+    # above the Corollary 2.1 curve (0.0018 at e = 0.99) the tap says it is proven
+    assert "proven: Corollary 2.1 excludes sliding" in app.point_pane.object
+    app._on_tap(SimpleNamespace(x=0.4, y=0.33))  # below the curve, no slide within 300 steps
+    assert "does not slide within max_iter = 300 steps" in app.point_pane.object
+    assert "Corollary 2.1 does not exclude it" in app.point_pane.object
 
 
 def test_explorer_colour_change_reshades_without_recomputing(explorer):

@@ -73,7 +73,7 @@ from .plane import (
     tongue_mask,
 )
 from .plane import scan as _scan_function
-from .symbolic import Word, parse_word, sliding_word
+from .symbolic import SlidingAnswer, Word, parse_word, sliding_answer, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, physical_speed, time_scale
 from ._compat import register_alias as _register_alias
@@ -95,6 +95,7 @@ __all__ = [
     "PerimeterDimension",
     "SLIDING",
     "Slide",
+    "SlidingAnswer",
     "SlopeFit",
     "Speed",
     "SpeedWindow",
@@ -144,6 +145,7 @@ __all__ = [
     "scan_points",
     "scan_to_zarr",
     "slides",
+    "sliding_answer",
     "sliding_classifier",
     "sliding_word",
     "slope_fit",

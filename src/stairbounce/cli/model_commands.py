@@ -10,7 +10,7 @@ import typer
 
 from .._io import atomic_path
 from ..model import SLIDING, iterate
-from ..symbolic import sliding_word, terminal_can_print_infinity
+from ..symbolic import sliding_answer, terminal_can_print_infinity
 from ..trajectory import trajectory
 from . import _staircase as st
 from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, plural, progress_bar, save_figure
@@ -33,18 +33,18 @@ def word(
     u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
     if stairs is not None:
         typer.echo(st.describe(u, stairs))
-    w = sliding_word(e, u, max_steps=max_steps)
+    answer = sliding_answer(e, u if stairs is None else stairs.speed(float(speed)),
+                            max_steps=max_steps)
+    w = answer.word
     if w is None:
-        typer.echo(
-            f"e = {e:g}, u = {u:g}: no periodic sliding solution found within {max_steps} steps "
-            "(the orbit of (1, 0) does not slide)"
-        )
+        # proven impossible above the Corollary 2.1 curve, else only not found
+        typer.echo(f"e = {e:g}, u = {u:g}: {answer.text()}")
         return
     text = w.format(ascii=not terminal_can_print_infinity())
     typer.echo(f"e = {e:g}, u = {u:g}")
     typer.echo(f"word:    {text}")
     typer.echo(f"length:  {len(w)}")
-    typer.echo(f"period:  {w.period} steps"
+    typer.echo(f"period:  {plural(w.period, 'step')}"
                + ("" if stairs is None else f" = {w.period * stairs.step_length / stairs.to_speed(u):.6g} s"))
     typer.echo(f"impacts: {w.impacts} per period (plus the accumulation)")
 

@@ -817,9 +817,15 @@ class Explorer:
         e, u, w = d["e"], d["u"], d["word"]
         head = (f'e = <span class="sb-e">{e!r}</span>, u = <span class="sb-u">{u!r}</span>: ')
         steps = d["steps"]
-        if w is None:
+        answer = d.get("answer")
+        if w is None and answer is not None and answer.verdict == "impossible":
+            body = (f"no periodic sliding solution, proven: Corollary 2.1 excludes sliding for "
+                    f"u &gt;= {answer.bound:.6g} at this e (sliding needs u &lt; {answer.bound:.6g})")
+            title = f"trajectory from (1, 0), {_plural(steps, 'step')} (never slides: Corollary 2.1)"
+        elif w is None:
             body = (f"no periodic sliding solution: the orbit of (1, 0) does not slide within "
-                    f"max_iter = {view.max_iter} steps")
+                    f"max_iter = {view.max_iter} steps (Corollary 2.1 does not exclude it: "
+                    f"u &lt; {answer.bound if answer is not None else float('nan'):.6g})")
             title = f"trajectory from (1, 0), {_plural(steps, 'step')} (no sliding found)"
         else:
             body = (f'word <span class="sb-word">{html.escape(w.format())}</span>, length {len(w)}, '
