@@ -104,7 +104,7 @@ def orbit_diagram_(
     warm_start: bool = typer.Option(False, "--warm-start", help="Start each value from the previous value's last state."),
     component: str = typer.Option("y", "--component", help="Component to plot: y or v."),
     points: bool = typer.Option(False, "--points", help="Draw every point instead of a density image."),
-    overlay: list[str] = typer.Option([], "--overlay", help="Curves to draw, comma-separated or repeated: tongues (Theorem 3.1)."),
+    overlay: list[str] = typer.Option([], "--overlay", help="Lines to draw, comma-separated or repeated: tongues (Theorem 3.1), families (one impact every n steps, where the diagram jumps), bound (Corollary 2.1)."),
     bins: int = typer.Option(400, "--bins", help="Density image rows along the component (>= 1)."),
     value_range: str = typer.Option(None, "--range", help="Plotted range MIN:MAX of the component (a zoom)."),
     png: Path = typer.Option(None, "--png", help="Figure file (.png, .pdf or .svg)."),
@@ -120,7 +120,7 @@ def orbit_diagram_(
         typer.echo(f"speed {speed} m/s on {stairs.describe()}: u = {u}")
     if component not in ("y", "v"):
         raise CLIError(f"--component must be y or v, got {component!r}")
-    overlays = parse_overlays(overlay, ("tongues",))
+    overlays = parse_overlays(overlay, ("tongues", "families", "bound"))
     check_count("--bins", bins, 1)
     check_dpi(dpi)
     if png is None and out is None:
