@@ -19,7 +19,7 @@ E_HELP = "Restitution coefficient, in [0, 1)."
 U_HELP = "Horizontal speed in normalised units (u > 0); one step takes 1/u. Or --speed with --step-height, --step-length."
 
 
-@app.command()
+@app.command(short_help="Word of the sliding solution through (1, 0), or why none.")
 def word(
     e: float = typer.Option(..., "--e", help=E_HELP),
     u: float = typer.Option(None, "--u", help=U_HELP),
@@ -49,7 +49,7 @@ def word(
     typer.echo(f"impacts: {w.impacts} per period (plus the accumulation)")
 
 
-@app.command("map")
+@app.command("map", short_help="Poincare iterates (Prop 2.3): the state at each edge.")
 def map_(
     e: float = typer.Option(..., "--e", help=E_HELP),
     u: float = typer.Option(None, "--u", help=U_HELP),
@@ -85,7 +85,7 @@ def map_(
         typer.echo(f"{n:>6}  {y:>22.15g}  {v:>22.15g}  {label:7s}{extra}".rstrip())
 
 
-@app.command("trajectory")
+@app.command("trajectory", short_help="The ball's path (Fig 1) and Poincare section (Fig 2).")
 def trajectory_(
     e: float = typer.Option(..., "--e", help=E_HELP),
     u: float = typer.Option(None, "--u", help=U_HELP),

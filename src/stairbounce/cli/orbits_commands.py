@@ -19,6 +19,7 @@ from ._app import (
     check_outputs,
     parse_overlays,
     parse_range,
+    plural,
     progress_bar,
     save_figure,
 )
@@ -88,7 +89,7 @@ def _write_data(ds, path: Path, overwrite=False) -> None:
             ds.to_dataframe().to_csv(tmp)
 
 
-@app.command("orbit-diagram")
+@app.command("orbit-diagram", short_help="Orbit diagram over e or u (Section 4, Figs 8, 9).")
 def orbit_diagram_(
     e: str = typer.Option(..., "--e", help="Restitution coefficient in [0, 1): a number, or a range MIN:MAX to sweep."),
     u: str = typer.Option(None, "--u", help="Horizontal speed u > 0: a number, or a range MIN:MAX to sweep."),
@@ -145,7 +146,7 @@ def orbit_diagram_(
     # figure's axes in m/s and metres
     ds = with_speed(ds, stairs, "u")
     fixed = "u" if e_swept else "e"
-    summary = (f"{ds.sizes[varied]} values of {varied} x {ds.sizes['iterate']} iterates "
+    summary = (f"{ds.sizes[varied]} values of {varied} x {plural(ds.sizes['iterate'], 'iterate')} "
                f"({ds.sizes[varied] * ds.sizes['iterate']} points), {fixed} = {ds.attrs[fixed]:g}")
 
     if out is not None:

@@ -16,9 +16,9 @@ from ._app import (
     parse_range,
     parse_size,
     plural,
-    progress_bar,
     save_figure,
     tile_for_workers,
+    with_row_progress,
 )
 from . import _staircase as st
 from .motion_commands import MOTION_FIELD_NAMES, motion_scan_figure
@@ -34,7 +34,7 @@ OVERLAY_NAMES = ("tongues", "bound")
 _CLI_BYTES_PER_PIXEL = 140
 
 
-@app.command("scan")
+@app.command("scan", short_help="Scan the (e, u) plane for sliding solutions (Figs 3-5).")
 def scan_(
     e: str = typer.Option(
         "0:1", "--e",
@@ -170,11 +170,8 @@ def scan_(
 
 
 def _scan_with_progress(sc, e, u, max_iter, y0, v0):
-    from rich.console import Console
-
-    with progress_bar(Console(stderr=True), "scan rows", u[2]) as (bar, task):
-        return sc.scan(e, u, max_iter, y0, v0,
-                       progress=lambda done, total: bar.update(task, completed=done, total=total))
+    return with_row_progress(lambda progress: sc.scan(e, u, max_iter, y0, v0, progress=progress),
+                             "scan rows", u[2])
 
 
 def _draw(ds, field, overlays, png, dpi, overwrite=False):

@@ -824,7 +824,7 @@ class Explorer:
             title = f"trajectory from (1, 0), {_plural(steps, 'step')} (never slides: Corollary 2.1)"
         elif w is None:
             body = (f"no periodic sliding solution: the orbit of (1, 0) does not slide within "
-                    f"max_iter = {view.max_iter} steps (Corollary 2.1 does not exclude it: "
+                    f"max_iter = {_plural(view.max_iter, 'step')} (Corollary 2.1 does not exclude it: "
                     f"u &lt; {answer.bound if answer is not None else float('nan'):.6g})")
             title = f"trajectory from (1, 0), {_plural(steps, 'step')} (no sliding found)"
         else:
@@ -837,7 +837,7 @@ class Explorer:
         sec = d.get("section")
         self.section_src.data = dict(x=sec[0], y=sec[1]) if sec is not None else dict(x=[], y=[])
         self.section_fig.title.text = (f"Poincare section at e = {e:.6g}, u = {u:.6g}: last "
-                                       f"{len(sec[0])} iterates from (1, 0)" if sec is not None else
+                                       f"{_plural(len(sec[0]), 'iterate')} from (1, 0)" if sec is not None else
                                        "Poincare section: none (the orbit slides)")
         sx = np.repeat(np.arange(-1, steps + 1), 2)[1:].astype(float)
         sy = -np.repeat(np.arange(-1, steps + 1), 2)[:-1].astype(float)
