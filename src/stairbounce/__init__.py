@@ -49,6 +49,7 @@ from .model import (
     tongue,
 )
 from .nonsliding import (
+    Motion,
     k_mean_bound,
     lyapunov_exponents,
     motion,
@@ -92,6 +93,7 @@ __all__ = [
     "BoxDimension",
     "Flight",
     "Impact",
+    "Motion",
     "PerimeterDimension",
     "SLIDING",
     "Slide",

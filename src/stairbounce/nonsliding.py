@@ -101,6 +101,8 @@ non-chaotic stationary bouncing on this staircase.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
@@ -121,6 +123,7 @@ from .model import (
 )
 
 __all__ = [
+    "Motion",
     "motion",
     "motion_scan",
     "motion_coords",
@@ -700,7 +703,7 @@ def _check_steps(steps, transient):
 
 
 def motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0):
-    """motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0) -> dict
+    """motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0) -> Motion
 
     Whether the orbit slides, and if not its impacts per step and Lyapunov exponents.
 
@@ -711,7 +714,8 @@ def motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0):
     over the kept ``steps``; each has a convergence estimate, the difference
     between its values over the first and the second half of the kept steps.
 
-    Returns a dict: ``slides`` (bool), ``slide_step`` (first sliding step,
+    Returns a :class:`Motion` (attributes, or keys as the dict it used to
+    be; its repr is one line): ``slides`` (bool), ``slide_step`` (first sliding step,
     1-based, transient included; 0 if none), ``k_mean`` (<k>), ``k_err``,
     ``jump_mean`` (kept steps per landing), ``lyap1``, ``lyap1_err``,
     ``lyap2`` (QR), ``lyap2_err``, ``lyap2_identity`` (``2 <k> log e -
@@ -754,7 +758,55 @@ def motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0):
     r["state_end"] = (float(extra[2]), float(extra[3]))
     r["steps"] = steps
     r["transient"] = transient
-    return r
+    return Motion(e=e, u=u, **r)
+
+
+@dataclass(frozen=True, repr=False)
+class Motion(Mapping):
+    """What :func:`motion` measured on one orbit, with a one-line repr.
+
+    The fields are those :func:`motion` documents; they read as attributes
+    (``r.k_mean``) or, as the dict this used to be, by key (``r["k_mean"]``,
+    ``dict(r)``, ``"lyap1" in r``).  ``e`` and ``u`` are the parameters.
+    """
+
+    e: float
+    u: float
+    steps: int
+    transient: int
+    slides: bool
+    slide_step: int
+    k_mean: float
+    k_err: float
+    jump_mean: float
+    lyap1: float
+    lyap1_err: float
+    lyap2: float
+    lyap2_err: float
+    lyap2_identity: float
+    dissipation: float
+    impulse: float
+    speed_spread: float
+    state_start: tuple
+    state_end: tuple
+
+    def __getitem__(self, key):
+        if not isinstance(key, str) or key not in self.__dataclass_fields__:
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def __iter__(self):
+        return iter(self.__dataclass_fields__)
+
+    def __len__(self):
+        return len(self.__dataclass_fields__)
+
+    def __repr__(self) -> str:
+        head = f"Motion(e={self.e:g}, u={self.u:g}, {self.transient} + {self.steps} steps: "
+        if self.slides:
+            return head + f"slides on step {self.slide_step})"
+        return head + (f"no slide, <k> = {self.k_mean:.6g}, mean jump {self.jump_mean:.6g}, "
+                       f"lambda_1 = {self.lyap1:.2e}, lambda_2 = {self.lyap2:.6g})")
 
 
 def _check_memory(npix):
