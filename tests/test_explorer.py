@@ -1172,3 +1172,45 @@ def test_back_and_forward_restore_the_view(explorer):
     assert app.e_window.value == "0:0.4" and app.color.value == "word_length"
     assert app.map_fig.x_range.start == 0.0 and app.map_fig.y_range.end == 1.1
     assert app.history_out.text.startswith("replace ?e=0:0.4&")
+
+
+def test_a_size_asked_for_in_one_edit_is_refused_whole(explorer):
+    """Issue 25: 5000 typed as width, then 5000 as height, is one request for
+    5000 x 5000 (refused with both numbers), not 600 x 5000: the refused width
+    is put back in its widget but asked for again with the height."""
+    app, ex = explorer
+    app.height_in.value = 500  # 60 x 500: computed
+    n = len(ex.calls)
+    app.width_in.value = 5000  # 5000 x 500: over the budget
+    assert "view of 5000x500 " in app.status.object and app.width_in.value == app.view.width == 60
+    app.height_in.value = 5000
+    assert "view of 5000x5000 = 25000000 pixels refused" in app.status.object
+    assert (app.width_in.value, app.height_in.value) == (60, 500) and len(ex.calls) == n
+    # another setting next is not combined with the refused side
+    app.max_iter.value = 200
+    assert app.view.max_iter == 200 and (app.view.width, app.view.height) == (60, 500)
+    # a refused height, then a width: asked for together
+    app.height_in.value = 50000
+    app.width_in.value = 100
+    assert "view of 100x50000" in app.status.object
+
+
+def test_a_quick_run_of_zooms_is_one_history_entry(explorer, monkeypatch):
+    """Issue 25: a six-notch wheel zoom reports several RangesUpdates on a
+    loaded machine; those within GESTURE_MERGE_S of each other are one
+    gesture, one history entry, so Back returns to the start view."""
+    import stairbounce.explorer.app as A
+
+    app, ex = explorer
+    clock = [100.0]
+    monkeypatch.setattr(A.time, "monotonic", lambda: clock[0])
+    modes = []
+    for k in range(6):  # notches 0.2 s apart
+        clock[0] += 0.2
+        app._on_ranges(SimpleNamespace(x0=0.02 * (k + 1), x1=0.4 - 0.02 * (k + 1), y0=0.3, y1=1.1))
+        modes.append(app.history_out.text.split(" ")[0])
+    assert modes == ["push"] + ["replace"] * 5
+    assert app.history_out.text.startswith("replace ?e=0.12:0.28&")
+    clock[0] += A.GESTURE_MERGE_S + 0.01  # a later zoom is a gesture of its own
+    app._on_ranges(SimpleNamespace(x0=0.15, x1=0.25, y0=0.3, y1=1.1))
+    assert app.history_out.text.startswith("push ?e=0.15:0.25&")
