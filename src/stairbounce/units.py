@@ -99,11 +99,12 @@ class Staircase:
     m/s and the attributes ``step_height``, ``step_length`` and ``g``; the
     plots then draw that axis in m/s (and heights in metres).
 
-    >>> stairs = Staircase(0.17, 0.28)
+    >>> import stairbounce as sb
+    >>> stairs = sb.Staircase(0.17, 0.28)
     >>> stairs
     Staircase(step_height=0.17 m, step_length=0.28 m, g=9.81 m/s^2)
-    >>> round(stairs.to_u(1.5), 4), round(stairs.to_speed(0.5641), 3)
-    (0.5641, 1.5)
+    >>> round(stairs.to_u(1.5), 4), round(stairs.to_speed(0.7052), 3)
+    (0.7052, 1.5)
     """
 
     step_height: float
