@@ -216,6 +216,7 @@ class Explorer:
         self._status_text, self._status_level, self._error_text = "", "info", ""
         self._refused_side = None  # (size widget, value) of the last refused size edit
         self._last_ranges = -math.inf  # time.monotonic() of the last range change
+        self._prefetched = False
 
         self._build_map()
         self._build_point_figures()
@@ -434,12 +435,23 @@ class Explorer:
 
     # ------------------------------------------------------------ interaction
 
-    def start(self):
-        """First render (and the URL's point) once the page is connected."""
-        self._connected = True
-        self._set_url("replace")
+    def prefetch(self):
+        """Ask for the first render as the session is built, before the
+        browser has the page's document: the picture is computed while the
+        document travels and the page builds its views (issue 25: the first
+        picture of a new page waited for all of that first)."""
+        self._prefetched = True
         self._draw_overlays(self.view)
         self._request(self.view, history=None)
+
+    def start(self):
+        """First render (unless :meth:`prefetch` asked for it) and the URL's
+        point, once the page is connected."""
+        self._connected = True
+        self._set_url("replace")
+        if not self._prefetched:
+            self._draw_overlays(self.view)
+            self._request(self.view, history=None)
         if self.view.point is not None:
             self._request_point(*self.view.point)
 
@@ -967,6 +979,9 @@ def create_app():
     (:func:`~stairbounce.explorer.view.parse_query`)."""
     view, messages = parse_query(pn.state.session_args if pn.state.curdoc else {})
     explorer = Explorer(view, messages)
+    doc = pn.state.curdoc
+    if doc is not None and doc.session_context is not None:
+        explorer._in_doc(explorer.prefetch)
     pn.state.onload(partial(explorer._in_doc, explorer.start))
     pn.state.on_session_destroyed(lambda _ctx: explorer.close())
     return explorer.layout
