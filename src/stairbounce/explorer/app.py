@@ -216,10 +216,6 @@ class Explorer:
         self._status_text, self._status_level, self._error_text = "", "info", ""
         self._refused_side = None  # (size widget, value) of the last refused size edit
         self._last_ranges = -math.inf  # time.monotonic() of the last range change
-        self._prefetched = False
-        # updates held back until the page is connected (see prefetch), or None
-        self._deferred = None
-        self._deferred_lock = threading.Lock()
 
         self._build_map()
         self._build_point_figures()
@@ -438,32 +434,12 @@ class Explorer:
 
     # ------------------------------------------------------------ interaction
 
-    def prefetch(self):
-        """Ask for the first render as the session is built, before the
-        browser has the page's document: the picture is computed while the
-        document travels and the page builds its views (issue 25: the first
-        picture of a new page waited for all of that first).  What the render
-        shows meanwhile is held back (:meth:`_next_tick`) and shown by
-        :meth:`start`: changes sent while the page is still connecting can be
-        lost (the status never said "computed")."""
-        self._prefetched = True
-        with self._deferred_lock:
-            self._deferred = []
-        self._draw_overlays(self.view)
-        self._request(self.view, history=None)
-
     def start(self):
-        """First render (unless :meth:`prefetch` asked for it, whose held-back
-        updates are shown now) and the URL's point, once the page is connected."""
+        """First render (and the URL's point) once the page is connected."""
         self._connected = True
         self._set_url("replace")
-        with self._deferred_lock:
-            deferred, self._deferred = self._deferred, None
-        for fn, args in deferred or ():
-            fn(*args)
-        if not self._prefetched:
-            self._draw_overlays(self.view)
-            self._request(self.view, history=None)
+        self._draw_overlays(self.view)
+        self._request(self.view, history=None)
         if self.view.point is not None:
             self._request_point(*self.view.point)
 
@@ -747,10 +723,6 @@ class Explorer:
         if self._doc is None or self._doc.session_context is None:
             fn(*args)
             return
-        with self._deferred_lock:
-            if self._deferred is not None:  # prefetched, the page not connected yet: start() shows it
-                self._deferred.append((fn, args))
-                return
         try:
             self._doc.add_next_tick_callback(partial(self._in_doc, fn, *args))
         except Exception:  # the page was closed meanwhile: nobody to show it to
@@ -995,9 +967,6 @@ def create_app():
     (:func:`~stairbounce.explorer.view.parse_query`)."""
     view, messages = parse_query(pn.state.session_args if pn.state.curdoc else {})
     explorer = Explorer(view, messages)
-    doc = pn.state.curdoc
-    if doc is not None and doc.session_context is not None:
-        explorer._in_doc(explorer.prefetch)
     pn.state.onload(partial(explorer._in_doc, explorer.start))
     pn.state.on_session_destroyed(lambda _ctx: explorer.close())
     return explorer.layout
