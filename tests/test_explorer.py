@@ -460,7 +460,11 @@ def test_explorer_refuses_a_view_over_budget(explorer):
 
 def test_explorer_tap_shows_the_word(explorer):
     app, ex = explorer
+    # a new page has no tap panels (most of its models): the first tap puts them in
+    assert app.tap_panels.objects == []
     app._on_tap(SimpleNamespace(x=0.1, y=0.75))
+    assert [p.object for p in app.tap_panels.objects[:1]] == [app.traj_fig]
+    assert [p.object for p in app.tap_panels.objects[1].objects] == [app.orbit_fig, app.section_fig]
     e, u = app.view.point
     assert (e, u) != (0.1, 0.75)  # snapped to the tapped pixel's centre
     assert e in app.ds.e.values and u in app.ds.u.values

@@ -572,6 +572,8 @@ def test_tap_panels_use_the_page_width_and_the_title_is_clean(server, page):
     box = _map_canvas(page).bounding_box()
     page.mouse.click(box["x"] + box["width"] * 0.3, box["y"] + box["height"] * 0.5)
     page.locator(".sb-point").get_by_text("word").first.wait_for(timeout=60_000)
+    page.locator(".sb-tap-panels .bk-Canvas").nth(2).wait_for(timeout=60_000)  # built by the tap
+    page.wait_for_timeout(500)  # laid out
     width = page.viewport_size["width"]
     panels = page.locator(".sb-tap-panels").bounding_box()
     assert panels["width"] > 0.9 * width

@@ -226,6 +226,17 @@ class Explorer:
         self.history_back.on_change("text", self._locked_bokeh(self._on_popstate))
         # referenced from the map, the two models are in the page's document
         self.map_fig.tags = [self.history_out, self.history_back]
+        # the tap's panels: a row of their own below the map, the page's full
+        # width; put in the page by the first tap (they are more than half of
+        # the page's models: a new page's document is half the size without them)
+        self._tap_panes = [
+            pn.pane.Bokeh(self.traj_fig, sizing_mode="stretch_width"),
+            pn.Row(pn.pane.Bokeh(self.orbit_fig, sizing_mode="stretch_width"),
+                   pn.pane.Bokeh(self.section_fig, sizing_mode="stretch_width"),
+                   sizing_mode="stretch_width"),
+        ]
+        self.tap_panels = pn.Column(sizing_mode="stretch_width", styles={"flex": "1 1 100%"},
+                                    css_classes=["sb-tap-panels"])
         # the status and the tap's word sit above the map, so a laptop screen
         # (1280 x 720) shows them without scrolling; a flex box wraps the
         # trajectory and orbit diagram below the map when the window is narrow
@@ -246,13 +257,7 @@ class Explorer:
                 width=310,
             ),
             pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note),
-            # the tap's panels: a row of their own below, the page's full width
-            pn.Column(pn.pane.Bokeh(self.traj_fig, sizing_mode="stretch_width"),
-                      pn.Row(pn.pane.Bokeh(self.orbit_fig, sizing_mode="stretch_width"),
-                             pn.pane.Bokeh(self.section_fig, sizing_mode="stretch_width"),
-                             sizing_mode="stretch_width"),
-                      sizing_mode="stretch_width", styles={"flex": "1 1 100%"},
-                      css_classes=["sb-tap-panels"]),
+            self.tap_panels,
             flex_wrap="wrap",
             align_items="flex-start",
             gap="12px",
@@ -846,6 +851,8 @@ class Explorer:
     def _show_point(self, gen, view, d):
         if gen != self._tap_gen:
             return
+        if not self.tap_panels.objects:
+            self.tap_panels.objects = list(self._tap_panes)
         e, u, w = d["e"], d["u"], d["word"]
         head = (f'e = <span class="sb-e">{e!r}</span>, u = <span class="sb-u">{u!r}</span>: ')
         steps = d["steps"]
