@@ -132,3 +132,21 @@ def test_plots_draw_the_speed_axis_in_metres_per_second():
     ax = sb.plot.plot_scan(sb.scan(e=(0.5, 0.9, 7), u=(0.1, 1.2, 9)))
     assert ax.get_ylabel() == "u (horizontal speed)"
     plt.close("all")
+
+
+def test_plot_trajectory_of_a_speed_is_in_metres_and_seconds():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = sb.trajectory(0.5, STAIRS.speed(1.2), steps=4)
+    ax = sb.plot.plot_trajectory(t)
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("x (m)", "height (m)") and "U = 1.2 m/s" in ax.get_title()
+    top = [c for c in ax.child_axes if c.get_xlabel() == "t (s)"]
+    forward, _ = top[0]._functions
+    assert forward(1.0) == pytest.approx(B / 1.2, rel=1e-12)  # one step length in b / U seconds
+    plt.close("all")
+    ax = sb.plot.plot_trajectory(sb.trajectory(0.5, float(STAIRS.speed(1.2)), steps=4))
+    assert ax.get_xlabel() == "x (steps)" and not ax.child_axes
+    plt.close("all")

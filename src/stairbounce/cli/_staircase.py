@@ -114,32 +114,10 @@ def describe(u: float, stairs: Staircase | None) -> str:
 
 
 def physical_trajectory_axes(ax_path, ax_section, stairs: Staircase, u: float):
-    """Relabel the trajectory figure (Fig. 1 and the Poincare section) in SI units.
+    """Relabel the trajectory figure (Fig. 1 and the Poincare section) in SI
+    units (:func:`stairbounce.plot._units.path_in_metres`,
+    :func:`~stairbounce.plot._units.section_in_metres`)."""
+    from ..plot._units import path_in_metres, section_in_metres
 
-    The data stay in the paper's units; ticks are placed at round metres
-    (``x b``, ``y a``), m/s (``v sqrt(a g)``) and seconds (``t = x / u`` time
-    units, on the top axis), and the path keeps the staircase's true aspect.
-    """
-    from ..plot._units import scaled_axis
-
-    a, b = stairs.step_height, stairs.step_length
-    scaled_axis(ax_path.xaxis, b)
-    scaled_axis(ax_path.yaxis, a)
-    ax_path.set_xlabel("x (m)")
-    ax_path.set_ylabel("height (m)")
-    ax_path.set_aspect(a / b, adjustable="box")
-    # horizontal motion is uniform: the x axis is also a clock, t = x / u time units
-    seconds_per_x = stairs.time_unit / u
-    top = ax_path.secondary_xaxis("top", functions=(lambda x: x * seconds_per_x, lambda t: t / seconds_per_x))
-    top.set_xlabel("t (s)")
-    ax_path.set_title(f"{ax_path.get_title()}  (U = {stairs.to_speed(u):.3g} m/s, a = {a:g} m, "
-                      f"b = {b:g} m)", fontsize="medium", pad=28)
-    scaled_axis(ax_section.xaxis, a)
-    scaled_axis(ax_section.yaxis, stairs.velocity_unit)
-    ax_section.set_xlabel("height at the edge (m)")
-    ax_section.set_ylabel("vertical velocity at the edge (m/s)")
-    # the dashed line y = 1 is the step height a: say so in metres
-    for line in ax_section.get_lines():
-        if line.get_label().startswith("y = 1:"):
-            line.set_label(f"y = {a:g} m: edge of the domain of P")
-    ax_section.legend(loc="best", fontsize="small")
+    path_in_metres(ax_path, stairs, u)
+    section_in_metres(ax_section, stairs)
