@@ -229,8 +229,6 @@ def test_scan_speed_figure_axis_in_metres_per_second(field, tmp_path, capsys, mo
         (["scan", "--speed", "0.5:1", "--u", "0:1"], "not both"),
         (["scan", "--speed", "0.5:1", "--step-height", "0.2"], "--speed needs --step-length"),
         (["scan", "--speed", "1", "--step-height", "0.2", "--step-length", "0.3"], "must be a range"),
-        (["scan", "--speed", "0.5:1", "--step-height", "0.2", "--step-length", "0.3", "--tile", "64",
-          "--out", "x.zarr"], "not available for tiled scans"),
     ],
 )
 def test_scan_bad_speed_options_are_one_line_and_status_2(args, needle, capsys):
@@ -261,3 +259,22 @@ def test_orbit_diagram_speed_axes_in_metres(tmp_path, capsys, monkeypatch):
     # heights: tick labels are y a
     labels = [(float(t.get_text()), y) for t, y in zip(ax.get_yticklabels(), ax.get_yticks()) if t.get_text()]
     assert labels and all(abs(lab - y * A) < 1e-3 for lab, y in labels)
+
+
+def test_tiled_scan_over_speeds_records_the_staircase(tmp_path, capsys):
+    """A tiled store over a window of speeds: the same pixels as the in-memory
+    scan, the coordinate speed, the staircase in its attributes; resuming it
+    with another staircase is refused."""
+    store = tmp_path / "t.zarr"
+    args = ["scan", "--e", "0.5:0.9", "--speed", "0.1:1.2", "--step-height", str(A), "--step-length",
+            str(B), "--size", "40x30", "--tile", "16", "--out", str(store)]
+    code, _, err = run(args, capsys)
+    assert code == 0, err
+    ds = sb.load(store)
+    ref = sb.scan(e=(0.5, 0.9, 40), u=sb.Staircase(A, B, G).speed(0.1, 1.2, 30))
+    for name in ("status", "word_length", "period"):
+        np.testing.assert_array_equal(ds[name].values, ref[name].values)
+    np.testing.assert_array_equal(ds.speed.values, ref.speed.values)
+    assert (ds.attrs["step_height"], ds.attrs["step_length"], ds.attrs["g"]) == (A, B, G)
+    code, _, err = run(args[:8] + [str(B + 0.01)] + args[9:], capsys)
+    assert code == 2 and "step_length: store 0.29, asked 0.3" in err

@@ -104,9 +104,6 @@ def scan_(
     if y0 < 0:
         raise CLIError(f"--y0 must be >= 0, got {y0}")
     tiled = tile is not None or scheduler is not None or workers is not None
-    if tiled and stairs is not None:
-        raise CLIError("--speed is not available for tiled scans (--tile, --scheduler, --workers): "
-                       "give the window in normalised units, --u")
     # the u window: in m/s on a real staircase (the Dataset gets the coordinate 'speed')
     u_window = (u_lo, u_hi, n_u) if stairs is None else stairs.speed(*parse_range("speed", speed), n_u)
     if stairs is not None:
@@ -142,7 +139,7 @@ def scan_(
                        + ("" if tiles >= workers else
                           f" (tiles under 64 px cost more than they share; "
                           f"{plural(workers - tiles, 'worker')} idle)"), err=True)
-        ds = run_tiled_scan(out, (e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0,
+        ds = run_tiled_scan(out, (e_lo, e_hi, n_e), u_window, max_iter, y0, v0,
                             tile=tile, scheduler=scheduler, workers=workers)
         if png is not None:
             # never the whole store in memory: reduced by blocks first
