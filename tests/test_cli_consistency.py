@@ -76,3 +76,47 @@ def test_animation_reports_every_frame(tmp_path):
                        progress=lambda done, total: seen.append((done, total)))
     assert seen[-1] == (5, 5) and [d for d, _ in seen] == [1, 2, 3, 4, 5]
     assert (tmp_path / "a.gif").stat().st_size > 0
+
+
+def test_help_summaries_are_whole_sentences(capsys, monkeypatch):
+    """Click cuts a docstring's summary at its first period ("(Prop." "(Fig.")
+    and at 45 characters ("..."): every command has a short summary of its
+    own that fits one line of an 80-column terminal (issue 25)."""
+    monkeypatch.setenv("COLUMNS", "80")
+    code, out, _ = run(["--help"], capsys)
+    assert code == 0
+    rows = out.split("Commands:")[1].strip().splitlines()
+    commands = ("figures", "dimension", "word", "map", "trajectory", "orbit-diagram", "motion",
+                "scan", "explore", "render")
+    assert sorted(r.split()[0] for r in rows) == sorted(commands)  # one line each
+    for r in rows:
+        assert r.endswith(".") and not r.endswith("...") and not r.endswith(("Prop.", "Fig.")), r
+
+
+@pytest.mark.parametrize("field, description", [("word_length", "scan rows"), ("k_mean", "motion scan rows")])
+def test_in_memory_scans_report_progress_over_rows(field, description, tmp_path, capsys, monkeypatch):
+    """Both in-memory scans (the words, and the motion fields) drive a progress
+    bar over their rows to the end (drawn on stderr when it is a terminal)."""
+    from contextlib import contextmanager
+
+    from stairbounce.cli import _app
+
+    calls = []
+
+    class Bar:
+        def update(self, task, completed, total):
+            calls[-1][2].append((completed, total))
+
+    @contextmanager
+    def fake(console, desc, total, unit=""):
+        assert console.stderr
+        calls.append((desc, total, []))
+        yield Bar(), 0
+
+    monkeypatch.setattr(_app, "progress_bar", fake)
+    code, _, err = run(["scan", "--size", "20x60", "--max-iter", "20", "--field", field,
+                        "--png", str(tmp_path / "s.png")], capsys)
+    assert code == 0, err
+    (desc, total, updates), = calls
+    assert desc == description and total == 60
+    assert updates[0] == (0, 60) and updates[-1] == (60, 60) and len(updates) > 10

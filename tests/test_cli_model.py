@@ -25,15 +25,19 @@ def test_word_prints_word_period_impacts(capsys):
     code, out, _ = run(["word", "--e", "0.05", "--u", "0.93"], capsys)
     w = sb.sliding_word(0.05, 0.93)
     assert code == 0
-    assert f"period:  {w.period} steps" in out
+    assert f"period:  {w.period} steps" in out and w.period > 1
     assert f"impacts: {w.impacts}" in out
     assert w.format(ascii=True)[:-6] in out  # the letters, whatever the tail's glyph
 
 
 def test_word_says_when_nothing_slides(capsys):
-    code, out, _ = run(["word", "--e", "0.1", "--u", "1.2", "--max-steps", "50"], capsys)
+    code, out, _ = run(["word", "--e", "0.4", "--u", "0.33", "--max-steps", "50"], capsys)
     assert code == 0
     assert "no periodic sliding solution found within 50 steps" in out
+    # above the Corollary 2.1 curve (1.006 at e = 0.1) it is proven, not searched
+    code, out, _ = run(["word", "--e", "0.1", "--u", "1.2", "--max-steps", "50"], capsys)
+    assert code == 0
+    assert "impossible (Corollary 2.1: u >= 1.00623 at e = 0.1)" in out
 
 
 def test_map_csv_is_the_iterates(capsys):

@@ -42,7 +42,7 @@ def test_word_of_a_physical_staircase_is_the_word_at_its_u(capsys):
                         "--step-length", str(B)], capsys)
     assert code == 0
     w = sb.sliding_word(0.05, u_of(speed))
-    assert w is not None and f"period:  {w.period} steps" in out
+    assert w is not None and w.period == 1 and "period:  1 step = " in out  # not "1 steps"
     # both descriptions are printed: the speed in m/s and the normalised u
     assert "U = 1.2 m/s" in out and f"u = U sqrt(a/g) / b = {u_of(speed):.6g}" in out
     # a period of n steps lasts n b / U seconds
@@ -123,7 +123,7 @@ def test_trajectory_axes_in_metres_and_seconds(tmp_path, capsys):
     fig, (a1, a2) = plt.subplots(1, 2)
     sb.plot.plot_trajectory(traj, ax=a1)
     sb.plot.plot_poincare_section(traj.edge_y, traj.edge_v, traj.edge_impacts, ax=a2)
-    st.physical_trajectory_axes(a1, a2, st.Staircase(A, B, G), u)
+    st.physical_trajectory_axes(a1, a2, sb.Staircase(A, B, G), u)
     fig.canvas.draw()
     assert a1.get_xlabel() == "x (m)" and a1.get_ylabel() == "height (m)"
     assert a2.get_ylabel().endswith("(m/s)")
@@ -139,6 +139,10 @@ def test_trajectory_axes_in_metres_and_seconds(tmp_path, capsys):
     assert len(top) == 1
     forward, _ = top[0]._functions
     assert forward(1.0) == pytest.approx(B / speed, rel=1e-12)
+    # the dashed edge of the map's domain, y = 1, is the step height in metres
+    labels = a2.get_legend_handles_labels()[1]
+    assert f"y = {A:g} m: edge of the domain of P" in labels
+    assert not any(text.startswith("y = 1:") for text in labels)
     plt.close(fig)
     code, out, _ = run(["trajectory", "--e", "0.5", "--speed", "1.2", "--step-height", str(A),
                         "--step-length", str(B), "--steps", "3", "--out", str(tmp_path / "t.png")], capsys)
@@ -171,3 +175,106 @@ def test_bad_or_mixed_input_is_one_line_and_status_2(args, needle, capsys):
     assert code == 2
     assert err.count("\n") == 1 and err.startswith("stairbounce: error:")
     assert needle in err
+
+
+# --------------------------------------------------------------------------- #
+# scans and orbit diagrams over a window of speeds in m/s (issue 25)          #
+# --------------------------------------------------------------------------- #
+
+
+def test_scan_speed_window_in_metres_per_second(tmp_path, capsys):
+    out = tmp_path / "s.nc"
+    code, text, err = run(["scan", "--e", "0.5:0.9", "--speed", "0.1:1.2", "--step-height", str(A),
+                           "--step-length", str(B), "--size", "24x18", "--out", str(out)], capsys)
+    assert code == 0, err
+    ds = xr.load_dataset(out)
+    # the picture's window is the same scan in u (u of each edge by the formula)
+    ref = sb.scan(e=(0.5, 0.9, 24), u=(u_of(0.1), u_of(1.2), 18))
+    np.testing.assert_allclose(ds.u.values, ref.u.values, rtol=1e-14)
+    for name in ("status", "word_length", "period"):
+        np.testing.assert_array_equal(ds[name].values, ref[name].values)
+    # the coordinate speed is U = u b / sqrt(a/g), pixel centres of 0.1..1.2 m/s
+    np.testing.assert_allclose(ds.speed.values, 0.1 + (np.arange(18) + 0.5) * 1.1 / 18, rtol=1e-12)
+    assert ds.speed.attrs["units"] == "m/s" and ds.attrs["step_length"] == B
+    assert "(U in [0.1, 1.2] m/s)" in text
+
+
+@pytest.mark.parametrize("field", ["word_length", "k_mean"])
+def test_scan_speed_figure_axis_in_metres_per_second(field, tmp_path, capsys, monkeypatch):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    saved = []
+    original = plt.Figure.savefig
+    monkeypatch.setattr(plt.Figure, "savefig", lambda fig, *a, **k: (saved.append(fig), original(fig, *a, **k)))
+    code, _, err = run(["scan", "--e", "0.5:0.9", "--speed", "0.1:1.2", "--step-height", str(A),
+                        "--step-length", str(B), "--size", "12x10", "--max-iter", "20", "--field", field,
+                        "--png", str(tmp_path / "s.png")], capsys)
+    assert code == 0, err
+    ax = saved[0].axes[0]
+    saved[0].canvas.draw()
+    assert ax.get_ylabel() == "U (horizontal speed, m/s)"
+    # the data stay in u: the axis limits are the u edges, the tick labels m/s
+    assert ax.get_ylim() == pytest.approx((u_of(0.1), u_of(1.2)), rel=1e-12)
+    labels = [float(t.get_text()) for t in ax.get_yticklabels() if t.get_text()]
+    np.testing.assert_allclose(labels, np.asarray(ax.get_yticks())[: len(labels)] * B / math.sqrt(A / G),
+                               rtol=1e-3)
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["scan", "--speed", "0.5:1", "--u", "0:1"], "not both"),
+        (["scan", "--speed", "0.5:1", "--step-height", "0.2"], "--speed needs --step-length"),
+        (["scan", "--speed", "1", "--step-height", "0.2", "--step-length", "0.3"], "must be a range"),
+    ],
+)
+def test_scan_bad_speed_options_are_one_line_and_status_2(args, needle, capsys):
+    code, _, err = run(args, capsys)
+    assert code == 2 and err.count("\n") == 1 and needle in err
+
+
+def test_orbit_diagram_speed_axes_in_metres(tmp_path, capsys, monkeypatch):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    saved = []
+    original = plt.Figure.savefig
+    monkeypatch.setattr(plt.Figure, "savefig", lambda fig, *a, **k: (saved.append(fig), original(fig, *a, **k)))
+    out = tmp_path / "od.nc"
+    code, _, err = run(["orbit-diagram", "--e", "0.3", "--speed", "0.5:2", "--step-height", str(A),
+                        "--step-length", str(B), "--n", "40", "--transient", "50", "--keep", "10",
+                        "--out", str(out), "--png", str(tmp_path / "od.png")], capsys)
+    assert code == 0, err
+    ds = xr.load_dataset(out)
+    np.testing.assert_allclose(ds.speed.values, np.linspace(0.5, 2.0, 40), rtol=1e-12)
+    ax = saved[0].axes[0]
+    assert ax.get_xlabel() == "U (horizontal speed, m/s)"
+    assert ax.get_ylabel() == "height at the edge (m)"
+    saved[0].canvas.draw()
+    # heights: tick labels are y a
+    labels = [(float(t.get_text()), y) for t, y in zip(ax.get_yticklabels(), ax.get_yticks()) if t.get_text()]
+    assert labels and all(abs(lab - y * A) < 1e-3 for lab, y in labels)
+
+
+def test_tiled_scan_over_speeds_records_the_staircase(tmp_path, capsys):
+    """A tiled store over a window of speeds: the same pixels as the in-memory
+    scan, the coordinate speed, the staircase in its attributes; resuming it
+    with another staircase is refused."""
+    store = tmp_path / "t.zarr"
+    args = ["scan", "--e", "0.5:0.9", "--speed", "0.1:1.2", "--step-height", str(A), "--step-length",
+            str(B), "--size", "40x30", "--tile", "16", "--out", str(store)]
+    code, _, err = run(args, capsys)
+    assert code == 0, err
+    ds = sb.load(store)
+    ref = sb.scan(e=(0.5, 0.9, 40), u=sb.Staircase(A, B, G).speed(0.1, 1.2, 30))
+    for name in ("status", "word_length", "period"):
+        np.testing.assert_array_equal(ds[name].values, ref[name].values)
+    np.testing.assert_array_equal(ds.speed.values, ref.speed.values)
+    assert (ds.attrs["step_height"], ds.attrs["step_length"], ds.attrs["g"]) == (A, B, G)
+    code, _, err = run(args[:8] + [str(B + 0.01)] + args[9:], capsys)
+    assert code == 2 and "step_length: store 0.29, asked 0.3" in err

@@ -460,7 +460,11 @@ def test_explorer_refuses_a_view_over_budget(explorer):
 
 def test_explorer_tap_shows_the_word(explorer):
     app, ex = explorer
+    # a new page has no tap panels (most of its models): the first tap puts them in
+    assert app.tap_panels.objects == []
     app._on_tap(SimpleNamespace(x=0.1, y=0.75))
+    assert [p.object for p in app.tap_panels.objects[:1]] == [app.traj_fig]
+    assert [p.object for p in app.tap_panels.objects[1].objects] == [app.orbit_fig, app.section_fig]
     e, u = app.view.point
     assert (e, u) != (0.1, 0.75)  # snapped to the tapped pixel's centre
     assert e in app.ds.e.values and u in app.ds.u.values
@@ -471,6 +475,11 @@ def test_explorer_tap_shows_the_word(explorer):
     assert len(app.orbit_src.data["x"]) == 300 * 200
     app._on_tap(SimpleNamespace(x=0.99, y=0.2))  # outside the window: taken as it is
     assert app.view.point == (0.99, 0.2)
+    # above the Corollary 2.1 curve (0.0018 at e = 0.99) the tap says it is proven
+    assert "proven: Corollary 2.1 excludes sliding" in app.point_pane.object
+    app._on_tap(SimpleNamespace(x=0.4, y=0.33))  # below the curve, no slide within 300 steps
+    assert "does not slide within max_iter = 300 steps" in app.point_pane.object
+    assert "Corollary 2.1 does not exclude it" in app.point_pane.object
 
 
 def test_explorer_colour_change_reshades_without_recomputing(explorer):
@@ -1197,3 +1206,43 @@ def test_png_export_draws_the_exact_borders_overlay():
     plain = view_png(ds, V.View(0.0, 0.3, 0.3, 0.7, 60, 50, max_iter=200, overlays=("tongues",)))
     png = view_png(ds, view)
     assert Image.open(io.BytesIO(png)).format == "PNG" and png != plain
+def test_a_size_asked_for_in_one_edit_is_refused_whole(explorer):
+    """Issue 25: 5000 typed as width, then 5000 as height, is one request for
+    5000 x 5000 (refused with both numbers), not 600 x 5000: the refused width
+    is put back in its widget but asked for again with the height."""
+    app, ex = explorer
+    app.height_in.value = 500  # 60 x 500: computed
+    n = len(ex.calls)
+    app.width_in.value = 5000  # 5000 x 500: over the budget
+    assert "view of 5000x500 " in app.status.object and app.width_in.value == app.view.width == 60
+    app.height_in.value = 5000
+    assert "view of 5000x5000 = 25000000 pixels refused" in app.status.object
+    assert (app.width_in.value, app.height_in.value) == (60, 500) and len(ex.calls) == n
+    # another setting next is not combined with the refused side
+    app.max_iter.value = 200
+    assert app.view.max_iter == 200 and (app.view.width, app.view.height) == (60, 500)
+    # a refused height, then a width: asked for together
+    app.height_in.value = 50000
+    app.width_in.value = 100
+    assert "view of 100x50000" in app.status.object
+
+
+def test_a_quick_run_of_zooms_is_one_history_entry(explorer, monkeypatch):
+    """Issue 25: a six-notch wheel zoom reports several RangesUpdates on a
+    loaded machine; those within GESTURE_MERGE_S of each other are one
+    gesture, one history entry, so Back returns to the start view."""
+    import stairbounce.explorer.app as A
+
+    app, ex = explorer
+    clock = [100.0]
+    monkeypatch.setattr(A.time, "monotonic", lambda: clock[0])
+    modes = []
+    for k in range(6):  # notches 0.2 s apart
+        clock[0] += 0.2
+        app._on_ranges(SimpleNamespace(x0=0.02 * (k + 1), x1=0.4 - 0.02 * (k + 1), y0=0.3, y1=1.1))
+        modes.append(app.history_out.text.split(" ")[0])
+    assert modes == ["push"] + ["replace"] * 5
+    assert app.history_out.text.startswith("replace ?e=0.12:0.28&")
+    clock[0] += A.GESTURE_MERGE_S + 0.01  # a later zoom is a gesture of its own
+    app._on_ranges(SimpleNamespace(x0=0.15, x1=0.25, y0=0.3, y1=1.1))
+    assert app.history_out.text.startswith("push ?e=0.15:0.25&")

@@ -506,3 +506,80 @@ def test_other_hosts_serve_a_working_page(browser, tmp_path, host):
                 page.close()
     finally:
         _stop(proc)
+
+
+# --------------------------------------------------------------------------- #
+# issue 25: offline, one history entry per wheel gesture, the page's width    #
+# --------------------------------------------------------------------------- #
+
+_LOOPBACK = re.compile(r"^(https?|wss?)://(127\.0\.0\.1|localhost|\[::1\])[:/]")
+
+
+def test_the_page_loads_nothing_from_outside_the_server(server, browser):
+    """With every non-loopback request cut off (an offline or firewalled
+    machine), the page asks for nothing outside the server, its stylesheets
+    come from the server, and it draws, taps and zooms as usual."""
+    page = browser.new_page(viewport={"width": 1400, "height": 1000})
+    outside, css = [], []
+    page.route("**/*", lambda route: route.continue_() if _LOOPBACK.match(route.request.url)
+               or route.request.url.startswith(("data:", "blob:")) else (outside.append(route.request.url),
+                                                                         route.abort()))
+    page.on("response", lambda r: css.append((r.url, r.status)) if ".css" in r.url else None)
+    errors = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    try:
+        page.goto(server.url + "?e=0:0.4&u=0.3:1.1&size=200x200&max_iter=200")
+        _wait_rendered(page)
+        box = _map_canvas(page).bounding_box()
+        page.mouse.click(box["x"] + box["width"] * 0.3, box["y"] + box["height"] * 0.5)
+        page.locator(".sb-point").get_by_text("word").first.wait_for(timeout=60_000)
+        page.mouse.move(box["x"] + box["width"] * 0.4, box["y"] + box["height"] * 0.5)
+        page.mouse.wheel(0, -300)
+        page.wait_for_function("() => !document.location.search.includes('e=0:0.4&')", timeout=30_000)
+        _wait_rendered(page)
+    finally:
+        page.close()
+    assert outside == [] and not errors
+    # Panel's stylesheets (theme, widgets, loading spinner) were served, by this server
+    assert len(css) >= 5 and all(_LOOPBACK.match(u) and status == 200 for u, status in css), css
+    assert any("/static/extensions/panel/" in u for u, _ in css)
+
+
+def test_a_quick_notched_wheel_zoom_is_one_step_back(server, page):
+    """Six wheel notches 100 ms apart are one zoom: Back returns to the view
+    before it, not to a view part way through."""
+    page.goto(server.url + "?e=0:1&u=0:1.5&size=200x200&max_iter=200")
+    _wait_rendered(page)
+    start = page.evaluate("() => history.length")
+    box = _map_canvas(page).bounding_box()
+    page.mouse.move(box["x"] + box["width"] * 0.4, box["y"] + box["height"] * 0.5)
+    for _ in range(6):
+        page.mouse.wheel(0, -100)
+        page.wait_for_timeout(100)
+    page.wait_for_function("() => !document.location.search.includes('e=0:1&')", timeout=30_000)
+    _wait_rendered(page)
+    page.wait_for_timeout(1500)  # any late RangesUpdate of the gesture has arrived
+    _wait_rendered(page)
+    assert page.evaluate("() => history.length") == start + 1
+    page.go_back()
+    page.locator(".sb-status .sb-info").get_by_text("e 0 to 1, u 0 to 1.5:").wait_for(timeout=60_000)
+    assert _window(page) == ("0:1", "0:1.5")
+
+
+def test_tap_panels_use_the_page_width_and_the_title_is_clean(server, page):
+    page.goto(server.url + "?e=0:0.4&u=0.3:1.1&size=200x200&max_iter=200")
+    _wait_rendered(page)
+    box = _map_canvas(page).bounding_box()
+    page.mouse.click(box["x"] + box["width"] * 0.3, box["y"] + box["height"] * 0.5)
+    page.locator(".sb-point").get_by_text("word").first.wait_for(timeout=60_000)
+    page.locator(".sb-tap-panels .bk-Canvas").nth(2).wait_for(timeout=60_000)  # built by the tap
+    page.wait_for_timeout(500)  # laid out
+    width = page.viewport_size["width"]
+    panels = page.locator(".sb-tap-panels").bounding_box()
+    assert panels["width"] > 0.9 * width
+    canvases = [c.bounding_box() for c in page.locator(".sb-tap-panels .bk-Canvas").all()]
+    # the trajectory across the page; the orbit diagram and section side by side below it
+    assert len(canvases) == 3 and canvases[0]["width"] > 0.85 * width
+    assert canvases[1]["width"] + canvases[2]["width"] > 0.8 * width
+    assert "\u00b6" not in page.locator(".sb-title").inner_text()
+    assert page.locator(".sb-title h2").inner_text() == "stairbounce explorer"

@@ -365,7 +365,7 @@ def test_scan_pixels_are_motion_of_that_point(grid_scan):
     for i in range(0, ds.sizes["u"], 4):
         for j in range(0, ds.sizes["e"], 5):
             e, u = float(ds.e[j]), float(ds.u[i])
-            r = motion(e, u, steps=GRID["steps"], transient=GRID["transient"])
+            r = dict(motion(e, u, steps=GRID["steps"], transient=GRID["transient"]))
             r["lyap2"] = r["lyap2_identity"]
             for f in MOTION_FIELDS:
                 a, b = float(ds[f].values[i, j]), float(r[f])

@@ -339,6 +339,53 @@ def test_plot_tongue_overlay_when_e_is_swept():
     plt.close("all")
 
 
+def test_family_and_bound_overlay_at_the_jumps_of_e_0_3():
+    """The one-impact families u_n(e) = sqrt(n (1-e) / (2 (1+e))) (formula
+    written out here) and Corollary 2.1's (1-e)/(2 sqrt(2e)): at e = 0.3 the
+    report's jumps 0.734, 0.899, 1.038, 1.160 and the sliding edge 0.452."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from stairbounce.plot import plot_orbit_diagram
+    from stairbounce.plot.orbits import _family_lines
+
+    families, bound = _family_lines("u", 0.3, 0.2, 1.2)
+    assert [n for _, n in families] == [1, 2, 3, 4, 5]
+    for pos, n in families:
+        assert pos == pytest.approx(math.sqrt(n * 0.7 / (2 * 1.3)), rel=1e-14)
+    assert [round(p, 3) for p, _ in families[1:]] == [0.734, 0.899, 1.038, 1.16]
+    assert bound == pytest.approx(0.7 / (2 * math.sqrt(0.6)), rel=1e-14) and round(bound, 3) == 0.452
+    ds = orbit_diagram(0.3, np.linspace(0.2, 1.2, 100), transient=100, keep=10)
+    ax = plot_orbit_diagram(ds, overlay=("families", "bound"))
+    xs = sorted(line.get_xdata()[0] for line in ax.lines if len(line.get_xdata()))
+    np.testing.assert_allclose(xs, sorted([bound] + [p for p, _ in families]), rtol=1e-14)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("one impact every n steps" in t for t in labels)
+    assert any("Corollary 2.1" in t for t in labels)
+    # the diagram jumps at u_2: the highest kept iterate just above it is far
+    # above the highest just below (a new, longer jump opens)
+    fine = orbit_diagram(0.3, np.array([families[1][0] - 0.01, families[1][0] + 0.01]),
+                         transient=2000, keep=400)
+    below, above = fine.y.values.max(axis=1)
+    assert above > below + 0.1
+    plt.close("all")
+
+
+def test_family_and_bound_overlay_when_e_is_swept():
+    from stairbounce.nonsliding import one_impact_family
+    from stairbounce.plot.orbits import _family_lines
+
+    u = 0.5
+    families, bound = _family_lines("e", u, 0.0, 0.99)
+    assert [n for _, n in families][:4] == [1, 2, 3, 4]
+    for e_n, n in families:
+        assert one_impact_family(n, e_n) == pytest.approx(u, rel=1e-12)
+    assert (1 - bound) / (2 * math.sqrt(2 * bound)) == pytest.approx(u, rel=1e-12)
+    assert _family_lines("e", u, 0.0, 0.2) == ([], None)
+
+
 # --------------------------------------------------------------------------- #
 # Command line                                                                #
 # --------------------------------------------------------------------------- #
@@ -354,8 +401,8 @@ def run_cli(capsys, *args):
 def test_cli_u_swept_writes_png_and_netcdf(tmp_path, capsys):
     png, nc = tmp_path / "fig8.png", tmp_path / "fig8.nc"
     code, out, err = run_cli(capsys, "orbit-diagram", "--e", "0.001", "--u", "0.3:1.6", "--n", "120",
-                             "--transient", "300", "--keep", "30", "--overlay", "tongues",
-                             "--png", str(png), "--out", str(nc))
+                             "--transient", "300", "--keep", "30", "--overlay", "tongues,families",
+                             "--overlay", "bound", "--png", str(png), "--out", str(nc))
     assert code == 0, err
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
     assert "120 values of u x 30 iterates" in out

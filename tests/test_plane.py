@@ -629,7 +629,7 @@ def test_every_plot_refuses_an_unknown_overlay_by_name():
     with pytest.raises(ValueError, match="overlay must be among families, bound, got 'grid'"):
         plot_motion(motion, overlay=("grid",))
     diagram = orbits.orbit_diagram(e=0.1, u=(0.5, 0.6, 3), transient=2, keep=2)
-    with pytest.raises(ValueError, match="overlay must be among tongues, got 'grid'"):
+    with pytest.raises(ValueError, match="overlay must be among tongues, families, bound, got 'grid'"):
         plot_orbit_diagram(diagram, overlay="grid")
 
 

@@ -50,6 +50,7 @@ from .model import (
     tongue,
 )
 from .nonsliding import (
+    Motion,
     k_mean_bound,
     lyapunov_exponents,
     motion,
@@ -75,9 +76,9 @@ from .plane import (
 )
 from .plane import scan as _scan_function
 from .borders import bifurcations, border_points, itinerary, word_table
-from .symbolic import Word, parse_word, sliding_word
+from .symbolic import SlidingAnswer, Word, parse_word, sliding_answer, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
-from .units import normalized_speed, physical_speed, time_scale
+from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, physical_speed, time_scale
 from ._compat import register_alias as _register_alias
 from ._version import __version__
 from . import fractal  # noqa: F401  (the old name of stairbounce.dimension, an alias)
@@ -92,11 +93,17 @@ __all__ = [
     "BoxDimension",
     "Flight",
     "Impact",
+    "Motion",
     "PerimeterDimension",
     "SLIDING",
     "SlicingDimension",
     "Slide",
+    "SlidingAnswer",
     "SlopeFit",
+    "Speed",
+    "SpeedWindow",
+    "Speeds",
+    "Staircase",
     "Trajectory",
     "UncertainFraction",
     "UncertaintyDimension",
@@ -145,6 +152,7 @@ __all__ = [
     "scan_to_zarr",
     "slicing_dimension",
     "slides",
+    "sliding_answer",
     "sliding_classifier",
     "sliding_word",
     "slope_fit",

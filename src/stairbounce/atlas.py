@@ -71,6 +71,7 @@ import numpy as np
 from . import _validate as _v
 from ._io import store_lock
 from .model import check_count
+from .units import Staircase, staircase_of, with_speed
 
 __all__ = ["scan_to_zarr", "tile_slices", "tiles_done", "downsample", "DamagedStoreError"]
 
@@ -301,7 +302,7 @@ def _template(probe, es, us, tile):
     }
     attrs = dict(probe.attrs)
     attrs.update(n_e=n_e, n_u=n_u)
-    ds = xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    ds = with_speed(xr.Dataset(data_vars, coords=coords, attrs=attrs), Staircase.from_attrs(attrs))
     from .plane import FILL_VALUES
 
     encoding = {name: {"chunks": chunks} for name in data_vars}
@@ -522,7 +523,11 @@ def scan_to_zarr(
     # one pixel through the public scan: validates everything as scan does and
     # gives its variables and attributes, whatever scan records
     (e_lo, e_hi, n_e), (u_lo, u_hi, n_u) = _triple("e", e), _triple("u", u)
-    probe = scan(e=(e_lo, e_hi, 1), u=(u_lo, u_hi, 1), max_iter=max_iter, y0=y0, v0=v0)
+    # a window of speeds in m/s (Staircase.speed(lo, hi, n)): the store records the
+    # staircase (its attributes, checked on resume) and the coordinate speed
+    stairs = staircase_of(u)
+    u_probe = (u_lo, u_hi, 1) if stairs is None else stairs.speed(*u.metres_per_second, 1)
+    probe = scan(e=(e_lo, e_hi, 1), u=u_probe, max_iter=max_iter, y0=y0, v0=v0)
     n_e = check_count("n_e", n_e, 1)
     n_u = check_count("n_u", n_u, 1)
     a = probe.attrs

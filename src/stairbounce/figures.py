@@ -441,7 +441,7 @@ def fig2(s: Settings) -> Result:
             f"{skip}..{steps}: {d:.2e} (> 1e-9: no return within {steps - skip} steps); "
             f"lambda_1 = {m['lyap1']:.1e} (halves differ by {m['lyap1_err']:.1e}), "
             f"compatible with 0" if quasi else
-            f"{slides} slides; least distance between two iterates {d:.2e}; "
+            f"{slides} slide{'' if slides == 1 else 's'}; least distance between two iterates {d:.2e}; "
             f"lambda_1 = {m['lyap1']:.1e}",
             verdict="not comparable",
             why="the paper names no orbit; the claim is ours, measured "

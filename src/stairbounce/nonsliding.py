@@ -101,12 +101,15 @@ non-chaotic stationary bouncing on this staircase.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
 from numba import njit, prange
 
 from ._version import __version__
+from .units import staircase_of, with_speed
 from .model import (
     _COUNTED_IMPACTS,
     SLIDING,
@@ -121,6 +124,7 @@ from .model import (
 )
 
 __all__ = [
+    "Motion",
     "motion",
     "motion_scan",
     "motion_coords",
@@ -700,7 +704,7 @@ def _check_steps(steps, transient):
 
 
 def motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0):
-    """motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0) -> dict
+    """motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0) -> Motion
 
     Whether the orbit slides, and if not its impacts per step and Lyapunov exponents.
 
@@ -711,7 +715,8 @@ def motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0):
     over the kept ``steps``; each has a convergence estimate, the difference
     between its values over the first and the second half of the kept steps.
 
-    Returns a dict: ``slides`` (bool), ``slide_step`` (first sliding step,
+    Returns a :class:`Motion` (attributes, or keys as the dict it used to
+    be; its repr is one line): ``slides`` (bool), ``slide_step`` (first sliding step,
     1-based, transient included; 0 if none), ``k_mean`` (<k>), ``k_err``,
     ``jump_mean`` (kept steps per landing), ``lyap1``, ``lyap1_err``,
     ``lyap2`` (QR), ``lyap2_err``, ``lyap2_identity`` (``2 <k> log e -
@@ -754,7 +759,55 @@ def motion(e, u, steps=1000, transient=1000, y0=1.0, v0=0.0):
     r["state_end"] = (float(extra[2]), float(extra[3]))
     r["steps"] = steps
     r["transient"] = transient
-    return r
+    return Motion(e=e, u=u, **r)
+
+
+@dataclass(frozen=True, repr=False)
+class Motion(Mapping):
+    """What :func:`motion` measured on one orbit, with a one-line repr.
+
+    The fields are those :func:`motion` documents; they read as attributes
+    (``r.k_mean``) or, as the dict this used to be, by key (``r["k_mean"]``,
+    ``dict(r)``, ``"lyap1" in r``).  ``e`` and ``u`` are the parameters.
+    """
+
+    e: float
+    u: float
+    steps: int
+    transient: int
+    slides: bool
+    slide_step: int
+    k_mean: float
+    k_err: float
+    jump_mean: float
+    lyap1: float
+    lyap1_err: float
+    lyap2: float
+    lyap2_err: float
+    lyap2_identity: float
+    dissipation: float
+    impulse: float
+    speed_spread: float
+    state_start: tuple
+    state_end: tuple
+
+    def __getitem__(self, key):
+        if not isinstance(key, str) or key not in self.__dataclass_fields__:
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def __iter__(self):
+        return iter(self.__dataclass_fields__)
+
+    def __len__(self):
+        return len(self.__dataclass_fields__)
+
+    def __repr__(self) -> str:
+        head = f"Motion(e={self.e:g}, u={self.u:g}, {self.transient} + {self.steps} steps: "
+        if self.slides:
+            return head + f"slides on step {self.slide_step})"
+        return head + (f"no slide, <k> = {self.k_mean:.6g}, mean jump {self.jump_mean:.6g}, "
+                       f"lambda_1 = {self.lyap1:.2e}, lambda_2 = {self.lyap2:.6g})")
 
 
 def _check_memory(npix):
@@ -820,7 +873,7 @@ def motion_coords(e_values, u_values, steps=1000, transient=1000, y0=1.0, v0=0.0
         "stairbounce_version": __version__,
         "reference": "Campos, Romero-Valles, Torres, Prop. 2.3; issue 13",
     }
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    return with_speed(xr.Dataset(data_vars, coords=coords, attrs=attrs), staircase_of(u_values))
 
 
 def motion_scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), steps=1000, transient=1000, y0=1.0, v0=0.0,
@@ -867,7 +920,7 @@ def motion_scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), steps=1000, transient=1000
             progress(min(r + block, n_u), n_u)
         ds = xr.concat(parts, dim="u", combine_attrs="override") if len(parts) > 1 else parts[0]
     ds.attrs.update(e_min=e_min, e_max=e_max, n_e=n_e, u_min=u_min, u_max=u_max, n_u=n_u)
-    return ds
+    return with_speed(ds, staircase_of(u))
 
 
 # --------------------------------------------------------------------------- #

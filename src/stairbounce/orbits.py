@@ -27,6 +27,7 @@ from ._version import __version__
 from . import _validate as _v
 from ._interrupt import halted
 from .model import _constants, _step, check_count, check_state
+from .units import SpeedWindow, staircase_of, with_speed
 
 __all__ = ["orbit_diagram", "orbit_density"]
 
@@ -108,7 +109,10 @@ def _orbit_kernel_warm(es, us, y0, v0, transient, keep, ys, vs, ks, items, halt)
 
 def _parameter(name, value):
     """``value`` as a float64 array and whether it was given as a 1-D array."""
-    a = _v.real_array(name, value)
+    if isinstance(value, SpeedWindow):
+        raise ValueError(f"{name} must be a speed or an array of speeds, got a scan window {value!r}: "
+                         "pass staircase.speed(np.linspace(lo, hi, n))")
+    a = np.asarray(_v.real_array(name, value))
     if a.ndim > 1:
         raise ValueError(f"{name} must be a real number or a 1-D array, got an array of shape {a.shape}")
     if a.ndim == 1 and a.size == 0:
@@ -223,7 +227,7 @@ def orbit_diagram(e, u, y0=0.1, v0=0.0, transient=2000, keep=200, warm_start=Fal
 
 
     dims = (varied, "iterate")
-    return xr.Dataset(
+    ds = xr.Dataset(
         {
             "y": (dims, ys, {"long_name": _LONG_NAMES["y"]}),
             "v": (dims, vs, {"long_name": _LONG_NAMES["v"]}),
@@ -254,6 +258,7 @@ def orbit_diagram(e, u, y0=0.1, v0=0.0, transient=2000, keep=200, warm_start=Fal
             "stairbounce_version": __version__,
         },
     )
+    return with_speed(ds, staircase_of(u), "u")
 
 
 def _varied(ds):

@@ -42,6 +42,7 @@ from numba import njit, prange
 from ._version import __version__
 from . import _validate as _v
 from ._interrupt import halted
+from .units import staircase_of, with_speed
 from .model import (
     _COUNTED_IMPACTS,
     SLIDING,
@@ -820,7 +821,8 @@ def scan_coords(e_values, u_values, max_iter=1000, y0=1.0, v0=0.0, *, prune=True
         for k, (_, desc) in _FIELDS.items()
     }
     coords = {"e": ("e", es, _E_ATTRS), "u": ("u", us, _U_ATTRS)}
-    return xr.Dataset(data_vars, coords=coords, attrs=_attrs(max_iter, y0, v0))
+    return with_speed(xr.Dataset(data_vars, coords=coords, attrs=_attrs(max_iter, y0, v0)),
+                      staircase_of(u_values))
 
 
 def scan_points(e, u, max_iter=1000, y0=1.0, v0=0.0, *, prune=True):
@@ -952,7 +954,7 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
     ds.attrs.update(
         e_min=e_min, e_max=e_max, n_e=n_e, u_min=u_min, u_max=u_max, n_u=n_u
     )
-    return ds
+    return with_speed(ds, staircase_of(u))
 
 
 def tongue_mask(e, u, n_max):

@@ -9,6 +9,7 @@ its jump and the accumulation tail ``0^inf``, which is not a letter.
 
 from __future__ import annotations
 
+import math
 import re
 import sys
 from dataclasses import dataclass
@@ -16,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .model import SLIDING, _constants, _step, check_count, check_e, check_u
+from .model import SLIDING, _constants, _step, check_count, check_e, check_u, no_sliding_bound
 
-__all__ = ["Word", "sliding_word", "parse_word"]
+__all__ = ["SlidingAnswer", "Word", "sliding_answer", "sliding_word", "parse_word"]
 
 INFINITY = "\u221e"
 # longest word text parse_word reads: a million characters (regular expression
@@ -176,3 +177,88 @@ def sliding_word(e, u, max_steps=1000):
         done.append(block[:m].copy())
         left -= m
     return None
+
+
+@dataclass(frozen=True, repr=False)
+class SlidingAnswer:
+    """Whether a periodic sliding solution exists at ``(e, u)``, and why; see
+    :func:`sliding_answer`.
+
+    ``verdict`` is ``"found"`` (``word`` is its word), ``"impossible"``
+    (proven by Corollary 2.1: ``u`` lies above ``bound``, so the orbit of
+    ``(1, 0)`` never slides again; nothing was iterated) or ``"not found"``
+    (below the bound, but the orbit did not slide within ``max_steps``
+    steps: not a proof).  ``bound`` is the Corollary 2.1 speed
+    ``(1-e)/(2 sqrt(2e))`` below which sliding is possible (``inf`` at
+    ``e = 0``); ``speed_bound`` is the same in m/s when ``u`` was given as a
+    :class:`stairbounce.Speed` on a staircase, else None.
+    """
+
+    e: float
+    u: float
+    max_steps: int
+    verdict: str
+    word: Word | None
+    bound: float
+    speed_bound: float | None = None
+
+    @property
+    def found(self) -> bool:
+        return self.word is not None
+
+    def text(self, ascii: bool = False) -> str:
+        """One sentence: the word, or the proof, or the search that failed."""
+        if self.word is not None:
+            return f"word {self.word.format(ascii=ascii)}: period {self.word.period}"
+        need = (f"sliding needs U < {self.speed_bound:.4g} m/s" if self.speed_bound is not None
+                else f"sliding needs u < {self.bound:.6g}")
+        if self.verdict == "impossible":
+            return f"impossible (Corollary 2.1: u >= {self.bound:.6g} at e = {self.e:g}); {need}"
+        return (f"no periodic sliding solution found within {self.max_steps} steps (the orbit of "
+                f"(1, 0) does not slide; "
+                f"Corollary 2.1 does not exclude it: {need})")
+
+    def __repr__(self) -> str:
+        text = self.text(ascii=True)
+        if self.word is not None and len(text) > 60:
+            text = f"word of length {len(self.word)}, period {self.word.period}"
+        return f"SlidingAnswer(e={self.e:g}, u={self.u:g}: {text})"
+
+
+def sliding_answer(e, u, max_steps=1000):
+    """sliding_answer(e, u, max_steps=1000) -> SlidingAnswer
+
+    :func:`sliding_word`, with what the paper proves when there is no word.
+
+    Above the Corollary 2.1 curve (by the rounding margin of
+    :func:`stairbounce.prunable`, the test a scan prunes on) no solution
+    slides: the verdict is ``"impossible"`` and nothing is iterated.
+    Otherwise the orbit of ``(1, 0)`` is iterated for up to ``max_steps``
+    steps: ``"found"`` with its word, or ``"not found"``.  Given a
+    :class:`stairbounce.Speed` (``staircase.speed(U)``), the answer also
+    carries the bound in m/s, ``speed_bound``: the speed below which sliding
+    becomes possible.
+
+    >>> import stairbounce as sb
+    >>> sb.sliding_answer(0.7, 0.5).verdict
+    'impossible'
+    >>> stairs = sb.Staircase(0.17, 0.28)
+    >>> print(sb.sliding_answer(0.7, stairs.speed(1.5)).text())
+    impossible (Corollary 2.1: u >= 0.126773 at e = 0.7); sliding needs U < 0.2696 m/s
+    """
+    from .plane import prunable
+    from .units import staircase_of
+
+    e = check_e(e)
+    stairs = staircase_of(u)
+    u_value = check_u(u)
+    max_steps = check_count("max_steps", max_steps, 1)
+    bound = no_sliding_bound(e)
+    speed_bound = None
+    if stairs is not None and math.isfinite(bound):
+        speed_bound = bound * stairs.speed_unit
+    if bool(prunable(e, u_value)):
+        return SlidingAnswer(e, u_value, max_steps, "impossible", None, bound, speed_bound)
+    w = sliding_word(e, u_value, max_steps)
+    return SlidingAnswer(e, u_value, max_steps, "found" if w is not None else "not found", w, bound,
+                         speed_bound)

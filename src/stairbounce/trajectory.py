@@ -32,6 +32,7 @@ from .model import (
     check_u,
     iterate,
 )
+from .units import Staircase, staircase_of
 
 __all__ = ["Trajectory", "Flight", "Impact", "Accumulation", "Slide", "Unlisted", "trajectory"]
 
@@ -100,9 +101,15 @@ class Slide:
     step: int
 
 
-@dataclass
+@dataclass(repr=False)
 class Trajectory:
-    """The solution over ``steps`` steps; see :func:`trajectory`."""
+    """The solution over ``steps`` steps; see :func:`trajectory`.
+
+    Its repr is one line (the parameters and how many of each record);
+    the records themselves are the lists ``flights``, ``impacts``,
+    ``accumulations``, ``slides`` and ``unlisted``.  ``staircase`` is the
+    :class:`stairbounce.Staircase` when ``u`` was given as a speed in m/s.
+    """
 
     e: float
     u: float
@@ -115,6 +122,17 @@ class Trajectory:
     accumulations: list[Accumulation] = field(default_factory=list)
     slides: list[Slide] = field(default_factory=list)
     unlisted: list[Unlisted] = field(default_factory=list)
+    staircase: Staircase | None = None
+
+    def __repr__(self) -> str:
+        speed = "" if self.staircase is None else f" (U = {self.staircase.to_speed(self.u):.4g} m/s)"
+        counts = [(len(self.impacts), "impact"), (len(self.accumulations), "accumulation"),
+                  (len(self.slides), "slide")]
+        more = sum(r.count for r in self.unlisted)
+        text = ", ".join(f"{n} {word}{'' if n == 1 else 's'}" for n, word in counts)
+        return (f"Trajectory(e={self.e:g}, u={self.u:g}{speed}, y0={float(self.edge_y[0]):g}, "
+                f"v0={float(self.edge_v[0]):g}, steps={self.steps}: {text}"
+                + (f", {more} more impacts unlisted" if more else "") + ")")
 
     @property
     def T(self) -> float:
@@ -225,7 +243,7 @@ def trajectory(e, u, y0=1.0, v0=0.0, steps=10, max_listed=30):
     ValueError when they would not fit in the memory available.
     """
     e = check_e(e)
-    u = check_u(u)
+    speed, u = u, check_u(u)
     y0, v0 = check_state(y0, v0, "y0", "v0")
     steps = check_count("steps", steps, 0)
     max_listed = check_count("max_listed", max_listed, 1)
@@ -234,7 +252,8 @@ def trajectory(e, u, y0=1.0, v0=0.0, steps=10, max_listed=30):
     # a flight and an impact per listed impact, plus up to three records a step
     records = sum(2 * _listed(int(k), e, max_listed) + 3 if k else 1 for k in ks[1:])
     _v.check_memory(f"steps = {steps} with max_listed = {max_listed}", records * _RECORD_BYTES)
-    traj = Trajectory(e=e, u=u, steps=steps, edge_y=ys, edge_v=vs, edge_impacts=ks)
+    traj = Trajectory(e=e, u=u, steps=steps, edge_y=ys, edge_v=vs, edge_impacts=ks,
+                      staircase=staircase_of(speed))
     for j in range(steps):
         _solve_step(traj, j, ys[j], vs[j], int(ks[j + 1]), e, T, ratio, max_listed)
     return traj

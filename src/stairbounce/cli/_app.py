@@ -163,6 +163,16 @@ def progress_bar(console, description, total, unit=""):
         yield bar, task
 
 
+def with_row_progress(run, description, rows):
+    """``run(progress)`` behind a progress bar over ``rows`` on stderr (drawn
+    only when stderr is a terminal): the in-memory scans, which call
+    ``progress(done, total)`` after each block of rows."""
+    from rich.console import Console
+
+    with progress_bar(Console(stderr=True), description, rows) as (bar, task):
+        return run(lambda done, total: bar.update(task, completed=done, total=total))
+
+
 def parse_overlays(values, allowed) -> tuple[str, ...]:
     """``--overlay`` as every command takes it: a comma-separated list, or the
     option repeated, or both (``--overlay tongues,bound`` = ``--overlay

@@ -11,11 +11,10 @@ and the physical set; they print both descriptions of the staircase.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import typer
 
-from ..units import normalized_speed, time_scale
+from ..units import Staircase
 from ._app import CLIError, parse_range
 
 SPEED_HELP = "Horizontal speed of the ball in m/s (with --step-height and --step-length; instead of --u)."
@@ -38,35 +37,6 @@ def step_length_option():
 
 def g_option():
     return typer.Option(None, "--g", help=G_HELP)
-
-
-@dataclass(frozen=True)
-class Staircase:
-    """A staircase in SI units: step height ``a``, step length ``b`` (m), gravity ``g`` (m/s^2)."""
-
-    a: float
-    b: float
-    g: float
-
-    @property
-    def time_unit(self) -> float:
-        """Seconds per normalised time unit, ``sqrt(a/g)``."""
-        return time_scale(self.a, self.g)
-
-    @property
-    def velocity_unit(self) -> float:
-        """m/s per normalised vertical velocity, ``sqrt(a g)``."""
-        return math.sqrt(self.a * self.g)
-
-    def u(self, speed: float) -> float:
-        return normalized_speed(speed, self.a, self.b, self.g)
-
-    def speed(self, u: float) -> float:
-        """m/s of the normalised horizontal speed ``u`` (the inverse of :meth:`u`)."""
-        return u * self.b / self.time_unit
-
-    def describe(self) -> str:
-        return f"steps a = {self.a:g} m high, b = {self.b:g} m long, g = {self.g:g} m/s^2"
 
 
 def _number(name: str, value) -> float | None:
@@ -110,7 +80,7 @@ def resolve_u(u, speed, step_height, step_length, g):
     stairs = _staircase(speed, step_height, step_length, g, u)
     if stairs is None:
         return u, None
-    return stairs.u(_number("speed", speed)), stairs
+    return stairs.to_u(_number("speed", speed)), stairs
 
 
 def resolve_u_text(u, speed, step_height, step_length, g):
@@ -122,20 +92,20 @@ def resolve_u_text(u, speed, step_height, step_length, g):
         return u, None
     if ":" in speed:
         lo, hi = parse_range("speed", speed)
-        return f"{stairs.u(_number('speed', lo))!r}:{stairs.u(_number('speed', hi))!r}", stairs
+        return f"{stairs.to_u(_number('speed', lo))!r}:{stairs.to_u(_number('speed', hi))!r}", stairs
     try:
         value = float(speed)
     except ValueError:
         raise CLIError(f"--speed must be a number or a range MIN:MAX in m/s, got {speed!r}") from None
-    return repr(stairs.u(_number("speed", value))), stairs
+    return repr(stairs.to_u(_number("speed", value))), stairs
 
 
 def describe(u: float, stairs: Staircase | None) -> str:
     """One line: the speed in both units (only ``u`` without a staircase)."""
     if stairs is None:
         return f"u = {u:g}"
-    return (f"speed U = {stairs.speed(u):g} m/s on {stairs.describe()}: u = U sqrt(a/g) / b = {u:.6g} "
-            f"(one step takes {stairs.b / stairs.speed(u):.4g} s)")
+    return (f"speed U = {stairs.to_speed(u):g} m/s on {stairs.describe()}: u = U sqrt(a/g) / b = {u:.6g} "
+            f"(one step takes {stairs.step_length / stairs.to_speed(u):.4g} s)")
 
 
 # --------------------------------------------------------------------------- #
@@ -143,48 +113,11 @@ def describe(u: float, stairs: Staircase | None) -> str:
 # --------------------------------------------------------------------------- #
 
 
-def _scaled_axis(axis, factor):
-    """Tick ``axis`` (drawn in normalised units) at round values of ``factor`` times them."""
-    from matplotlib.ticker import FuncFormatter, Locator, MaxNLocator
-
-    class ScaledLocator(Locator):
-        def __init__(self):
-            self._inner = MaxNLocator(nbins="auto", steps=[1, 2, 2.5, 5, 10])
-
-        def set_axis(self, axis):
-            super().set_axis(axis)
-            self._inner.set_axis(axis)
-
-        def __call__(self):
-            lo, hi = self.axis.get_view_interval()
-            return self.tick_values(lo, hi)
-
-        def tick_values(self, vmin, vmax):
-            return [t / factor for t in self._inner.tick_values(vmin * factor, vmax * factor)]
-
-    axis.set_major_locator(ScaledLocator())
-    axis.set_major_formatter(FuncFormatter(lambda x, _pos: f"{x * factor:.4g}"))
-
-
 def physical_trajectory_axes(ax_path, ax_section, stairs: Staircase, u: float):
-    """Relabel the trajectory figure (Fig. 1 and the Poincare section) in SI units.
+    """Relabel the trajectory figure (Fig. 1 and the Poincare section) in SI
+    units (:func:`stairbounce.plot._units.path_in_metres`,
+    :func:`~stairbounce.plot._units.section_in_metres`)."""
+    from ..plot._units import path_in_metres, section_in_metres
 
-    The data stay in the paper's units; ticks are placed at round metres
-    (``x b``, ``y a``), m/s (``v sqrt(a g)``) and seconds (``t = x / u`` time
-    units, on the top axis), and the path keeps the staircase's true aspect.
-    """
-    _scaled_axis(ax_path.xaxis, stairs.b)
-    _scaled_axis(ax_path.yaxis, stairs.a)
-    ax_path.set_xlabel("x (m)")
-    ax_path.set_ylabel("height (m)")
-    ax_path.set_aspect(stairs.a / stairs.b, adjustable="box")
-    # horizontal motion is uniform: the x axis is also a clock, t = x / u time units
-    seconds_per_x = stairs.time_unit / u
-    top = ax_path.secondary_xaxis("top", functions=(lambda x: x * seconds_per_x, lambda t: t / seconds_per_x))
-    top.set_xlabel("t (s)")
-    ax_path.set_title(f"{ax_path.get_title()}  (U = {stairs.speed(u):.3g} m/s, a = {stairs.a:g} m, "
-                      f"b = {stairs.b:g} m)", fontsize="medium", pad=28)
-    _scaled_axis(ax_section.xaxis, stairs.a)
-    _scaled_axis(ax_section.yaxis, stairs.velocity_unit)
-    ax_section.set_xlabel("height at the edge (m)")
-    ax_section.set_ylabel("vertical velocity at the edge (m/s)")
+    path_in_metres(ax_path, stairs, u)
+    section_in_metres(ax_section, stairs)

@@ -139,7 +139,7 @@ def _local_cluster(workers):
         raise
 
 
-@app.command()
+@app.command(short_help="Draw a scan store block by block, never whole in memory.")
 def render(
     store: Path = typer.Argument(..., help="A scan store (.zarr) or file (.nc), e.g. from 'scan --tile'."),
     png: Path = typer.Option(..., "--png", help="Image to write (.png)."),

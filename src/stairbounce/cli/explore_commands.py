@@ -7,7 +7,7 @@ import typer
 from ._app import CLIError, app
 
 
-@app.command()
+@app.command(short_help="Serve the zoomable (e, u) plane in a browser.")
 def explore(
     port: int = typer.Option(5006, "--port", help="TCP port to serve on (0: any free port)."),
     host: str = typer.Option(

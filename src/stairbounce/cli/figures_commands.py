@@ -11,7 +11,7 @@ import typer
 from ._app import FORCE_HELP, CLIError, app, check_interrupted, plural, progress_bar
 
 
-@app.command()
+@app.command(short_help="Reproduce the paper's Figures 1-9, with a report.")
 def figures(
     out: Path = typer.Option(Path("figures"), "--out", help="Folder for the figures and the report."),
     only: str = typer.Option(None, "--only", help="Comma-separated figures to make, e.g. fig4,fig6 (fig5 = all five blow-ups)."),

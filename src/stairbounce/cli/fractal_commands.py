@@ -206,7 +206,7 @@ def _store_dimension(store, which, connectivity, fit_range, scheduler):
     return result, fit_range
 
 
-@app.command()
+@app.command(short_help="Fractal dimension of the sliding border (Figs 6, 7).")
 def dimension(
     e: str = typer.Option("0:0.333", "--e", help="Window along e, MIN:MAX (default: the paper's Fig. 6)."),
     u: str = typer.Option("0.4:0.733", "--u", help="Window along u, MIN:MAX (default: the paper's Fig. 6)."),

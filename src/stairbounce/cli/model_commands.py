@@ -10,7 +10,7 @@ import typer
 
 from .._io import atomic_path
 from ..model import SLIDING, iterate
-from ..symbolic import sliding_word, terminal_can_print_infinity
+from ..symbolic import sliding_answer, terminal_can_print_infinity
 from ..trajectory import trajectory
 from . import _staircase as st
 from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, plural, progress_bar, save_figure
@@ -19,7 +19,7 @@ E_HELP = "Restitution coefficient, in [0, 1)."
 U_HELP = "Horizontal speed in normalised units (u > 0); one step takes 1/u. Or --speed with --step-height, --step-length."
 
 
-@app.command()
+@app.command(short_help="Word of the sliding solution through (1, 0), or why none.")
 def word(
     e: float = typer.Option(..., "--e", help=E_HELP),
     u: float = typer.Option(None, "--u", help=U_HELP),
@@ -33,23 +33,23 @@ def word(
     u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
     if stairs is not None:
         typer.echo(st.describe(u, stairs))
-    w = sliding_word(e, u, max_steps=max_steps)
+    answer = sliding_answer(e, u if stairs is None else stairs.speed(float(speed)),
+                            max_steps=max_steps)
+    w = answer.word
     if w is None:
-        typer.echo(
-            f"e = {e:g}, u = {u:g}: no periodic sliding solution found within {max_steps} steps "
-            "(the orbit of (1, 0) does not slide)"
-        )
+        # proven impossible above the Corollary 2.1 curve, else only not found
+        typer.echo(f"e = {e:g}, u = {u:g}: {answer.text()}")
         return
     text = w.format(ascii=not terminal_can_print_infinity())
     typer.echo(f"e = {e:g}, u = {u:g}")
     typer.echo(f"word:    {text}")
     typer.echo(f"length:  {len(w)}")
-    typer.echo(f"period:  {w.period} steps"
-               + ("" if stairs is None else f" = {w.period * stairs.b / stairs.speed(u):.6g} s"))
+    typer.echo(f"period:  {plural(w.period, 'step')}"
+               + ("" if stairs is None else f" = {w.period * stairs.step_length / stairs.to_speed(u):.6g} s"))
     typer.echo(f"impacts: {w.impacts} per period (plus the accumulation)")
 
 
-@app.command("map")
+@app.command("map", short_help="Poincare iterates (Prop 2.3): the state at each edge.")
 def map_(
     e: float = typer.Option(..., "--e", help=E_HELP),
     u: float = typer.Option(None, "--u", help=U_HELP),
@@ -67,7 +67,7 @@ def map_(
     u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
     ys, vs, ks = iterate(y0, v0, e, u, steps)
     # (y, v) normalised, then (y a, v sqrt(a g)) in SI units when a staircase was given
-    si = () if stairs is None else (stairs.a, stairs.velocity_unit)
+    si = () if stairs is None else (stairs.step_height, stairs.velocity_unit)
     if as_csv:
         w = csv.writer(sys.stdout, lineterminator="\n")
         w.writerow(["n", "y", "v", "impacts"] + (["y_m", "v_m_per_s"] if si else []))
@@ -85,7 +85,7 @@ def map_(
         typer.echo(f"{n:>6}  {y:>22.15g}  {v:>22.15g}  {label:7s}{extra}".rstrip())
 
 
-@app.command("trajectory")
+@app.command("trajectory", short_help="The ball's path (Fig 1) and Poincare section (Fig 2).")
 def trajectory_(
     e: float = typer.Option(..., "--e", help=E_HELP),
     u: float = typer.Option(None, "--u", help=U_HELP),

@@ -6,12 +6,12 @@ from __future__ import annotations
 import typer
 
 from . import _staircase as st
-from ._app import CLIError, app, save_figure
+from ._app import CLIError, app, save_figure, with_row_progress
 
 MOTION_FIELD_NAMES = ("k_mean", "lyap1", "jump_mean", "speed_spread")
 
 
-@app.command()
+@app.command(short_help="Non-sliding motion: <k>, mean jump, Lyapunov exponents.")
 def motion(
     e: float = typer.Option(..., "--e", help="Restitution coefficient, in [0, 1)."),
     u: float = typer.Option(None, "--u", help="Horizontal speed in normalised units (u > 0). Or --speed with --step-height, --step-length."),
@@ -56,7 +56,10 @@ def motion_scan_figure(e, u, max_iter, y0, v0, field, png, dpi, out=None, overla
 
     if max_iter < 2:
         raise CLIError(f"--max-iter must be >= 2 for a motion field, got {max_iter}")
-    ds = motion_scan(e, u, steps=max_iter, transient=max_iter, y0=y0, v0=v0)
+    ds = with_row_progress(
+        lambda progress: motion_scan(e, u, steps=max_iter, transient=max_iter, y0=y0, v0=v0,
+                                     progress=progress),
+        "motion scan rows", u[2])
     if out is not None:
         sc.save(ds, out, overwrite=force)
         typer.echo(f"wrote {out}")

@@ -9,6 +9,7 @@ import typer
 
 from .._io import atomic_path
 from ..model import check_count
+from ..units import with_speed
 from . import _staircase as st
 from ._app import (
     FORCE_HELP,
@@ -18,6 +19,7 @@ from ._app import (
     check_outputs,
     parse_overlays,
     parse_range,
+    plural,
     progress_bar,
     save_figure,
 )
@@ -87,7 +89,7 @@ def _write_data(ds, path: Path, overwrite=False) -> None:
             ds.to_dataframe().to_csv(tmp)
 
 
-@app.command("orbit-diagram")
+@app.command("orbit-diagram", short_help="Orbit diagram over e or u (Section 4, Figs 8, 9).")
 def orbit_diagram_(
     e: str = typer.Option(..., "--e", help="Restitution coefficient in [0, 1): a number, or a range MIN:MAX to sweep."),
     u: str = typer.Option(None, "--u", help="Horizontal speed u > 0: a number, or a range MIN:MAX to sweep."),
@@ -103,7 +105,7 @@ def orbit_diagram_(
     warm_start: bool = typer.Option(False, "--warm-start", help="Start each value from the previous value's last state."),
     component: str = typer.Option("y", "--component", help="Component to plot: y or v."),
     points: bool = typer.Option(False, "--points", help="Draw every point instead of a density image."),
-    overlay: list[str] = typer.Option([], "--overlay", help="Curves to draw, comma-separated or repeated: tongues (Theorem 3.1)."),
+    overlay: list[str] = typer.Option([], "--overlay", help="Lines to draw, comma-separated or repeated: tongues (Theorem 3.1), families (one impact every n steps, where the diagram jumps), bound (Corollary 2.1)."),
     bins: int = typer.Option(400, "--bins", help="Density image rows along the component (>= 1)."),
     value_range: str = typer.Option(None, "--range", help="Plotted range MIN:MAX of the component (a zoom)."),
     png: Path = typer.Option(None, "--png", help="Figure file (.png, .pdf or .svg)."),
@@ -119,7 +121,7 @@ def orbit_diagram_(
         typer.echo(f"speed {speed} m/s on {stairs.describe()}: u = {u}")
     if component not in ("y", "v"):
         raise CLIError(f"--component must be y or v, got {component!r}")
-    overlays = parse_overlays(overlay, ("tongues",))
+    overlays = parse_overlays(overlay, ("tongues", "families", "bound"))
     check_count("--bins", bins, 1)
     check_dpi(dpi)
     if png is None and out is None:
@@ -140,8 +142,11 @@ def orbit_diagram_(
     varied = "e" if e_swept else "u"
 
     ds = _sweep(ev, uv, varied, y0, v0, transient, keep, warm_start)
+    # on a real staircase: the coordinate (or attribute) speed in m/s, and the
+    # figure's axes in m/s and metres
+    ds = with_speed(ds, stairs, "u")
     fixed = "u" if e_swept else "e"
-    summary = (f"{ds.sizes[varied]} values of {varied} x {ds.sizes['iterate']} iterates "
+    summary = (f"{ds.sizes[varied]} values of {varied} x {plural(ds.sizes['iterate'], 'iterate')} "
                f"({ds.sizes[varied] * ds.sizes['iterate']} points), {fixed} = {ds.attrs[fixed]:g}")
 
     if out is not None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -17,9 +18,10 @@ from ._app import (
     parse_range,
     parse_size,
     plural,
-    progress_bar,
     tile_for_workers,
+    with_row_progress,
 )
+from . import _staircase as st
 from .motion_commands import MOTION_FIELD_NAMES, motion_scan_figure
 
 FIELD_NAMES = ("word_length", "period", "impacts", "jumps", "status") + MOTION_FIELD_NAMES
@@ -33,16 +35,22 @@ OVERLAY_NAMES = ("tongues", "bound")
 _CLI_BYTES_PER_PIXEL = 140
 
 
-@app.command("scan")
+@app.command("scan", short_help="Scan the (e, u) plane for sliding solutions (Figs 3-5).")
 def scan_(
     e: str = typer.Option(
         "0:1", "--e",
         help="Window along e, MIN:MAX: the image edges, within [0, 1] (pixel centres lie inside, < 1).",
     ),
     u: str = typer.Option(
-        "0:1.5", "--u",
-        help="Window along u, MIN:MAX: the image edges, MIN >= 0 (pixel centres lie inside, > 0).",
+        None, "--u",
+        help="Window along u, MIN:MAX: the image edges, MIN >= 0 (pixel centres lie inside, > 0); default 0:1.5.",
     ),
+    speed: str = st.speed_option(
+        "Window along the ball's speed in m/s, MIN:MAX (with --step-height and --step-length; instead "
+        "of --u): the picture's axis and the data's coordinate 'speed' are in m/s."),
+    step_height: float = st.step_height_option(),
+    step_length: float = st.step_length_option(),
+    g: float = st.g_option(),
     size: str = typer.Option("500x350", "--size", help="Pixels WIDTHxHEIGHT (along e x along u)."),
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
     y0: float = typer.Option(1.0, "--y0", help="Initial height at the edge (>= 0); (1, 0) is the paper's."),
@@ -72,8 +80,15 @@ def scan_(
     from .. import plane as sc
 
     e_lo, e_hi = parse_range("e", e)
-    u_lo, u_hi = parse_range("u", u)
     n_e, n_u = parse_size(size)
+    stairs = None
+    if u is None and (speed, step_height, step_length, g) == (None,) * 4:
+        u = "0:1.5"
+    else:
+        u, stairs = st.resolve_u_text(u, speed, step_height, step_length, g)
+        if stairs is not None and ":" not in speed:
+            raise CLIError(f"--speed must be a range MIN:MAX in m/s for a scan, got {speed!r}")
+    u_lo, u_hi = parse_range("u", u)
     if max_iter < 1:
         raise CLIError(f"--max-iter must be an integer >= 1, got {max_iter}")
     if field not in FIELD_NAMES:
@@ -90,6 +105,11 @@ def scan_(
     if y0 < 0:
         raise CLIError(f"--y0 must be >= 0, got {y0}")
     tiled = tile is not None or scheduler is not None or workers is not None
+    # the u window: in m/s on a real staircase (the Dataset gets the coordinate 'speed')
+    u_window: Any = (u_lo, u_hi, n_u) if stairs is None else stairs.speed(*parse_range("speed", speed), n_u)
+    if stairs is not None:
+        typer.echo(f"speed U in [{u_window.metres_per_second[0]:g}, {u_window.metres_per_second[1]:g}] m/s "
+                   f"on {stairs.describe()}: u in [{u_lo:.6g}, {u_hi:.6g}]")
     if png is None and out is None and not tiled:
         png = Path("scan.png")
     if not tiled:
@@ -103,7 +123,7 @@ def scan_(
         if tiled:
             raise CLIError(f"--field {field} is not available for tiled scans; scan tiles with "
                            "stairbounce.nonsliding.motion_coords")
-        typer.echo(motion_scan_figure((e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0,
+        typer.echo(motion_scan_figure((e_lo, e_hi, n_e), u_window, max_iter, y0, v0,
                                       field, png, dpi, out, overlays, force=force))
         return
     if tiled:
@@ -120,7 +140,7 @@ def scan_(
                        + ("" if tiles >= workers else
                           f" (tiles under 64 px cost more than they share; "
                           f"{plural(workers - tiles, 'worker')} idle)"), err=True)
-        ds = run_tiled_scan(out, (e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0,
+        ds = run_tiled_scan(out, (e_lo, e_hi, n_e), u_window, max_iter, y0, v0,
                             tile=tile, scheduler=scheduler, workers=workers)
         if png is not None:
             # never the whole store in memory: reduced by blocks first
@@ -128,7 +148,7 @@ def scan_(
             typer.echo(f"wrote {png}")
         return
 
-    ds = _scan_with_progress(sc, (e_lo, e_hi, n_e), (u_lo, u_hi, n_u), max_iter, y0, v0)
+    ds = _scan_with_progress(sc, (e_lo, e_hi, n_e), u_window, max_iter, y0, v0)
     if out is not None:
         sc.save(ds, out, overwrite=force)
         typer.echo(f"wrote {out}")
@@ -139,15 +159,14 @@ def scan_(
     frac = found.mean()
     longest = int(ds["word_length"].values.max())
     typer.echo(
-        f"{n_e} x {n_u} pixels, e in [{e_lo:g}, {e_hi:g}], u in [{u_lo:g}, {u_hi:g}], "
+        f"{n_e} x {n_u} pixels, e in [{e_lo:g}, {e_hi:g}], u in [{u_lo:g}, {u_hi:g}]"
+        + ("" if stairs is None else " (U in [{:g}, {:g}] m/s)".format(*u_window.metres_per_second))
+        + ", "
         f"max_iter {max_iter}: periodic sliding solution at {100 * frac:.1f}% of the pixels"
         + (f", longest word {longest}" if found.any() else "")
     )
 
 
 def _scan_with_progress(sc, e, u, max_iter, y0, v0):
-    from rich.console import Console
-
-    with progress_bar(Console(stderr=True), "scan rows", u[2]) as (bar, task):
-        return sc.scan(e, u, max_iter, y0, v0,
-                       progress=lambda done, total: bar.update(task, completed=done, total=total))
+    return with_row_progress(lambda progress: sc.scan(e, u, max_iter, y0, v0, progress=progress),
+                             "scan rows", u[2])

@@ -225,6 +225,38 @@ def _prepare_page(server, host: str) -> None:
         answer.read()
 
 
+def _page_with_local_resources():
+    """The app's page (:func:`~stairbounce.explorer.app.create_app`) in the
+    session's document, its stylesheets served by this server.
+
+    Panel's components import their stylesheets from its CDN
+    (``cdn.holoviz.org``); Panel rewrites them to its own static route only
+    in the document it renders a page's HTML from, not in the session each
+    page's websocket then builds (``reuse_sessions``).  Rewritten here, in
+    every session, with Panel's own rewriting, so that a page loads nothing
+    from outside the server (offline, behind a firewall).
+    """
+    import panel as pn
+    from panel.io.resources import LOCAL_DIST, patch_model_css
+
+    from .app import create_app
+
+    doc = pn.state.curdoc
+    if doc is None:  # outside a server: nothing to rewrite
+        return create_app()
+    # the designs (themes) patch the stylesheets they apply, now and later,
+    # to the document's dist_url, else to the CDN
+    doc._template_variables["dist_url"] = LOCAL_DIST
+    layout = create_app()
+    layout.server_doc(doc, title=TITLE)
+    for root in doc.roots:
+        patch_model_css(root, dist_url=LOCAL_DIST)
+    return None
+
+
+TITLE = "stairbounce explorer"
+
+
 def make_server(port=5006, host="127.0.0.1", show=False, allow_websocket_origin=()):
     """make_server(port=5006, host="127.0.0.1", show=False, allow_websocket_origin=()) -> bokeh Server
 
@@ -237,8 +269,6 @@ def make_server(port=5006, host="127.0.0.1", show=False, allow_websocket_origin=
     """
     import panel as pn
 
-    from .app import create_app
-
     # A page request answers with the page's HTML only (the same for every
     # view: the picture and widgets come over the websocket), rendered from
     # one kept session instead of building a new session's document (0.3 s of
@@ -249,13 +279,13 @@ def make_server(port=5006, host="127.0.0.1", show=False, allow_websocket_origin=
     pn.config.session_key_func = _page_key
     address = normalize_host(host)
     server = pn.serve(
-        create_app,
+        _page_with_local_resources,
         port=port,
         address=address or None,
         websocket_origin=["localhost:1"],  # replaced below, once the port is known
         show=show,
         start=False,
-        title="stairbounce explorer",
+        title=TITLE,
         verbose=False,
         # a closed page's session is freed after 15 s; look every 5 s
         check_unused_sessions_milliseconds=5000,

@@ -22,6 +22,7 @@ from __future__ import annotations
 import asyncio
 import html
 import io
+import math
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -113,6 +114,11 @@ _OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u
 
 # milliseconds without wheel events after which a wheel zoom is taken as done
 ZOOM_SETTLE_MS = 150
+# range changes (wheel, pan, box zoom) that follow one another within this
+# many seconds are one gesture: one history entry, so Back returns to the view
+# before it (a wheel turned in notches, on a loaded machine, reports a
+# RangesUpdate every few notches)
+GESTURE_MERGE_S = 1.0
 
 # the longest trajectory drawn for a tap, in steps (one full period when shorter)
 MAX_TRAJECTORY_STEPS = 2000
@@ -211,6 +217,8 @@ class Explorer:
         self._closed = False
         self._connected = False
         self._status_text, self._status_level, self._error_text = "", "info", ""
+        self._refused_side = None  # (size widget, value) of the last refused size edit
+        self._last_ranges = -math.inf  # time.monotonic() of the last range change
 
         self._build_map()
         self._build_point_figures()
@@ -221,16 +229,28 @@ class Explorer:
         self.history_back.on_change("text", self._locked_bokeh(self._on_popstate))
         # referenced from the map, the two models are in the page's document
         self.map_fig.tags = [self.history_out, self.history_back]
+        # the tap's panels: a row of their own below the map, the page's full
+        # width; put in the page by the first tap (they are more than half of
+        # the page's models: a new page's document is half the size without them)
+        self._tap_panes = [
+            pn.pane.Bokeh(self.traj_fig, sizing_mode="stretch_width"),
+            pn.Row(pn.pane.Bokeh(self.orbit_fig, sizing_mode="stretch_width"),
+                   pn.pane.Bokeh(self.section_fig, sizing_mode="stretch_width"),
+                   sizing_mode="stretch_width"),
+        ]
+        self.tap_panels = pn.Column(sizing_mode="stretch_width", styles={"flex": "1 1 100%"},
+                                    css_classes=["sb-tap-panels"])
         # the status and the tap's word sit above the map, so a laptop screen
         # (1280 x 720) shows them without scrolling; a flex box wraps the
         # trajectory and orbit diagram below the map when the window is narrow
         self.layout = pn.FlexBox(
             pn.Column(
-                pn.pane.Markdown(
-                    "## stairbounce explorer\nPeriodic sliding solutions of a ball bouncing down "
-                    "a staircase. Scroll to zoom, drag to pan, tap a point for its orbit; "
-                    "Back undoes a zoom.",
-                    width=290, margin=(0, 10),
+                # HTML, not Markdown: Markdown headings get a stray anchor link
+                pn.pane.HTML(
+                    "<h2>stairbounce explorer</h2><p>Periodic sliding solutions of a ball bouncing "
+                    "down a staircase. Scroll to zoom, drag to pan, tap a point for its orbit; "
+                    "Back undoes a zoom.</p>",
+                    width=290, margin=(0, 10), css_classes=["sb-title"],
                 ),
                 self.color, self.max_iter, pn.Row(self.width_in, self.height_in),
                 self.e_window, self.u_window, pn.Row(self.go_button, self.fig4_button),
@@ -240,8 +260,7 @@ class Explorer:
                 width=310,
             ),
             pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note),
-            pn.Column(pn.pane.Bokeh(self.traj_fig), pn.pane.Bokeh(self.orbit_fig),
-                      pn.pane.Bokeh(self.section_fig)),
+            self.tap_panels,
             flex_wrap="wrap",
             align_items="flex-start",
             gap="12px",
@@ -315,7 +334,7 @@ class Explorer:
         self.map_fig = fig
 
     def _build_point_figures(self):
-        t = figure(height=340, width=560, match_aspect=True, tools="pan,wheel_zoom,reset",
+        t = figure(height=340, sizing_mode="stretch_width", min_width=360, match_aspect=True, tools="pan,wheel_zoom,reset",
                    active_scroll="wheel_zoom", title="trajectory from (1, 0): tap the map",
                    x_axis_label="x (steps)", y_axis_label="height")
         t.toolbar.logo = None
@@ -336,7 +355,7 @@ class Explorer:
         t.legend.visible = False  # shown with the first tap
         self.traj_fig = t
 
-        o = figure(height=300, width=560, x_range=Range1d(0, 1.5), y_range=Range1d(0, 3),
+        o = figure(height=300, sizing_mode="stretch_width", min_width=360, x_range=Range1d(0, 1.5), y_range=Range1d(0, 3),
                    tools="pan,wheel_zoom,box_zoom,reset",
                    title="orbit diagram along u: tap the map", output_backend="webgl",
                    x_axis_label="u", y_axis_label="y at the step edges")
@@ -348,7 +367,7 @@ class Explorer:
         o.add_layout(self.orbit_marker)
         self.orbit_fig = o
 
-        p = figure(height=300, width=560, tools="pan,wheel_zoom,box_zoom,reset", output_backend="webgl",
+        p = figure(height=300, sizing_mode="stretch_width", min_width=360, tools="pan,wheel_zoom,box_zoom,reset", output_backend="webgl",
                    title="Poincare section of a non-sliding point: tap the map",
                    x_axis_label="y at the step edges", y_axis_label="v at the step edges")
         p.toolbar.logo = None
@@ -481,7 +500,10 @@ class Explorer:
         if new == v:
             self._clear_error()  # e.g. Reset back to the view shown
             return
-        self._request(new)
+        now = time.monotonic()
+        merged = now - self._last_ranges < GESTURE_MERGE_S
+        self._last_ranges = now
+        self._request(new, history="replace" if merged else "push")
 
     def _on_window_text(self, _event=None):
         if self._syncing:
@@ -520,17 +542,32 @@ class Explorer:
         self._set_ranges(view)
         self._request(view, history=history)
 
-    def _on_settings(self, _event):
+    def _on_settings(self, event):
         if self._syncing:
             return
+        # a refused side is put back in its widget (the widgets show the view);
+        # the other side typed next is asked for with it: 5000, then 5000, is
+        # one request for 5000 x 5000, not for 600 x 5000
+        refused, self._refused_side = self._refused_side, None
+        obj = getattr(event, "obj", None)
+        sides = (self.width_in, self.height_in)
         try:
-            new = replace(self.view, max_iter=int(self.max_iter.value), width=int(self.width_in.value),
-                          height=int(self.height_in.value))
+            width, height = int(self.width_in.value), int(self.height_in.value)
+            if refused is not None and obj in sides and refused[0] in sides and obj is not refused[0]:
+                width, height = (refused[1], height) if refused[0] is self.width_in else (width, refused[1])
+            new = replace(self.view, max_iter=int(self.max_iter.value), width=width, height=height)
         except (TypeError, ValueError):
             self._refuse(ValueError("max_iter, width and height must be integers"))
             return
         if new == self.view:
             self._clear_error()
+            return
+        try:
+            check_view(new)
+        except ValueError as exc:
+            if obj in sides:
+                self._refused_side = (obj, int(obj.value))
+            self._refuse(exc)
             return
         self._request(new)
 
@@ -835,12 +872,20 @@ class Explorer:
     def _show_point(self, gen, view, d):
         if gen != self._tap_gen:
             return
+        if not self.tap_panels.objects:
+            self.tap_panels.objects = list(self._tap_panes)
         e, u, w = d["e"], d["u"], d["word"]
         head = (f'e = <span class="sb-e">{e!r}</span>, u = <span class="sb-u">{u!r}</span>: ')
         steps = d["steps"]
-        if w is None:
+        answer = d.get("answer")
+        if w is None and answer is not None and answer.verdict == "impossible":
+            body = (f"no periodic sliding solution, proven: Corollary 2.1 excludes sliding for "
+                    f"u &gt;= {answer.bound:.6g} at this e (sliding needs u &lt; {answer.bound:.6g})")
+            title = f"trajectory from (1, 0), {_plural(steps, 'step')} (never slides: Corollary 2.1)"
+        elif w is None:
             body = (f"no periodic sliding solution: the orbit of (1, 0) does not slide within "
-                    f"max_iter = {view.max_iter} steps")
+                    f"max_iter = {_plural(view.max_iter, 'step')} (Corollary 2.1 does not exclude it: "
+                    f"u &lt; {answer.bound if answer is not None else float('nan'):.6g})")
             title = f"trajectory from (1, 0), {_plural(steps, 'step')} (no sliding found)"
         else:
             body = (f'word <span class="sb-word">{html.escape(w.format())}</span>, length {len(w)}, '
@@ -852,7 +897,7 @@ class Explorer:
         sec = d.get("section")
         self.section_src.data = dict(x=sec[0], y=sec[1]) if sec is not None else dict(x=[], y=[])
         self.section_fig.title.text = (f"Poincare section at e = {e:.6g}, u = {u:.6g}: last "
-                                       f"{len(sec[0])} iterates from (1, 0)" if sec is not None else
+                                       f"{_plural(len(sec[0]), 'iterate')} from (1, 0)" if sec is not None else
                                        "Poincare section: none (the orbit slides)")
         sx = np.repeat(np.arange(-1, steps + 1), 2)[1:].astype(float)
         sy = -np.repeat(np.arange(-1, steps + 1), 2)[:-1].astype(float)

@@ -32,7 +32,7 @@ import xarray as xr
 
 from .. import orbits, plane
 from ..model import check_e, check_u, tongue
-from ..symbolic import sliding_word
+from ..symbolic import sliding_answer
 from ..plot.plane import _CLASS_STARTS, _LEAST, NO_SLIDING_COLOR, ColorKey
 from ..plot.plane import color_key as _sliding_color_key
 from ..trajectory import trajectory
@@ -772,7 +772,9 @@ def point_details(e: float, u: float, max_iter: int, steps: int | None = None,
 
     What a tap on ``(e, u)`` shows: the word of the periodic sliding solution
     through (1, 0) (:func:`stairbounce.sliding_word`, ``None`` when it does
-    not slide within ``max_iter`` steps), for a point that does not slide its
+    not slide within ``max_iter`` steps) and ``"answer"``, the
+    :class:`stairbounce.SlidingAnswer` saying whether Corollary 2.1 proves
+    that it never slides, for a point that does not slide its
     motion (:func:`stairbounce.nonsliding.motion`, ``max_iter`` transient and kept
     steps: <k>, exponents) and last Poincare iterates (``"motion"``,
     ``"section"``; ``None`` otherwise), and the exact trajectory from (1, 0)
@@ -782,7 +784,8 @@ def point_details(e: float, u: float, max_iter: int, steps: int | None = None,
     points and slides.
     """
     e, u = check_e(e), check_u(u)
-    w = sliding_word(e, u, max_steps=max_iter)
+    answer = sliding_answer(e, u, max_steps=max_iter)
+    w = answer.word
     mo, section = _point_motion(e, u, max_iter) if w is None else (None, None)
     if steps is None:
         steps = 12 if w is None else int(min(max_steps, max(4, w.period + 2)))
@@ -795,6 +798,7 @@ def point_details(e: float, u: float, max_iter: int, steps: int | None = None,
         "e": e,
         "u": u,
         "word": w,
+        "answer": answer,
         "steps": steps,
         "path": (x, y),
         "impacts": (np.array([i.x for i in traj.impacts]), np.array([i.y for i in traj.impacts])),

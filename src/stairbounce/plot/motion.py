@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _units
 from .. import _validate as _v
 
 __all__ = ["plot_motion", "plot_motion_cut", "MOTION_PLOT_FIELDS"]
@@ -156,6 +157,9 @@ def plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=OVERLAYS, col
     ax.set_ylim(u_lo, u_hi)
     ax.set_xlabel("e (restitution coefficient)")
     ax.set_ylabel("u (horizontal speed)")
+    stairs = _units.staircase(ds)
+    if stairs is not None:
+        _units.speed_axis(ax.yaxis, stairs)
     if title is None:
         what = {"speed_spread": "spread of the impact speeds = <k>/(its Cauchy-Schwarz bound) - 1",
                 "lyap1": "lambda_1 (per step): O(1/N) everywhere, lambda_1 = 0"}.get(

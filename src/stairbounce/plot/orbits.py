@@ -6,13 +6,15 @@ import math
 
 import numpy as np
 
+from . import _units
 from .. import _validate as _v
-from ..model import tongue
+from ..model import no_sliding_bound, tongue
+from ..nonsliding import one_impact_family
 from ..orbits import _LONG_NAMES, _varied, orbit_density
 
 __all__ = ["plot_orbit_diagram"]
 
-_OVERLAYS = ("tongues",)
+_OVERLAYS = ("tongues", "families", "bound")
 
 
 def _tongue_lines(varied, fixed, lo, hi):
@@ -45,6 +47,78 @@ def _tongue_lines(varied, fixed, lo, hi):
     return lines
 
 
+def _family_lines(varied, fixed, lo, hi):
+    """Where the one-impact families and the Corollary 2.1 bound cross [lo, hi]
+    of the swept parameter: ``[(position, n)]`` for the families
+    (:func:`stairbounce.one_impact_family`, one landing every n steps) and
+    the bound's position or None.
+
+    Swept ``u`` at fixed ``e``: ``u_n(e) = sqrt(n (1-e) / (2 (1+e)))`` and
+    ``(1-e) / (2 sqrt(2e))``.  Swept ``e`` at fixed ``u``: the same curves
+    solved for ``e``, ``e_n = (1 - 2u^2/n) / (1 + 2u^2/n)`` (while
+    ``2u^2 < n``) and ``e = s^2`` with ``s = sqrt(2u^2 + 1) - sqrt(2) u``.
+    """
+    families = []
+    if varied == "u":
+        e = fixed
+        if 0.0 < e < 1.0:
+            n = 1
+            while True:
+                u_n = one_impact_family(n, e)
+                if u_n > hi:
+                    break
+                if u_n >= lo:
+                    families.append((u_n, n))
+                n += 1
+        bound = no_sliding_bound(e)
+    else:
+        u = fixed
+        r = 2.0 * u * u
+        # e_n grows with n towards 1: stop past the window, or at a cap
+        n = max(1, math.floor(r) + 1)
+        while n < 10**6:
+            q = r / n
+            e_n = (1.0 - q) / (1.0 + q)
+            if e_n > hi:
+                break
+            if e_n >= lo:
+                families.append((e_n, n))
+            n += 1
+        s = math.sqrt(r + 1.0) - math.sqrt(2.0) * u
+        bound = s * s
+    return families, (bound if lo <= bound <= hi else None)
+
+
+FAMILY_COLOR = "C3"
+BOUND_COLOR = "0.3"
+
+
+def _draw_family_lines(ax, ds, varied, overlay):
+    """The one-impact families and/or the Corollary 2.1 bound as vertical
+    lines; returns the legend handles of what is drawn."""
+    import matplotlib.pyplot as plt
+
+    lo, hi = sorted(ax.get_xlim())
+    fixed = float(ds.attrs["e" if varied == "u" else "u"])
+    families, bound = _family_lines(varied, fixed, lo, hi)
+    handles = []
+    if "families" in overlay and families:
+        for pos, n in families:
+            ax.axvline(pos, color=FAMILY_COLOR, lw=0.8, ls="-.", zorder=3)
+            if len(families) <= 12:
+                ax.annotate(f"1/{n}", (pos, 0.0), xycoords=("data", "axes fraction"), xytext=(2, 3),
+                            textcoords="offset points", fontsize="x-small", color=FAMILY_COLOR)
+        name = "u_n(e)" if varied == "u" else "e_n(u)"
+        handles.append(plt.Line2D([], [], color=FAMILY_COLOR, lw=0.8, ls="-.",
+                                  label=f"one impact every n steps, {name} (<k> = 1/n)"))
+    if "bound" in overlay and bound is not None:
+        ax.axvline(bound, color=BOUND_COLOR, lw=1.4, ls="--", zorder=3)
+        side = "above" if varied == "u" else "to the right"
+        handles.append(plt.Line2D([], [], color=BOUND_COLOR, lw=1.4, ls="--",
+                                  label=f"Corollary 2.1: no sliding {side}"))
+    return handles
+
+
 def density_cmap():
     """inferno_r without its palest quarter: the rarest visits (one iterate
     in a cell) are orange, not pale yellow lost on the white background."""
@@ -71,7 +145,10 @@ def plot_orbit_diagram(ds, component="y", density=True, ax=None, overlay=(), bin
     Theorem 3.1 as vertical lines: ``u_low = sqrt((n-1)/2)`` dashed and
     ``u_high = sqrt(n/2)(1-e)/(1+e)`` dotted when ``u`` is swept (each tongue
     numbered once, at its middle), ``e_high = (sqrt(n/2)-u)/(sqrt(n/2)+u)``
-    when ``e`` is.  The component is drawn as ``(value - offset) / unit`` (a
+    when ``e`` is.  ``"families"`` draws the one-impact families
+    (:func:`stairbounce.one_impact_family`: one landing every n steps, where
+    the diagram jumps) and ``"bound"`` the Corollary 2.1 bound (no sliding
+    above it), both as vertical lines.  The component is drawn as ``(value - offset) / unit`` (a
     zoom far below the unit reads without matplotlib's offset notation).
 
     Parameters
@@ -82,7 +159,7 @@ def plot_orbit_diagram(ds, component="y", density=True, ax=None, overlay=(), bin
     density : bool, default True
     ax : matplotlib Axes or None
     overlay : iterable of str, default ()
-        Subset of ``("tongues",)``.
+        Subset of ``("tongues", "families", "bound")``.
     bins : int, default 400
         Density bins along the component.
     range : (float, float) or None, default None
@@ -149,8 +226,9 @@ def plot_orbit_diagram(ds, component="y", density=True, ax=None, overlay=(), bin
         if shown is not None:
             ax.set_ylim(*shown)
 
-    if "tongues" in overlay:
-        _draw_tongue_lines(ax, ds, varied, legend)
+    handles = _draw_tongue_lines(ax, ds, varied) if "tongues" in overlay else []
+    handles += _draw_family_lines(ax, ds, varied, overlay)
+    _overlay_legend(ax, handles, legend)
 
     fixed_name = "e" if varied == "u" else "u"
     a = ds.attrs
@@ -158,16 +236,36 @@ def plot_orbit_diagram(ds, component="y", density=True, ax=None, overlay=(), bin
     ax.set_ylabel(label if label is not None else _LONG_NAMES[component])
     # never "1e-5+1" above the axis: the offset is in the label instead
     ax.ticklabel_format(axis="y", useOffset=False)
+    stairs = _units.staircase(ds)
+    fixed_text = f"{fixed_name} = {float(a[fixed_name]):g}"
+    if stairs is not None:
+        _physical_axes(ax, stairs, varied, component, offset, unit, label)
+        fixed_text = (f"{fixed_text} (U = {float(a[fixed_name]) * stairs.speed_unit:.4g} m/s)"
+                      if fixed_name == "u" else fixed_text) + f", {_units.describe(stairs)}"
     first, last = int(ds["iterate"].values[0]), int(ds["iterate"].values[-1])
-    ax.set_title(f"orbit diagram, {fixed_name} = {float(a[fixed_name]):g}, "
+    ax.set_title(f"orbit diagram, {fixed_text}, "
                  f"iterates {first}..{last} from ({float(a['y0']):g}, {float(a['v0']):g})"
                  + (", warm start" if int(a.get("warm_start", 0)) else ""), fontsize="medium")
     return ax
 
 
-def _draw_tongue_lines(ax, ds, varied, legend):
+def _physical_axes(ax, stairs, varied, component, offset, unit, label):
+    """An orbit diagram on a real staircase: the swept speed in m/s, the
+    component in metres or m/s (when it is drawn as it is: no offset or unit)."""
+    if varied == "u":
+        _units.speed_axis(ax.xaxis, stairs)
+    if offset == 0.0 and unit == 1.0 and label is None:
+        if component == "y":
+            _units.scaled_axis(ax.yaxis, stairs.step_height)
+            ax.set_ylabel("height at the edge (m)")
+        else:
+            _units.scaled_axis(ax.yaxis, stairs.velocity_unit)
+            ax.set_ylabel("vertical velocity at the edge (m/s)")
+
+
+def _draw_tongue_lines(ax, ds, varied):
     """The tongue boundaries inside the view, each tongue numbered once at
-    the middle of its visible part, and a legend of what is drawn only."""
+    the middle of its visible part; returns the legend handles of what is drawn."""
     import matplotlib.pyplot as plt
 
     lo, hi = sorted(ax.get_xlim())
@@ -197,6 +295,10 @@ def _draw_tongue_lines(ax, ds, varied, legend):
         text = (r"tongue $n$ ends: $u = \sqrt{n/2}\,(1-e)/(1+e)$" if varied == "u"
                 else r"tongue $n$ ends: $e = (\sqrt{n/2}-u)/(\sqrt{n/2}+u)$")
         handles.append(plt.Line2D([], [], color="C2", lw=0.8, ls=":", label=text))
+    return handles
+
+
+def _overlay_legend(ax, handles, legend):
     if not handles or legend is None:
         return
     if legend == "outside":

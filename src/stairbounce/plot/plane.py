@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import _units
 from .. import _validate as _v
 
 __all__ = ["plot_scan", "FIELDS", "ColorKey", "color_key", "NO_SLIDING_COLOR", "class_bounds"]
@@ -238,9 +239,15 @@ def plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=
     ax.set_ylim(u_lo, u_hi)
     ax.set_xlabel("e (restitution coefficient)")
     ax.set_ylabel("u (horizontal speed)")
+    stairs = _units.staircase(ds)
+    if stairs is not None:
+        _units.speed_axis(ax.yaxis, stairs)
     mi = ds.attrs.get("max_iter")
     if title is None:
-        title = f"e in [{e_lo:g}, {e_hi:g}], u in [{u_lo:g}, {u_hi:g}]" + (
+        speeds = (f"u in [{u_lo:g}, {u_hi:g}]" if stairs is None else
+                  f"U in [{u_lo * stairs.speed_unit:.4g}, {u_hi * stairs.speed_unit:.4g}] m/s "
+                  f"({_units.describe(stairs)})")
+        title = f"e in [{e_lo:g}, {e_hi:g}], {speeds}" + (
             f", max_iter {mi}" if mi is not None else ""
         )
     ax.set_title(title)

@@ -29,7 +29,9 @@ def plot_trajectory(traj, ax=None, samples_per_step=400, show_impacts=True):
 
     Flights are drawn from ``traj.position`` on a fine time grid (plus every
     impact time, so the corners are sharp); impacts are dots, accumulation
-    points stars, slides thick segments along the floor.
+    points stars, slides thick segments along the floor.  A trajectory
+    computed from a speed in m/s (``staircase.speed(U)``) is drawn with its
+    axes in metres and a clock in seconds on top.
     """
     ax = _axes(ax)
     sx, sy = _staircase(max(traj.steps, 1))
@@ -55,6 +57,10 @@ def plot_trajectory(traj, ax=None, samples_per_step=400, show_impacts=True):
     ax.set_title(f"e = {traj.e:g}, u = {traj.u:g}")
     ax.set_aspect("equal", adjustable="box")
     ax.legend(loc="lower left", fontsize="small")
+    if getattr(traj, "staircase", None) is not None:  # computed from a speed in m/s
+        from ._units import path_in_metres
+
+        path_in_metres(ax, traj.staircase, traj.u)
     return ax
 
 
