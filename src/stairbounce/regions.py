@@ -391,7 +391,7 @@ def _follow(F, a, x, g, sign, scale, *, others, stop_at=None, max_points=20000, 
                 return arc
             continue
         gyv = gy[0]
-        neg = others[gyv[others] < 0.0]
+        neg = others[(gyv[others] < 0.0) & ((gg[others] > 0.0) | (gyv[others] < gg[others]))]
         if stop_at is not None:
             # closed when the start lies on the chord x -> y
             dx, dy = y[0] - x[0], y[1] - x[1]
@@ -467,7 +467,9 @@ def _walk(F, a0, x0, scale, max_corners=5000, max_points=200000):
         return None
     start = (first.pts[-1], a0, first.end_slot)
     arcs = []
-    x, a, g = first.pts[-1], first.end_slot, first.corner_margins
+    x, g = first.pts[-1], first.corner_margins
+    a = _outgoing(g, a0, first.end_slot, scale)
+    start = (x, a0, a)
     used = len(first.pts)
     for _ in range(max_corners):
         arc = _follow(F, a, x, g, 1, scale, others=allc[allc != a])
@@ -476,12 +478,35 @@ def _walk(F, a0, x0, scale, max_corners=5000, max_points=200000):
             return None
         arc.start_slot = arcs[-1].slot if arcs else start[1]
         arcs.append(arc)
-        x, a, g = arc.pts[-1], arc.end_slot, arc.corner_margins
+        x, g = arc.pts[-1], arc.corner_margins
+        a = _outgoing(g, arc.slot, arc.end_slot, scale)
         if arc.slot == start[1] and a == start[2] and \
                 math.hypot(x[0] - start[0][0], x[1] - start[0][1]) <= 1e-9 * scale:
             arc.pts[-1] = start[0]  # the same corner: close exactly
             return arcs
     return None
+
+
+def _outgoing(g, a, b, scale):
+    """The margin to follow out of a corner reached along ``a`` where ``b``
+    vanished: where more than two margins vanish at once (a resonance of the
+    itinerary), the one whose tangent keeps every other vanishing margin
+    non-negative to first order (the edge of the region's tangent cone)."""
+    gv, ge, gu = g
+    cand = np.nonzero(np.abs(gv) <= 1e3 * _EPS * scale * (np.abs(ge) + np.abs(gu)))[0]
+    cand = [int(c) for c in cand if c != a]
+    if b not in cand:
+        cand.insert(0, b)
+    if len(cand) == 1:
+        return b
+    best, worst_best = b, -math.inf
+    for c in cand:
+        t = _tangent(ge[c], gu[c], 1)
+        worst = min((ge[o] * t[0] + gu[o] * t[1]) / math.hypot(ge[o], gu[o])
+                    for o in cand + [a] if o != c)
+        if worst > worst_best + 1e-12:
+            best, worst_best = c, worst
+    return best
 
 
 def _hermite_area(p0, p1, t0, t1):
@@ -524,3 +549,388 @@ def _curve_area(arcs):
     fine = sum(_arc_area(a.pts, a.tans) for a in arcs)
     coarse = sum(_arc_area(a.pts, a.tans, 2) for a in arcs)
     return fine, abs(fine - coarse) / 15.0
+
+
+# --------------------------------------------------------------------------- #
+# Regions                                                                     #
+# --------------------------------------------------------------------------- #
+
+
+def itinerary_of_word(word) -> np.ndarray:
+    """The impact numbers of the steps of one period of ``word`` (the last one
+    ``SLIDING``): the inverse of :func:`stairbounce.symbolic.word_from_impacts`."""
+    letters = _as_word(word).letters
+    ks = []
+    i = 0
+    while i < len(letters):
+        ks.extend([0] * (letters[i] - 1))
+        if i == len(letters) - 1:
+            ks.append(SLIDING)
+            break
+        z = 0
+        while letters[i + 1 + z] == 0:
+            z += 1
+        ks.append(1 + z)
+        i += 1 + z
+    return np.array(ks, dtype=np.int64)
+
+
+def _as_word(word) -> Word:
+    if isinstance(word, Word):
+        return word
+    if isinstance(word, str):
+        return parse_word(word)
+    return Word(tuple(word))
+
+
+@dataclass(frozen=True)
+class Corner:
+    """A point where two margins vanish at once: the events of both (kind, step)."""
+
+    e: float
+    u: float
+    events: tuple
+
+    def __repr__(self):
+        a, b = self.events
+        return f"Corner(e={self.e:.17g}, u={self.u:.17g}, {a[0]}@{a[1]} x {b[0]}@{b[1]})"
+
+
+@dataclass
+class BorderArc:
+    """One traced arc: points ``e``, ``u`` on the curve where the margin of one
+    event (``kind`` at ``step``) vanishes, between two ends."""
+
+    e: np.ndarray
+    u: np.ndarray
+    kind: str
+    step: int
+    inside: str = ""        # the word on the side where the margin is >= 0
+    outside: str = ""       # the word on the other side ("" where not computed)
+    ends: tuple = ("", "")  # how each end was reached: corner, window, junction, domain, limit
+    corners: tuple = (None, None)
+
+    def __repr__(self):
+        return (f"BorderArc({self.kind} at step {self.step}, {self.e.size} points, "
+                f"{self.inside or '?'} | {self.outside or '?'}, ends {self.ends[0]}/{self.ends[1]})")
+
+
+@dataclass
+class RegionComponent:
+    """One connected component of a word's region: its outer boundary and holes
+    (closed curves of arcs, counter-clockwise and clockwise), exact area."""
+
+    area: float
+    area_error: float
+    boundary: list           # BorderArc list of the outer curve
+    holes: list              # list of BorderArc lists
+    corners: list
+
+    @property
+    def kinds(self):
+        """Counts of the outer boundary's arcs by kind."""
+        out = {}
+        for a in self.boundary + [a for h in self.holes for a in h]:
+            out[a.kind] = out.get(a.kind, 0) + 1
+        return out
+
+    def polygon(self, hole=None):
+        """``(e, u)`` of the closed outer boundary (or of hole number ``hole``)."""
+        arcs = self.boundary if hole is None else self.holes[hole]
+        e = np.concatenate([a.e[:-1] for a in arcs] + [arcs[0].e[:1]])
+        u = np.concatenate([a.u[:-1] for a in arcs] + [arcs[0].u[:1]])
+        return e, u
+
+    def __repr__(self):
+        return (f"RegionComponent(area={self.area:.6e} +- {self.area_error:.1e}, "
+                f"{len(self.boundary)} arcs, {len(self.holes)} holes, kinds {self.kinds})")
+
+
+@dataclass
+class Region:
+    """Every component of the region of one word in a window."""
+
+    word: Word
+    e: tuple
+    u: tuple
+    components: list = field(default_factory=list)
+    complete: bool = True    # False when a seed's walk failed (see ``failures``)
+    failures: int = 0
+
+    @property
+    def area(self) -> float:
+        return float(sum(c.area for c in self.components))
+
+    @property
+    def area_error(self) -> float:
+        return float(sum(c.area_error for c in self.components))
+
+    @property
+    def corners(self):
+        return [c for comp in self.components for c in comp.corners]
+
+    def __repr__(self):
+        return (f"Region({self.word.format(ascii=True)}: area {self.area:.6e} +- "
+                f"{self.area_error:.1e} in {len(self.components)} components"
+                f"{'' if self.complete else ', INCOMPLETE'})")
+
+
+def _check_window(e, u):
+    try:
+        e_lo, e_hi = (float(_v.real("e_min", e[0])), float(_v.real("e_max", e[1])))
+        u_lo, u_hi = (float(_v.real("u_min", u[0])), float(_v.real("u_max", u[1])))
+    except (TypeError, IndexError, KeyError):
+        raise ValueError(f"e and u must be (min, max) pairs, got e={e!r}, u={u!r}") from None
+    if not 0.0 <= e_lo < e_hi < 1.0:
+        raise ValueError(f"e window must satisfy 0 <= e_min < e_max < 1, got [{e_lo}, {e_hi}]")
+    if not (_v.U_MIN <= u_lo < u_hi <= _v.U_MAX):
+        raise ValueError(f"u window must satisfy {_v.U_MIN:g} <= u_min < u_max <= {_v.U_MAX:g}, "
+                         f"got [{u_lo}, {u_hi}]")
+    return (e_lo, e_hi), (u_lo, u_hi)
+
+
+def _grid(e, u, resolution):
+    n = resolution
+    es = e[0] + (np.arange(n) + 0.5) * (e[1] - e[0]) / n
+    us = u[0] + (np.arange(n) + 0.5) * (u[1] - u[0]) / n
+    return es, us
+
+
+def _label_grid(es, us, max_iter, y0, v0):
+    h1 = np.empty((us.size, es.size), dtype=np.uint64)
+    h2 = np.empty_like(h1)
+    steps = np.empty((us.size, es.size), dtype=np.int64)
+    _words_grid(es, us, y0, v0, max_iter, h1, h2, steps)
+    return h1, h2, steps
+
+
+def _fill(P, es, us):
+    """Even-odd fill of the closed polygon ``P`` (N x 2) at the pixel centres."""
+    x1, y1 = P[:-1, 0], P[:-1, 1]
+    x2, y2 = P[1:, 0], P[1:, 1]
+    out = np.zeros((us.size, es.size), dtype=bool)
+    lo, hi = np.minimum(y1, y2), np.maximum(y1, y2)
+    rows = np.nonzero((us >= lo.min()) & (us <= hi.max()))[0]
+    for i in rows:
+        uu = us[i]
+        sel = (y1 > uu) != (y2 > uu)
+        if not sel.any():
+            continue
+        xc = x1[sel] + (uu - y1[sel]) * (x2[sel] - x1[sel]) / (y2[sel] - y1[sel])
+        xc.sort()
+        cnt = xc.size - np.searchsorted(xc, es, side="right")
+        out[i] = (cnt % 2) == 1
+    return out
+
+
+def _inside_polygon(P, x):
+    return bool(_fill(P, np.array([x[0]]), np.array([x[1]]))[0, 0])
+
+
+def _crossing(F, mask, es, us, i, j, e, u):
+    """From pixel (i, j), the first pixel of the other class along a row or a
+    column, bisected to rounding on the region's margins: (x_in, slot) or None."""
+    m0 = mask[i, j]
+    for di, dj in ((0, 1), (0, -1), (1, 0), (-1, 0)):
+        ii, jj = i + di, j + dj
+        while 0 <= ii < us.size and 0 <= jj < es.size and mask[ii, jj] == m0:
+            ii += di
+            jj += dj
+        a = np.array([es[j], us[i]])
+        if 0 <= ii < us.size and 0 <= jj < es.size:
+            b = np.array([es[jj], us[ii]])
+        elif m0:  # the window's side
+            b = np.array([e[1] if dj > 0 else e[0] if dj < 0 else es[j],
+                          u[1] if di > 0 else u[0] if di < 0 else us[i]])
+            if F.inside(F(b)[0]):
+                return b, F.m - 4 + (1 if dj > 0 else 0 if dj < 0 else 3 if di > 0 else 2)
+        else:
+            continue
+        xin, xout = (a, b) if m0 else (b, a)
+        gin, gout = F(xin)[0], F(xout)[0]
+        if not F.inside(gin) or F.inside(gout):
+            continue
+        while True:
+            mid = 0.5 * (xin + xout)
+            if (mid == xin).all() or (mid == xout).all():
+                break
+            gm = F(mid)[0]
+            if F.inside(gm):
+                xin, gin = mid, gm
+            else:
+                xout, gout = mid, gm
+        viol = np.nonzero(~(gout >= 0.0) | (np.arange(F.m) % 2 == 1) & (np.arange(F.m) < F.m - 4)
+                          & (gout <= 0.0))[0]
+        if viol.size == 0:
+            continue
+        slot = int(viol[np.argmin(np.abs(gin[viol]))])
+        return xin, slot
+    return None
+
+
+def _to_arcs(F, curve, word_text):
+    out = []
+    for i, arc in enumerate(curve):
+        kind, step = F.event(arc.slot)
+        P = np.array(arc.pts)
+        out.append(BorderArc(P[:, 0].copy(), P[:, 1].copy(), kind, step, inside=word_text,
+                             ends=("corner", "corner") if arc.end == "corner" else ("closed", "closed")))
+        out[-1]._tans = arc.tans
+        out[-1]._slot = arc.slot
+        out[-1]._end_slot = arc.end_slot
+    return out
+
+
+def _on_curves(x, slot, curves, tol):
+    for curve in curves:
+        for arc in curve:
+            if arc.slot != slot:
+                continue
+            P = np.array(arc.pts)
+            d = np.hypot(P[:, 0] - x[0], P[:, 1] - x[1])
+            if d.min() <= tol:
+                return True
+            # distance to the chords
+            A, B = P[:-1], P[1:]
+            AB = B - A
+            L2 = (AB ** 2).sum(1)
+            tau = np.clip(((x - A) * AB).sum(1) / np.where(L2 > 0, L2, 1), 0, 1)
+            C = A + tau[:, None] * AB
+            if np.hypot(C[:, 0] - x[0], C[:, 1] - x[1]).min() <= tol:
+                return True
+    return False
+
+
+def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20):
+    """Every component of the region of itinerary ``ks`` seen by the pixel mask."""
+    F = _Margins(ks, (e[0], e[1], u[0], u[1]), y0, v0)
+    scale = max(e[1] - e[0], u[1] - u[0])
+    curves, fill = [], np.zeros_like(mask)
+    tried = np.zeros_like(mask)
+    failures = 0
+    while True:
+        todo = np.argwhere((mask ^ fill) & ~tried)
+        if todo.size == 0 or failures > max_failures:
+            break
+        i, j = (int(t) for t in todo[0])
+        tried[i, j] = True
+        c = _crossing(F, mask, es, us, i, j, e, u)
+        if c is None:
+            failures += 1
+            continue
+        x0, slot = c
+        if _on_curves(x0, slot, curves, 1e-9 * scale):
+            continue
+        curve = _walk(F, slot, x0, scale)
+        if curve is None:
+            failures += 1
+            continue
+        curves.append(curve)
+        P = np.concatenate([np.array(a.pts[:-1]) for a in curve] + [np.array(curve[0].pts[:1])])
+        fill ^= _fill(P, es, us)
+    text = word.format(ascii=True)
+    outer, holes = [], []
+    for curve in curves:
+        A, err = _curve_area(curve)
+        P = np.concatenate([np.array(a.pts[:-1]) for a in curve] + [np.array(curve[0].pts[:1])])
+        (outer if A > 0 else holes).append((A, err, curve, P))
+    comps = []
+    outer.sort(key=lambda t: t[0])
+    members = [[] for _ in outer]
+    for h in holes:
+        for k, o in enumerate(outer):
+            if _inside_polygon(o[3], h[3][0]):
+                members[k].append(h)
+                break
+    for (A, err, curve, P), hs in zip(outer, members):
+        corners = []
+        for arc in curve:
+            if arc.end == "corner":
+                x = arc.pts[-1]
+                corners.append(Corner(float(x[0]), float(x[1]), (F.event(arc.slot), F.event(arc.end_slot))))
+        comps.append(RegionComponent(A + sum(h[0] for h in hs), err + sum(h[1] for h in hs),
+                                     _to_arcs(F, curve, text), [_to_arcs(F, h[2], text) for h in hs],
+                                     corners))
+    comps.sort(key=lambda c: -c.area)
+    return comps, failures
+
+
+def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=256, max_iter=1000,
+                y0=1.0, v0=0.0):
+    """word_region(word, e=(0, 1), u=(0.05, 1.5), *, resolution=256, max_iter=1000) -> Region
+
+    The region of the parameter plane where the periodic sliding solution
+    through (1, 0) has the word ``word``, as closed polygons of traced arcs.
+
+    The region is ``{g_c(e, u) >= 0}`` for the margins of the word's itinerary
+    (two per step, see :mod:`stairbounce.regions`) and of the window.  A scan
+    of ``resolution`` x ``resolution`` pixel centres finds the pixels of the
+    word; from each pixel not yet inside a traced curve the first border along
+    its row (or column) is bisected to rounding and the boundary of that
+    component walked by pseudo-arclength continuation, corner to corner, until
+    it closes.  Areas are the shoelace sum of the dense curve plus the cubic
+    Hermite correction of every chord (the tangents are known), with an error
+    estimate from the same sum on every other point.
+
+    What it can miss: a component (or hole) that contains no pixel centre of
+    the scan, i.e. narrower than a pixel everywhere.  Raise ``resolution`` to
+    find smaller ones.
+
+    Parameters
+    ----------
+    word : Word, str such as ``"(2, 0, 1, 0^inf)"``, or letters such as ``(2, 0, 1)``
+    e, u : (min, max)
+        The window (0 <= e_min < e_max < 1).
+    resolution : int >= 2, default 256
+        Pixels per side of the seeding scan.
+    max_iter : int, default 1000
+        Only matters for the seeding scan's labels (steps per pixel).
+
+    Returns
+    -------
+    Region
+        ``area``, ``area_error``, ``components`` (each with ``area``,
+        ``boundary`` arcs, ``holes``, ``corners``, ``kinds``, ``polygon()``).
+    """
+    w = _as_word(word)
+    e, u = _check_window(e, u)
+    resolution = check_count("resolution", resolution, 2, 8192)
+    max_iter = check_count("max_iter", max_iter, 1)
+    ks = itinerary_of_word(w)
+    es, us = _grid(e, u, resolution)
+    h1, h2, _ = _label_grid(es, us, max(max_iter, ks.size), float(y0), float(v0))
+    a, b = _hash_itinerary(ks, ks.size)
+    mask = (h1 == a) & (h2 == b)
+    comps, failures = _trace_word(ks, w, e, u, es, us, mask, float(y0), float(v0))
+    return Region(w, e, u, comps, complete=failures == 0, failures=failures)
+
+
+def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, progress=None):
+    """window_regions(e, u, *, resolution=256, max_iter=1000) -> list[Region]
+
+    Every word's region in a window (the words seen by a scan of
+    ``resolution`` x ``resolution`` pixel centres), largest area first; see
+    :func:`word_region` for the method and what it can miss.
+    """
+    e, u = _check_window(e, u)
+    resolution = check_count("resolution", resolution, 2, 8192)
+    max_iter = check_count("max_iter", max_iter, 1)
+    es, us = _grid(e, u, resolution)
+    h1, h2, steps = _label_grid(es, us, max_iter, float(y0), float(v0))
+    keys, first = np.unique(np.stack([h1.ravel(), h2.ravel()], 1), axis=0, return_index=True)
+    out = []
+    buf = np.empty(max_iter, dtype=np.int64)
+    for idx, (a, b) in zip(first, keys):
+        if a == 0:
+            continue
+        i, j = divmod(int(idx), es.size)
+        n = _itinerary_of(es[j], us[i], float(y0), float(v0), max_iter, buf)
+        ks = buf[:n].copy()
+        w = word_from_impacts(ks)
+        mask = (h1 == a) & (h2 == b)
+        comps, failures = _trace_word(ks, w, e, u, es, us, mask, float(y0), float(v0))
+        out.append(Region(w, e, u, comps, complete=failures == 0, failures=failures))
+        if progress is not None:
+            progress(len(out), keys.shape[0])
+    out.sort(key=lambda r: -r.area)
+    return out
