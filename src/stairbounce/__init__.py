@@ -73,6 +73,7 @@ from .plane import (
     tongue_mask,
 )
 from .plane import scan as _scan_function
+from .borders import border_points, itinerary
 from .symbolic import Word, parse_word, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import normalized_speed, physical_speed, time_scale
@@ -102,6 +103,7 @@ __all__ = [
     "Word",
     "__version__",
     "border_dimension_estimates",
+    "border_points",
     "boundary",
     "box_counts",
     "box_dimension",
@@ -112,6 +114,7 @@ __all__ = [
     "impact_number",
     "impact_times",
     "iterate",
+    "itinerary",
     "k_mean_bound",
     "label_boundary",
     "linear_region",

@@ -1,0 +1,358 @@
+"""Borders of the (e, u) plane located to rounding (stairbounce.borders, issue 21).
+
+Independent references: the map of ``model._step`` (``model.iterate``), the
+impact-by-impact loop of ``tests/naive.py`` and the analytic curves of
+Theorem 3.1 and Corollary 2.1.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+import stairbounce as sb
+from stairbounce import borders, model
+
+from . import naive
+
+RNG = np.random.default_rng(21)
+# random points of the paper's plane [0, 1) x (0, 1.5], plus points of the tongues
+POINTS = [(float(e), float(u)) for e, u in zip(RNG.uniform(0.0, 0.95, 300), RNG.uniform(0.05, 1.5, 300))]
+
+
+@pytest.mark.parametrize("e,u", POINTS[:100])
+def test_itinerary_impacts_are_model_steps(e, u):
+    it = sb.itinerary(e, u, max_iter=300)
+    ks = it.impacts.values
+    _, _, ref = model.iterate(1.0, 0.0, e, u, ks.size)
+    assert np.array_equal(ks, ref[1:])
+    assert it.attrs["slid"] == int(ks[-1] == model.SLIDING)
+    if not it.attrs["slid"]:
+        assert ks.size == 300
+    assert np.array_equal(it.step.values, np.arange(1, ks.size + 1))
+
+
+@pytest.mark.parametrize("e,u", POINTS)
+def test_margin_signs_reproduce_the_impact_numbers(e, u):
+    it = sb.itinerary(e, u, max_iter=200)
+    T, ratio = model._constants(e, u)
+    empty = np.zeros(0, np.int64)
+    for j, (k, c, nx, a) in enumerate(zip(it.impacts.values, it.contact.values,
+                                          it.next_impact.values, it.accumulation.values), 1):
+        # the sliding test (2.4) and the first contact, as signs
+        assert (k == model.SLIDING) == (a >= 0.0)
+        if k == model.SLIDING:
+            assert math.isnan(nx)
+            continue
+        assert (k == 0) == (c < 0.0)
+        assert nx < 0.0
+        if k >= 1:
+            # k impacts: t_k <= T < t_(k+1), each margin from the scalar helper
+            # that a continuation code calls as a function of (e, u)
+            assert borders._margin(e, u, j, borders.EDGE, k, 1.0, 0.0, empty) >= 0.0
+            assert borders._margin(e, u, j, borders.EDGE, k + 1, 1.0, 0.0, empty) == nx
+        assert borders._margin(e, u, j, borders.GRAZE, 1, 1.0, 0.0, empty) == c
+        assert borders._margin(e, u, j, borders.CHATTER, 0, 1.0, 0.0, empty) == a
+
+
+@pytest.mark.parametrize("e,u", POINTS[:150])
+def test_itinerary_agrees_with_the_impact_by_impact_loop(e, u):
+    # naive.step bounces one impact at a time (no closed form); it cannot tell
+    # an accumulation from rest closer than naive.REST, so the steps compared
+    # are those whose margins are far from every event
+    it = sb.itinerary(e, u, max_iter=200)
+    T = 1.0 / u
+    y, v = 1.0, 0.0
+    for k, c, nx, a in zip(it.impacts.values, it.contact.values, it.next_impact.values,
+                           it.accumulation.values):
+        close = min(abs(c), abs(a), abs(nx) if k != model.SLIDING else math.inf) < 1e-9 * T
+        yn, vn, kn = naive.step(y, v, e, u)
+        if close:
+            return
+        assert kn == k
+        # the signs of the margins, from the naive state and its own times
+        speed = math.sqrt(v * v + 2.0 * y)
+        assert (T - (v + speed) >= 0.0) == (c >= 0.0)
+        assert (T - naive.accumulation_time(y, v, e) >= 0.0) == (a >= 0.0)
+        if k == model.SLIDING:
+            return
+        y, v = yn, vn
+
+
+def test_margin_is_nan_off_the_prefix_and_after_a_slide():
+    e, u = 0.02, 0.7  # word (1, 1, 2, 0^inf): 4 steps, the last slides
+    it = sb.itinerary(e, u)
+    ks = it.impacts.values
+    n = ks.size
+    assert it.attrs["slid"] == 1 and n == 4
+    prefix = ks.astype(np.int64)
+    assert not math.isnan(borders._margin(e, u, n, borders.CHATTER, 0, 1.0, 0.0, prefix))
+    assert borders._margin(e, u, n, borders.CHATTER, 0, 1.0, 0.0, prefix) >= 0.0
+    assert math.isnan(borders._margin(e, u, n + 1, borders.CHATTER, 0, 1.0, 0.0, prefix))
+    if n > 1:
+        wrong = prefix.copy()
+        wrong[0] = wrong[0] + 1
+        assert math.isnan(borders._margin(e, u, n, borders.CHATTER, 0, 1.0, 0.0, wrong))
+
+
+def test_itinerary_tongue_n_slides_at_step_n():
+    # Theorem 3.1: inside tongue n the word is (n, 0^inf): n - 1 flights, then a slide
+    for n in range(1, 6):
+        lo, hi = sb.tongue(n, 0.01)
+        u = 0.5 * (lo + hi)
+        ks = sb.itinerary(0.01, u).impacts.values
+        assert list(ks) == [0] * (n - 1) + [model.SLIDING]
+
+
+def test_itinerary_start_state_and_max_iter():
+    it = sb.itinerary(0.5, 2.0, max_iter=7, y0=3.0, v0=-0.5)
+    assert it.sizes["step"] == 7 and it.attrs["slid"] == 0
+    assert it.y.values[0] == 3.0 and it.v.values[0] == -0.5
+    ys, vs, ks = model.iterate(3.0, -0.5, 0.5, 2.0, 7)
+    assert np.array_equal(it.y.values, ys[:7]) and np.array_equal(it.v.values, vs[:7])
+    assert np.array_equal(it.impacts.values, ks[1:])
+
+
+@pytest.mark.parametrize("kw,name", [
+    ({"e": 1.0}, "e"), ({"e": -0.1}, "e"), ({"u": 0.0}, "u"), ({"u": "1"}, "u"),
+    ({"max_iter": 0}, "max_iter"), ({"max_iter": 2**31}, "max_iter"), ({"y0": -1.0}, "y0"),
+    ({"v0": math.nan}, "v0"),
+])
+def test_itinerary_bad_input(kw, name):
+    args = {"e": 0.3, "u": 0.8, **kw}
+    with pytest.raises(ValueError, match=name):
+        sb.itinerary(**args)
+
+
+# --------------------------------------------------------------------------- #
+# border_points                                                               #
+# --------------------------------------------------------------------------- #
+
+SMALL = {"e": (0.0, 1.0, 60), "u": (0.0, 1.5, 50)}
+# a window with many words (the paper's Fig. 5a) and one across the tongues n = 1..8
+FIG5A = {"e": (0.0, 0.3, 40), "u": (0.3, 0.7, 40)}
+TONGUES = {"e": (0.0, 0.25, 50), "u": (0.05, 2.05, 200)}
+
+
+@pytest.fixture(scope="module")
+def small():
+    return sb.border_points(**SMALL)
+
+
+@pytest.fixture(scope="module")
+def fig5a():
+    return sb.border_points(**FIG5A)
+
+
+@pytest.fixture(scope="module")
+def tongues():
+    return sb.border_points(**TONGUES, max_iter=200)
+
+
+def _word(e, u, max_iter=1000):
+    w = sb.sliding_word(e, u, max_iter)
+    return w.format(ascii=True) if w else borders.NONE_WORD
+
+
+def test_pairs_are_exactly_those_with_different_words(small):
+    # brute force: the word of every pixel centre by sliding_word, pairs compared whole
+    es = sb.pixel_centres(*SMALL["e"])
+    us = sb.pixel_centres(*SMALL["u"])
+    W = [[sb.sliding_word(e, u) for e in es] for u in us]
+    expect = set()
+    for i in range(us.size):
+        for j in range(es.size):
+            if j + 1 < es.size and W[i][j] != W[i][j + 1]:
+                expect.add((i, j, "e"))
+            if i + 1 < us.size and W[i][j] != W[i + 1][j]:
+                expect.add((i, j, "u"))
+    got = set(zip(small.i_u.values.tolist(), small.i_e.values.tolist(), small.axis.values.tolist()))
+    assert got == expect and len(expect) > 100
+
+
+def _sides(pt):
+    """(e, u) of the bracket's low and high ends."""
+    e, u, w = float(pt.e), float(pt.u), float(pt.width)
+    if pt.axis.item() == "e":
+        return (e, u), (e + w, u)
+    return (e, u), (e, u + w)
+
+
+def _check_point(pt, max_iter):
+    (el, ul), (eh, uh) = _sides(pt)
+    j = int(pt.step)
+    kind = pt.kind.item()
+    # located to rounding: no float strictly inside the bracket
+    x = el if pt.axis.item() == "e" else ul
+    assert 0.0 < float(pt.width) and np.nextafter(x, np.inf) == x + float(pt.width)
+    # the pair of sides by model._step (model.iterate), not by the bisection kernel
+    ys_l, vs_l, k_l = model.iterate(1.0, 0.0, el, ul, j)
+    ys_h, vs_h, k_h = model.iterate(1.0, 0.0, eh, uh, j)
+    assert np.array_equal(k_l[1:j], k_h[1:j]) and model.SLIDING not in k_l[1:j]
+    assert (k_l[j], k_h[j]) == (int(pt.impacts_low), int(pt.impacts_high))
+    pair = sorted((int(k_l[j]), int(k_h[j])))
+    if kind == "graze":
+        assert pair == [0, 1] and int(pt.index) == 1
+    elif kind == "edge":
+        assert pair == [int(pt.index) - 1, int(pt.index)] and pair[0] >= 1
+    else:
+        assert kind == "chatter" and pair[0] == model.SLIDING and pair[1] >= 0
+    # the words on each side, by sliding_word
+    assert _word(el, ul, max_iter) == pt.word_low.item()
+    assert _word(eh, uh, max_iter) == pt.word_high.item()
+    assert bool(pt.sliding_border) == (borders.NONE_WORD in (pt.word_low.item(), pt.word_high.item()))
+    assert pt.word_low.item() != pt.word_high.item()
+    # the impact-by-impact loop of tests/naive.py: same impact numbers before
+    # step j, and at step j the labelled event's time equals T = 1/u to rounding
+    y, v = 1.0, 0.0
+    for i in range(1, j):
+        y, v, k = naive.step(y, v, el, ul)
+        assert k == k_l[i]
+    T = 1.0 / ul
+    speed = math.sqrt(v * v + 2.0 * y)
+    if kind == "graze":
+        t = v + speed
+    elif kind == "edge":
+        t, w = v + speed, el * speed
+        for _ in range(int(pt.index) - 1):
+            t, w = t + 2.0 * w, el * w
+    else:
+        t = naive.accumulation_time(y, v, el)
+    assert abs(t - T) <= 1e-9 * T
+    kn = {naive.step(y, v, el, ul)[2], naive.step(y, v, eh, uh)[2]}
+    if kind == "graze":
+        assert kn <= {0, 1}
+    elif kind == "edge":
+        assert kn <= {int(pt.index) - 1, int(pt.index)}
+
+
+@pytest.mark.parametrize("which", ["small", "fig5a", "tongues"])
+def test_every_label_checked_independently(which, request):
+    pts = request.getfixturevalue(which)
+    max_iter = int(pts.attrs["max_iter"])
+    assert pts.sizes["point"] > 50
+    for i in range(pts.sizes["point"]):
+        _check_point(pts.isel(point=i), max_iter)
+    # every kind occurs
+    assert set(pts.kind.values) == {"graze", "edge", "chatter"} or which == "tongues"
+
+
+def test_theorem_3_1_tongue_borders(tongues):
+    # Theorem 3.1: word (n) iff (n-1)/2 < u^2 <= n/2 ((1-e)/(1+e))^2; its border is the
+    # graze curve (lower, step n-1) and the chatter curve (upper, step n)
+    seen = set()
+    for n in range(1, 9):
+        word = f"({n}, 0^inf)"
+        sel = (tongues.word_low.values == word) | (tongues.word_high.values == word)
+        assert sel.sum() > 0, n
+        for i in np.flatnonzero(sel):
+            pt = tongues.isel(point=int(i))
+            e, u = float(pt.e), float(pt.u)
+            if pt.kind.item() == "graze":
+                assert int(pt.step) == n - 1 and pt.axis.item() == "u"
+                assert abs(u * u - (n - 1) / 2) <= 1e-14 * (n - 1) / 2
+                # the graze side is below: the low side lands on step n - 1
+                assert pt.word_high.item() == word
+            else:
+                assert pt.kind.item() == "chatter" and int(pt.step) == n
+                c = n / 2 * ((1 - e) / (1 + e)) ** 2
+                # the bracket's low end; on the u axis the high end is above the curve
+                if pt.axis.item() == "u":
+                    assert abs(u * u - c) <= 1e-14 * c
+                    assert pt.word_low.item() == word
+                else:
+                    eh = e + float(pt.width)
+                    ch = n / 2 * ((1 - eh) / (1 + eh)) ** 2
+                    assert min(abs(u * u - c), abs(u * u - ch)) <= 1e-14 * c
+                # left of the tip e_n where the two curves meet (Corollary 2.1)
+                tip = (math.sqrt(n) - math.sqrt(n - 1)) ** 2
+                assert e <= tip
+            seen.add((n, pt.kind.item()))
+    assert {(n, "chatter") for n in range(1, 9)} <= seen
+    assert {(n, "graze") for n in range(2, 9)} <= seen
+
+
+def test_no_border_above_corollary_2_1():
+    pts = sb.border_points(e=(0.0, 1.0, 120), u=(0.0, 1.5, 100))
+    e, u = pts.e.values, pts.u.values
+    with np.errstate(divide="ignore"):
+        bound = (1.0 - e) / (2.0 * np.sqrt(2.0 * e))
+    assert pts.sliding_border.values.sum() > 100
+    assert not np.any(u > bound)
+
+
+def test_threads_and_tiles_change_nothing(fig5a):
+    import numba
+
+    threads = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = sb.border_points(**FIG5A)
+    finally:
+        numba.set_num_threads(threads)
+    assert one.identical(fig5a)
+    # from the scan Dataset, and from tiles cut out of it (overlapping by one
+    # row or column so that every pair lies inside some tile)
+    ds = sb.scan(**FIG5A)
+    assert sb.border_points(ds).identical(fig5a)
+    rows = []
+    for us, es in [(slice(0, 21), slice(0, 16)), (slice(20, None), slice(0, 16)),
+                   (slice(0, 21), slice(15, None)), (slice(20, None), slice(15, None))]:
+        t = sb.border_points(ds.isel(u=us, e=es)).to_dataframe()
+        rows.append(t.drop(columns=["i_e", "i_u"]))
+    import pandas as pd
+
+    tiles = pd.concat(rows).drop_duplicates().sort_values(["u", "e", "axis"]).reset_index(drop=True)
+    whole = fig5a.to_dataframe().drop(columns=["i_e", "i_u"]).sort_values(["u", "e", "axis"])
+    pd.testing.assert_frame_equal(tiles, whole.reset_index(drop=True), check_dtype=False)
+
+
+def test_word_text_is_the_symbolic_convention():
+    from stairbounce.symbolic import word_from_impacts
+
+    for ks in ([-1], [0, 0, -1], [2, 0, 1, 3, -1], [0, 1, 0, 4, 0, -1]):
+        a = np.array(ks, np.int64)
+        assert borders._word_text(a) == word_from_impacts(a).format(ascii=True)
+
+
+def test_progress_is_called_and_changes_nothing(small):
+    calls = []
+    got = sb.border_points(**SMALL, progress=lambda d, t: calls.append((d, t)))
+    assert got.identical(small)
+    assert calls[0] == (0, SMALL["u"][2]) and calls[-1][0] == calls[-1][1] and len(calls) > 10
+
+
+@pytest.mark.parametrize("kw,name", [
+    ({"e": (0.0, 1.1, 10)}, "e window"), ({"u": (-1.0, 1.0, 10)}, "u window"),
+    ({"e": (0.0, 1.0, 0)}, "n_e"), ({"max_iter": 0}, "max_iter"), ({"e": "x"}, "e must"),
+    ({"progress": 3}, "progress"),
+])
+def test_border_points_bad_input(kw, name):
+    with pytest.raises(ValueError, match=name):
+        sb.border_points(**{**SMALL, **kw})
+
+
+def test_border_points_refuses_a_scan_it_cannot_use():
+    ds = sb.scan(e=(0.0, 1.0, 10), u=(0.0, 1.5, 10), y0=2.0)
+    with pytest.raises(ValueError, match="y0, v0"):
+        sb.border_points(ds)
+    ds = sb.scan(e=(0.0, 1.0, 10), u=(0.0, 1.5, 10))
+    ds["status"][0, 0] = 255
+    with pytest.raises(ValueError, match="status"):
+        sb.border_points(ds)
+    with pytest.raises(ValueError, match="status"):
+        sb.border_points(ds.drop_vars("status"))
+
+
+def test_a_set_halt_flag_stops_the_kernel_before_any_pair():
+    ds = sb.scan(**SMALL)
+    es, us, period, max_iter = borders._grid_input(ds)
+    a, b, axis = borders._pairs(period, us.size, es.size)
+    found = np.zeros(a.size, np.bool_)
+    out = np.full((a.size, borders._OUT), 7.0)
+    borders._border_kernel(es, us, period, a, b, axis, max_iter, int(period.max()), found, out,
+                           np.ones(1, np.int64))
+    assert not found.any() and (out == 7.0).all()
+    borders._border_kernel(es, us, period, a, b, axis, max_iter, int(period.max()), found, out,
+                           np.zeros(1, np.int64))
+    assert found.sum() == sb.border_points(ds).sizes["point"]
