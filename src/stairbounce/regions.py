@@ -1144,3 +1144,225 @@ def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-
                     _word_text(k_b, s_b), (eb, ef), (cb, cf))
     arc.evaluations = F.evals
     return arc
+
+
+# --------------------------------------------------------------------------- #
+# The planar graph of a window's borders                                      #
+# --------------------------------------------------------------------------- #
+
+
+@dataclass
+class BorderGraph:
+    """Nodes (corners) and edges (arcs between them) of a window's borders.
+
+    ``edges`` are ``(i, j, arc)`` with node indices; an arc shared by two
+    regions is one edge, its ``inside`` and ``outside`` the two words."""
+
+    nodes: list
+    edges: list
+    regions: list
+
+    def counts(self):
+        """Regions, arcs by kind and corners by their pair of kinds."""
+        arcs, corners = {}, {}
+        for _, _, a in self.edges:
+            arcs[a.kind] = arcs.get(a.kind, 0) + 1
+        for c in self.nodes:
+            key = "+".join(sorted(ev[0] for ev in c.events))
+            corners[key] = corners.get(key, 0) + 1
+        comps = sum(len(r.components) for r in self.regions)
+        return {"words": len(self.regions), "components": comps, "arcs": arcs, "corners": corners}
+
+    def words_by_period(self):
+        """N(p): the number of distinct words of period p among the regions."""
+        out = {}
+        for r in self.regions:
+            out[r.word.period] = out.get(r.word.period, 0) + 1
+        return dict(sorted(out.items()))
+
+    def __repr__(self):
+        c = self.counts()
+        return (f"BorderGraph({c['words']} words, {c['components']} components, "
+                f"{len(self.nodes)} corners, {len(self.edges)} arcs {c['arcs']})")
+
+
+def _curves(region):
+    for comp in region.components:
+        yield comp.boundary
+        yield from comp.holes
+
+
+def border_graph(regions):
+    """border_graph(regions) -> BorderGraph
+
+    The planar graph of the traced borders of ``regions`` (from
+    :func:`window_regions`): nodes are the corners (shared by the regions that
+    meet there, merged within 1e-11 of the window's size), edges the arcs
+    between consecutive corners of each boundary, an arc between two regions
+    kept once with the words on both sides.  Arcs are not split at a corner
+    that only one side's boundary has (a junction seen from one side): such an
+    arc may overlap the other side's two shorter arcs; ``counts`` then counts
+    both."""
+    regions = list(regions)
+    if not regions:
+        return BorderGraph([], [], [])
+    e, u = regions[0].e, regions[0].u
+    tol = 1e-11 * max(e[1] - e[0], u[1] - u[0])
+    nodes, index = [], {}
+
+    def node(x, events):
+        key = (round(x[0] / tol), round(x[1] / tol))
+        for dk in ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (-1, 1)):
+            k = (key[0] + dk[0], key[1] + dk[1])
+            if k in index:
+                return index[k]
+        index[key] = len(nodes)
+        nodes.append(Corner(float(x[0]), float(x[1]), events))
+        return index[key]
+
+    edges, seen = [], {}
+    for r in regions:
+        for curve in _curves(r):
+            for i, arc in enumerate(curve):
+                prev = curve[i - 1]
+                a = node((arc.e[0], arc.u[0]), ((prev.kind, prev.step), (arc.kind, arc.step)))
+                nxt = curve[(i + 1) % len(curve)]
+                b = node((arc.e[-1], arc.u[-1]), ((arc.kind, arc.step), (nxt.kind, nxt.step)))
+                mid = arc.e.size // 2
+                key = (arc.kind, arc.step, frozenset((a, b)),
+                       round(arc.e[mid] / (1e5 * tol)), round(arc.u[mid] / (1e5 * tol)))
+                if arc.kind != "window" and key in seen:
+                    seen[key].outside = arc.inside
+                    continue
+                if arc.kind != "window" and len(curve) == 1:
+                    key = (arc.kind, arc.step, id(arc))
+                seen[key] = arc
+                edges.append((a, b, arc))
+    return BorderGraph(nodes, edges, regions)
+
+
+# --------------------------------------------------------------------------- #
+# Export                                                                      #
+# --------------------------------------------------------------------------- #
+
+KIND_COLOURS = {"graze": "#1f77b4", "edge": "#2ca02c", "chatter": "#d62728", "window": "#999999"}
+
+
+def regions_geojson(regions) -> dict:
+    """regions_geojson(regions) -> dict
+
+    A GeoJSON FeatureCollection of ``regions`` (from :func:`word_region` or
+    :func:`window_regions`): one Polygon feature per connected component,
+    coordinates ``[e, u]``, the outer ring counter-clockwise and the holes
+    clockwise; properties ``word``, ``period``, ``impacts``, ``area``,
+    ``area_error``, ``kinds`` (arcs by kind) and ``corners``.
+    """
+    feats = []
+    for r in ([regions] if isinstance(regions, Region) else regions):
+        for ci, comp in enumerate(r.components):
+            rings = []
+            for h in [None] + list(range(len(comp.holes))):
+                pe, pu = comp.polygon(h)
+                rings.append(np.stack([pe, pu], 1).tolist())
+            feats.append({
+                "type": "Feature",
+                "geometry": {"type": "Polygon", "coordinates": rings},
+                "properties": {"word": r.word.format(ascii=True), "period": r.word.period,
+                               "impacts": r.word.impacts, "component": ci,
+                               "area": comp.area, "area_error": comp.area_error,
+                               "kinds": comp.kinds, "corners": len(comp.corners)},
+            })
+    return {"type": "FeatureCollection", "features": feats}
+
+
+def regions_svg(regions, size=800) -> str:
+    """regions_svg(regions, size=800) -> str
+
+    An SVG drawing of the traced borders of ``regions`` in their window, each
+    arc coloured by its kind (graze blue, edge green, chatter red, window
+    grey), e to the right and u upwards.
+    """
+    regions = [regions] if isinstance(regions, Region) else list(regions)
+    size = check_count("size", size, 16, 100000)
+    if not regions:
+        return f'<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{size}"/>\n'
+    e, u = regions[0].e, regions[0].u
+    sx, sy = size / (e[1] - e[0]), size / (u[1] - u[0])
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{size}" '
+           f'viewBox="0 0 {size} {size}">',
+           f'<title>borders of [{e[0]:g}, {e[1]:g}] x [{u[0]:g}, {u[1]:g}]</title>',
+           '<rect width="100%" height="100%" fill="white"/>']
+    for r in regions:
+        for curve in _curves(r):
+            for arc in curve:
+                if arc.kind == "window":
+                    continue
+                pts = " ".join(f"{(x - e[0]) * sx:.3f},{(u[1] - y) * sy:.3f}" for x, y in zip(arc.e, arc.u))
+                out.append(f'<polyline fill="none" stroke="{KIND_COLOURS[arc.kind]}" '
+                           f'stroke-width="0.6" points="{pts}"><title>{arc.kind} at step {arc.step}: '
+                           f'{arc.inside}</title></polyline>')
+    out.append("</svg>")
+    return "\n".join(out) + "\n"
+
+
+def write_regions(regions, path, overwrite=False):
+    """Write ``regions`` as GeoJSON (``.geojson``/``.json``) or SVG (``.svg``),
+    atomically; ValueError for another suffix."""
+    import json
+    from pathlib import Path
+
+    from ._io import atomic_path
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".geojson", ".json", ".svg"):
+        raise ValueError(f"out must end in .geojson, .json or .svg, got {path.name!r}")
+    text = regions_svg(regions) if suffix == ".svg" else json.dumps(regions_geojson(regions))
+    with atomic_path(path, overwrite) as tmp:
+        Path(tmp).write_text(text)
+    return path
+
+
+# --------------------------------------------------------------------------- #
+# Self-similarity on the exact borders                                        #
+# --------------------------------------------------------------------------- #
+
+
+def band_similarity(n=(2, 3, 4, 5, 6), repeats=(2, 3), *, resolution=256):
+    """band_similarity(n=(2, ..., 6), repeats=(2, 3), *, resolution=256) -> dict
+
+    Self-similarity between the bands ``sqrt((n-1)/2) < u <= sqrt(n/2)`` of
+    Figs. 5a-c, measured on exact borders: in band n, the region of the word
+    ``(n, ..., n)`` (``m`` letters, m in ``repeats``; the first members of the
+    family the band shows), its area and its corner of largest e (its tip),
+    and the ratios of both between consecutive bands.  A constant scale factor
+    would make each row of ratios constant.
+
+    Returns a dict ``{m: {"n": [...], "area": [...], "tip_e": [...],
+    "tip_u": [...], "area_ratio": [...], "tip_ratio": [...]}}`` and
+    ``"tongue_tip_ratio"``, the ratio e_{n+1}/e_n of Theorem 3.1's tips.
+    """
+    ns = [check_count("n", k, 2, 50) for k in n]
+    out = {}
+    for m in repeats:
+        m = check_count("repeats", m, 1, 20)
+        rows = {"n": [], "area": [], "area_error": [], "tip_e": [], "tip_u": []}
+        for k in ns:
+            lo, hi = math.sqrt((k - 1) / 2.0), math.sqrt(k / 2.0)
+            tip = (math.sqrt(k) - math.sqrt(k - 1)) ** 2
+            r = word_region((k,) * m, e=(1e-9, min(0.999, 2.0 * tip)), u=(lo, hi),
+                            resolution=resolution, max_iter=max(1000, 2 * k * m))
+            xs = [(c.e, c.u) for c in r.corners if c.events[0][0] != "window" or
+                  c.events[1][0] != "window"]
+            te, tu = max(xs) if xs else (math.nan, math.nan)
+            rows["n"].append(k)
+            rows["area"].append(r.area)
+            rows["area_error"].append(r.area_error)
+            rows["tip_e"].append(te)
+            rows["tip_u"].append(tu)
+        rows["area_ratio"] = [b / a if a else math.nan for a, b in zip(rows["area"], rows["area"][1:])]
+        rows["tip_ratio"] = [b / a if a else math.nan for a, b in zip(rows["tip_e"], rows["tip_e"][1:])]
+        out[m] = rows
+    tips = [(math.sqrt(k) - math.sqrt(k - 1)) ** 2 for k in ns]
+    out["tongue_tip_ratio"] = [b / a for a, b in zip(tips, tips[1:])]
+    return out
