@@ -74,6 +74,21 @@ from .plane import (
 )
 from .plane import scan as _scan_function
 from .borders import border_points, itinerary
+from .regions import (
+    BorderArc,
+    BorderGraph,
+    Corner,
+    Region,
+    RegionComponent,
+    band_similarity,
+    border_graph,
+    regions_geojson,
+    regions_svg,
+    trace_border,
+    window_regions,
+    word_region,
+    write_regions,
+)
 from .symbolic import Word, parse_word, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import normalized_speed, physical_speed, time_scale
@@ -89,6 +104,19 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 scan = _register_alias(__name__ + ".scan", __name__ + ".plane", _scan_function, "scan")
 
 __all__ = [
+    "BorderArc",
+    "BorderGraph",
+    "Corner",
+    "Region",
+    "RegionComponent",
+    "band_similarity",
+    "border_graph",
+    "regions_geojson",
+    "regions_svg",
+    "trace_border",
+    "window_regions",
+    "word_region",
+    "write_regions",
     "Accumulation",
     "BoxDimension",
     "Flight",

@@ -30,7 +30,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from . import _validate as _v
 from .model import (
@@ -215,12 +215,13 @@ def _itinerary_of(e, u, y0, v0, max_iter, ks):
     return -max_iter
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def _words_grid(es, us, y0, v0, max_iter, h1, h2, steps):
     """Two independent 64-bit hashes of every pixel's itinerary (0, 0 and steps 0
-    when it does not slide within max_iter): the word labels of a small scan."""
-    ks = np.empty(max_iter, dtype=np.int64)
-    for i in range(us.size):
+    when it does not slide within max_iter): the word labels of a small scan.
+    Rows in parallel, each pixel independent of the others."""
+    for i in prange(us.size):
+        ks = np.empty(max_iter, dtype=np.int64)
         for j in range(es.size):
             n = _itinerary_of(es[j], us[i], y0, v0, max_iter, ks)
             if n <= 0:
@@ -453,14 +454,14 @@ def _locate_corner(F, a, x, gx, y, gy, neg, others):
     return None
 
 
-def _walk(F, a0, x0, scale, max_corners=5000, max_points=200000):
+def _walk(F, a0, x0, scale, max_corners=2000, max_points=50000):
     """Walk the boundary of one connected piece of the region of ``F`` through the
     boundary point ``x0`` of margin ``a0``, with the region on the left: the
     list of arcs of one closed curve (counter-clockwise around an outer
     boundary, clockwise around a hole), or None when the walk fails."""
     allc = np.arange(F.m)
     g = F(x0)
-    first = _follow(F, a0, x0, g, 1, scale, others=allc[allc != a0], stop_at=x0)
+    first = _follow(F, a0, x0, g, 1, scale, others=allc[allc != a0], stop_at=x0, max_points=max_points)
     if first.end == "closed":
         return [first]
     if first.end != "corner":
@@ -471,9 +472,16 @@ def _walk(F, a0, x0, scale, max_corners=5000, max_points=200000):
     a = _outgoing(g, a0, first.end_slot, scale)
     start = (x, a0, a)
     used = len(first.pts)
+    stuck = 0
     for _ in range(max_corners):
-        arc = _follow(F, a, x, g, 1, scale, others=allc[allc != a])
+        arc = _follow(F, a, x, g, 1, scale, others=allc[allc != a], max_points=max_points - used)
         used += len(arc.pts)
+        if arc.end == "corner" and math.hypot(x[0] - arc.pts[-1][0], x[1] - arc.pts[-1][1]) == 0.0:
+            stuck += 1
+            if stuck > 8:  # turning in place at a point where many margins vanish
+                return None
+        else:
+            stuck = 0
         if arc.end != "corner" or used > max_points:
             return None
         arc.start_slot = arcs[-1].slot if arcs else start[1]
