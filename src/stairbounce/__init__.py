@@ -73,7 +73,7 @@ from .plane import (
     tongue_mask,
 )
 from .plane import scan as _scan_function
-from .borders import border_points, itinerary
+from .borders import border_points, itinerary, word_table
 from .regions import (
     BorderArc,
     BorderGraph,
@@ -187,6 +187,7 @@ __all__ = [
     "uncertain_fraction",
     "uncertainty_dimension",
     "uncertainty_dimension_from_counts",
+    "word_table",
 ]
 
 # heavy submodules, imported on first use (PEP 562)

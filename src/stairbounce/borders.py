@@ -43,7 +43,7 @@ from .model import (
     check_u,
 )
 
-__all__ = ["itinerary", "border_points"]
+__all__ = ["itinerary", "border_points", "word_table"]
 
 GRAZE, EDGE, CHATTER = 0, 1, 2
 """Event codes of the compiled functions (``kind`` argument of :func:`_margin`)."""
@@ -177,14 +177,14 @@ def _impacts_from_rest(e, u, steps, ks):
 def _follows(e, u, ref, p):
     """Whether the orbit of ``(1, 0)`` at ``(e, u)`` has the impact numbers
     ``ref[:p]`` (the last one ``SLIDING``): the same outcome, word for word.
-    Stops at the first step that differs."""
+    Stops at the first step that differs; returns ``(follows, steps done)``."""
     T, ratio = _constants(e, u)
     y, v = 1.0, 0.0
     for n in range(p):
         y, v, k = _step(y, v, e, T, ratio)
         if k != ref[n]:
-            return False
-    return True
+            return False, n + 1
+    return True, p
 
 
 @njit(cache=True)
@@ -197,22 +197,118 @@ def _at(x, f, axis):
 
 
 @njit(cache=True)
-def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt):
+def _trial(x, f, axis, ref, pc, j, kind, index):
+    """Follow the orbit of ``(1, 0)`` at ``x`` along ``ref[:pc]``.
+
+    Returns ``(follows, dev, kdev, F, G)``: whether all ``pc`` impact numbers
+    are ``ref``'s (the outcome of ``ref``); else ``dev``, the first step that
+    differs, and its impact number ``kdev``.  ``F``: the margin of the event ``(kind, index)`` at step ``j``
+    (NaN when the orbit deviates before step ``j``); ``G``: when the orbit
+    deviates at step ``dev``, the margin there of the event that separates
+    its impact number from ``ref``'s (NaN otherwise).
+    """
+    e, u = _at(x, f, axis)
+    T, ratio = _constants(e, u)
+    y, v = 1.0, 0.0
+    F = math.nan
+    for n in range(pc):
+        if n == j - 1:
+            F = _event_margin(y, v, e, T, ratio, kind, index)
+        yn, vn, k = _step(y, v, e, T, ratio)
+        if k != ref[n]:
+            kd, idx = _event_of(ref[n], k)
+            return False, n + 1, k, F, _event_margin(y, v, e, T, ratio, kd, idx)
+        y, v = yn, vn
+    return True, 0, 0, F, math.nan
+
+
+@njit(cache=True)
+def _event_of(ka, kb):
+    """The event (kind, index) that separates impact numbers ``ka != kb`` of one step."""
+    if ka == SLIDING or kb == SLIDING:
+        return CHATTER, 0
+    if min(ka, kb) == 0:
+        return GRAZE, 1
+    return EDGE, max(ka, kb)
+
+
+@njit(cache=True)
+def _shrink_secant(xc, xo, f, axis, ref, pc):
+    """Shrink the bracket ``[xc, xo]`` (``xc`` has the outcome ``ref``, ``xo``
+    another one) to adjacent floats.
+
+    Every trial point is decided by the exact outcome test, as in bisection;
+    only its place differs: where the first step ``j`` at which ``xo``
+    deviates from ``ref`` and its event are known at both ends, the trial is
+    the secant root of the event's margin (Illinois: the margin of an end kept
+    twice is halved), a bisection otherwise, and whenever two trials in a row
+    shrank the bracket by less than half.  The margin is smooth along the
+    bracket while the two ends share their first ``j - 1`` impact numbers, so
+    this converges superlinearly; the bisection steps bound the work by about
+    twice plain bisection.
+    """
+    _, j, ko, _, Fo = _trial(xo, f, axis, ref, pc, 0, 0, 0)
+    kind, index = _event_of(ref[j - 1], ko)
+    Fc = _trial(xc, f, axis, ref, pc, j, kind, index)[3]
+    trials = 2
+    steps = j + pc
+    slow = 0
+    last = 0  # which end moved last: 1 c, -1 o
+    while True:
+        width = abs(xo - xc)
+        m = 0.5 * (xc + xo)
+        if m == xc or m == xo:
+            break
+        if slow < 2 and math.isfinite(Fc) and math.isfinite(Fo) and Fc != Fo and (Fc >= 0.0) != (Fo >= 0.0):
+            s = xc - Fc * (xo - xc) / (Fo - Fc)
+            if min(xc, xo) < s < max(xc, xo):
+                m = s
+        follows, dev, kdev, F, G = _trial(m, f, axis, ref, pc, j, kind, index)
+        trials += 1
+        steps += pc if follows else dev
+        if follows:
+            xc, Fc = m, F
+            if last == 1:
+                Fo *= 0.5
+            last = 1
+        else:
+            xo = m
+            if dev == j:
+                Fo = F
+            else:  # a border of an earlier step: its event, at both ends
+                j = dev
+                kind, index = _event_of(ref[j - 1], kdev)
+                Fo = G
+                Fc = _trial(xc, f, axis, ref, pc, j, kind, index)[3]
+                trials += 1
+                steps += pc
+            if last == -1:
+                Fc *= 0.5
+            last = -1
+        slow = slow + 1 if abs(xo - xc) > 0.5 * width else 0
+    return xc, xo, trials, steps
+
+
+@njit(cache=True)
+def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt, secant):
     """One pair of neighbouring pixels at ``xa``, ``xb`` along ``axis`` (the
     other coordinate ``f``), with the periods ``pa``, ``pb`` of their words
     (0: no slide within max_iter).
 
     Returns False when the two have the same outcome.  Otherwise bisects to
-    adjacent floats and writes into ``out`` (float64[9]): the low end of the
+    adjacent floats and writes into ``out`` (float64[11]): the low end of the
     bracket, its width, the step j, the kind code, the event index, the impact
     numbers at step j on the low and high side, the period of the low and high
-    side (0: none within max_iter).
+    side (0: none within max_iter), and for the benchmarks the outcome tests
+    (trial points) and the map steps they took.
 
     The reference end ``c`` is a sliding one (the shorter period): a point has
     its outcome exactly when its first ``p_c`` impact numbers are ``c``'s, so
     every bisection step costs at most ``p_c`` map steps; the other end keeps
     a different outcome.  The bracket ``[c, o]`` always has different outcomes
-    at its ends, so it ends on a border.
+    at its ends, so it ends on a border.  ``secant``: the trial points are
+    placed by :func:`_shrink_secant` (same invariant, fewer steps); otherwise
+    at the midpoints (plain bisection).
     """
     if pa == 0 and pb == 0:
         return False
@@ -223,17 +319,24 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt):
     ec, uc = _at(xc, f, axis)
     _impacts_from_rest(ec, uc, pc, ref)
     eo, uo = _at(xo, f, axis)
-    if pa != 0 and pb != 0 and pa == pb and _follows(eo, uo, ref, pc):
+    if pa != 0 and pb != 0 and pa == pb and _follows(eo, uo, ref, pc)[0]:
         return False
-    while True:
-        m = 0.5 * (xc + xo)
-        if m == xc or m == xo:
-            break
-        em, um = _at(m, f, axis)
-        if _follows(em, um, ref, pc):
-            xc = m
-        else:
-            xo = m
+    if secant:
+        xc, xo, trials, steps = _shrink_secant(xc, xo, f, axis, ref, pc)
+    else:
+        trials = steps = 0
+        while True:
+            m = 0.5 * (xc + xo)
+            if m == xc or m == xo:
+                break
+            em, um = _at(m, f, axis)
+            follows, n = _follows(em, um, ref, pc)
+            trials += 1
+            steps += n
+            if follows:
+                xc = m
+            else:
+                xo = m
     # the first step where the two ends differ, and the event there
     ec, uc = _at(xc, f, axis)
     eo, uo = _at(xo, f, axis)
@@ -260,12 +363,7 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt):
             if k == SLIDING:
                 po = n + 1
                 break
-    if kc == SLIDING or ko == SLIDING:
-        kind, index = CHATTER, 0
-    elif min(kc, ko) == 0:
-        kind, index = GRAZE, 1
-    else:
-        kind, index = EDGE, max(kc, ko)
+    kind, index = _event_of(kc, ko)
     low_is_c = xc < xo
     out[0] = min(xc, xo)
     out[1] = abs(xo - xc)
@@ -276,18 +374,95 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt):
     out[6] = ko if low_is_c else kc
     out[7] = pc if low_is_c else po
     out[8] = po if low_is_c else pc
+    out[9] = trials
+    out[10] = steps
     return True
 
 
-_OUT = 9
+_OUT = 11
+
+# what a kernel call locates: word borders (trial points at the secant root, or
+# plain midpoints), or the border of the sliding region (midpoints)
+_WORD, _WORD_BISECT, _SLIDING = 0, 1, 2
+
+
+@njit(cache=True)
+def _slide_period(e, u, max_iter, halt):
+    """The period of the orbit of ``(1, 0)`` (steps up to and including its
+    slide), 0 when it does not slide within ``max_iter`` steps (or once
+    ``halt[0]`` is set, read every 2**16 steps)."""
+    T, ratio = _constants(e, u)
+    y, v = 1.0, 0.0
+    for n in range(max_iter):
+        if (n & 0xFFFF) == 0xFFFF and halted(halt):
+            return 0
+        y, v, k = _step(y, v, e, T, ratio)
+        if k == SLIDING:
+            return n + 1
+    return 0
+
+
+@njit(cache=True)
+def _bisect_sliding_pair(xa, xb, f, axis, pa, pb, max_iter, out, halt):
+    """A pair of pixels of which exactly one slides within ``max_iter``:
+    bisected with the outcome "slides within max_iter" (not the word), so it
+    ends on the border of the sliding region.  Writes ``out`` as
+    :func:`_bisect_pair` does; returns False for any other pair."""
+    if (pa == 0) == (pb == 0):
+        return False
+    if pa != 0:
+        xc, xo, pc = xa, xb, pa
+    else:
+        xc, xo, pc = xb, xa, pb
+    trials = steps = 0
+    while True:
+        m = 0.5 * (xc + xo)
+        if m == xc or m == xo:
+            break
+        em, um = _at(m, f, axis)
+        pm = _slide_period(em, um, max_iter, halt)
+        trials += 1
+        steps += pm if pm else max_iter
+        if pm:
+            xc, pc = m, pm
+        else:
+            xo = m
+    ec, uc = _at(xc, f, axis)
+    eo, uo = _at(xo, f, axis)
+    Tc, rc = _constants(ec, uc)
+    To, ro = _constants(eo, uo)
+    yc, vc, yo, vo = 1.0, 0.0, 1.0, 0.0
+    j = 0
+    kc = ko = 0
+    for n in range(pc):
+        yc, vc, kc = _step(yc, vc, ec, Tc, rc)
+        yo, vo, ko = _step(yo, vo, eo, To, ro)
+        if kc != ko:
+            j = n + 1
+            break
+    kind, index = _event_of(kc, ko)
+    low_is_c = xc < xo
+    out[0] = min(xc, xo)
+    out[1] = abs(xo - xc)
+    out[2] = j
+    out[3] = kind
+    out[4] = index
+    out[5] = kc if low_is_c else ko
+    out[6] = ko if low_is_c else kc
+    out[7] = pc if low_is_c else 0
+    out[8] = 0 if low_is_c else pc
+    out[9] = trials
+    out[10] = steps
+    return True
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _border_kernel(es, us, period, a_idx, b_idx, axis, max_iter, ref_len, found, out, halt):
+def _border_kernel(es, us, period, a_idx, b_idx, axis, max_iter, ref_len, method, found, out, halt):
     """Pairs ``(a_idx[p], b_idx[p])`` of 4-neighbouring pixels (flat row-major
     indices of the ``n_u x n_e`` grid ``us x es``; ``axis[p]`` 0 along e, 1 along
-    u), each bisected by :func:`_bisect_pair` into ``out[p]``; ``found[p]`` says
-    whether the outcomes differ.  Pairs are independent: the answers do not
+    u), each bisected by :func:`_bisect_pair` (``method`` ``_WORD`` or
+    ``_WORD_BISECT``) or :func:`_bisect_sliding_pair` (``_SLIDING``) into
+    ``out[p]``; ``found[p]`` says whether the outcomes differ.  Pairs are independent: the answers do not
     depend on the thread count or on which pairs are computed together.  Returns
     early once ``halt[0]`` is set (the outputs are then incomplete)."""
     ne = es.shape[0]
@@ -297,12 +472,17 @@ def _border_kernel(es, us, period, a_idx, b_idx, axis, max_iter, ref_len, found,
             continue
         a = a_idx[p]
         b = b_idx[p]
-        ref = np.empty(ref_len, np.int64)
         if axis[p] == 0:
             xa, xb, f = es[a % ne], es[b % ne], us[a // ne]
         else:
             xa, xb, f = us[a // ne], us[b // ne], es[a % ne]
-        found[p] = _bisect_pair(xa, xb, f, axis[p], period[a], period[b], max_iter, ref, out[p], halt)
+        if method == _SLIDING:
+            found[p] = _bisect_sliding_pair(xa, xb, f, axis[p], period[a], period[b], max_iter,
+                                            out[p], halt)
+        else:
+            ref = np.empty(ref_len, np.int64)
+            found[p] = _bisect_pair(xa, xb, f, axis[p], period[a], period[b], max_iter, ref,
+                                    out[p], halt, method == _WORD)
 
 
 # --------------------------------------------------------------------------- #
@@ -431,13 +611,18 @@ def _grid_input(data):
     return es, us, period.ravel(), max_iter
 
 
-def _pairs(period, n_u, n_e):
+def _pairs(period, n_u, n_e, sliding=False):
     """Flat indices ``(a, b)`` and axis of the 4-neighbour pairs where at least
-    one pixel slides, in the order of ``a`` then axis (e before u)."""
+    one pixel slides (``sliding``: exactly one), in the order of ``a`` then
+    axis (e before u)."""
     idx = np.arange(n_u * n_e, dtype=np.int64).reshape(n_u, n_e)
-    p = period.reshape(n_u, n_e)
-    ah = idx[:, :-1][(p[:, :-1] != 0) | (p[:, 1:] != 0)]
-    av = idx[:-1, :][(p[:-1, :] != 0) | (p[1:, :] != 0)]
+    s = period.reshape(n_u, n_e) != 0
+    if sliding:
+        ah = idx[:, :-1][s[:, :-1] != s[:, 1:]]
+        av = idx[:-1, :][s[:-1, :] != s[1:, :]]
+    else:
+        ah = idx[:, :-1][s[:, :-1] | s[:, 1:]]
+        av = idx[:-1, :][s[:-1, :] | s[1:, :]]
     a = np.concatenate([ah, av])
     axis = np.concatenate([np.zeros(ah.size, np.int64), np.ones(av.size, np.int64)])
     order = np.argsort(2 * a + axis, kind="stable")
@@ -446,7 +631,7 @@ def _pairs(period, n_u, n_e):
     return a, b, axis
 
 
-def _run_pairs(es, us, period, a, b, axis, max_iter, progress):
+def _run_pairs(es, us, period, a, b, axis, max_iter, progress, secant=True, sliding=False):
     """:func:`_border_kernel` over the pairs, in blocks (progress, Ctrl-C)."""
     from ._interrupt import run_kernel
 
@@ -454,13 +639,14 @@ def _run_pairs(es, us, period, a, b, axis, max_iter, progress):
     found = np.zeros(n, np.bool_)
     out = np.zeros((n, _OUT))
     ref_len = int(max(period.max(initial=0), 1))
+    method = _SLIDING if sliding else (_WORD if secant else _WORD_BISECT)
     block = max(1, -(-n // 50)) if progress is not None else max(n, 1)
     if progress is not None:
         progress(0, n)
     for s in range(0, n, block):
         sl = slice(s, min(s + block, n))
         run_kernel(_border_kernel, es, us, period, a[sl], b[sl], axis[sl], max_iter, ref_len,
-                   found[sl], out[sl])
+                   method, found[sl], out[sl])
         if progress is not None:
             progress(sl.stop, n)
     return found, out
@@ -493,29 +679,76 @@ def _word_text(ks):
     return "(" + ", ".join(letters) + ", 0^inf)"
 
 
-def _words(e, u, periods):
-    """Word text of each side: ASCII ``(2, 0, 1, 0^inf)`` or :data:`NONE_WORD`.
+def _word_groups(e, u, periods):
+    """The distinct words of the orbits of ``(1, 0)`` at ``(e[i], u[i])``.
 
-    The impact numbers of all sides are computed in one parallel pass; sides
-    with the same period are grouped and their distinct rows formatted once
-    (exact: rows are compared whole, no hashing)."""
+    ``periods[i]``: the period of the word there (0: no slide, id -1).
+    Returns ``(ids, rows)``: ``rows[ids[i]]`` is the impact numbers of point
+    i's period.  All impact numbers are computed in one parallel pass and
+    grouped by a hash; every row is then compared whole with its group's
+    first row (exact: on a collision the rows are grouped by comparing them
+    whole, period by period)."""
     periods = np.asarray(periods, np.int64)
-    texts = np.full(e.size, NONE_WORD, dtype=object)
+    ids = np.full(e.size, -1, np.int64)
     offsets = np.concatenate([[0], np.cumsum(periods)]).astype(np.int64)
-    _v.check_memory(f"the words of {e.size} border sides", 8 * int(offsets[-1]))
+    _v.check_memory(f"the words of {e.size} points", 8 * int(offsets[-1]))
     flat = np.empty(int(offsets[-1]), np.int64)
-    _fill_impacts(np.ascontiguousarray(e), np.ascontiguousarray(u), periods, offsets, flat)
+    _fill_impacts(np.ascontiguousarray(e, np.float64), np.ascontiguousarray(u, np.float64),
+                  periods, offsets, flat)
+    hashes = np.empty(e.size, np.uint64)
+    _hash_rows(periods, offsets, flat, hashes)
+    sl = np.flatnonzero(periods > 0)
+    keys, first, inverse = np.unique(hashes[sl], return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    rep = sl[first]
+    if _rows_equal(periods, offsets, flat, sl, rep[inverse]):
+        ids[sl] = inverse
+        rows = [flat[offsets[r]:offsets[r] + periods[r]] for r in rep]
+        return ids, rows
+    # a hash collision (never seen): compare whole rows, period by period
+    rows = []
     for p in np.unique(periods[periods > 0]):
         where = np.flatnonzero(periods == p)
-        rows = flat[offsets[where][:, None] + np.arange(p)]
-        distinct, inverse = np.unique(rows, axis=0, return_inverse=True)
-        names = np.array([_word_text(r) for r in distinct], dtype=object)
-        texts[where] = names[inverse.ravel()]
-    return texts
+        block = flat[offsets[where][:, None] + np.arange(p)]
+        distinct, inverse = np.unique(block, axis=0, return_inverse=True)
+        ids[where] = len(rows) + inverse.ravel()
+        rows.extend(distinct)
+    return ids, rows
 
 
-def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progress=None):
-    """border_points(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, *, progress=None) -> xarray.Dataset
+@njit(cache=True, parallel=True)
+def _hash_rows(periods, offsets, flat, out):
+    """A 64-bit FNV-1a hash of each row ``flat[offsets[i]:offsets[i] + periods[i]]``."""
+    for i in prange(periods.shape[0]):
+        h = np.uint64(14695981039346656037)
+        for n in range(offsets[i], offsets[i] + periods[i]):
+            h = (h ^ np.uint64(flat[n] & 0xFFFFFFFFFFFF)) * np.uint64(1099511628211)
+        out[i] = h ^ np.uint64(periods[i])
+
+
+@njit(cache=True)
+def _rows_equal(periods, offsets, flat, rows, reps):
+    """Whether each row ``rows[i]`` equals the row ``reps[i]``, element by element."""
+    for i in range(rows.shape[0]):
+        a, b = rows[i], reps[i]
+        if periods[a] != periods[b]:
+            return False
+        for n in range(periods[a]):
+            if flat[offsets[a] + n] != flat[offsets[b] + n]:
+                return False
+    return True
+
+
+def _words(e, u, periods):
+    """Word text of each point: ASCII ``(2, 0, 1, 0^inf)`` or :data:`NONE_WORD`."""
+    ids, rows = _word_groups(e, u, periods)
+    names = np.array([_word_text(r) for r in rows] + [NONE_WORD], dtype=object)
+    return names[ids]  # id -1: the last name
+
+
+def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, outcome="word",
+                  progress=None):
+    """border_points(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, *, outcome="word", progress=None) -> xarray.Dataset
 
     Every border between neighbouring pixels of a scan, located to rounding and
     labelled by the event that makes it.
@@ -535,10 +768,23 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progre
     - ``"edge"``: the ``index``-th impact (``index - 1`` <-> ``index``, index >= 2);
     - ``"chatter"``: the accumulation point (finite <-> sliding on step j).
 
+    ``outcome="sliding"`` takes "slides within max_iter" as the outcome
+    instead of the word: only the pairs of which one pixel slides and the
+    other does not are bisected, and every point lies on the border of the
+    sliding region (between some word and "none within max_iter"), one per
+    crossing.  With the word as the outcome such a pair may end on the border
+    of another word met on the way (the sliding region's border is made of
+    many words' borders).
+
     Kernel: pairs in parallel (numba ``prange``), each independent of the
-    others, so the thread count and the tiling change no bit.  Each bisection
-    step follows the orbit of the midpoint only as long as the sliding end's
-    word, at most its period.
+    others, so the thread count and the tiling change no bit.  Each trial
+    point is decided exactly (its whole word against the sliding end's, which
+    follows the orbit at most that word's period); it is placed at the root
+    of the secant through the two ends' margins of the event that separates
+    them (the margins of :func:`itinerary`; a bisection step whenever that
+    does not shrink the bracket by half), about 24 trial points per border
+    point on the paper's grid instead of 46.  ``outcome="sliding"`` bisects
+    at midpoints, a trial on the non-sliding side costing max_iter steps.
 
     Parameters
     ----------
@@ -546,6 +792,8 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progre
         ``(y0, v0) = (1, 0)``, its ``max_iter`` attribute used; ``u`` and
         ``max_iter`` are then ignored).
     max_iter : int >= 1, default 1000
+    outcome : "word" (default) or "sliding"
+        What two sides must differ in: the word, or whether they slide.
     progress : callable ``progress(done, total)``, optional
         Called for the scan's rows (as :func:`stairbounce.scan` does) and
         then for the pairs, in about 50 blocks each.
@@ -562,8 +810,10 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progre
         ``impacts_low``, ``impacts_high`` (the impact numbers at step j on the
         sides of smaller and larger coordinate), ``word_low``, ``word_high``
         (ASCII words, or ``"none within max_iter"``), ``sliding_border``
-        (one side does not slide within max_iter), ``i_e``, ``i_u`` (the
-        pixel of the pair with the smaller indices).  ``.to_dataframe()``
+        (one side of the point does not slide within max_iter: the point is
+        on the border of the sliding region), ``sliding_pair`` (one pixel of
+        the pair slides, the other does not: the pair crosses that border),
+        ``i_e``, ``i_u`` (the pixel of the pair with the smaller indices).  ``.to_dataframe()``
         gives the table as pandas.
 
     Raises
@@ -576,6 +826,8 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progre
 
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
+    _v.among("outcome", (outcome,), ("word", "sliding"))
+    sliding = outcome == "sliding"
     if isinstance(e, xr.Dataset):
         es, us, period, max_iter = _grid_input(e)
         attrs = {k: e.attrs[k] for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u") if k in e.attrs}
@@ -588,12 +840,14 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, progre
         es, us, period, _ = _grid_input(ds)
         attrs = dict(e_min=e_min, e_max=e_max, n_e=n_e, u_min=u_min, u_max=u_max, n_u=n_u)
     n_e, n_u = es.size, us.size
-    a, b, axis = _pairs(period, n_u, n_e)
-    found, out = _run_pairs(es, us, period, a, b, axis, max_iter, progress)
-    return _table(es, us, a[found], axis[found], out[found], max_iter, attrs)
+    a, b, axis = _pairs(period, n_u, n_e, sliding)
+    found, out = _run_pairs(es, us, period, a, b, axis, max_iter, progress, sliding=sliding)
+    pair = (period[a[found]] == 0) != (period[b[found]] == 0)
+    return _table(es, us, a[found], axis[found], out[found], max_iter,
+                  {**attrs, "outcome": outcome}, pair)
 
 
-def _table(es, us, a, axis, out, max_iter, attrs):
+def _table(es, us, a, axis, out, max_iter, attrs, pair=None):
     """The labelled Dataset of :func:`border_points` from the kernel's rows."""
     n_e = es.size
     i_e, i_u = a % n_e, a // n_e
@@ -623,8 +877,137 @@ def _table(es, us, a, axis, out, max_iter, attrs):
         "word_high": (dim, _words(e_high, u_high, p_high), {"long_name": "word on the high side"}),
         "sliding_border": (dim, (p_low == 0) | (p_high == 0),
                            {"long_name": "one side does not slide within max_iter"}),
+        "sliding_pair": (dim, np.zeros(x.size, bool) if pair is None else pair,
+                         {"long_name": "one pixel of the pair slides within max_iter, the other not"}),
         "i_e": (dim, i_e, {"long_name": "e index of the pair's first pixel"}),
         "i_u": (dim, i_u, {"long_name": "u index of the pair's first pixel"}),
     }
     return xr.Dataset(data, attrs={"title": "borders of the (e, u) plane to rounding",
                                    "max_iter": max_iter, "convention": _CONVENTION, **attrs})
+
+
+def _scan_input(e, u, max_iter, progress):
+    """A scan Dataset from window arguments (as :func:`stairbounce.scan`) or the
+    Dataset itself, with the window attributes to carry on."""
+    from . import plane
+
+    if isinstance(e, xr.Dataset):
+        _grid_input(e)  # checked here, once
+        return e
+    e_min, e_max, n_e = plane._window("e", e, 0.0, 1.0, "[0, 1]")
+    u_min, u_max, n_u = plane._window("u", u, 0.0, math.inf, "[0, inf)")
+    max_iter = _check_max_iter(max_iter)
+    return plane.scan(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=max_iter,
+                      progress=progress)
+
+
+def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=None, progress=None):
+    """word_table(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, *, points=None, progress=None) -> xarray.Dataset
+
+    The distinct words of the periodic sliding solutions in a window, one row each,
+    and the number of distinct words by period, N(p).
+
+    Every pixel centre of the window (as :func:`stairbounce.scan`; or pass a
+    scan Dataset as ``e``) gets the whole word of its periodic sliding
+    solution (not only its length).  The border points (:func:`border_points`
+    of the same pixels, or ``points`` when given) are counted per word on
+    either side, by kind.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``word`` (most pixels first, then by text): ``text`` (ASCII,
+        ``(2, 0, 1, 0^inf)``), ``letters`` (number of letters = word length),
+        ``period`` (steps per period = sum of the letters), ``impacts``
+        (finite impacts per period), ``pixels``, ``area_fraction`` (of all the
+        window's pixels), ``e_rep``, ``u_rep`` (a pixel centre of the word, the
+        nearest to the centroid of its pixels), ``e_min``, ``e_max``,
+        ``u_min``, ``u_max`` (the bounding box of its pixel centres),
+        ``graze``, ``edge``, ``chatter`` (its border points by kind).
+        Dimension ``p`` (the periods present): ``distinct_words`` = N(p).
+        Attributes: ``pixels`` (all), ``sliding_pixels``, ``max_iter`` and the
+        window.
+
+    Raises
+    ------
+    ValueError
+        As :func:`border_points`.
+    """
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
+    ds = _scan_input(e, u, max_iter, progress)
+    es, us, period, max_iter = _grid_input(ds)
+    if points is None:
+        points = border_points(ds, progress=progress)
+    elif not (isinstance(points, xr.Dataset) and "kind" in points and "word_low" in points):
+        raise ValueError("points must be a Dataset from border_points")
+    E, U = np.meshgrid(es, us)
+    E, U = E.ravel(), U.ravel()
+    ids, rows = _word_groups(E, U, period)
+    nw = len(rows)
+    texts = [_word_text(r) for r in rows]
+    sliding = ids >= 0
+    idx = ids[sliding]
+    pix = np.bincount(idx, minlength=nw)
+    Es, Us = E[sliding], U[sliding]
+
+    def per_word(values, fn):
+        out = np.full(nw, np.nan)
+        order = np.argsort(idx, kind="stable")
+        starts = np.concatenate([[0], np.cumsum(pix)])
+        sv = values[order]
+        for w in range(nw):
+            out[w] = fn(sv[starts[w]:starts[w + 1]])
+        return out, order, starts
+
+    e_min, order, starts = per_word(Es, np.min)
+    e_max = per_word(Es, np.max)[0]
+    u_min = per_word(Us, np.min)[0]
+    u_max = per_word(Us, np.max)[0]
+    ce = np.bincount(idx, Es, minlength=nw) / np.maximum(pix, 1)
+    cu = np.bincount(idx, Us, minlength=nw) / np.maximum(pix, 1)
+    # a pixel of the word nearest its centroid, in units of the window's pixels
+    de = (es[-1] - es[0]) / max(es.size - 1, 1) or 1.0
+    du = (us[-1] - us[0]) / max(us.size - 1, 1) or 1.0
+    e_rep = np.empty(nw)
+    u_rep = np.empty(nw)
+    for w in range(nw):
+        sel = order[starts[w]:starts[w + 1]]
+        d = ((Es[sel] - ce[w]) / de) ** 2 + ((Us[sel] - cu[w]) / du) ** 2
+        k = sel[int(np.argmin(d))]
+        e_rep[w], u_rep[w] = Es[k], Us[k]
+    counts = {k: np.zeros(nw, np.int64) for k in KINDS}
+    where = {t: i for i, t in enumerate(texts)}
+    for side in ("word_low", "word_high"):
+        for t, kind in zip(points[side].values, points["kind"].values):
+            w = where.get(t)
+            if w is not None:
+                counts[kind][w] += 1
+    letters = np.array([t.count(",") for t in texts], np.int64)  # "(a, b, 0^inf)": letters + 1 items
+    periods = np.array([int(r.size) for r in rows], np.int64)
+    impacts = np.array([int(np.sum(np.where(r > 0, r, 0))) for r in rows], np.int64)
+    rank = np.lexsort((np.array(texts, dtype=object).astype(str), -pix)) if nw else np.zeros(0, np.int64)
+    dim = ("word",)
+    p_values, n_p = np.unique(periods, return_counts=True)
+    data = {
+        "text": (dim, np.array(texts, dtype=object)[rank], {"long_name": "the word (ASCII)"}),
+        "letters": (dim, letters[rank], {"long_name": "letters (word length, impacts + 1)"}),
+        "period": (dim, periods[rank], {"long_name": "steps per period (sum of the letters)"}),
+        "impacts": (dim, impacts[rank], {"long_name": "finite impacts per period"}),
+        "pixels": (dim, pix[rank], {"long_name": "pixel centres with this word"}),
+        "area_fraction": (dim, pix[rank] / E.size, {"long_name": "share of the window's pixels"}),
+        "e_rep": (dim, e_rep[rank], {"long_name": "e of a representative pixel centre"}),
+        "u_rep": (dim, u_rep[rank], {"long_name": "u of a representative pixel centre"}),
+        "e_min": (dim, e_min[rank], {"long_name": "bounding box of its pixel centres"}),
+        "e_max": (dim, e_max[rank], {"long_name": "bounding box of its pixel centres"}),
+        "u_min": (dim, u_min[rank], {"long_name": "bounding box of its pixel centres"}),
+        "u_max": (dim, u_max[rank], {"long_name": "bounding box of its pixel centres"}),
+        **{k: (dim, counts[k][rank], {"long_name": f"{k} border points with this word on a side"})
+           for k in KINDS},
+        "distinct_words": (("p",), n_p, {"long_name": "N(p): distinct words of period p"}),
+    }
+    attrs = {k: ds.attrs[k] for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u") if k in ds.attrs}
+    return xr.Dataset(data, coords={"p": ("p", p_values, {"long_name": "period (steps)"})},
+                      attrs={"title": "words of the periodic sliding solutions in a window",
+                             "pixels": E.size, "sliding_pixels": int(sliding.sum()),
+                             "max_iter": max_iter, **attrs})

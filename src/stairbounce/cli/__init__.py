@@ -26,6 +26,7 @@ from . import scan_commands  # noqa: F401  (registers scan)
 from . import explore_commands  # noqa: F401  (registers explore)
 from . import atlas_commands  # noqa: F401  (registers render; scan --tile calls into it)
 from . import motion_commands  # noqa: F401  (registers motion; scan --field k_mean calls into it)
+from . import borders_commands  # noqa: F401  (registers borders, words)
 from ._app import CLIError, INTERRUPTED, app
 
 __all__ = ["app", "main"]

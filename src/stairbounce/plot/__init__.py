@@ -18,11 +18,13 @@ computed by                    drawn by
                                :func:`animate_trajectory`
 ``sb.iterate``                 :func:`plot_poincare_section`
 ``sb.motion_scan``             :func:`plot_motion`, :func:`plot_motion_cut`
+``sb.border_points``           :func:`plot_borders` (over a scan)
 (the tongues, Thm. 3.1)        :func:`plot_tongues` (Fig. 2)
 =============================  ==============================================
 """
 
 from .._compat import register_alias as _register_alias
+from .borders import plot_borders
 from .fractal import plot_border, plot_box_counts, plot_box_dimension, plot_uncertainty
 from .motion import plot_motion, plot_motion_cut
 from .orbits import plot_orbit_diagram
@@ -36,6 +38,7 @@ scan = _register_alias(__name__ + ".scan", __name__ + ".plane", plot_scan, "scan
 __all__ = [
     "animate_trajectory",
     "plot_border",
+    "plot_borders",
     "plot_box_counts",
     "plot_box_dimension",
     "plot_motion",

@@ -1,0 +1,181 @@
+"""``stairbounce borders`` and ``stairbounce words``: the plane's borders located
+to rounding and labelled graze / edge / chatter, and the table of its words
+(:mod:`stairbounce.borders`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from . import _staircase as st
+from ._app import (
+    FORCE_HELP,
+    CLIError,
+    app,
+    check_dpi,
+    check_outputs,
+    parse_range,
+    parse_size,
+    progress_bar,
+    save_figure,
+)
+
+_DATA_SUFFIXES = (".nc", ".csv")
+_FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+E_HELP = "Window along e, MIN:MAX: the image edges, within [0, 1]."
+U_HELP = "Window along u, MIN:MAX (normalised): the image edges, MIN >= 0. Or --speed with --step-height, --step-length."
+SPEED_HELP = "Window along the ball's horizontal speed in m/s, MIN:MAX (instead of --u)."
+
+
+def _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force):
+    """Parse and check everything before any work; returns the scan's window
+    arguments and the staircase (None with --u)."""
+    from .. import plane
+
+    if u is None and speed is None:
+        u = "0:1.5"
+    u, stairs = st.resolve_u_text(u, speed, step_height, step_length, g)
+    if stairs is not None:
+        typer.echo(f"speed {speed} m/s on {stairs.describe()}: u = {u}")
+    e_lo, e_hi = parse_range("e", e)
+    u_lo, u_hi = parse_range("u", u)
+    n_e, n_u = parse_size(size)
+    if max_iter < 1 or max_iter > 2**31 - 1:
+        raise CLIError(f"--max-iter must be an integer in [1, 2**31 - 1], got {max_iter}")
+    plane._window("e", (e_lo, e_hi, n_e), 0.0, 1.0, "[0, 1]")
+    plane._window("u", (u_lo, u_hi, n_u), 0.0, float("inf"), "[0, inf)")
+    plane._check_memory(n_e, n_u)
+    if out is not None and out.suffix.lower() not in _DATA_SUFFIXES:
+        raise CLIError(f"--out must end in .nc or .csv, got {str(out)!r}")
+    if png is not None and png.suffix.lower() not in _FIGURE_SUFFIXES:
+        raise CLIError(f"--png must end in .png, .pdf or .svg, got {str(png)!r}")
+    if out is None and png is None:
+        raise CLIError("give --out FILE (.nc or .csv) and/or --png FILE: there is nothing to write")
+    check_dpi(dpi)
+    check_outputs(force, out=out, png=png)
+    return (e_lo, e_hi, n_e), (u_lo, u_hi, n_u)
+
+
+def _write(ds, path: Path, overwrite: bool, dim: str) -> None:
+    """A labelled table to .nc (netCDF4, strings as variable-length text) or
+    .csv (one row per entry of ``dim``), atomically."""
+    from .._io import atomic_path
+
+    with atomic_path(path, overwrite=overwrite) as tmp:
+        if path.suffix.lower() == ".nc":
+            ds.to_netcdf(tmp, engine="netcdf4")
+        else:
+            ds.drop_dims([d for d in ds.dims if d != dim]).to_dataframe().to_csv(tmp)
+
+
+def _with_progress(what, compute):
+    """Run ``compute(progress)`` under a transient progress bar on stderr."""
+    from rich.console import Console
+
+    with progress_bar(Console(stderr=True), what, 1) as (bar, task):
+        return compute(lambda done, total: bar.update(task, completed=done, total=max(total, 1)))
+
+
+def _figure(png, dpi, force, draw):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 6.5))
+    draw(ax)
+    fig.tight_layout()
+    save_figure(fig, png, dpi, force)
+
+
+@app.command("borders")
+def borders_(
+    e: str = typer.Option("0:1", "--e", help=E_HELP),
+    u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5."),
+    speed: str = st.speed_option(SPEED_HELP),
+    step_height: float = st.step_height_option(),
+    step_length: float = st.step_length_option(),
+    g: float = st.g_option(),
+    size: str = typer.Option("500x350", "--size", help="Pixels WIDTHxHEIGHT (along e x along u)."),
+    max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
+    outcome: str = typer.Option("word", "--outcome", help="What the two sides differ in: word (every border) "
+                                "or sliding (the border of the sliding region, one point per crossing)."),
+    out: Path = typer.Option(None, "--out", help="The border points: .nc (netCDF) or .csv (one row per point)."),
+    png: Path = typer.Option(None, "--png", help="Figure (.png, .pdf or .svg): the borders over the scan, coloured by kind."),
+    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
+):
+    """Every border between neighbouring pixels located to rounding and labelled by its
+    event at a step's edge: graze (first contact), edge (a later impact) or chatter
+    (the accumulation point)."""
+    from .. import borders, plane
+
+    if outcome not in ("word", "sliding"):
+        raise CLIError(f"--outcome must be word or sliding, got {outcome!r}")
+    ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force)
+    ds = _with_progress("scan rows",
+                        lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
+    pts = _with_progress("border pairs",
+                         lambda p: borders.border_points(ds, outcome=outcome, progress=p))
+    if out is not None:
+        _write(pts, out, force, "point")
+        typer.echo(f"wrote {out}")
+    if png is not None:
+        from ..plot import plot_borders
+
+        _figure(png, dpi, force, lambda ax: plot_borders(pts, ax=ax, scan=ds))
+        typer.echo(f"wrote {png}")
+    kinds = pts.kind.values
+    n = kinds.size
+    shares = ", ".join(f"{k} {int((kinds == k).sum())}" for k in borders.KINDS)
+    typer.echo(f"{ew[2]} x {uw[2]} pixels, e in [{ew[0]:g}, {ew[1]:g}], u in [{uw[0]:g}, {uw[1]:g}], "
+               f"max_iter {max_iter}: {n} border points ({shares}); "
+               f"{int(pts.sliding_border.values.sum())} on the border of the sliding region")
+
+
+@app.command("words")
+def words_(
+    e: str = typer.Option("0:1", "--e", help=E_HELP),
+    u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5."),
+    speed: str = st.speed_option(SPEED_HELP),
+    step_height: float = st.step_height_option(),
+    step_length: float = st.step_length_option(),
+    g: float = st.g_option(),
+    size: str = typer.Option("500x350", "--size", help="Pixels WIDTHxHEIGHT (along e x along u)."),
+    max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
+    top: int = typer.Option(10, "--top", help="Rows of the table to print (>= 0)."),
+    out: Path = typer.Option(None, "--out", help="The word table: .nc (with N(p)) or .csv (one row per word)."),
+    png: Path = typer.Option(None, "--png", help="Figure (.png, .pdf or .svg): N(p), distinct words by period."),
+    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
+):
+    """The distinct words of the periodic sliding solutions in a window: letters, period,
+    pixels, area, a representative point, bounding box, border points by kind; and N(p)."""
+    from .. import borders, plane
+
+    if top < 0:
+        raise CLIError(f"--top must be >= 0, got {top}")
+    ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force)
+    ds = _with_progress("scan rows", lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
+    tab = _with_progress("border pairs", lambda p: borders.word_table(ds, progress=p))
+    if out is not None:
+        _write(tab, out, force, "word")
+        typer.echo(f"wrote {out}")
+    if png is not None:
+        def draw(ax):
+            ax.loglog(tab.p.values, tab.distinct_words.values, "o", ms=3)
+            ax.set_xlabel("period p (steps)")
+            ax.set_ylabel("N(p): distinct words of period p")
+            ax.set_title(f"{tab.sizes['word']} words in e [{ew[0]:g}, {ew[1]:g}] x u [{uw[0]:g}, {uw[1]:g}]")
+
+        _figure(png, dpi, force, draw)
+        typer.echo(f"wrote {png}")
+    typer.echo(f"{tab.sizes['word']} distinct words on {tab.attrs['sliding_pixels']} of "
+               f"{tab.attrs['pixels']} pixels (max_iter {max_iter})")
+    for i in range(min(top, tab.sizes["word"])):
+        r = tab.isel(word=i)
+        typer.echo(f"{r.text.item():>30s}  period {int(r.period):5d}  {int(r.pixels):8d} px "
+                   f"({100 * float(r.area_fraction):6.2f} %)  at e = {float(r.e_rep):.6g}, "
+                   f"u = {float(r.u_rep):.6g}  borders: graze {int(r.graze)}, edge {int(r.edge)}, "
+                   f"chatter {int(r.chatter)}")

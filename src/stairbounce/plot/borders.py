@@ -1,0 +1,71 @@
+"""The exact borders of :func:`stairbounce.border_points` drawn over a scan,
+coloured by the event that makes them (graze, edge, chatter)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import _validate as _v
+
+KIND_COLORS = {"graze": "#0050ff", "edge": "#ff9d00", "chatter": "#e0002a"}
+"""One colour per kind of border point, chosen apart from the word-length key
+and from the tongues' magenta."""
+
+_KINDS = tuple(KIND_COLORS)
+
+
+def plot_borders(points, ax=None, scan=None, kinds=_KINDS, size=None, legend="upper right", title=None):
+    """plot_borders(points, ax=None, scan=None, kinds=("graze", "edge", "chatter"), size=None, legend="upper right", title=None) -> Axes
+
+    Draw border points located to rounding, one dot each, coloured by kind.
+
+    Parameters
+    ----------
+    points : xarray.Dataset from :func:`stairbounce.border_points`.
+    ax : matplotlib Axes, default a new figure (or the scan's).
+    scan : optional scan Dataset drawn first with :func:`plot_scan` (the
+        raster the borders separate), muted and without its colour bar.
+    kinds : the kinds to draw, among "graze", "edge", "chatter".
+    size : marker area in points^2, default from the number of points.
+    legend : location of the legend (counts per kind), or None.
+    title : default "exact borders" with the count.
+    """
+    import matplotlib.pyplot as plt
+
+    kinds = tuple(kinds)
+    _v.among("kinds", kinds, _KINDS)
+    if not hasattr(points, "data_vars") or "kind" not in points:
+        raise ValueError("points must be a Dataset from stairbounce.border_points")
+    if scan is not None:
+        from .plane import plot_scan
+
+        ax = plot_scan(scan, ax=ax, colorbar=False, legend=None,
+                       title=title if title is not None else "")
+        for image in ax.images:  # muted, so that the borders stand out
+            image.set_alpha(0.3)
+    elif ax is None:
+        _, ax = plt.subplots(figsize=(8, 6))
+    n = points.sizes.get("point", 0)
+    if size is None:
+        size = float(np.clip(20000.0 / max(n, 1), 1.0, 8.0))
+    kind = points["kind"].values
+    for k in kinds:
+        sel = kind == k
+        ax.scatter(points["e"].values[sel], points["u"].values[sel], s=size, c=KIND_COLORS[k],
+                   marker=".", linewidths=0, label=f"{k} ({int(sel.sum())})", zorder=3,
+                   rasterized=True)
+    if scan is None:
+        a = points.attrs
+        if all(key in a for key in ("e_min", "e_max", "u_min", "u_max")):
+            ax.set_xlim(a["e_min"], a["e_max"])
+            ax.set_ylim(a["u_min"], a["u_max"])
+        ax.set_xlabel("e")
+        ax.set_ylabel("u")
+    if title is None:
+        ax.set_title(f"exact borders: {n} points located to rounding")
+    elif scan is None:
+        ax.set_title(title)
+    if legend is not None:
+        ax.legend(loc=legend, markerscale=max(1.0, 6.0 / max(size, 0.1)), fontsize="small",
+                  title="event at the step's edge", title_fontsize="small")
+    return ax
