@@ -525,6 +525,32 @@ def _bands(s):
     return found, pixel
 
 
+def _band_similarity_row(s):
+    """Self-similarity measured on exact borders (stairbounce.regions.band_similarity):
+    the tips (corner of largest e) and areas of the words (n, n) and (n, n, n) in
+    bands n = 2..6, and their ratios between consecutive bands."""
+    from .regions import band_similarity
+
+    s.note("fig5c: tracing the word families of bands 2..6")
+    sim = band_similarity(resolution=s.px(128))
+    fam = [sim[m] for m in (2, 3)]
+    ratios = [x for f in fam for x in f["tip_ratio"] + f["area_ratio"]]
+    spread = max(max(f["tip_ratio"]) / min(f["tip_ratio"]) - 1 for f in fam)
+    tips = sim["tongue_tip_ratio"]
+    vs_tongue = max(abs(a / b - 1) for f in fam for a, b in zip(f["tip_ratio"], tips))
+    text = "; ".join(f"(n,)*{m}: tip ratios {', '.join(f'{x:.3f}' for x in sim[m]['tip_ratio'])}, "
+                     f"area ratios {', '.join(f'{x:.3f}' for x in sim[m]['area_ratio'])}" for m in (2, 3))
+    return Row(
+        "self-similarity on exact borders, bands n = 2..6",
+        "the same complex structure repeated at smaller and smaller scales",
+        f"traced regions of the words (n, n) and (n, n, n) in band n: {text}; tongue tips "
+        f"e_(n+1)/e_n {', '.join(f'{x:.3f}' for x in tips)}",
+        verdict="agrees" if all(0 < x < 1 for x in ratios) else "differs",
+        why=f"every ratio < 1 (smaller and smaller scales); no constant scale factor: the tip "
+            f"ratios spread by {100 * spread:.0f}% and rise towards 1 with n, within "
+            f"{100 * vs_tongue:.0f}% of the tongue tips' own ratios")
+
+
 def _blowup(name):
     letter = name[-1]
 
@@ -568,6 +594,7 @@ def _blowup(name):
                 verdict="agrees" if worst <= 3 * pixel else "differs",
                 why=f"each band's structure fills it up to the tongue tip within {worst:.4f} "
                     f"(pixel {pixel:.4f}); the paper gives no scale factor"))
+            rows.append(_band_similarity_row(s))
         caption = (f"Blow-up {letter}) of Fig. 4: the paper's window [{e[0]:g}, {e[1]:g}] x "
                    f"[{u[0]:g}, {u[1]:g}], {n} x {n} px (ours). {_key_caption(s)}")
         return Result(name, f"Blow-up {letter})", [_save(fig, s, name)], rows,
