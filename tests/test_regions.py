@@ -20,6 +20,7 @@ import pytest
 
 import stairbounce as sb
 from stairbounce import borders, model, regions
+from stairbounce._io import OutputExistsError
 from stairbounce.symbolic import word_from_impacts
 
 EPS = np.finfo(float).eps
@@ -310,8 +311,9 @@ def test_graph_counts_and_exports(tmp_path):
     assert root.tag.endswith("svg") and len(root.findall("{http://www.w3.org/2000/svg}polyline")) > 0
     with pytest.raises(ValueError, match="out must end in"):
         sb.write_regions(regs, tmp_path / "x.png")
-    with pytest.raises(FileExistsError):
+    with pytest.raises(OutputExistsError):
         sb.write_regions(regs, tmp_path / "x.svg")
+    assert sb.write_regions(regs, tmp_path / "x.svg", overwrite=True).exists()
 
 
 def test_band_similarity_numbers():
@@ -346,3 +348,46 @@ def test_regions_module_imports_no_plotting_cli_or_web():
     code = f"import sys, stairbounce.regions; print([m for m in {forbidden!r} if m in sys.modules])"
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert r.stdout.strip() == "[]"
+
+
+def test_word_table_with_traced_regions():
+    window = ((0.02, 0.2, 24), (0.95, 1.05, 24))
+    tab = sb.word_table(*window, regions=True)
+    assert not np.isnan(tab.traced_area.values).any()
+    row = tab.isel(word=list(tab.text.values).index("(3, 0^inf)"))
+    # the tongue of Theorem 3.1 clipped to the window: e from 0.02 to its tip, u from 1 to
+    # the chatter curve, or to the window's top u = 1.05 until the curve falls below it
+    tip = (math.sqrt(3) - math.sqrt(2)) ** 2
+    c = 1.05 / math.sqrt(1.5)
+    e_star = (1 - c) / (1 + c)
+
+    def prim(x):
+        return math.sqrt(1.5) * (2.0 * math.log1p(x) - x) - x
+    exact = 0.05 * (e_star - 0.02) + prim(tip) - prim(e_star)
+    assert float(row.traced_area) == pytest.approx(exact, rel=1e-12)
+    assert int(row.components) == 1 and bool(row.complete)
+
+
+def test_cli_words_regions(tmp_path, capsys):
+    from stairbounce.cli import main
+
+    def run(args):
+        with pytest.raises(SystemExit) as exc:
+            main(args)
+        out, err = capsys.readouterr()
+        return exc.value.code, out, err
+
+    out = tmp_path / "w.geojson"
+    code, text, err = run(["words", "--e", "0.02:0.2", "--u", "0.95:1.05", "--size", "24x24",
+                           "--regions", "--out", str(out)])
+    assert code == 0, err
+    gj = json.loads(out.read_text())
+    ref = sb.window_regions((0.02, 0.2), (0.95, 1.05), resolution=24)
+    assert len(gj["features"]) == sum(len(r.components) for r in ref)
+    assert any(f["properties"]["word"] == "(3, 0^inf)" for f in gj["features"])
+    assert f"{len(ref)} words in" in text
+    code, _, err = run(["words", "--e", "0.02:0.2", "--u", "0.95:1.05", "--size", "24x24",
+                        "--regions", "--out", str(tmp_path / "w.svg")])
+    assert code == 0 and (tmp_path / "w.svg").read_text().startswith("<svg")
+    code, _, err = run(["words", "--regions", "--out", str(tmp_path / "w.csv")])
+    assert code == 2 and "--regions needs --out" in err and "Traceback" not in err

@@ -1001,6 +1001,12 @@ def _outcome(e, u, y0, v0, max_iter, buf):
     return buf[:abs(n)].copy(), n > 0
 
 
+def _same(ka, sa, kb, sb):
+    """Whether two outcomes are the same: the same word, or both no slide within
+    max_iter (however their bounces differ)."""
+    return sa == sb and (not sa or np.array_equal(ka, kb))
+
+
 def _word_text(ks, slides):
     return word_from_impacts(ks).format(ascii=True) if slides else "none within max_iter"
 
@@ -1064,7 +1070,7 @@ def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-
             if not (we[0] <= c[0] <= we[1] and wu[0] <= c[1] <= wu[1]):
                 continue
             kc, sc = _outcome(c[0], c[1], y0, v0, max_iter, buf)
-            if sc != sp or not np.array_equal(kc, kp):
+            if not _same(kc, sc, kp, sp):
                 q = c
                 break
         d *= 2.0
@@ -1076,7 +1082,7 @@ def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-
         if (m == a).all() or (m == b).all():
             break
         km, sm = _outcome(m[0], m[1], y0, v0, max_iter, buf)
-        if sm == sp and np.array_equal(km, kp):
+        if _same(km, sm, kp, sp):
             a = m
         else:
             b = m
@@ -1374,3 +1380,35 @@ def band_similarity(n=(2, 3, 4, 5, 6), repeats=(2, 3), *, resolution=256):
     tips = [(math.sqrt(k) - math.sqrt(k - 1)) ** 2 for k in ns]
     out["tongue_tip_ratio"] = [b / a for a, b in zip(tips, tips[1:])]
     return out
+
+
+def traced_columns(tab):
+    """Add ``traced_area``, ``traced_area_error``, ``components`` and ``complete``
+    to a word table (:func:`stairbounce.word_table` with ``regions=True``):
+    :func:`window_regions` of its window, seeded by a square scan of the larger
+    side of the table's grid, matched to the rows by the word's text."""
+    import xarray as xr
+
+    try:
+        e = (float(tab.attrs["e_min"]), float(tab.attrs["e_max"]))
+        u = (float(tab.attrs["u_min"]), float(tab.attrs["u_max"]))
+        res = max(int(tab.attrs["n_e"]), int(tab.attrs["n_u"]))
+    except KeyError:
+        raise ValueError("regions=True needs the scan's window (attributes e_min, e_max, u_min, "
+                         "u_max, n_e, n_u)") from None
+    e = (e[0], min(e[1], 1.0 - 1e-12))
+    u = (max(u[0], 1e-9), u[1])
+    found = {r.word.format(ascii=True): r for r in
+             window_regions(e, u, resolution=res, max_iter=int(tab.attrs.get("max_iter", 1000)))}
+    rows = [found.get(str(t)) for t in tab.text.values]
+    dim = ("word",)
+    return tab.assign(
+        traced_area=(dim, np.array([r.area if r else np.nan for r in rows]),
+                     {"long_name": "area of the traced region (stairbounce.regions)"}),
+        traced_area_error=(dim, np.array([r.area_error if r else np.nan for r in rows]),
+                           {"long_name": "error estimate of traced_area"}),
+        components=(dim, np.array([len(r.components) if r else 0 for r in rows], np.int64),
+                    {"long_name": "connected components traced"}),
+        complete=(dim, np.array([bool(r and r.complete) for r in rows]),
+                  {"long_name": "every seed's walk closed"}),
+    ) if isinstance(tab, xr.Dataset) else tab
