@@ -391,3 +391,11 @@ def test_cli_words_regions(tmp_path, capsys):
     assert code == 0 and (tmp_path / "w.svg").read_text().startswith("<svg")
     code, _, err = run(["words", "--regions", "--out", str(tmp_path / "w.csv")])
     assert code == 2 and "--regions needs --out" in err and "Traceback" not in err
+
+
+def test_fig5c_report_row_on_exact_borders(tmp_path):
+    from stairbounce import figures
+
+    row = figures._band_similarity_row(figures.Settings(out=tmp_path, scale=0.25))
+    assert row.verdict in figures.VERDICTS
+    assert "tip ratios" in row.measured and "no constant scale factor" in row.why
