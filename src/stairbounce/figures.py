@@ -546,9 +546,12 @@ def _band_similarity_row(s):
         f"traced regions of the words (n, n) and (n, n, n) in band n: {text}; tongue tips "
         f"e_(n+1)/e_n {', '.join(f'{x:.3f}' for x in tips)}",
         verdict="agrees" if all(0 < x < 1 for x in ratios) else "differs",
-        why=f"every ratio < 1 (smaller and smaller scales); no constant scale factor: the tip "
-            f"ratios spread by {100 * spread:.0f}% and rise towards 1 with n, within "
-            f"{100 * vs_tongue:.0f}% of the tongue tips' own ratios")
+        why=f"{'every' if all(0 < x < 1 for x in ratios) else 'not every'} ratio < 1 (smaller "
+            f"and smaller scales); "
+            + (f"a constant scale factor {np.mean([x for f in fam for x in f['tip_ratio']]):.3f}"
+               if spread < 0.05 else "no constant scale factor")
+            + f": the tip ratios spread by {100 * spread:.0f}%, within {100 * vs_tongue:.0f}% of "
+              f"the tongue tips' own ratios")
 
 
 def _blowup(name):
