@@ -475,3 +475,99 @@ def test_no_border_of_the_sliding_region_above_corollary_2_1():
     assert not np.any(pts.u.values > bound)
     # and the sliding side of every point is at or below it too
     assert not np.any(np.minimum(u, pts.u.values) > bound)
+
+
+# --------------------------------------------------------------------------- #
+# bifurcations                                                                #
+# --------------------------------------------------------------------------- #
+
+
+@pytest.fixture(scope="module")
+def fig8_bifurcations():
+    # the paper's Fig. 8: e = 0.001, u swept, from (0.1, 0), iterates 2000..2200
+    return sb.bifurcations(0.001, np.linspace(0.3, 2.0, 600))
+
+
+def test_bifurcations_at_the_tongue_borders_of_theorem_3_1(fig8_bifurcations):
+    b = fig8_bifurcations
+    e = 0.001
+    for n in range(1, 6):
+        word = f"({n}, 0^inf)"
+        upper = math.sqrt(n / 2) * (1 - e) / (1 + e)
+        sel = (b.itinerary_low.values == word) & (b.kind.values == "chatter")
+        assert sel.sum() == 1, n
+        assert abs(float(b.value[sel][0]) - upper) <= 1e-14 * upper
+        if n >= 2:
+            lower = math.sqrt((n - 1) / 2)
+            sel = (b.itinerary_high.values == word) & (b.kind.values == "graze")
+            assert sel.sum() == 1, n
+            assert abs(float(b.value[sel][0]) - lower) <= 1e-14 * lower
+
+
+def test_every_bifurcation_label_checked_with_model_step(fig8_bifurcations):
+    b = fig8_bifurcations
+    assert b.sizes["bifurcation"] > 20
+    for i in range(b.sizes["bifurcation"]):
+        pt = b.isel(bifurcation=i)
+        lo = float(pt.value)
+        hi = lo + float(pt.width)
+        assert np.nextafter(lo, np.inf) == hi
+        j = int(pt.step)
+        _, _, kl = model.iterate(0.1, 0.0, 0.001, lo, j)
+        _, _, kh = model.iterate(0.1, 0.0, 0.001, hi, j)
+        assert np.array_equal(kl[1:j], kh[1:j])
+        assert (kl[j], kh[j]) == (int(pt.impacts_low), int(pt.impacts_high))
+        pair = sorted((int(kl[j]), int(kh[j])))
+        kind = pt.kind.item()
+        if kind == "graze":
+            assert pair == [0, 1]
+        elif kind == "edge":
+            # impacts k+1 .. index land within rounding of the edge only where their
+            # bounces (e^k times the impact speed) are below the ulp: e = 0.001, k >= 5
+            assert pair[1] == int(pt.index) and pair[0] >= 1
+            assert pair[1] - pair[0] == 1 or 0.001 ** pair[0] < 1e-14
+        else:
+            assert pair[0] == model.SLIDING and pair[1] >= 0
+        assert pt.itinerary_low.item() != pt.itinerary_high.item()
+
+
+def test_long_run_itinerary_is_a_pattern_up_to_its_phase():
+    buf = np.zeros(40, np.int64)
+    halt = np.zeros(1, np.int64)
+    # inside tongue 3 the long run is the word (3, 0^inf): two flights and a slide
+    lo, hi = sb.tongue(3, 0.001)
+    p = borders._long_run(0.001, 0.5 * (lo + hi), 0.1, 0.0, 100, 20, buf, halt)
+    assert p == 3 and list(buf[:3]) == [-1, 0, 0]
+    assert borders._run_text(p, buf) == "(3, 0^inf)"
+    assert borders._run_text(0, buf) == "not periodic within keep"
+
+
+@pytest.mark.parametrize("kw,name", [
+    ({"e": 0.1, "u": 0.5}, "exactly one"), ({"e": [0.1, 0.2], "u": [0.5, 0.6]}, "exactly one"),
+    ({"e": 0.1, "u": [0.5, -1.0]}, "u"), ({"e": 1.5, "u": [0.5, 0.6]}, "e"),
+    ({"e": 0.1, "u": [0.5, 0.6], "keep": 1}, "keep"), ({"e": 0.1, "u": [0.5, 0.6], "transient": -1}, "transient"),
+    ({"e": 0.1, "u": [0.5, 0.6], "y0": -1.0}, "y0"),
+])
+def test_bifurcations_bad_input(kw, name):
+    with pytest.raises(ValueError, match=name):
+        sb.bifurcations(**kw)
+
+
+def test_report_measures_on_known_answers():
+    # the tongue window at a coarse grid: every (n, 0^inf) border point within 1e-14
+    (e0, e1), (u0, u1) = borders.TONGUE_WINDOW
+    pts = sb.border_points(e=(e0, e1, 30), u=(u0, u1, 120), max_iter=200)
+    t = borders.tongue_distances(pts)
+    assert t["points"] > 30 and t["wrong_kind"] == 0 and t["max_relative"] <= 1e-14
+    assert t["kinds"][1] == {"chatter"} and t["kinds"][5] == {"graze", "chatter"}
+    # a point moved off its curve by 1e-9 is measured as such
+    moved = pts.copy(deep=True)
+    i = int(np.flatnonzero(moved.word_low.values == "(3, 0^inf)")[0])
+    moved["u"].values[i] *= 1 + 1e-9
+    assert borders.tongue_distances(moved)["max_relative"] > 5e-10
+    assert borders.above_no_sliding_curve(pts) == 0
+    moved["u"].values[i] = 10.0
+    assert borders.above_no_sliding_curve(moved) == 1
+    ds = sb.scan(**FIG5A)
+    share, near = borders.side_agreement(sb.border_points(ds), ds)
+    assert near > 100 and 0.8 < share <= 1.0

@@ -73,7 +73,7 @@ from .plane import (
     tongue_mask,
 )
 from .plane import scan as _scan_function
-from .borders import border_points, itinerary, word_table
+from .borders import bifurcations, border_points, itinerary, word_table
 from .regions import (
     BorderArc,
     BorderGraph,
@@ -130,6 +130,7 @@ __all__ = [
     "UncertaintyDimension",
     "Word",
     "__version__",
+    "bifurcations",
     "border_dimension_estimates",
     "border_points",
     "boundary",

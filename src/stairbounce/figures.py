@@ -66,6 +66,8 @@ class Settings:
     border_dimension: Path | None = None
     # replace existing files that are not from an earlier run into this folder
     overwrite: bool = False
+    # draw the exact borders (stairbounce.border_points) over Figs. 4 and 5a-e
+    borders: bool = False
 
     def px(self, n):
         """A pixel count of the default set, scaled (at least 16)."""
@@ -77,7 +79,10 @@ class Settings:
 
     def record(self):
         """The settings as they go into the manifest (paths as text)."""
-        return {"fmt": self.fmt, "dpi": self.dpi, "scale": self.scale, "max_iter": self.max_iter}
+        out = {"fmt": self.fmt, "dpi": self.dpi, "scale": self.scale, "max_iter": self.max_iter}
+        if self.borders:
+            out["borders"] = True
+        return out
 
 
 VERDICTS = ("agrees", "differs", "not comparable")
@@ -458,6 +463,64 @@ def fig3(s: Settings) -> Result:
                   {"n_max": n_max}, caption=caption)
 
 
+def _draw_borders(settings, ds, ax, label):
+    """With ``settings.borders``: the exact borders of the scan ``ds``
+    (stairbounce.border_points, located to rounding) over its picture,
+    coloured by kind; returns a caption sentence ("" without)."""
+    if not settings.borders:
+        return ""
+    from .borders import border_points
+    from .plot import plot_borders
+
+    settings.note(f"{label}: exact borders")
+    pts = border_points(ds)
+    plot_borders(pts, ax=ax, title=ax.get_title(), legend="lower left")
+    return (f" Dots: the {pts.sizes['point']} borders between neighbouring pixels located to "
+            f"rounding (stairbounce.border_points), coloured by their event (graze, edge, chatter).")
+
+
+def _border_rows(s, ds):
+    """Report rows of the exact borders (stairbounce.borders): the tongue
+    borders against Theorem 3.1, none above Corollary 2.1, and the pixel words
+    against the words on their side of the nearest border point."""
+    from .borders import (TONGUE_WINDOW, above_no_sliding_curve, border_points,
+                          side_agreement, tongue_distances)
+
+    s.note("fig4: exact borders")
+    (e0, e1), (u0, u1) = TONGUE_WINDOW
+    tongues = border_points(e=(e0, e1, s.px(60)), u=(u0, u1, s.px(240)), max_iter=s.max_iter)
+    t = tongue_distances(tongues, 8)
+    both = all(t["kinds"].get(n) == ({"chatter"} if n == 1 else {"graze", "chatter"})
+               for n in range(1, 9))
+    ok = t["points"] > 0 and t["wrong_kind"] == 0 and both and t["max_relative"] <= 1e-14
+    sliding = border_points(ds, outcome="sliding")
+    words = border_points(ds)
+    above = above_no_sliding_curve(sliding) + above_no_sliding_curve(words)
+    share, near = side_agreement(words, ds)
+    return [
+        Row("tongue borders located to rounding (Theorem 3.1, n = 1..8)",
+            "(n, 0^inf) iff (n-1)/2 < u^2 <= n/2 ((1-e)/(1+e))^2",
+            f"{t['points']} border points of the words (n, 0^inf): largest relative distance "
+            f"to the graze curve u^2 = (n-1)/2 (lower) or the chatter curve (upper) "
+            f"{t['max_relative']:.1e}; {t['wrong_kind']} with another event",
+            verdict="agrees" if ok else "differs",
+            why=("every point within 1e-14 of its curve, graze below and chatter above"
+                 if ok else "a point farther than 1e-14, of another kind, or a curve not found")),
+        Row("no border of the sliding region above Corollary 2.1",
+            "u >= (1-e)/(2 sqrt(2e)): no sliding solutions",
+            f"{above} of {sliding.sizes['point']} crossings of the sliding region's border and "
+            f"{words.sizes['point']} word borders located to rounding lie above the curve",
+            verdict="agrees" if above == 0 else "differs",
+            why="none" if above == 0 else f"{above} points"),
+        Row("pixel words against the exact borders", "(not in the paper)",
+            f"{100 * share:.1f}% of the {near} pixel centres within half a pixel of a border "
+            f"point have the word of their side of it",
+            verdict="agrees" if share >= 0.9 else "differs",
+            why="at least 90% asked: the rest sit next to a region narrower than a pixel, "
+                "which the grid does not sample"),
+    ]
+
+
 def _key_caption(s):
     return (f"Colours: one fixed scale shared by Figs. 4 and 5a-e, word length 1 (black, the "
             f"tongues), 2, 3, 4, 5, 6-7, 8-10, 11-15, ... (the explorer's classes); white: no "
@@ -477,6 +540,7 @@ def fig4(s: Settings) -> Result:
     fig, ax = _subplots(s, figsize=(8.5, 6))
     plot_scan(ds, field="word_length", ax=ax, overlay=("tongues", "bound"),
               title=f"Fig. 4: word length of the periodic sliding solution ({n_e} x {n_u} px)")
+    exact = _draw_borders(s, ds, ax, "fig4")
     fig.tight_layout()
     E, U = np.meshgrid(ds.e.values, ds.u.values)
     wl1 = ds.word_length.values == 1
@@ -496,12 +560,13 @@ def fig4(s: Settings) -> Result:
             f"{int(above.sum())} sliding pixels above the curve",
             verdict="agrees" if above.sum() == 0 else "differs",
             why="none" if above.sum() == 0 else f"{int(above.sum())} pixels"),
+        *_border_rows(s, ds),
     ]
     caption = (f"Every pixel centre of the paper's window [0, 1] x [0, 1.5] on the paper's "
                f"{500} x {350} grid (here {n_e} x {n_u}), iterated from (1, 0) as in the paper, "
                f"coloured by the length of the word of its periodic sliding solution "
                f"({100 * sliding.mean():.1f}% of pixels have one). {_key_caption(s)} Grey "
-               f"dashed: the Corollary 2.1 curve.")
+               f"dashed: the Corollary 2.1 curve.{exact}")
     return Result("fig4", "The fractal pattern in the (e, u) plane", [_save(fig, s, "fig4")], rows,
                   {"e": e, "u": u, "size": [n_e, n_u], "max_iter": s.max_iter}, caption=caption)
 
@@ -567,6 +632,7 @@ def _blowup(name):
         fig, ax = _subplots(s, figsize=(7, 6.2))
         plot_scan(ds, field="word_length", ax=ax, overlay=("tongues",), legend="below",
                   title=f"Fig. 5{letter}: [{e[0]:g}, {e[1]:g}] x [{u[0]:g}, {u[1]:g}]")
+        exact = _draw_borders(s, ds, ax, name)
         fig.tight_layout()
         sliding = ds.status.values == 0
         lengths = np.unique(ds.word_length.values[sliding])
@@ -599,7 +665,7 @@ def _blowup(name):
                     f"(pixel {pixel:.4f}); the paper gives no scale factor"))
             rows.append(_band_similarity_row(s))
         caption = (f"Blow-up {letter}) of Fig. 4: the paper's window [{e[0]:g}, {e[1]:g}] x "
-                   f"[{u[0]:g}, {u[1]:g}], {n} x {n} px (ours). {_key_caption(s)}")
+                   f"[{u[0]:g}, {u[1]:g}], {n} x {n} px (ours). {_key_caption(s)}{exact}")
         return Result(name, f"Blow-up {letter})", [_save(fig, s, name)], rows,
                       {"e": e, "u": u, "size": [n, n], "max_iter": s.max_iter}, caption=caption)
 
@@ -753,6 +819,22 @@ def _orbits(settings, e, u_window, n):
     )
 
 
+def _bifurcation_marks(settings, e, u_window, n, ax):
+    """Mark the discontinuity-induced bifurcations (sb.bifurcations, located to
+    rounding and labelled graze / edge / chatter) found between ``n`` values of
+    u on an orbit diagram's axes; returns their count."""
+    from .borders import bifurcations
+    from .plot import plot_bifurcations
+
+    settings.note(f"bifurcations e = {e:g}, u in [{u_window[0]:g}, {u_window[1]:g}], {n} values")
+    b = _cached(settings, "bifurcations", {"e": e, "u": list(u_window), "n": n, "y0": 0.1,
+                                           "v0": 0.0, "transient": 2000, "keep": 200},
+                lambda: bifurcations(e, np.linspace(u_window[0], u_window[1], n), y0=0.1, v0=0.0,
+                                     transient=2000, keep=200))
+    plot_bifurcations(b, ax=ax)
+    return b.sizes["bifurcation"]
+
+
 def _distinct(row):
     return np.unique(np.round(row, 9)).size
 
@@ -768,6 +850,7 @@ def fig8(s: Settings) -> Result:
     # left of the first grazing at u = sqrt(1/2) there is one branch, at y = 1:
     # the legend goes above it, clear of the bifurcation and of the tongue numbers
     plot_orbit_diagram(ds, ax=ax, overlay=("tongues",), legend="center left")
+    _bifurcation_marks(s, e, window, s.px(500), ax)
     ax.set_title(f"Fig. 8: orbit diagram, e = {e} (iterates 2001-2200 from (0.1, 0))")
     fig.tight_layout()
     counts, ok = [], True
@@ -789,7 +872,10 @@ def fig8(s: Settings) -> Result:
                f"cells coloured by how many iterates fall in each (white: none). e = {e} is the "
                f"paper's. Dashed/dotted lines: where tongue n of Theorem 3.1 begins "
                f"(u = sqrt((n-1)/2), a grazing bifurcation) and ends; at this e the two nearly "
-               f"coincide; each tongue is numbered at its middle.")
+               f"coincide; each tongue is numbered at its middle. Ticks at the bottom: the "
+               f"discontinuity-induced bifurcations found between {s.px(500)} values of u "
+               f"(stairbounce.bifurcations: where the itinerary of iterates 2001-2200 changes, "
+               f"located to rounding), coloured by their event.")
     return Result("fig8", "Orbit diagram, e = 0.001", [_save(fig, s, "fig8")], rows,
                   {"e": e, "u": window, "n": n, "y0": 0.1, "v0": 0.0, "transient": 2000,
                    "keep": 200}, caption=caption)
@@ -822,6 +908,7 @@ def fig9(s: Settings) -> Result:
                                range=(1.0 - 0.1 * unit, 1.0 + 1.3 * unit),
                                label=f"(y - 1) / $10^{{-{2 * k}}}$")
             ax.set_title(f"zoom {k}: u in [{window[0]:g}, {window[1]:g}]", fontsize="medium")
+        _bifurcation_marks(s, e, window, s.px(300), ax)
         images += ax.get_images()
         if k < len(FIG9_WINDOWS) - 1:
             nxt = FIG9_WINDOWS[k + 1]

@@ -19,6 +19,7 @@ def figures(
     dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
     scale: float = typer.Option(1.0, "--scale", help="Multiply every grid's pixel count by this (0.01-16)."),
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps before a point counts as non-sliding (>= 1)."),
+    borders: bool = typer.Option(False, "--borders", help="Draw the exact borders (located to rounding, coloured by kind) over Figs. 4 and 5a-e."),
     no_cache: bool = typer.Option(False, "--no-cache", help="Recompute the scans instead of reading the cache."),
     cache_dir: Path = typer.Option(None, "--cache-dir", help="Where scans are cached (default ~/.cache/stairbounce)."),
     force: bool = typer.Option(
@@ -45,6 +46,7 @@ def figures(
     cache = None if no_cache else _usable_cache(cache_dir or default_cache_dir())
     settings = Settings(
         out=out, fmt=fmt, dpi=dpi, scale=scale, max_iter=max_iter, cache_dir=cache, overwrite=force,
+        borders=borders,
     )
     check_outputs(settings, names)  # before any figure: nothing replaced unasked
     console = Console(stderr=True)

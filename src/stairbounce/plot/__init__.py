@@ -11,6 +11,7 @@ computed by                    drawn by
 =============================  ==============================================
 ``sb.scan``                    :func:`plot_scan` (Figs. 3-5)
 ``sb.orbit_diagram``           :func:`plot_orbit_diagram` (Figs. 8, 9)
+``sb.bifurcations``            :func:`plot_bifurcations` (marks on them)
 ``sb.perimeter_dimension``     :func:`plot_box_dimension` (Figs. 6, 7),
                                :func:`plot_box_counts`, :func:`plot_border`
 ``sb.uncertainty_dimension``   :func:`plot_uncertainty`
@@ -27,7 +28,7 @@ from .._compat import register_alias as _register_alias
 from .borders import plot_borders
 from .fractal import plot_border, plot_box_counts, plot_box_dimension, plot_uncertainty
 from .motion import plot_motion, plot_motion_cut
-from .orbits import plot_orbit_diagram
+from .orbits import plot_bifurcations, plot_orbit_diagram
 from .plane import plot_scan
 from .tongues import plot_tongues
 from .trajectory import animate_trajectory, plot_poincare_section, plot_trajectory
@@ -37,6 +38,7 @@ scan = _register_alias(__name__ + ".scan", __name__ + ".plane", plot_scan, "scan
 
 __all__ = [
     "animate_trajectory",
+    "plot_bifurcations",
     "plot_border",
     "plot_borders",
     "plot_box_counts",

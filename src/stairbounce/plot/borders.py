@@ -66,6 +66,9 @@ def plot_borders(points, ax=None, scan=None, kinds=_KINDS, size=None, legend="up
     elif scan is None:
         ax.set_title(title)
     if legend is not None:
+        earlier = ax.get_legend()
+        if earlier is not None:  # the scan's overlay legend stays
+            ax.add_artist(earlier)
         ax.legend(loc=legend, markerscale=max(1.0, 6.0 / max(size, 0.1)), fontsize="small",
                   title="event at the step's edge", title_fontsize="small")
     return ax

@@ -204,3 +204,41 @@ def _draw_tongue_lines(ax, ds, varied, legend):
                   fontsize="x-small", frameon=False)
     else:
         ax.legend(handles=handles, loc=legend, fontsize="x-small", framealpha=0.85)
+
+
+def plot_bifurcations(points, ax=None, height=0.05, legend="lower right"):
+    """plot_bifurcations(points, ax=None, height=0.05, legend="lower right") -> Axes
+
+    Mark the bifurcations of :func:`stairbounce.bifurcations` on an orbit
+    diagram: a short tick at the bottom of the axes at each parameter value
+    (``height`` in axes fraction), coloured by kind (graze, edge, chatter;
+    the colours of :func:`plot_borders`), with a legend of the counts.
+    """
+    import matplotlib.pyplot as plt
+
+    from .borders import KIND_COLORS
+
+    if not hasattr(points, "data_vars") or "kind" not in points or "value" not in points:
+        raise ValueError("points must be a Dataset from stairbounce.bifurcations")
+    if ax is None:
+        _, ax = plt.subplots(figsize=(10, 5.5))
+    kind = points["kind"].values
+    value = points["value"].values
+    trans = ax.get_xaxis_transform()
+    lo, hi = sorted(ax.get_xlim())
+    for k, color in KIND_COLORS.items():
+        x = value[(kind == k) & (value >= lo) & (value <= hi)]
+        if x.size:
+            ax.vlines(x, 0.0, height, transform=trans, colors=color, lw=0.7, zorder=4,
+                      label=f"{k} bifurcation ({x.size})")
+    if legend is not None and value.size:
+        handles = [h for h in ax.get_legend_handles_labels()[0]]
+        labels = ax.get_legend_handles_labels()[1]
+        picked = [(h, lab) for h, lab in zip(handles, labels) if "bifurcation" in lab]
+        if picked:
+            from matplotlib.legend import Legend
+
+            ax.add_artist(Legend(ax, [h for h, _ in picked], [lab for _, lab in picked],
+                                 loc=legend, fontsize="x-small", title="exact, located to rounding",
+                                 title_fontsize="x-small"))
+    return ax
