@@ -399,3 +399,32 @@ def test_fig5c_report_row_on_exact_borders(tmp_path):
     row = figures._band_similarity_row(figures.Settings(out=tmp_path, scale=0.25))
     assert row.verdict in figures.VERDICTS
     assert "tip ratios" in row.measured and "no constant scale factor" in row.why
+
+
+def test_regions_seeded_from_finer_border_points():
+    # a coarse seed scan (8 x 8) misses most words; i21's border points of a 32 x 32 scan
+    # seed the rest, each traced from the word's end of a bisected bracket
+    e, u = (0.08, 0.12), (0.98, 1.02)
+    coarse = sb.window_regions(e, u, resolution=8)
+    bp = sb.border_points((*e, 32), (*u, 32))
+    seeded = sb.window_regions(e, u, resolution=8, points=bp)
+    fine = sb.window_regions(e, u, resolution=32)
+    words = {r.word.letters for r in seeded if r.complete}
+    assert {r.word.letters for r in coarse} < words | {r.word.letters for r in coarse}
+    assert len(words) > len({r.word.letters for r in coarse})
+    # no component twice, and nothing outside the sliding set: the total lies below the
+    # pixels touching a sliding pixel at 512 x 512
+    areas = [c.area for r in seeded for c in r.components]
+    assert len(set(np.round(areas, 15))) == len(areas)
+    res = 512
+    es, us = regions._grid(e, u, res)
+    _, _, steps = regions._label_grid(es, us, 1000, 1.0, 0.0)
+    _, hi = _pixel_area(steps > 0, (0.04 / res) ** 2)
+    assert sum(areas) <= hi
+    # a word traced both ways has the same area
+    by_word = {r.word.letters: r.area for r in fine if r.complete}
+    for r in seeded:
+        if r.complete and r.word.letters in by_word and len(r.components) == 1:
+            assert r.area == pytest.approx(by_word[r.word.letters], rel=1e-9)
+    with pytest.raises(ValueError, match="points must be"):
+        sb.window_regions(e, u, resolution=8, points=42)

@@ -309,7 +309,9 @@ def _ulps(x):
 
 
 def _solve2(a, b, c, d, r0, r1):
-    """Solve [[a, b], [c, d]] z = (r0, r1); None when singular."""
+    """Solve [[a, b], [c, d]] z = (r0, r1); None when singular (Python floats:
+    an overflow is inf, quietly, and then rejected by the caller)."""
+    a, b, c, d, r0, r1 = float(a), float(b), float(c), float(d), float(r0), float(r1)
     det = a * d - b * c
     if not det or not math.isfinite(det):
         return None
@@ -804,13 +806,16 @@ def _on_curves(x, slot, curves, tol):
             L2 = (AB ** 2).sum(1)
             tau = np.clip(((x - A) * AB).sum(1) / np.where(L2 > 0, L2, 1), 0, 1)
             C = A + tau[:, None] * AB
-            if np.hypot(C[:, 0] - x[0], C[:, 1] - x[1]).min() <= tol:
+            # within the chord's sagitta (a turn of at most _MAX_TURN per step)
+            if np.any(np.hypot(C[:, 0] - x[0], C[:, 1] - x[1]) <= np.maximum(tol, 0.05 * np.sqrt(L2))):
                 return True
     return False
 
 
-def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20):
-    """Every component of the region of itinerary ``ks`` seen by the pixel mask."""
+def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=()):
+    """Every component of the region of itinerary ``ks`` seen by the pixel mask,
+    and those through the border points ``seeds`` (points of the region at
+    its border, e.g. the word's end of a bisected bracket of a finer scan)."""
     F = _Margins(ks, (e[0], e[1], u[0], u[1]), y0, v0)
     scale = max(e[1] - e[0], u[1] - u[0])
     curves, fill = [], np.zeros_like(mask)
@@ -836,6 +841,21 @@ def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20):
         curves.append(curve)
         P = np.concatenate([np.array(a.pts[:-1]) for a in curve] + [np.array(curve[0].pts[:1])])
         fill ^= _fill(P, es, us)
+    n2 = 2 * F.n
+    for x in seeds:
+        x = np.asarray(x, dtype=float)
+        g = F(x)[0]
+        if not F.inside(g):  # the margins disagree with the map there: not traced
+            failures += 1
+            continue
+        slot = int(np.argmin(np.where(np.isfinite(g[:n2]), np.abs(g[:n2]), np.inf)))
+        if _on_curves(x, slot, curves, 1e-9 * scale):
+            continue
+        curve = _walk(F, slot, x, scale)
+        if curve is None:
+            failures += 1
+            continue
+        curves.append(curve)
     text = word.format(ascii=True)
     outer, holes = [], []
     for curve in curves:
@@ -913,33 +933,65 @@ def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=256, max
     return Region(w, e, u, comps, complete=failures == 0, failures=failures)
 
 
-def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, progress=None):
-    """window_regions(e, u, *, resolution=256, max_iter=1000) -> list[Region]
+def _point_seeds(points, e, u, y0, v0, max_iter):
+    """Border points (:func:`stairbounce.border_points`) as seeds: for each end of
+    each bracket inside the window whose outcome slides, ``{(hash1, hash2):
+    (itinerary, [points])}``."""
+    seeds = {}
+    buf = np.empty(max_iter, dtype=np.int64)
+    pe, pu, w = (np.asarray(points[k].values, float) for k in ("e", "u", "width"))
+    along_u = np.asarray(points["axis"].values).astype(str) == "u"
+    for x0, y0_, d, au in zip(pe, pu, w, along_u):
+        for x in ((x0, y0_), (x0, y0_ + d) if au else (x0 + d, y0_)):
+            if not (e[0] <= x[0] <= e[1] and u[0] <= x[1] <= u[1]):
+                continue
+            n = _itinerary_of(x[0], x[1], y0, v0, max_iter, buf)
+            if n <= 0:
+                continue
+            key = tuple(int(h) for h in _hash_itinerary(buf, n))
+            seeds.setdefault(key, (buf[:n].copy(), []))[1].append(x)
+    return seeds
+
+
+def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, points=None, progress=None):
+    """window_regions(e, u, *, resolution=256, max_iter=1000, points=None) -> list[Region]
 
     Every word's region in a window (the words seen by a scan of
-    ``resolution`` x ``resolution`` pixel centres), largest area first; see
-    :func:`word_region` for the method and what it can miss.
+    ``resolution`` x ``resolution`` pixel centres, and, with ``points`` (a
+    :func:`stairbounce.border_points` Dataset, e.g. of a finer scan), the
+    words on either side of those border points, each traced from there),
+    largest area first; see :func:`word_region` for the method and what it
+    can miss.
     """
     e, u = _check_window(e, u)
     resolution = check_count("resolution", resolution, 2, 8192)
     max_iter = check_count("max_iter", max_iter, 1)
+    y0, v0 = float(y0), float(v0)
+    if points is not None and not all(k in getattr(points, "variables", ()) for k in ("e", "u", "width", "axis")):
+        raise ValueError("points must be a Dataset from border_points (variables e, u, width, axis)")
     es, us = _grid(e, u, resolution)
-    h1, h2, steps = _label_grid(es, us, max_iter, float(y0), float(v0))
+    h1, h2, steps = _label_grid(es, us, max_iter, y0, v0)
     keys, first = np.unique(np.stack([h1.ravel(), h2.ravel()], 1), axis=0, return_index=True)
-    out = []
+    seeds = _point_seeds(points, e, u, y0, v0, max_iter) if points is not None else {}
+    todo = {}
     buf = np.empty(max_iter, dtype=np.int64)
     for idx, (a, b) in zip(first, keys):
         if a == 0:
             continue
         i, j = divmod(int(idx), es.size)
-        n = _itinerary_of(es[j], us[i], float(y0), float(v0), max_iter, buf)
-        ks = buf[:n].copy()
+        n = _itinerary_of(es[j], us[i], y0, v0, max_iter, buf)
+        todo[(int(a), int(b))] = buf[:n].copy()
+    for key, (ks, _) in seeds.items():
+        todo.setdefault(key, ks)
+    out = []
+    for key, ks in todo.items():
         w = word_from_impacts(ks)
-        mask = (h1 == a) & (h2 == b)
-        comps, failures = _trace_word(ks, w, e, u, es, us, mask, float(y0), float(v0))
+        mask = (h1 == np.uint64(key[0])) & (h2 == np.uint64(key[1]))
+        comps, failures = _trace_word(ks, w, e, u, es, us, mask, y0, v0,
+                                      seeds=seeds.get(key, (None, ()))[1])
         out.append(Region(w, e, u, comps, complete=failures == 0, failures=failures))
         if progress is not None:
-            progress(len(out), keys.shape[0])
+            progress(len(out), len(todo))
     out.sort(key=lambda r: -r.area)
     return out
 
