@@ -571,3 +571,29 @@ def test_report_measures_on_known_answers():
     ds = sb.scan(**FIG5A)
     share, near = borders.side_agreement(sb.border_points(ds), ds)
     assert near > 100 and 0.8 < share <= 1.0
+
+
+def test_plot_borders_and_bifurcations_draw_one_mark_per_point(fig5a, fig8_bifurcations):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ds = sb.scan(**FIG5A)
+    ax = sb.plot.plot_borders(fig5a, scan=ds)
+    drawn = {c.get_label(): len(c.get_offsets()) for c in ax.collections}
+    for kind in borders.KINDS:
+        n = int((fig5a.kind.values == kind).sum())
+        assert drawn[f"{kind} ({n})"] == n
+    assert ax.images[0].get_alpha() == 0.3
+    with pytest.raises(ValueError, match="kinds"):
+        sb.plot.plot_borders(fig5a, kinds=("slide",))
+    plt.close("all")
+    fig, ax = plt.subplots()
+    ax.set_xlim(0.3, 2.0)
+    sb.plot.plot_bifurcations(fig8_bifurcations, ax=ax)
+    marks = sum(len(c.get_segments()) for c in ax.collections)
+    assert marks == fig8_bifurcations.sizes["bifurcation"]
+    with pytest.raises(ValueError, match="bifurcations"):
+        sb.plot.plot_bifurcations(fig5a, ax=ax)
+    plt.close("all")

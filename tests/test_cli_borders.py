@@ -114,3 +114,33 @@ def test_borders_bad_outcome(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     code, _, err = run(["borders", "--outcome", "status", "--out", "x.nc"], capsys)
     assert code == 2 and "--outcome must be word or sliding" in err and len(err.strip().splitlines()) == 1
+
+
+def test_itinerary_prints_the_library_margins(capsys):
+    import csv
+    import io
+
+    code, out, err = run(["itinerary", "--e", "0.02", "--u", "0.7", "--csv"], capsys)
+    assert code == 0, err
+    ref = sb.itinerary(0.02, 0.7)
+    rows = list(csv.DictReader(io.StringIO(out)))
+    assert [int(r["impacts"]) for r in rows] == ref.impacts.values.tolist()
+    for name in ("contact", "next_impact", "accumulation"):
+        got = np.array([float(r[name]) for r in rows])
+        np.testing.assert_array_equal(got, ref[name].values)
+    code, out, err = run(["itinerary", "--e", "0.02", "--u", "0.7"], capsys)
+    assert code == 0 and "slides on step 4" in out
+
+
+def test_itinerary_of_a_physical_staircase(capsys):
+    a, b, g, speed = 0.17, 0.29, 9.81, 1.5
+    code, out, err = run(["itinerary", "--e", "0.1", "--speed", str(speed), "--step-height", str(a),
+                          "--step-length", str(b), "--csv"], capsys)
+    assert code == 0, err
+    ref = sb.itinerary(0.1, speed * math.sqrt(a / g) / b)
+    assert len(out.strip().splitlines()) == ref.sizes["step"] + 1
+    for args, message in [(["--e", "1.5", "--u", "1"], "e (restitution"),
+                          (["--e", "0.1"], "give the horizontal speed"),
+                          (["--e", "0.1", "--u", "1", "--max-iter", "0"], "max_iter")]:
+        code, _, err = run(["itinerary", *args], capsys)
+        assert code == 2 and message in err and len(err.strip().splitlines()) == 1

@@ -337,25 +337,14 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt, secant):
                 xc = m
             else:
                 xo = m
-    # the first step where the two ends differ, and the event there
-    ec, uc = _at(xc, f, axis)
-    eo, uo = _at(xo, f, axis)
-    Tc, rc = _constants(ec, uc)
-    To, ro = _constants(eo, uo)
-    yc, vc, yo, vo = 1.0, 0.0, 1.0, 0.0
-    j = 0
-    kc = ko = 0
-    for n in range(pc):
-        yc, vc, kc = _step(yc, vc, ec, Tc, rc)
-        yo, vo, ko = _step(yo, vo, eo, To, ro)
-        if kc != ko:
-            j = n + 1
-            break
+    j, kc, ko, yo, vo = _first_difference(xc, xo, f, axis, pc)
     # the other end's outcome: its period, or 0 when it does not slide within max_iter
     po = 0
     if ko == SLIDING:
         po = j
     else:
+        eo, uo = _at(xo, f, axis)
+        To, ro = _constants(eo, uo)
         for n in range(j, max_iter):
             if (n & 0xFFFF) == 0 and halted(halt):  # Ctrl-C on a long max_iter
                 break
@@ -363,6 +352,34 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt, secant):
             if k == SLIDING:
                 po = n + 1
                 break
+    _write_point(out, xc, xo, j, kc, ko, pc, po, trials, steps)
+    return True
+
+
+@njit(cache=True)
+def _first_difference(xc, xo, f, axis, pc):
+    """Follow the orbits of ``(1, 0)`` at both ends (``xc`` slides at step
+    ``pc``, ``xo`` has another outcome) to the first step ``j`` whose impact
+    numbers ``kc``, ``ko`` differ; returns ``(j, kc, ko, y, v)`` with the
+    state of ``xo`` after step ``j``."""
+    ec, uc = _at(xc, f, axis)
+    eo, uo = _at(xo, f, axis)
+    Tc, rc = _constants(ec, uc)
+    To, ro = _constants(eo, uo)
+    yc, vc, yo, vo = 1.0, 0.0, 1.0, 0.0
+    kc = ko = 0
+    for n in range(pc):
+        yc, vc, kc = _step(yc, vc, ec, Tc, rc)
+        yo, vo, ko = _step(yo, vo, eo, To, ro)
+        if kc != ko:
+            return n + 1, kc, ko, yo, vo
+    return 0, kc, ko, yo, vo
+
+
+@njit(cache=True)
+def _write_point(out, xc, xo, j, kc, ko, pc, po, trials, steps):
+    """One row of the border kernels (layout in :func:`_bisect_pair`), the
+    sides ordered low/high along the axis."""
     kind, index = _event_of(kc, ko)
     low_is_c = xc < xo
     out[0] = min(xc, xo)
@@ -376,7 +393,6 @@ def _bisect_pair(xa, xb, f, axis, pa, pb, max_iter, ref, out, halt, secant):
     out[8] = po if low_is_c else pc
     out[9] = trials
     out[10] = steps
-    return True
 
 
 _OUT = 11
@@ -427,32 +443,8 @@ def _bisect_sliding_pair(xa, xb, f, axis, pa, pb, max_iter, out, halt):
             xc, pc = m, pm
         else:
             xo = m
-    ec, uc = _at(xc, f, axis)
-    eo, uo = _at(xo, f, axis)
-    Tc, rc = _constants(ec, uc)
-    To, ro = _constants(eo, uo)
-    yc, vc, yo, vo = 1.0, 0.0, 1.0, 0.0
-    j = 0
-    kc = ko = 0
-    for n in range(pc):
-        yc, vc, kc = _step(yc, vc, ec, Tc, rc)
-        yo, vo, ko = _step(yo, vo, eo, To, ro)
-        if kc != ko:
-            j = n + 1
-            break
-    kind, index = _event_of(kc, ko)
-    low_is_c = xc < xo
-    out[0] = min(xc, xo)
-    out[1] = abs(xo - xc)
-    out[2] = j
-    out[3] = kind
-    out[4] = index
-    out[5] = kc if low_is_c else ko
-    out[6] = ko if low_is_c else kc
-    out[7] = pc if low_is_c else 0
-    out[8] = 0 if low_is_c else pc
-    out[9] = trials
-    out[10] = steps
+    j, kc, ko, _, _ = _first_difference(xc, xo, f, axis, pc)
+    _write_point(out, xc, xo, j, kc, ko, pc, 0, trials, steps)
     return True
 
 

@@ -189,6 +189,48 @@ def words_(
                    f"chatter {int(r.chatter)}")
 
 
+@app.command("itinerary")
+def itinerary_(
+    e: float = typer.Option(..., "--e", help="Restitution coefficient, in [0, 1)."),
+    u: float = typer.Option(None, "--u", help="Horizontal speed in normalised units (u > 0). Or --speed with "
+                            "--step-height, --step-length."),
+    speed: float = st.speed_option(),
+    step_height: float = st.step_height_option(),
+    step_length: float = st.step_length_option(),
+    g: float = st.g_option(),
+    max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
+    y0: float = typer.Option(1.0, "--y0", help="Initial height above the step's floor (>= 0)."),
+    v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
+    as_csv: bool = typer.Option(False, "--csv", help="Write CSV to stdout instead of a table."),
+):
+    """Print the impact number of every step up to the slide, with the signed time margins
+    (T - t; >= 0: the event happens on the step) of the first contact, the next impact and
+    the accumulation point: the events whose crossing of 0 makes a border."""
+    import csv
+    import sys
+
+    from ..borders import itinerary
+
+    u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
+    it = itinerary(e, u, max_iter=max_iter, y0=y0, v0=v0)
+    cols = ("impacts", "contact", "next_impact", "accumulation")
+    rows = zip(it.step.values, *(it[c].values for c in cols))
+    if as_csv:
+        w = csv.writer(sys.stdout, lineterminator="\n")
+        w.writerow(["step", *cols])
+        for n, k, *m in rows:
+            w.writerow([int(n), int(k), *(repr(float(x)) for x in m)])
+        return
+    if stairs is not None:
+        typer.echo(st.describe(u, stairs))
+    typer.echo(f"{'step':>6}  {'impacts':>8}  {'contact':>14}  {'next impact':>14}  {'accumulation':>14}")
+    for n, k, *m in rows:
+        typer.echo(f"{int(n):6d}  {'slides' if k == -1 else int(k):>8}  "
+                   + "  ".join(f"{x:14.6e}" for x in m))
+    typer.echo(f"e = {e:g}, u = {u:g}: " + (f"slides on step {it.sizes['step']}" if it.attrs["slid"]
+                                         else f"no slide within {max_iter} steps"))
+
+
 def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force):
     """``words --regions``: the window's regions traced (stairbounce.regions) to GeoJSON or SVG."""
     from .. import regions as rg
