@@ -6,7 +6,7 @@ import sys
 import pytest
 
 CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "atlas",
-        "atlas_boxes", "nonsliding", "borders", "_io", "_interrupt"]
+        "atlas_boxes", "nonsliding", "borders", "regions", "_io", "_interrupt"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

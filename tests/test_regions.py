@@ -11,8 +11,6 @@ for the continuation.
 
 import json
 import math
-import subprocess
-import sys
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -341,13 +339,6 @@ def test_band_similarity_numbers():
 def test_bad_input(call, match):
     with pytest.raises(ValueError, match=match):
         call()
-
-
-def test_regions_module_imports_no_plotting_cli_or_web():
-    forbidden = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
-    code = f"import sys, stairbounce.regions; print([m for m in {forbidden!r} if m in sys.modules])"
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert r.stdout.strip() == "[]"
 
 
 def test_word_table_with_traced_regions():

@@ -50,10 +50,6 @@ __all__ = ["BorderArc", "Corner", "Region", "RegionComponent", "BorderGraph",
            "trace_border", "word_region", "window_regions", "border_graph",
            "regions_geojson", "regions_svg", "band_similarity"]
 
-# event kinds, in the order of i21's border tables
-KINDS = ("graze", "edge", "chatter", "window")
-_GRAZE, _EDGE, _CHATTER, _WINDOW = 0, 1, 2, 3
-
 # --------------------------------------------------------------------------- #
 # Compiled margins along a prescribed itinerary                                #
 # --------------------------------------------------------------------------- #
