@@ -808,6 +808,24 @@ def _on_curves(x, slot, curves, tol):
     return False
 
 
+def _closed(curve):
+    """The closed polygon (N x 2, first point repeated) of a curve of arcs."""
+    return np.concatenate([np.array(a.pts[:-1]) for a in curve] + [np.array(curve[0].pts[:1])])
+
+
+def _new_curve(F, x, slot, curves, scale):
+    """Walk the boundary through ``x`` (margin ``slot``) unless a traced curve
+    already passes there: the new curve (appended to ``curves``), None when
+    known, False when the walk failed."""
+    if _on_curves(x, slot, curves, 1e-9 * scale):
+        return None
+    curve = _walk(F, slot, x, scale)
+    if curve is None:
+        return False
+    curves.append(curve)
+    return curve
+
+
 def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=()):
     """Every component of the region of itinerary ``ks`` seen by the pixel mask,
     and those through the border points ``seeds`` (points of the region at
@@ -827,16 +845,11 @@ def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=())
         if c is None:
             failures += 1
             continue
-        x0, slot = c
-        if _on_curves(x0, slot, curves, 1e-9 * scale):
-            continue
-        curve = _walk(F, slot, x0, scale)
-        if curve is None:
+        curve = _new_curve(F, *c, curves, scale)
+        if curve is False:
             failures += 1
-            continue
-        curves.append(curve)
-        P = np.concatenate([np.array(a.pts[:-1]) for a in curve] + [np.array(curve[0].pts[:1])])
-        fill ^= _fill(P, es, us)
+        elif curve is not None:
+            fill ^= _fill(_closed(curve), es, us)
     n2 = 2 * F.n
     for x in seeds:
         x = np.asarray(x, dtype=float)
@@ -845,18 +858,12 @@ def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=())
             failures += 1
             continue
         slot = int(np.argmin(np.where(np.isfinite(g[:n2]), np.abs(g[:n2]), np.inf)))
-        if _on_curves(x, slot, curves, 1e-9 * scale):
-            continue
-        curve = _walk(F, slot, x, scale)
-        if curve is None:
-            failures += 1
-            continue
-        curves.append(curve)
+        failures += _new_curve(F, x, slot, curves, scale) is False
     text = word.format(ascii=True)
     outer, holes = [], []
     for curve in curves:
         A, err = _curve_area(curve)
-        P = np.concatenate([np.array(a.pts[:-1]) for a in curve] + [np.array(curve[0].pts[:1])])
+        P = _closed(curve)
         (outer if A > 0 else holes).append((A, err, curve, P))
     comps = []
     outer.sort(key=lambda t: t[0])
