@@ -800,10 +800,14 @@ def _on_curves(x, slot, curves, tol):
             A, B = P[:-1], P[1:]
             AB = B - A
             L2 = (AB ** 2).sum(1)
-            tau = np.clip(((x - A) * AB).sum(1) / np.where(L2 > 0, L2, 1), 0, 1)
+            raw = ((x - A) * AB).sum(1) / np.where(L2 > 0, L2, 1)
+            tau = np.clip(raw, 0, 1)
             C = A + tau[:, None] * AB
-            # within the chord's sagitta (a turn of at most _MAX_TURN per step)
-            if np.any(np.hypot(C[:, 0] - x[0], C[:, 1] - x[1]) <= np.maximum(tol, 0.05 * np.sqrt(L2))):
+            # beside a chord, within its sagitta (a turn of at most _MAX_TURN per step
+            # bends the curve at most 0.01 of the chord away from it); past its ends,
+            # within tol only (another piece of the same level set may start there)
+            near = np.where((raw > 0) & (raw < 1), np.maximum(tol, 0.015 * np.sqrt(L2)), tol)
+            if np.any(np.hypot(C[:, 0] - x[0], C[:, 1] - x[1]) <= near):
                 return True
     return False
 
