@@ -419,3 +419,15 @@ def test_regions_seeded_from_finer_border_points():
             assert r.area == pytest.approx(by_word[r.word.letters], rel=1e-9)
     with pytest.raises(ValueError, match="points must be"):
         sb.window_regions(e, u, resolution=8, points=42)
+
+
+def test_fig5e_regions_no_component_twice():
+    # the seeds of one component all land on its traced boundary: each component is
+    # walked once (an earlier version walked 7 of the 918 twice here)
+    regs = sb.window_regions(*FIG5E, resolution=128)
+    assert len(regs) > 800
+    for r in regs:
+        areas = [round(c.area, 16) for c in r.components]
+        assert len(set(areas)) == len(areas), r
+    assert sum(r.area for r in regs) < 0.025 ** 2
+    assert sum(not r.complete for r in regs) <= 0.02 * len(regs)
