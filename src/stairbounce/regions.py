@@ -48,7 +48,7 @@ from .symbolic import Word, parse_word, word_from_impacts
 
 __all__ = ["BorderArc", "Corner", "Region", "RegionComponent", "BorderGraph",
            "trace_border", "word_region", "window_regions", "border_graph",
-           "regions_geojson", "regions_svg", "band_similarity"]
+           "regions_geojson", "regions_svg", "write_regions", "band_similarity"]
 
 # --------------------------------------------------------------------------- #
 # Compiled margins along a prescribed itinerary                                #
