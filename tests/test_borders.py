@@ -597,3 +597,35 @@ def test_plot_borders_and_bifurcations_draw_one_mark_per_point(fig5a, fig8_bifur
     with pytest.raises(ValueError, match="bifurcations"):
         sb.plot.plot_bifurcations(fig5a, ax=ax)
     plt.close("all")
+
+
+def test_explorer_border_overlay_is_the_library_points():
+    from stairbounce.explorer import view as V
+
+    v = V.View(0.0, 0.3, 0.3, 0.7, 60, 50, 500, "word_length", ("borders",), None)
+    got = V.border_overlay(v)
+    ref = sb.border_points(e=(0.0, 0.3, 60), u=(0.3, 0.7, 50), max_iter=500)
+    assert got["e"] == ref.e.values.tolist() and got["kind"] == ref.kind.values.tolist()
+    assert got["word_low"] == ref.word_low.values.tolist()
+    assert V.parse_overlays("borders,tongues") == ("tongues", "borders")
+    assert V.View().overlays == ("tongues", "no_sliding")
+
+
+def test_figures_borders_option_draws_the_exact_borders(tmp_path, monkeypatch):
+    from stairbounce import figures as F
+
+    figs = {}
+    real = F._save
+
+    def keep(fig, settings, name):
+        figs[name] = fig
+        return real(fig, settings, name)
+
+    monkeypatch.setattr(F, "_save", keep)
+    settings = F.Settings(out=tmp_path, scale=0.1, dpi=30, borders=True)
+    (res,) = F.make_figures(settings, only=["fig5e"])
+    assert res.error is None and "located to rounding" in res.caption
+    labels = [c.get_label() for c in figs["fig5e"].axes[0].collections]
+    assert any(label.startswith("chatter (") for label in labels)
+    assert settings.record()["borders"] is True
+    assert "borders" not in F.Settings(out=tmp_path).record()

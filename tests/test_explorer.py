@@ -1167,3 +1167,33 @@ def test_back_and_forward_restore_the_view(explorer):
     assert app.e_window.value == "0:0.4" and app.color.value == "word_length"
     assert app.map_fig.x_range.start == 0.0 and app.map_fig.y_range.end == 1.1
     assert app.history_out.text.startswith("replace ?e=0:0.4&")
+
+
+def test_exact_borders_overlay_shows_the_views_border_points(explorer):
+    """Issue 21: the "exact borders" overlay draws stairbounce.border_points of the
+    view (hover: kind, step, the two words), coloured by kind; off by default."""
+    from stairbounce.plot.borders import KIND_COLORS
+
+    app, _ = explorer
+    assert "borders" not in app.view.overlays and app.border_src.data["e"] == []
+    app.overlays.value = ["borders"]
+    data = app.border_src.data
+    ref = V.border_overlay(app.view)
+    assert len(data["e"]) > 10 and data["e"] == ref["e"] and data["word_high"] == ref["word_high"]
+    assert data["color"] == [KIND_COLORS[k] for k in ref["kind"]]
+    assert [i.label.value for i in app.legend.items] == [_OVERLAY_LEGEND()["borders"]]
+    assert "overlays=borders" in app.history_out.text
+    app.overlays.value = []
+    assert app.border_src.data["e"] == []
+
+
+def test_png_export_draws_the_exact_borders_overlay():
+    from PIL import Image
+
+    from stairbounce.explorer.export import view_png
+
+    view = V.View(0.0, 0.3, 0.3, 0.7, 60, 50, max_iter=200, overlays=("tongues", "borders"))
+    ds = V.compute_view(view)
+    plain = view_png(ds, V.View(0.0, 0.3, 0.3, 0.7, 60, 50, max_iter=200, overlays=("tongues",)))
+    png = view_png(ds, view)
+    assert Image.open(io.BytesIO(png)).format == "PNG" and png != plain

@@ -63,6 +63,7 @@ from .view import (
     SLIDES_COLOR,
     U_LIMIT,
     View,
+    border_overlay,
     check_view,
     color_key,
     format_number,
@@ -105,8 +106,10 @@ _PREVIEW_SIDE = 300
 _PREVIEW_AFTER = 0.25
 
 _COLOR_OPTIONS = {menu: var for var, (menu, _, _) in FIELDS.items()}
-_OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bound, Cor. 2.1": "no_sliding"}
-_OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u = (1-e)/(2\u221a(2e)), Cor. 2.1"}
+_OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bound, Cor. 2.1": "no_sliding",
+                    "exact borders (graze, edge, chatter)": "borders"}
+_OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u = (1-e)/(2\u221a(2e)), Cor. 2.1",
+                   "borders": "exact borders: graze blue, edge orange, chatter red"}
 
 # milliseconds without wheel events after which a wheel zoom is taken as done
 ZOOM_SETTLE_MS = 150
@@ -287,9 +290,15 @@ class Explorer:
         tongues = fig.multi_line("xs", "ys", source=self.tongue_src, line_color="#7a7a7a", line_width=1)
         bound = fig.multi_line("xs", "ys", source=self.bound_src, line_color="#d62728", line_width=2,
                                line_dash="dashed")
+        self.border_src = ColumnDataSource(dict(e=[], u=[], kind=[], step=[], word_low=[],
+                                                word_high=[], color=[]))
+        borders = fig.scatter("e", "u", source=self.border_src, size=3, color="color", line_width=0)
+        fig.add_tools(HoverTool(renderers=[borders], tooltips=[
+            ("border", "@kind at step @step"), ("low side", "@word_low"), ("high side", "@word_high")]))
         self._overlay_items = {
             "tongues": LegendItem(label=_OVERLAY_LEGEND["tongues"], renderers=[tongues]),
             "no_sliding": LegendItem(label=_OVERLAY_LEGEND["no_sliding"], renderers=[bound]),
+            "borders": LegendItem(label=_OVERLAY_LEGEND["borders"], renderers=[borders]),
         }
         self.legend = Legend(items=[], orientation="horizontal", label_text_font_size="9pt",
                              border_line_alpha=0)
@@ -561,8 +570,20 @@ class Explorer:
         for name, src in (("tongues", self.tongue_src), ("no_sliding", self.bound_src)):
             xs, ys = curves[name] if name in view.overlays else ([], [])
             src.data = dict(xs=list(xs), ys=list(ys))
+        self._draw_borders(view)
         self.legend.items = [self._overlay_items[n] for n in OVERLAYS if n in view.overlays]
         self.legend.visible = bool(view.overlays)
+
+    def _draw_borders(self, view):
+        """The exact borders of the view (view.border_overlay), when that overlay is on."""
+        from ..plot.borders import KIND_COLORS
+
+        if "borders" not in view.overlays:
+            data = dict(e=[], u=[], kind=[], step=[], word_low=[], word_high=[])
+        else:
+            data = border_overlay(view)
+        data["color"] = [KIND_COLORS[k] for k in data["kind"]]
+        self.border_src.data = data
 
     def _set_url(self, mode):
         """Address bar := the view's query; ``push`` makes a history entry."""

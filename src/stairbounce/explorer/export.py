@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import plane
-from .view import MOTION_COLOR_VARS, View, classes, color_key, overlay_curves
+from .view import MOTION_COLOR_VARS, View, border_overlay, classes, color_key, overlay_curves
 
 __all__ = ["view_png", "view_netcdf", "export_name"]
 
@@ -57,6 +57,12 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     curves = overlay_curves(view)
     styles = {"tongues": dict(color="0.6", lw=0.7), "no_sliding": dict(color="C3", lw=1.2, ls="--")}
     for name in view.overlays:
+        if name == "borders":  # the exact border points, coloured by kind
+            from ..plot.borders import KIND_COLORS
+
+            b = border_overlay(view)
+            ax.scatter(b["e"], b["u"], s=2, c=[KIND_COLORS[k] for k in b["kind"]], linewidths=0)
+            continue
         for xs, ys in zip(*curves[name]):
             ax.plot(xs, ys, **styles[name])
     ax.set_xlim(view.e_lo, view.e_hi)

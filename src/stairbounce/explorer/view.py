@@ -97,9 +97,16 @@ COLOR_VARS = tuple(FIELDS)
 NO_SLIDING_LABEL = "none within max_iter"
 """Key entry of white pixels: no periodic sliding solution within max_iter steps."""
 
-OVERLAYS = ("tongues", "no_sliding")
-"""Curves drawn over the map: the (n, 0^inf) tongues of Theorem 3.1 and the
-no-sliding bound of Corollary 2.1."""
+OVERLAYS = ("tongues", "no_sliding", "borders")
+"""What can be drawn over the map: the (n, 0^inf) tongues of Theorem 3.1, the
+no-sliding bound of Corollary 2.1 and the exact borders of the view
+(:func:`border_overlay`)."""
+
+DEFAULT_OVERLAYS = ("tongues", "no_sliding")
+"""The overlays a new view shows (the exact borders cost a computation: off)."""
+
+BORDER_SIDE = 160
+"""Pixels per side, at most, of the grid whose borders the overlay locates."""
 
 PIXEL_BUDGET = 1_000_000
 """Largest view, in pixels, that is computed (1000 x 1000)."""
@@ -154,7 +161,7 @@ class View:
     height: int = 600
     max_iter: int = 1000
     color: str = "word_length"
-    overlays: tuple[str, ...] = field(default=OVERLAYS)
+    overlays: tuple[str, ...] = field(default=DEFAULT_OVERLAYS)
     point: tuple[float, float] | None = None
 
     @property
@@ -738,6 +745,23 @@ def overlay_curves(view: View, samples: int = 400, max_tongues: int = 400) -> di
         ns = plane.no_sliding_curve(e)
     ok = np.isfinite(ns)
     return {"tongues": (txs, tys), "no_sliding": ([e[ok]], [ns[ok]])}
+
+
+def border_overlay(view: View, side: int = BORDER_SIDE) -> dict:
+    """border_overlay(view, side=BORDER_SIDE) -> dict
+
+    The exact borders of the view (:func:`stairbounce.border_points` on a grid
+    of at most ``side`` x ``side`` pixels of its window, the view's
+    max_iter), as columns for a scatter: ``e``, ``u``, ``kind``, ``step``,
+    ``word_low``, ``word_high``.
+    """
+    from ..borders import border_points
+
+    n_e = max(2, min(side, view.width))
+    n_u = max(2, min(side, view.height))
+    pts = border_points(e=(view.e_lo, view.e_hi, n_e), u=(view.u_lo, view.u_hi, n_u),
+                        max_iter=view.max_iter)
+    return {k: pts[k].values.tolist() for k in ("e", "u", "kind", "step", "word_low", "word_high")}
 
 
 def point_details(e: float, u: float, max_iter: int, steps: int | None = None,
