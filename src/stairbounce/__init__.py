@@ -76,6 +76,21 @@ from .plane import (
 )
 from .plane import scan as _scan_function
 from .borders import bifurcations, border_points, itinerary, word_table
+from .regions import (
+    BorderArc,
+    BorderGraph,
+    Corner,
+    Region,
+    RegionComponent,
+    band_similarity,
+    border_graph,
+    regions_geojson,
+    regions_svg,
+    trace_border,
+    window_regions,
+    word_region,
+    write_regions,
+)
 from .symbolic import SlidingAnswer, Word, parse_word, sliding_answer, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, physical_speed, time_scale
@@ -89,6 +104,19 @@ from . import fractal  # noqa: F401  (the old name of stairbounce.dimension, an 
 scan = _register_alias(__name__ + ".scan", __name__ + ".plane", _scan_function, "scan")
 
 __all__ = [
+    "BorderArc",
+    "BorderGraph",
+    "Corner",
+    "Region",
+    "RegionComponent",
+    "band_similarity",
+    "border_graph",
+    "regions_geojson",
+    "regions_svg",
+    "trace_border",
+    "window_regions",
+    "word_region",
+    "write_regions",
     "Accumulation",
     "BoxDimension",
     "Flight",

@@ -896,7 +896,8 @@ def _scan_input(e, u, max_iter, progress):
                       progress=progress)
 
 
-def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=None, progress=None):
+def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=None, progress=None,
+               regions=False):
     """word_table(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, *, points=None, progress=None) -> xarray.Dataset
 
     The distinct words of the periodic sliding solutions in a window, one row each,
@@ -921,7 +922,10 @@ def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=No
         ``graze``, ``edge``, ``chatter`` (its border points by kind).
         Dimension ``p`` (the periods present): ``distinct_words`` = N(p).
         Attributes: ``pixels`` (all), ``sliding_pixels``, ``max_iter`` and the
-        window.
+        window.  With ``regions=True`` also ``traced_area``, ``traced_area_error``,
+        ``components`` and ``complete`` per word, from
+        :func:`stairbounce.window_regions` seeded at the larger side of the grid
+        (NaN / 0 for a word it did not see).
 
     Raises
     ------
@@ -1002,10 +1006,15 @@ def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=No
         "distinct_words": (("p",), n_p, {"long_name": "N(p): distinct words of period p"}),
     }
     attrs = {k: ds.attrs[k] for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u") if k in ds.attrs}
-    return xr.Dataset(data, coords={"p": ("p", p_values, {"long_name": "period (steps)"})},
-                      attrs={"title": "words of the periodic sliding solutions in a window",
-                             "pixels": E.size, "sliding_pixels": int(sliding.sum()),
-                             "max_iter": max_iter, **attrs})
+    tab = xr.Dataset(data, coords={"p": ("p", p_values, {"long_name": "period (steps)"})},
+                     attrs={"title": "words of the periodic sliding solutions in a window",
+                            "pixels": E.size, "sliding_pixels": int(sliding.sum()),
+                            "max_iter": max_iter, **attrs})
+    if regions:  # traced areas (stairbounce.regions)
+        from .regions import traced_columns
+
+        tab = traced_columns(tab)
+    return tab
 
 
 # --------------------------------------------------------------------------- #

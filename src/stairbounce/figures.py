@@ -596,23 +596,33 @@ def fig4(s: Settings) -> Result:
                   {"e": e, "u": u, "size": [n_e, n_u], "max_iter": s.max_iter}, caption=caption)
 
 
-def _bands(s):
-    """Self-similarity of Figs. 5a-c, measured: in band n, sqrt((n-1)/2) < u <=
-    sqrt(n/2) (Fig. 5a, b, c lie in bands 1, 2, 3), the largest e of a pixel
-    with word length >= 2, against the tip of tongue n (Theorem 3.1), where
-    the band meets the Corollary 2.1 curve."""
-    found = []
-    n_e, n_u = s.px(600), s.px(300)
-    for n in range(2, 6):
-        lo, hi = math.sqrt((n - 1) / 2.0), math.sqrt(n / 2.0)
-        ds = _scan(s, f"fig5 band {n}", (0.0, 0.3), (lo, hi), n_e, n_u)
-        mask = (ds.status.values == 0) & (ds.word_length.values >= 2)
-        cols = np.where(mask.any(axis=0))[0]
-        e_max = float(ds.e.values[cols.max()]) if cols.size else 0.0
-        c = math.sqrt((n - 1) / n)
-        found.append((n, e_max, (1 - c) / (1 + c)))
-    pixel = 0.3 / n_e
-    return found, pixel
+def _band_similarity_row(s):
+    """Self-similarity measured on exact borders (stairbounce.regions.band_similarity):
+    the tips (corner of largest e) and areas of the words (n, n) and (n, n, n) in
+    bands n = 2..6, and their ratios between consecutive bands."""
+    from .regions import band_similarity
+
+    s.note("fig5c: tracing the word families of bands 2..6")
+    sim = band_similarity(resolution=s.px(128))
+    fam = [sim[m] for m in (2, 3)]
+    ratios = [x for f in fam for x in f["tip_ratio"] + f["area_ratio"]]
+    spread = max(max(f["tip_ratio"]) / min(f["tip_ratio"]) - 1 for f in fam)
+    tips = sim["tongue_tip_ratio"]
+    vs_tongue = max(abs(a / b - 1) for f in fam for a, b in zip(f["tip_ratio"], tips))
+    text = "; ".join(f"(n,)*{m}: tip ratios {', '.join(f'{x:.3f}' for x in sim[m]['tip_ratio'])}, "
+                     f"area ratios {', '.join(f'{x:.3f}' for x in sim[m]['area_ratio'])}" for m in (2, 3))
+    return Row(
+        "self-similarity on exact borders, bands n = 2..6",
+        "the same complex structure repeated at smaller and smaller scales",
+        f"traced regions of the words (n, n) and (n, n, n) in band n: {text}; tongue tips "
+        f"e_(n+1)/e_n {', '.join(f'{x:.3f}' for x in tips)}",
+        verdict="agrees" if all(0 < x < 1 for x in ratios) else "differs",
+        why=f"{'every' if all(0 < x < 1 for x in ratios) else 'not every'} ratio < 1 (smaller "
+            f"and smaller scales); "
+            + (f"a constant scale factor {np.mean([x for f in fam for x in f['tip_ratio']]):.3f}"
+               if spread < 0.05 else "no constant scale factor")
+            + f": the tip ratios spread by {100 * spread:.0f}%, within {100 * vs_tongue:.0f}% of "
+              f"the tongue tips' own ratios")
 
 
 def _blowup(name):
@@ -645,25 +655,10 @@ def _blowup(name):
                     "structure shows many word lengths, so a count of them could not fail"),
         ]
         if name == "fig5c":
-            found, pixel = _bands(s)
-            ends = ", ".join(f"{x:.4f}" for _, x, _ in found)
-            tips = ", ".join(f"{t:.4f}" for _, _, t in found)
-            factors = ", ".join(f"{found[i + 1][1] / found[i][1]:.3f}"
-                                for i in range(len(found) - 1) if found[i][1] > 0)
-            worst = max(abs(x - t) for _, x, t in found)
-            reach = (f"each band's structure reaches the tip of its tongue within {worst:.4f} "
-                     f"(pixel {pixel:.4f})")
-            rows.append(Row(
-                "self-similarity across the bands of Figs. 5a-c",
-                "the same complex structure repeated at smaller and smaller scales",
-                f"bands n = 2..5 (sqrt((n-1)/2) < u <= sqrt(n/2)): word lengths >= 2 reach "
-                f"e = {ends}; the tips of tongue n (Theorem 3.1) are at {tips}; ratio of "
-                f"successive reaches {factors}",
-                verdict="not comparable",
-                why=f"{reach}, so the ratios are those of the Theorem 3.1 tongue tips: they "
-                    f"restate the theorem and measure no self-similarity (nor are they one "
-                    f"factor); a measurement needs the structure inside the bands (exact "
-                    f"borders). The paper gives no scale factor"))
+            # self-similarity measured on exact borders (issue 22); the former row that
+            # compared how far the raster structure reaches between tongues only restated
+            # the Theorem 3.1 tongue tips, so it is gone
+            rows.append(_band_similarity_row(s))
         caption = (f"Blow-up {letter}) of Fig. 4: the paper's window [{e[0]:g}, {e[1]:g}] x "
                    f"[{u[0]:g}, {u[1]:g}], {n} x {n} px (ours). {_key_caption(s)}{exact}")
         return Result(name, f"Blow-up {letter})", [_save(fig, s, name)], rows,

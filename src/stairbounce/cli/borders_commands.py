@@ -28,9 +28,10 @@ U_HELP = "Window along u, MIN:MAX (normalised): the image edges, MIN >= 0. Or --
 SPEED_HELP = "Window along the ball's horizontal speed in m/s, MIN:MAX (instead of --u)."
 
 
-def _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force):
+def _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force, outputs=True):
     """Parse and check everything before any work; returns the scan's window
-    arguments and the staircase (None with --u)."""
+    arguments and the staircase (None with --u).  ``outputs=False``: the
+    caller checks its own outputs."""
     from .. import plane
 
     if u is None and speed is None:
@@ -46,6 +47,8 @@ def _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, 
     plane._window("e", (e_lo, e_hi, n_e), 0.0, 1.0, "[0, 1]")
     plane._window("u", (u_lo, u_hi, n_u), 0.0, float("inf"), "[0, inf)")
     plane._check_memory(n_e, n_u)
+    if not outputs:
+        return (e_lo, e_hi, n_e), (u_lo, u_hi, n_u)
     if out is not None and out.suffix.lower() not in _DATA_SUFFIXES:
         raise CLIError(f"--out must end in .nc or .csv, got {str(out)!r}")
     if png is not None and png.suffix.lower() not in _FIGURE_SUFFIXES:
@@ -149,6 +152,9 @@ def words_(
     png: Path = typer.Option(None, "--png", help="Figure (.png, .pdf or .svg): N(p), distinct words by period."),
     dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
+    regions: bool = typer.Option(False, "--regions", help="Trace every word's region as polygons "
+                                 "(stairbounce.regions; seeded by a square scan of the larger side of "
+                                 "--size) and write them to --out .geojson or .svg."),
 ):
     """The distinct words of the periodic sliding solutions in a window: letters, period,
     pixels, area, a representative point, bounding box, border points by kind; and N(p)."""
@@ -156,6 +162,8 @@ def words_(
 
     if top < 0:
         raise CLIError(f"--top must be >= 0, got {top}")
+    if regions:
+        return _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force)
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force)
     ds = _with_progress("scan rows", lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
     tab = _with_progress("border pairs", lambda p: borders.word_table(ds, progress=p))
@@ -221,3 +229,25 @@ def itinerary_(
                    + "  ".join(f"{x:14.6e}" for x in m))
     typer.echo(f"e = {e:g}, u = {u:g}: " + (f"slides on step {it.sizes['step']}" if it.attrs["slid"]
                                          else f"no slide within {max_iter} steps"))
+
+
+def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force):
+    """``words --regions``: the window's regions traced (stairbounce.regions) to GeoJSON or SVG."""
+    from .. import regions as rg
+
+    if out is None or out.suffix.lower() not in (".geojson", ".json", ".svg"):
+        raise CLIError(f"--regions needs --out ending in .geojson or .svg, got {str(out) if out else None!r}")
+    ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, None, 150, force,
+                     outputs=False)
+    check_outputs(force, out=out)
+    res = max(ew[2], uw[2])
+    regs = _with_progress("words traced", lambda p: rg.window_regions(
+        ew[:2], uw[:2], resolution=res, max_iter=max_iter, progress=p))
+    rg.write_regions(regs, out, overwrite=force)
+    graph = rg.border_graph(regs)
+    c = graph.counts()
+    typer.echo(f"wrote {out}")
+    typer.echo(f"{c['words']} words in {c['components']} components, {len(graph.nodes)} corners, "
+               f"arcs by kind {c['arcs']}; area traced {sum(r.area for r in regs):.6g} of "
+               f"{(ew[1] - ew[0]) * (uw[1] - uw[0]):.6g}; "
+               f"{sum(not r.complete for r in regs)} words incomplete")

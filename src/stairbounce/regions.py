@@ -1,0 +1,1473 @@
+"""Borders as curves: continuation of the arcs, their corners, each word's region
+as a polygon (docs/guide/regions.md).
+
+Along a fixed itinerary (the impact numbers ``k_1, k_2, ...`` of the steps from
+the departure at ``(1, 0)``) the state at every edge is a smooth closed-form
+function of ``(e, u)``, and so is every margin of the map's three decisions on a
+step (the sliding test (2.4), the first contact, the next impact).  The region
+of a word is therefore an intersection of smooth inequalities
+
+    g_c(e, u) >= 0,   c = 1, 2, ...,
+
+two per step (the step keeps its impact number ``k``: ``t_k <= T`` and
+``T < t_{k+1}``; ``k = 0``: ``T < t_1``; the sliding step: ``t_inf <= T``)
+and four for the window.  Its boundary is made of arcs ``g_c = 0`` joined at
+corners where two margins vanish at once.  This module follows the arcs by
+pseudo-arclength continuation, locates the corners by Newton's method on the
+two margins, and walks each connected component of a region around its boundary.
+
+The margins are evaluated by :func:`_margins` with exactly the arithmetic of
+:func:`stairbounce.model._step` (the same operations in the same order, so the
+sign of a margin is the map's decision bit for bit), and their derivatives by
+forward-mode differentiation written out by hand (exact derivatives of the
+closed forms, evaluated in floating point; they only steer Newton's method, the
+points themselves are fixed by the margins' signs).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit, prange
+
+from . import _validate as _v
+from .model import (
+    SLIDING,
+    _COUNTED_IMPACTS,
+    _constants,
+    _geometric,
+    _impact_time_log,
+    _step,
+    check_count,
+    check_e,
+    check_u,
+)
+from .symbolic import Word, parse_word, word_from_impacts
+
+__all__ = ["BorderArc", "Corner", "Region", "RegionComponent", "BorderGraph",
+           "trace_border", "word_region", "window_regions", "border_graph",
+           "regions_geojson", "regions_svg", "write_regions", "band_similarity"]
+
+# --------------------------------------------------------------------------- #
+# Compiled margins along a prescribed itinerary                                #
+# --------------------------------------------------------------------------- #
+
+
+@njit(cache=True)
+def _margins(e, u, y0, v0, ks, nsteps, win, g, ge, gu):
+    """Every margin of the itinerary ``ks[:nsteps]`` and of the window at (e, u).
+
+    Fills ``g[2j]`` (lower) and ``g[2j+1]`` (upper) for step ``j+1``, with
+    ``ge``, ``gu`` their derivatives in e and u, and ``g[2n..2n+3]`` the window
+    margins ``e - e_lo``, ``e_hi - e``, ``u - u_lo``, ``u_hi - u``.  The point
+    belongs to the itinerary's region iff every lower margin is >= 0 and every
+    upper margin is > 0 (exactly :func:`model._step`'s decisions):
+
+    - ``k = 0``: upper ``t_1 - T`` (it flies over iff ``t_1 > T``), no lower;
+    - ``1 <= k``: lower ``T - t_k``, upper ``t_{k+1} - T`` (``t`` summed along
+      the geometric series as ``_step`` does, closed form past
+      ``_COUNTED_IMPACTS`` impacts as ``_step_closed`` does);
+    - ``SLIDING``: lower ``T - (v + (1+e)/(1-e) s)`` (the test (2.4)), no upper.
+
+    A missing margin is +inf.  Returns the number of steps evaluated: less than
+    ``nsteps`` when the prescribed itinerary leaves the domain (a negative
+    ``v^2 + 2y``); the margins of the remaining steps are then NaN.
+    """
+    T, ratio = _constants(e, u)
+    Tu = -T * T
+    re_ = 2.0 / ((1.0 - e) * (1.0 - e))
+    log_e = math.log(e) if e > 0.0 else -math.inf
+    y, v = y0, v0
+    ye = 0.0
+    yu = 0.0
+    ve = 0.0
+    vu = 0.0
+    m = 2 * nsteps
+    g[m] = e - win[0]
+    ge[m] = 1.0
+    gu[m] = 0.0
+    g[m + 1] = win[1] - e
+    ge[m + 1] = -1.0
+    gu[m + 1] = 0.0
+    g[m + 2] = u - win[2]
+    ge[m + 2] = 0.0
+    gu[m + 2] = 1.0
+    g[m + 3] = win[3] - u
+    ge[m + 3] = 0.0
+    gu[m + 3] = -1.0
+    for j in range(nsteps):
+        k = ks[j]
+        q = v * v + 2.0 * y
+        if not q >= 0.0 or (q == 0.0 and k != 0):
+            for i in range(2 * j, m):
+                g[i] = math.nan
+                ge[i] = math.nan
+                gu[i] = math.nan
+            return j
+        s = math.sqrt(q)
+        se = (v * ve + ye) / s if s > 0.0 else 0.0
+        su = (v * vu + yu) / s if s > 0.0 else 0.0
+        lo = 2 * j
+        hi = lo + 1
+        if k == SLIDING:
+            c = v + ratio * s
+            g[lo] = T - c
+            ge[lo] = -(ve + re_ * s + ratio * se)
+            gu[lo] = Tu - (vu + ratio * su)
+            g[hi] = math.inf
+            ge[hi] = 0.0
+            gu[hi] = 0.0
+            y, v = 1.0, 0.0
+            ye = yu = ve = vu = 0.0
+            continue
+        t = v + s
+        te = ve + se
+        tu = vu + su
+        if k == 0:
+            g[lo] = math.inf
+            ge[lo] = 0.0
+            gu[lo] = 0.0
+            g[hi] = t - T
+            ge[hi] = te
+            gu[hi] = tu - Tu
+            ny = y + v * T - 0.5 * T * T + 1.0
+            nye = ye + ve * T
+            nyu = yu + vu * T + v * Tu - T * Tu
+            v = v - T
+            vu = vu - Tu
+            y, ye, yu = ny, nye, nyu
+            continue
+        # k >= 1: the bounces along the geometric series, as _step counts them
+        w = e * s
+        we = s + e * se
+        wu = e * su
+        kk = min(k, _COUNTED_IMPACTS)
+        for _ in range(kk - 1):
+            t = t + 2.0 * w
+            te = te + 2.0 * we
+            tu = tu + 2.0 * wu
+            we = w + e * we
+            wu = e * wu
+            w *= e
+        # lower margin: t_k (t_8 of the loop when k = 8, as _step decides 7 <-> 8)
+        g[lo] = T - t
+        ge[lo] = -te
+        gu[lo] = Tu - tu
+        if k < _COUNTED_IMPACTS:
+            nt = t + 2.0 * w
+            g[hi] = nt - T
+            ge[hi] = te + 2.0 * we
+            gu[hi] = tu + 2.0 * wu - Tu
+            d = T - t
+            de = -te
+            du = Tu - tu
+        else:
+            # _step_closed: closed forms of eq. (2.2) with G(n) = (1 - e^n)/(1 - e)
+            G = _geometric(e, k - 1, log_e)
+            Ge = (G - (k - 1) * math.pow(e, float(k - 2))) / (1.0 - e)
+            tk = _impact_time_log(v, s, e, k, log_e)
+            tke = ve + se * (1.0 + 2.0 * e * G) + 2.0 * s * (G + e * Ge)
+            tku = vu + su * (1.0 + 2.0 * e * G)
+            if k > _COUNTED_IMPACTS:
+                g[lo] = T - tk
+                ge[lo] = -tke
+                gu[lo] = Tu - tku
+            G1 = _geometric(e, k, log_e)
+            G1e = (G1 - k * math.pow(e, float(k - 1))) / (1.0 - e)
+            g[hi] = _impact_time_log(v, s, e, k + 1, log_e) - T
+            ge[hi] = ve + se * (1.0 + 2.0 * e * G1) + 2.0 * s * (G1 + e * G1e)
+            gu[hi] = vu + su * (1.0 + 2.0 * e * G1) - Tu
+            ek = math.pow(e, float(k))
+            w = ek * s
+            we = k * math.pow(e, float(k - 1)) * s + ek * se
+            wu = ek * su
+            d = min(max(T - tk, 0.0), 2.0 * w)
+            de = -tke
+            du = Tu - tku
+        ny = -0.5 * d * d + w * d + 1.0
+        nye = -d * de + we * d + w * de
+        nyu = -d * du + wu * d + w * du
+        v = w - d
+        ve = we - de
+        vu = wu - du
+        y, ye, yu = ny, nye, nyu
+    return nsteps
+
+
+@njit(cache=True)
+def _itinerary_of(e, u, y0, v0, max_iter, ks):
+    """Impact numbers from (y0, v0) with :func:`model._step` until the slide:
+    fills ``ks`` and returns the step count (the sliding step included), or
+    ``-max_iter`` when it does not slide within ``max_iter`` steps."""
+    T, ratio = _constants(e, u)
+    y, v = y0, v0
+    for n in range(max_iter):
+        y, v, k = _step(y, v, e, T, ratio)
+        ks[n] = k
+        if k == SLIDING:
+            return n + 1
+    return -max_iter
+
+
+@njit(cache=True, parallel=True)
+def _words_grid(es, us, y0, v0, max_iter, h1, h2, steps):
+    """Two independent 64-bit hashes of every pixel's itinerary (0, 0 and steps 0
+    when it does not slide within max_iter): the word labels of a small scan.
+    Rows in parallel, each pixel independent of the others."""
+    for i in prange(us.size):
+        ks = np.empty(max_iter, dtype=np.int64)
+        for j in range(es.size):
+            n = _itinerary_of(es[j], us[i], y0, v0, max_iter, ks)
+            if n <= 0:
+                h1[i, j] = 0
+                h2[i, j] = 0
+                steps[i, j] = 0
+                continue
+            h1[i, j], h2[i, j] = _hash_itinerary(ks, n)
+            steps[i, j] = n
+
+
+@njit(cache=True)
+def _hash_itinerary(ks, n):
+    """Two independent 64-bit hashes of ``ks[:n]`` (the word labels of a scan)."""
+    a = np.uint64(1469598103934665603)
+    b = np.uint64(7)
+    for t in range(n):
+        x = np.uint64(ks[t] + 2)
+        a = (a ^ x) * np.uint64(1099511628211)
+        b = b * np.uint64(6364136223846793005) + x * np.uint64(1442695040888963407)
+    return a | np.uint64(1), b
+
+
+# --------------------------------------------------------------------------- #
+# Continuation                                                                #
+# --------------------------------------------------------------------------- #
+
+_EPS = np.finfo(float).eps
+# largest turn of the tangent per step (radians): keeps the chords' sagitta small
+# and the cubic Hermite area correction accurate to O(h^5) per step
+_MAX_TURN = 0.08
+_NEWTON = 8
+
+
+class _Margins:
+    """The margins of one prescribed itinerary (and a window) as a function of (e, u)."""
+
+    def __init__(self, ks, window, y0=1.0, v0=0.0):
+        self.ks = np.ascontiguousarray(ks, dtype=np.int64)
+        self.n = self.ks.size
+        self.win = np.asarray(window, dtype=float).reshape(4)
+        self.y0, self.v0 = float(y0), float(v0)
+        self.m = 2 * self.n + 4
+        self.evals = 0
+
+    def __call__(self, x):
+        g = np.empty(self.m)
+        ge = np.empty(self.m)
+        gu = np.empty(self.m)
+        _margins(x[0], x[1], self.y0, self.v0, self.ks, self.n, self.win, g, ge, gu)
+        self.evals += 1
+        return g, ge, gu
+
+    def inside(self, g):
+        """Whether margins ``g`` say the point is in the region (lower >= 0, upper > 0)."""
+        n2 = 2 * self.n
+        return bool(np.all(g[0:n2:2] >= 0.0) and np.all(g[1:n2:2] > 0.0) and np.all(g[n2:] >= 0.0))
+
+    def event(self, c):
+        """(kind, step) of margin ``c``: step 0 and kind ``window`` for the window's sides."""
+        if c >= 2 * self.n:
+            return "window", 0
+        j, side = divmod(c, 2)
+        k = int(self.ks[j])
+        if k == SLIDING:
+            return "chatter", j + 1
+        if side == 1:  # t_{k+1} = T
+            return ("graze" if k == 0 else "edge"), j + 1
+        return ("graze" if k == 1 else "edge"), j + 1
+
+
+def _unit(a, b):
+    n = math.hypot(a, b)
+    return (a / n, b / n) if n > 0 and math.isfinite(n) else (math.nan, math.nan)
+
+
+def _tangent(ge, gu, sign):
+    """Unit tangent of ``g = 0`` with ``g >= 0`` on its left (sign +1) or right (-1)."""
+    t0, t1 = _unit(gu, -ge)
+    return sign * t0, sign * t1
+
+
+def _ulps(x):
+    return 4.0 * _EPS * max(abs(x[0]), abs(x[1]), 1e-300)
+
+
+def _solve2(a, b, c, d, r0, r1):
+    """Solve [[a, b], [c, d]] z = (r0, r1); None when singular (Python floats:
+    an overflow is inf, quietly, and then rejected by the caller)."""
+    a, b, c, d, r0, r1 = float(a), float(b), float(c), float(d), float(r0), float(r1)
+    det = a * d - b * c
+    if not det or not math.isfinite(det):
+        return None
+    return (r0 * d - b * r1) / det, (a * r1 - c * r0) / det
+
+
+def _correct(F, a, xp, t):
+    """Pseudo-arclength corrector: ``g_a(x) = 0`` on the line through ``xp`` normal
+    to ``t``.  Returns (x, margins, iterations) or None when Newton fails."""
+    x = np.array(xp, dtype=float)
+    for it in range(1, _NEWTON + 1):
+        g, ge, gu = F(x)
+        if not math.isfinite(g[a]):
+            return None
+        z = _solve2(ge[a], gu[a], t[0], t[1], -g[a], -(t[0] * (x[0] - xp[0]) + t[1] * (x[1] - xp[1])))
+        if z is None:
+            return None
+        x[0] += z[0]
+        x[1] += z[1]
+        if abs(z[0]) + abs(z[1]) <= _ulps(x):
+            return x, F(x), it
+    return None
+
+
+def _corner(F, a, b, x):
+    """Newton's method on ``g_a = g_b = 0`` from ``x``: the corner to rounding, or None."""
+    x = np.array(x, dtype=float)
+    for _ in range(40):
+        g, ge, gu = F(x)
+        z = _solve2(ge[a], gu[a], ge[b], gu[b], -g[a], -g[b])
+        if z is None or not (math.isfinite(z[0]) and math.isfinite(z[1])):
+            return None
+        x[0] += z[0]
+        x[1] += z[1]
+        if abs(z[0]) + abs(z[1]) <= _ulps(x):
+            return x, F(x)
+    return None
+
+
+@dataclass
+class _Arc:
+    slot: int
+    pts: list
+    tans: list
+    end: str = ""            # corner, closed, window, junction, domain, limit
+    end_slot: int = -1
+
+
+def _follow(F, a, x, g, sign, scale, *, others, stop_at=None, max_points=20000, junction=None):
+    """Follow ``g_a = 0`` from ``x`` (margins ``g``) with the region on the left
+    (sign +1) or right (-1), until another margin in ``others`` turns negative
+    (a corner, located to rounding), the start ``stop_at`` is passed again (a
+    closed curve), ``junction(x_prev, x)`` reports a change, or the curve
+    leaves the domain (a margin turns NaN)."""
+    gg, ge, gu = g
+    t = _tangent(ge[a], gu[a], sign)
+    arc = _Arc(a, [np.array(x, float)], [t])
+    h = 1e-3 * scale
+    hmin = 1e-14 * scale
+    hmax = 0.02 * scale
+    while True:
+        if len(arc.pts) > max_points:
+            arc.end = "limit"
+            return arc
+        xp = (x[0] + h * t[0], x[1] + h * t[1])
+        res = _correct(F, a, xp, t)
+        ok = res is not None
+        if ok:
+            y, gy, it = res
+            tn = _tangent(gy[1][a], gy[2][a], sign)
+            cos = t[0] * tn[0] + t[1] * tn[1]
+            ok = math.isfinite(cos) and cos > math.cos(_MAX_TURN) and \
+                math.hypot(y[0] - xp[0], y[1] - xp[1]) <= 0.25 * h
+        if ok and np.isnan(gy[0][others]).any():
+            ok = False
+        if not ok:
+            h *= 0.25
+            if h < hmin:
+                arc.end = "domain"
+                return arc
+            continue
+        gyv = gy[0]
+        neg = others[(gyv[others] < 0.0) & ((gg[others] > 0.0) | (gyv[others] < gg[others]))]
+        if stop_at is not None:
+            # closed when the start lies on the chord x -> y
+            dx, dy = y[0] - x[0], y[1] - x[1]
+            L2 = dx * dx + dy * dy
+            tau = ((stop_at[0] - x[0]) * dx + (stop_at[1] - x[1]) * dy) / L2
+            if 0.0 < tau <= 1.0 and abs((stop_at[0] - x[0]) * dy - (stop_at[1] - x[1]) * dx) <= \
+                    1e-6 * L2 and len(arc.pts) > 2:
+                arc.pts.append(np.array(stop_at, float))
+                arc.tans.append(arc.tans[0])
+                arc.end = "closed"
+                return arc
+        if neg.size:
+            cx = _locate_corner(F, a, x, gg, y, gyv, neg, others)
+            if cx is None:
+                h *= 0.25
+                if h < hmin:
+                    arc.end = "domain"
+                    return arc
+                continue
+            xc, b, gc = cx
+            arc.pts.append(xc)
+            arc.tans.append(_tangent(gc[1][a], gc[2][a], sign))
+            arc.end, arc.end_slot = "corner", b
+            arc.corner_margins = gc
+            return arc
+        if junction is not None:
+            jx = junction(x, y)
+            if jx is not None:
+                arc.pts.append(jx[0])
+                arc.tans.append(_tangent(jx[1][1][a], jx[1][2][a], sign))
+                arc.end = "junction"
+                arc.junction = jx
+                return arc
+        arc.pts.append(y)
+        arc.tans.append(tn)
+        x, gg, t = y, gyv, tn
+        if it <= 2 and cos > math.cos(0.5 * _MAX_TURN):
+            h = min(1.6 * h, hmax)
+
+
+def _locate_corner(F, a, x, gx, y, gy, neg, others):
+    """The first margin of ``neg`` to vanish between x and y, and the corner where
+    it meets ``g_a = 0`` (Newton from the linear estimate; retried with another
+    margin when one of the others is then negative)."""
+    lam = gx[neg] / (gx[neg] - gy[neg])
+    order = np.argsort(lam)
+    for i in order:
+        b = int(neg[i])
+        x0 = (x[0] + lam[i] * (y[0] - x[0]), x[1] + lam[i] * (y[1] - x[1]))
+        r = _corner(F, a, b, x0)
+        if r is None:
+            continue
+        xc, gc = r
+        rest = others[others != b]
+        scale = max(abs(xc[0]), abs(xc[1]), 1.0)
+        if np.all(gc[0][rest] >= -1e3 * _EPS * scale) and \
+                math.hypot(xc[0] - x[0], xc[1] - x[1]) <= 1.5 * math.hypot(y[0] - x[0], y[1] - x[1]):
+            return xc, b, gc
+    return None
+
+
+def _walk(F, a0, x0, scale, max_corners=2000, max_points=50000):
+    """Walk the boundary of one connected piece of the region of ``F`` through the
+    boundary point ``x0`` of margin ``a0``, with the region on the left: the
+    list of arcs of one closed curve (counter-clockwise around an outer
+    boundary, clockwise around a hole), or None when the walk fails."""
+    allc = np.arange(F.m)
+    g = F(x0)
+    first = _follow(F, a0, x0, g, 1, scale, others=allc[allc != a0], stop_at=x0, max_points=max_points)
+    if first.end == "closed":
+        return [first]
+    if first.end != "corner":
+        return None
+    start = (first.pts[-1], a0, first.end_slot)
+    arcs = []
+    x, g = first.pts[-1], first.corner_margins
+    a = _outgoing(g, a0, first.end_slot, scale)
+    start = (x, a0, a)
+    used = len(first.pts)
+    stuck = 0
+    for _ in range(max_corners):
+        arc = _follow(F, a, x, g, 1, scale, others=allc[allc != a], max_points=max_points - used)
+        used += len(arc.pts)
+        if arc.end == "corner" and math.hypot(x[0] - arc.pts[-1][0], x[1] - arc.pts[-1][1]) == 0.0:
+            stuck += 1
+            if stuck > 8:  # turning in place at a point where many margins vanish
+                return None
+        else:
+            stuck = 0
+        if arc.end != "corner" or used > max_points:
+            return None
+        arc.start_slot = arcs[-1].slot if arcs else start[1]
+        arcs.append(arc)
+        x, g = arc.pts[-1], arc.corner_margins
+        a = _outgoing(g, arc.slot, arc.end_slot, scale)
+        if arc.slot == start[1] and a == start[2] and \
+                math.hypot(x[0] - start[0][0], x[1] - start[0][1]) <= 1e-9 * scale:
+            arc.pts[-1] = start[0]  # the same corner: close exactly
+            return arcs
+    return None
+
+
+def _outgoing(g, a, b, scale):
+    """The margin to follow out of a corner reached along ``a`` where ``b``
+    vanished: where more than two margins vanish at once (a resonance of the
+    itinerary), the one whose tangent keeps every other vanishing margin
+    non-negative to first order (the edge of the region's tangent cone)."""
+    gv, ge, gu = g
+    cand = np.nonzero(np.abs(gv) <= 1e3 * _EPS * scale * (np.abs(ge) + np.abs(gu)))[0]
+    cand = [int(c) for c in cand if c != a]
+    if b not in cand:
+        cand.insert(0, b)
+    if len(cand) == 1:
+        return b
+    best, worst_best = b, -math.inf
+    for c in cand:
+        t = _tangent(ge[c], gu[c], 1)
+        worst = min((ge[o] * t[0] + gu[o] * t[1]) / math.hypot(ge[o], gu[o])
+                    for o in cand + [a] if o != c)
+        if worst > worst_best + 1e-12:
+            best, worst_best = c, worst
+    return best
+
+
+_GAUSS = ((0.5 - math.sqrt(0.15), 5.0 / 18.0), (0.5, 8.0 / 18.0), (0.5 + math.sqrt(0.15), 5.0 / 18.0))
+
+
+def _hermite_area(p0, p1, t0, t1):
+    """Signed areas between the chords p0 -> p1 (arrays N x 2) and the cubic
+    Hermite curves with unit tangents t0, t1 (scaled by the chord), exact by
+    3-point Gauss (the integrand has degree 5)."""
+    d = p1 - p0
+    L = np.hypot(d[:, 0], d[:, 1])[:, None]
+    m0, m1 = L * t0, L * t1
+    total = np.zeros(len(p0))
+    for s, w in _GAUSS:
+        h10, h01, h11 = s**3 - 2 * s**2 + s, -2 * s**3 + 3 * s**2, s**3 - s**2
+        d10, d01, d11 = 3 * s**2 - 4 * s + 1, -6 * s**2 + 6 * s, 3 * s**2 - 2 * s
+        # position and velocity relative to p0 (the chord's own term cancels)
+        r = h10 * m0 + h01 * d + h11 * m1
+        v = d10 * m0 + d01 * d + d11 * m1
+        total += w * 0.5 * (r[:, 0] * v[:, 1] - r[:, 1] * v[:, 0])
+    return total
+
+
+def _arc_area(pts, tans, stride=1):
+    """Shoelace contribution of an arc plus the Hermite correction of its chords,
+    on every ``stride``-th point (the ends always kept)."""
+    idx = list(range(0, len(pts), stride))
+    if idx[-1] != len(pts) - 1:
+        idx.append(len(pts) - 1)
+    P = np.asarray(pts, dtype=float)[idx]
+    Tg = np.asarray(tans, dtype=float)[idx]
+    p, q = P[:-1], P[1:]
+    return float(np.sum(0.5 * (p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]) + _hermite_area(p, q, Tg[:-1], Tg[1:])))
+
+
+def _curve_area(arcs):
+    """Signed area of a closed curve of arcs and an error estimate: the Hermite
+    area on every point against every other point (the error is O(h^4),
+    Richardson's factor 15)."""
+    fine = sum(_arc_area(a.pts, a.tans) for a in arcs)
+    coarse = sum(_arc_area(a.pts, a.tans, 2) for a in arcs)
+    return fine, abs(fine - coarse) / 15.0
+
+
+# --------------------------------------------------------------------------- #
+# Regions                                                                     #
+# --------------------------------------------------------------------------- #
+
+
+def itinerary_of_word(word) -> np.ndarray:
+    """The impact numbers of the steps of one period of ``word`` (the last one
+    ``SLIDING``): the inverse of :func:`stairbounce.symbolic.word_from_impacts`."""
+    letters = _as_word(word).letters
+    ks = []
+    i = 0
+    while i < len(letters):
+        ks.extend([0] * (letters[i] - 1))
+        if i == len(letters) - 1:
+            ks.append(SLIDING)
+            break
+        z = 0
+        while letters[i + 1 + z] == 0:
+            z += 1
+        ks.append(1 + z)
+        i += 1 + z
+    return np.array(ks, dtype=np.int64)
+
+
+def _as_word(word) -> Word:
+    if isinstance(word, Word):
+        return word
+    if isinstance(word, str):
+        return parse_word(word)
+    return Word(tuple(word))
+
+
+@dataclass(frozen=True)
+class Corner:
+    """A point where two margins vanish at once: the events of both (kind, step)."""
+
+    e: float
+    u: float
+    events: tuple
+
+    def __repr__(self):
+        a, b = self.events
+        return f"Corner(e={self.e:.17g}, u={self.u:.17g}, {a[0]}@{a[1]} x {b[0]}@{b[1]})"
+
+
+@dataclass
+class BorderArc:
+    """One traced arc: points ``e``, ``u`` on the curve where the margin of one
+    event (``kind`` at ``step``) vanishes, between two ends."""
+
+    e: np.ndarray
+    u: np.ndarray
+    kind: str
+    step: int
+    inside: str = ""        # the word on the side where the margin is >= 0
+    outside: str = ""       # the word on the other side ("" where not computed)
+    ends: tuple = ("", "")  # how each end was reached: corner, window, junction, domain, limit
+    corners: tuple = (None, None)
+
+    def __repr__(self):
+        return (f"BorderArc({self.kind} at step {self.step}, {self.e.size} points, "
+                f"{self.inside or '?'} | {self.outside or '?'}, ends {self.ends[0]}/{self.ends[1]})")
+
+
+@dataclass
+class RegionComponent:
+    """One connected component of a word's region: its outer boundary and holes
+    (closed curves of arcs, counter-clockwise and clockwise), exact area."""
+
+    area: float
+    area_error: float
+    boundary: list           # BorderArc list of the outer curve
+    holes: list              # list of BorderArc lists
+    corners: list
+
+    @property
+    def kinds(self):
+        """Counts of the outer boundary's arcs by kind."""
+        out = {}
+        for a in self.boundary + [a for h in self.holes for a in h]:
+            out[a.kind] = out.get(a.kind, 0) + 1
+        return out
+
+    def polygon(self, hole=None):
+        """``(e, u)`` of the closed outer boundary (or of hole number ``hole``)."""
+        arcs = self.boundary if hole is None else self.holes[hole]
+        e = np.concatenate([a.e[:-1] for a in arcs] + [arcs[0].e[:1]])
+        u = np.concatenate([a.u[:-1] for a in arcs] + [arcs[0].u[:1]])
+        return e, u
+
+    def __repr__(self):
+        return (f"RegionComponent(area={self.area:.6e} +- {self.area_error:.1e}, "
+                f"{len(self.boundary)} arcs, {len(self.holes)} holes, kinds {self.kinds})")
+
+
+@dataclass
+class Region:
+    """Every component of the region of one word in a window."""
+
+    word: Word
+    e: tuple
+    u: tuple
+    components: list = field(default_factory=list)
+    complete: bool = True    # False when a seed's walk failed (see ``failures``)
+    failures: int = 0
+
+    @property
+    def area(self) -> float:
+        return float(sum(c.area for c in self.components))
+
+    @property
+    def area_error(self) -> float:
+        return float(sum(c.area_error for c in self.components))
+
+    @property
+    def corners(self):
+        return [c for comp in self.components for c in comp.corners]
+
+    def __repr__(self):
+        return (f"Region({self.word.format(ascii=True)}: area {self.area:.6e} +- "
+                f"{self.area_error:.1e} in {len(self.components)} components"
+                f"{'' if self.complete else ', INCOMPLETE'})")
+
+
+def _check_window(e, u):
+    try:
+        e_lo, e_hi = (float(_v.real("e_min", e[0])), float(_v.real("e_max", e[1])))
+        u_lo, u_hi = (float(_v.real("u_min", u[0])), float(_v.real("u_max", u[1])))
+    except (TypeError, IndexError, KeyError):
+        raise ValueError(f"e and u must be (min, max) pairs, got e={e!r}, u={u!r}") from None
+    if not 0.0 <= e_lo < e_hi < 1.0:
+        raise ValueError(f"e window must satisfy 0 <= e_min < e_max < 1, got [{e_lo}, {e_hi}]")
+    if not (_v.U_MIN <= u_lo < u_hi <= _v.U_MAX):
+        raise ValueError(f"u window must satisfy {_v.U_MIN:g} <= u_min < u_max <= {_v.U_MAX:g}, "
+                         f"got [{u_lo}, {u_hi}]")
+    return (e_lo, e_hi), (u_lo, u_hi)
+
+
+def _grid(e, u, resolution):
+    n = resolution
+    es = e[0] + (np.arange(n) + 0.5) * (e[1] - e[0]) / n
+    us = u[0] + (np.arange(n) + 0.5) * (u[1] - u[0]) / n
+    return es, us
+
+
+def _label_grid(es, us, max_iter, y0, v0):
+    h1 = np.empty((us.size, es.size), dtype=np.uint64)
+    h2 = np.empty_like(h1)
+    steps = np.empty((us.size, es.size), dtype=np.int64)
+    _words_grid(es, us, y0, v0, max_iter, h1, h2, steps)
+    return h1, h2, steps
+
+
+def _fill(P, es, us):
+    """Even-odd fill of the closed polygon ``P`` (N x 2) at the pixel centres."""
+    x1, y1 = P[:-1, 0], P[:-1, 1]
+    x2, y2 = P[1:, 0], P[1:, 1]
+    out = np.zeros((us.size, es.size), dtype=bool)
+    lo, hi = np.minimum(y1, y2), np.maximum(y1, y2)
+    rows = np.nonzero((us >= lo.min()) & (us <= hi.max()))[0]
+    for i in rows:
+        uu = us[i]
+        sel = (y1 > uu) != (y2 > uu)
+        if not sel.any():
+            continue
+        xc = x1[sel] + (uu - y1[sel]) * (x2[sel] - x1[sel]) / (y2[sel] - y1[sel])
+        xc.sort()
+        cnt = xc.size - np.searchsorted(xc, es, side="right")
+        out[i] = (cnt % 2) == 1
+    return out
+
+
+def _inside_polygon(P, x):
+    return bool(_fill(P, np.array([x[0]]), np.array([x[1]]))[0, 0])
+
+
+def _crossing(F, mask, es, us, i, j, e, u):
+    """From pixel (i, j), the first pixel of the other class along a row or a
+    column, bisected to rounding on the region's margins: (x_in, slot) or None."""
+    m0 = mask[i, j]
+    for di, dj in ((0, 1), (0, -1), (1, 0), (-1, 0)):
+        ii, jj = i + di, j + dj
+        while 0 <= ii < us.size and 0 <= jj < es.size and mask[ii, jj] == m0:
+            ii += di
+            jj += dj
+        a = np.array([es[j], us[i]])
+        if 0 <= ii < us.size and 0 <= jj < es.size:
+            b = np.array([es[jj], us[ii]])
+        elif m0:  # the window's side
+            b = np.array([e[1] if dj > 0 else e[0] if dj < 0 else es[j],
+                          u[1] if di > 0 else u[0] if di < 0 else us[i]])
+            if F.inside(F(b)[0]):
+                return b, F.m - 4 + (1 if dj > 0 else 0 if dj < 0 else 3 if di > 0 else 2)
+        else:
+            continue
+        xin, xout = (a, b) if m0 else (b, a)
+        gin, gout = F(xin)[0], F(xout)[0]
+        if not F.inside(gin) or F.inside(gout):
+            continue
+        while True:
+            mid = 0.5 * (xin + xout)
+            if (mid == xin).all() or (mid == xout).all():
+                break
+            gm = F(mid)[0]
+            if F.inside(gm):
+                xin, gin = mid, gm
+            else:
+                xout, gout = mid, gm
+        viol = np.nonzero(~(gout >= 0.0) | (np.arange(F.m) % 2 == 1) & (np.arange(F.m) < F.m - 4)
+                          & (gout <= 0.0))[0]
+        if viol.size == 0:
+            continue
+        slot = int(viol[np.argmin(np.abs(gin[viol]))])
+        return xin, slot
+    return None
+
+
+def _to_arcs(F, curve, word_text):
+    out = []
+    for i, arc in enumerate(curve):
+        kind, step = F.event(arc.slot)
+        P = np.array(arc.pts)
+        out.append(BorderArc(P[:, 0].copy(), P[:, 1].copy(), kind, step, inside=word_text,
+                             ends=("corner", "corner") if arc.end == "corner" else ("closed", "closed")))
+        out[-1]._tans = arc.tans
+        out[-1]._slot = arc.slot
+        out[-1]._end_slot = arc.end_slot
+    return out
+
+
+def _on_curves(x, slot, curves, tol):
+    for curve in curves:
+        for arc in curve:
+            if arc.slot != slot:
+                continue
+            P = np.array(arc.pts)
+            d = np.hypot(P[:, 0] - x[0], P[:, 1] - x[1])
+            if d.min() <= tol:
+                return True
+            # distance to the chords
+            A, B = P[:-1], P[1:]
+            AB = B - A
+            L2 = (AB ** 2).sum(1)
+            raw = ((x - A) * AB).sum(1) / np.where(L2 > 0, L2, 1)
+            tau = np.clip(raw, 0, 1)
+            C = A + tau[:, None] * AB
+            # beside a chord, within its sagitta (a turn of at most _MAX_TURN per step
+            # bends the curve at most 0.01 of the chord away from it); past its ends,
+            # within tol only (another piece of the same level set may start there)
+            near = np.where((raw > 0) & (raw < 1), np.maximum(tol, 0.015 * np.sqrt(L2)), tol)
+            if np.any(np.hypot(C[:, 0] - x[0], C[:, 1] - x[1]) <= near):
+                return True
+    return False
+
+
+def _closed(curve):
+    """The closed polygon (N x 2, first point repeated) of a curve of arcs."""
+    return np.concatenate([np.array(a.pts[:-1]) for a in curve] + [np.array(curve[0].pts[:1])])
+
+
+def _new_curve(F, x, slot, curves, scale):
+    """Walk the boundary through ``x`` (margin ``slot``) unless a traced curve
+    already passes there: the new curve (appended to ``curves``), None when
+    known, False when the walk failed."""
+    if _on_curves(x, slot, curves, 1e-9 * scale):
+        return None
+    curve = _walk(F, slot, x, scale)
+    if curve is None:
+        return False
+    curves.append(curve)
+    return curve
+
+
+def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=()):
+    """Every component of the region of itinerary ``ks`` seen by the pixel mask,
+    and those through the border points ``seeds`` (points of the region at
+    its border, e.g. the word's end of a bisected bracket of a finer scan)."""
+    F = _Margins(ks, (e[0], e[1], u[0], u[1]), y0, v0)
+    scale = max(e[1] - e[0], u[1] - u[0])
+    curves, fill = [], np.zeros_like(mask)
+    tried = np.zeros_like(mask)
+    failures = 0
+    while True:
+        todo = np.argwhere((mask ^ fill) & ~tried)
+        if todo.size == 0 or failures > max_failures:
+            break
+        i, j = (int(t) for t in todo[0])
+        tried[i, j] = True
+        c = _crossing(F, mask, es, us, i, j, e, u)
+        if c is None:
+            failures += 1
+            continue
+        curve = _new_curve(F, *c, curves, scale)
+        if curve is False:
+            failures += 1
+        elif curve is not None:
+            fill ^= _fill(_closed(curve), es, us)
+    n2 = 2 * F.n
+    for x in seeds:
+        x = np.asarray(x, dtype=float)
+        g = F(x)[0]
+        if not F.inside(g):  # the margins disagree with the map there: not traced
+            failures += 1
+            continue
+        slot = int(np.argmin(np.where(np.isfinite(g[:n2]), np.abs(g[:n2]), np.inf)))
+        failures += _new_curve(F, x, slot, curves, scale) is False
+    text = word.format(ascii=True)
+    outer, holes = [], []
+    for curve in curves:
+        A, err = _curve_area(curve)
+        P = _closed(curve)
+        (outer if A > 0 else holes).append((A, err, curve, P))
+    comps = []
+    outer.sort(key=lambda t: t[0])
+    members = [[] for _ in outer]
+    for h in holes:
+        for k, o in enumerate(outer):
+            if _inside_polygon(o[3], h[3][0]):
+                members[k].append(h)
+                break
+    for (A, err, curve, P), hs in zip(outer, members):
+        corners = []
+        for arc in curve:
+            if arc.end == "corner":
+                x = arc.pts[-1]
+                corners.append(Corner(float(x[0]), float(x[1]), (F.event(arc.slot), F.event(arc.end_slot))))
+        comps.append(RegionComponent(A + sum(h[0] for h in hs), err + sum(h[1] for h in hs),
+                                     _to_arcs(F, curve, text), [_to_arcs(F, h[2], text) for h in hs],
+                                     corners))
+    comps.sort(key=lambda c: -c.area)
+    return comps, failures
+
+
+def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=256, max_iter=1000,
+                y0=1.0, v0=0.0):
+    """word_region(word, e=(0, 1), u=(0.05, 1.5), *, resolution=256, max_iter=1000) -> Region
+
+    The region of the parameter plane where the periodic sliding solution
+    through (1, 0) has the word ``word``, as closed polygons of traced arcs.
+
+    The region is ``{g_c(e, u) >= 0}`` for the margins of the word's itinerary
+    (two per step, see :mod:`stairbounce.regions`) and of the window.  A scan
+    of ``resolution`` x ``resolution`` pixel centres finds the pixels of the
+    word; from each pixel not yet inside a traced curve the first border along
+    its row (or column) is bisected to rounding and the boundary of that
+    component walked by pseudo-arclength continuation, corner to corner, until
+    it closes.  Areas are the shoelace sum of the dense curve plus the cubic
+    Hermite correction of every chord (the tangents are known), with an error
+    estimate from the same sum on every other point.
+
+    What it can miss: a component (or hole) that contains no pixel centre of
+    the scan, i.e. narrower than a pixel everywhere.  Raise ``resolution`` to
+    find smaller ones.
+
+    Parameters
+    ----------
+    word : Word, str such as ``"(2, 0, 1, 0^inf)"``, or letters such as ``(2, 0, 1)``
+    e, u : (min, max)
+        The window (0 <= e_min < e_max < 1).
+    resolution : int >= 2, default 256
+        Pixels per side of the seeding scan.
+    max_iter : int, default 1000
+        Only matters for the seeding scan's labels (steps per pixel).
+
+    Returns
+    -------
+    Region
+        ``area``, ``area_error``, ``components`` (each with ``area``,
+        ``boundary`` arcs, ``holes``, ``corners``, ``kinds``, ``polygon()``).
+    """
+    w = _as_word(word)
+    e, u = _check_window(e, u)
+    resolution = check_count("resolution", resolution, 2, 8192)
+    max_iter = check_count("max_iter", max_iter, 1)
+    ks = itinerary_of_word(w)
+    es, us = _grid(e, u, resolution)
+    h1, h2, _ = _label_grid(es, us, max(max_iter, ks.size), float(y0), float(v0))
+    a, b = _hash_itinerary(ks, ks.size)
+    mask = (h1 == a) & (h2 == b)
+    comps, failures = _trace_word(ks, w, e, u, es, us, mask, float(y0), float(v0))
+    return Region(w, e, u, comps, complete=failures == 0, failures=failures)
+
+
+def _point_seeds(points, e, u, y0, v0, max_iter):
+    """Border points (:func:`stairbounce.border_points`) as seeds: for each end of
+    each bracket inside the window whose outcome slides, ``{(hash1, hash2):
+    (itinerary, [points])}``."""
+    seeds = {}
+    buf = np.empty(max_iter, dtype=np.int64)
+    pe, pu, w = (np.asarray(points[k].values, float) for k in ("e", "u", "width"))
+    along_u = np.asarray(points["axis"].values).astype(str) == "u"
+    for x0, y0_, d, au in zip(pe, pu, w, along_u):
+        for x in ((x0, y0_), (x0, y0_ + d) if au else (x0 + d, y0_)):
+            if not (e[0] <= x[0] <= e[1] and u[0] <= x[1] <= u[1]):
+                continue
+            n = _itinerary_of(x[0], x[1], y0, v0, max_iter, buf)
+            if n <= 0:
+                continue
+            key = tuple(int(h) for h in _hash_itinerary(buf, n))
+            seeds.setdefault(key, (buf[:n].copy(), []))[1].append(x)
+    return seeds
+
+
+def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, points=None, progress=None):
+    """window_regions(e, u, *, resolution=256, max_iter=1000, points=None) -> list[Region]
+
+    Every word's region in a window (the words seen by a scan of
+    ``resolution`` x ``resolution`` pixel centres, and, with ``points`` (a
+    :func:`stairbounce.border_points` Dataset, e.g. of a finer scan), the
+    words on either side of those border points, each traced from there),
+    largest area first; see :func:`word_region` for the method and what it
+    can miss.
+    """
+    e, u = _check_window(e, u)
+    resolution = check_count("resolution", resolution, 2, 8192)
+    max_iter = check_count("max_iter", max_iter, 1)
+    y0, v0 = float(y0), float(v0)
+    if points is not None and not all(k in getattr(points, "variables", ()) for k in ("e", "u", "width", "axis")):
+        raise ValueError("points must be a Dataset from border_points (variables e, u, width, axis)")
+    es, us = _grid(e, u, resolution)
+    h1, h2, steps = _label_grid(es, us, max_iter, y0, v0)
+    keys, first = np.unique(np.stack([h1.ravel(), h2.ravel()], 1), axis=0, return_index=True)
+    seeds = _point_seeds(points, e, u, y0, v0, max_iter) if points is not None else {}
+    todo = {}
+    buf = np.empty(max_iter, dtype=np.int64)
+    for idx, (a, b) in zip(first, keys):
+        if a == 0:
+            continue
+        i, j = divmod(int(idx), es.size)
+        n = _itinerary_of(es[j], us[i], y0, v0, max_iter, buf)
+        todo[(int(a), int(b))] = buf[:n].copy()
+    for key, (ks, _) in seeds.items():
+        todo.setdefault(key, ks)
+    out = []
+    for key, ks in todo.items():
+        w = word_from_impacts(ks)
+        mask = (h1 == np.uint64(key[0])) & (h2 == np.uint64(key[1]))
+        comps, failures = _trace_word(ks, w, e, u, es, us, mask, y0, v0,
+                                      seeds=seeds.get(key, (None, ()))[1])
+        out.append(Region(w, e, u, comps, complete=failures == 0, failures=failures))
+        if progress is not None:
+            progress(len(out), len(todo))
+    out.sort(key=lambda r: -r.area)
+    return out
+
+
+# --------------------------------------------------------------------------- #
+# One arc from a point near it                                                #
+# --------------------------------------------------------------------------- #
+
+
+@njit(cache=True)
+def _prescribed_step(y, v, e, T, ratio, k):
+    """:func:`model._step` with the impact number ``k`` imposed (same arithmetic):
+    the one-sided limit of the map on a border where ``k`` changes."""
+    if k == SLIDING:
+        return 1.0, 0.0
+    if k == 0:
+        return y + v * T - 0.5 * T * T + 1.0, v - T
+    s = math.sqrt(v * v + 2.0 * y)
+    if k < _COUNTED_IMPACTS:
+        t = v + s
+        w = e * s
+        for _ in range(k - 1):
+            t = t + 2.0 * w
+            w *= e
+        d = T - t
+        return -0.5 * d * d + w * d + 1.0, w - d
+    log_e = math.log(e)
+    tk = _impact_time_log(v, s, e, k, log_e)
+    vk = math.pow(e, float(k)) * s
+    d = min(max(T - tk, 0.0), 2.0 * vk)
+    return -0.5 * d * d + vk * d + 1.0, vk - d
+
+
+@njit(cache=True)
+def _side_itinerary(e, u, y0, v0, prefix, k, max_iter, ks):
+    """The itinerary on one side of a border of step ``len(prefix) + 1``: the
+    prefix, then ``k`` imposed, then :func:`model._step` until the slide.
+    Fills ``ks``; returns the step count, or ``-max_iter`` without a slide."""
+    T, ratio = _constants(e, u)
+    y, v = y0, v0
+    n = prefix.size
+    for j in range(n):
+        y, v = _prescribed_step(y, v, e, T, ratio, prefix[j])
+        ks[j] = prefix[j]
+    ks[n] = k
+    if k == SLIDING:
+        return n + 1
+    y, v = _prescribed_step(y, v, e, T, ratio, k)
+    for m in range(n + 1, max_iter):
+        y, v, kk = _step(y, v, e, T, ratio)
+        ks[m] = kk
+        if kk == SLIDING:
+            return m + 1
+    return -max_iter
+
+
+def _outcome(e, u, y0, v0, max_iter, buf):
+    n = _itinerary_of(e, u, y0, v0, max_iter, buf)
+    return buf[:abs(n)].copy(), n > 0
+
+
+def _same(ka, sa, kb, sb):
+    """Whether two outcomes are the same: the same word, or both no slide within
+    max_iter (however their bounces differ)."""
+    return sa == sb and (not sa or np.array_equal(ka, kb))
+
+
+def _word_text(ks, slides):
+    return word_from_impacts(ks).format(ascii=True) if slides else "none within max_iter"
+
+
+def _event_between(ka, kb):
+    """(kind, k on the side where the margin is >= 0, slot side) of the event that
+    separates impact numbers ``ka`` and ``kb`` on one step."""
+    if SLIDING in (ka, kb):
+        return "chatter", SLIDING, 0
+    lo = min(ka, kb)
+    return ("graze" if lo == 0 else "edge"), lo, 1
+
+
+def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-3,
+                 max_points=20000):
+    """trace_border(e, u, *, window=None, max_iter=1000, search=1e-3) -> BorderArc
+
+    The border arc nearest to ``(e, u)`` along the axes, followed in both
+    directions by pseudo-arclength continuation.
+
+    A point where the outcome (the whole word, or "none within max_iter")
+    differs is searched along the four axis directions at distances doubling
+    up to ``search``, and the pair bisected to rounding.  The two itineraries
+    first differ at step j, by one event: ``graze`` (0 <-> 1 impacts),
+    ``edge`` (k <-> k+1) or ``chatter`` (finite <-> sliding).  The arc is the
+    level set ``F = 0`` of that event's margin along the common prefix (a
+    closed-form function of (e, u), :func:`_margins`), followed with an
+    adaptive step until a corner (a margin of the prefix, or the step's other
+    margin, vanishes: the prefix changes), a junction (the word on one side
+    changes: another border ends on this one, located by bisection along the
+    arc), the window's edge, or the curve leaving the domain.
+
+    Every point is a Newton solution of ``F = 0`` converged to a few ulps.
+
+    Returns
+    -------
+    BorderArc
+        ``e``, ``u`` arrays, ``kind``, ``step``, the words ``inside`` (where
+        the margin is >= 0) and ``outside``, and how each end was reached.
+    """
+    e = check_e(e)
+    u = check_u(u)
+    max_iter = check_count("max_iter", max_iter, 1)
+    search = _v.real("search", search)
+    if not 0.0 < search <= 1.0:
+        raise ValueError(f"search must be in (0, 1], got {search}")
+    if window is None:
+        window = ((max(0.0, e - 0.5), min(1.0 - 1e-9, e + 0.5)), (max(1e-3, u - 0.5), u + 0.5))
+    we, wu = _check_window(*window)
+    if not (we[0] <= e <= we[1] and wu[0] <= u <= wu[1]):
+        raise ValueError(f"(e, u) = ({e}, {u}) must lie in the window {window}")
+    y0, v0 = float(y0), float(v0)
+    buf = np.empty(max_iter, dtype=np.int64)
+    p = np.array([e, u])
+    kp, sp = _outcome(e, u, y0, v0, max_iter, buf)
+    q = None
+    d = 1e-12
+    while q is None and d <= search * 1.0001:
+        for de, du in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+            c = p + d * np.array([de, du])
+            if not (we[0] <= c[0] <= we[1] and wu[0] <= c[1] <= wu[1]):
+                continue
+            kc, sc = _outcome(c[0], c[1], y0, v0, max_iter, buf)
+            if not _same(kc, sc, kp, sp):
+                q = c
+                break
+        d *= 2.0
+    if q is None:
+        raise ValueError(f"no border within search = {search} of ({e}, {u}) along the axes")
+    a, b = p.copy(), q
+    while True:
+        m = 0.5 * (a + b)
+        if (m == a).all() or (m == b).all():
+            break
+        km, sm = _outcome(m[0], m[1], y0, v0, max_iter, buf)
+        if _same(km, sm, kp, sp):
+            a = m
+        else:
+            b = m
+    ka, sa = _outcome(a[0], a[1], y0, v0, max_iter, buf)
+    kb, sb_ = _outcome(b[0], b[1], y0, v0, max_iter, buf)
+    n = min(ka.size, kb.size)
+    diff = np.nonzero(ka[:n] != kb[:n])[0]
+    if diff.size == 0:
+        raise ValueError(f"the outcomes near ({e}, {u}) differ only beyond max_iter = {max_iter}")
+    j = int(diff[0])
+    kind, k_in, side = _event_between(int(ka[j]), int(kb[j]))
+    x0 = a if ka[j] == k_in else b
+    prefix = ka[:j].copy()
+    F = _Margins(np.append(prefix, k_in), (we[0], we[1], wu[0], wu[1]), y0, v0)
+    slot = 2 * j + side
+    k_out = int(kb[j]) if ka[j] == k_in else int(ka[j])
+    scale = max(we[1] - we[0], wu[1] - wu[0])
+    sides_buf = np.empty(max_iter + 1, dtype=np.int64)
+
+    # across a chatter border the non-sliding side's impact number is unbounded
+    # (edge borders k <-> k+1 accumulate on it, each a sliver of another word):
+    # its one-sided limit is the slide itself, so only the sliding side is followed
+    watched = (k_in,) if kind == "chatter" else (k_in, k_out)
+
+    def sides(x):
+        out = []
+        for k in watched:
+            nn = _side_itinerary(x[0], x[1], y0, v0, prefix, k, max_iter, sides_buf)
+            # two points that never slide are not separated by a border
+            out.append((sides_buf[:nn].tobytes() if nn > 0 else b"", nn > 0))
+        return out
+
+    def junction(x, y):
+        sx, sy = sides(x), sides(y)
+        if sx == sy:
+            return None
+        for _ in range(200):
+            mid = 0.5 * (np.asarray(x) + np.asarray(y))
+            t = _unit(y[0] - x[0], y[1] - x[1])
+            r = _correct(F, slot, mid, t)
+            if r is None or math.hypot(y[0] - x[0], y[1] - x[1]) <= _ulps(mid):
+                break
+            mid = r[0]
+            if (mid == x).all() or (mid == y).all():
+                break
+            if sides(mid) == sx:
+                x = mid
+            else:
+                y = mid
+        return np.asarray(y, float), F(y)
+
+    allc = np.arange(F.m)
+    others = allc[allc != slot]
+    g0 = F(x0)
+    halves = [_follow(F, slot, x0, g0, sgn, scale, others=others, max_points=max_points,
+                      junction=junction) for sgn in (-1, 1)]
+    back, fwd = halves
+    P = np.array(back.pts[::-1] + fwd.pts[1:])
+
+    def end(h):
+        if h.end == "corner":
+            ev = F.event(h.end_slot)
+            x = h.pts[-1]
+            return ("window" if ev[0] == "window" else "corner"), \
+                Corner(float(x[0]), float(x[1]), (F.event(slot), ev))
+        return h.end, None
+
+    (eb, cb), (ef, cf) = end(back), end(fwd)
+    k_a, s_a = _outcome(x0[0], x0[1], y0, v0, max_iter, buf)
+    other = b if x0 is a else a
+    k_b, s_b = _outcome(other[0], other[1], y0, v0, max_iter, buf)
+    arc = BorderArc(P[:, 0].copy(), P[:, 1].copy(), kind, j + 1, _word_text(k_a, s_a),
+                    _word_text(k_b, s_b), (eb, ef), (cb, cf))
+    arc.evaluations = F.evals
+    return arc
+
+
+# --------------------------------------------------------------------------- #
+# The planar graph of a window's borders                                      #
+# --------------------------------------------------------------------------- #
+
+
+@dataclass
+class BorderGraph:
+    """Nodes (corners) and edges (arcs between them) of a window's borders.
+
+    ``edges`` are ``(i, j, arc)`` with node indices; an arc shared by two
+    regions is one edge, its ``inside`` and ``outside`` the two words."""
+
+    nodes: list
+    edges: list
+    regions: list
+
+    def counts(self):
+        """Regions, arcs by kind and corners by their pair of kinds."""
+        arcs, corners = {}, {}
+        for _, _, a in self.edges:
+            arcs[a.kind] = arcs.get(a.kind, 0) + 1
+        for c in self.nodes:
+            key = "+".join(sorted(ev[0] for ev in c.events))
+            corners[key] = corners.get(key, 0) + 1
+        comps = sum(len(r.components) for r in self.regions)
+        return {"words": len(self.regions), "components": comps, "arcs": arcs, "corners": corners}
+
+    def words_by_period(self):
+        """N(p): the number of distinct words of period p among the regions."""
+        out = {}
+        for r in self.regions:
+            out[r.word.period] = out.get(r.word.period, 0) + 1
+        return dict(sorted(out.items()))
+
+    def __repr__(self):
+        c = self.counts()
+        return (f"BorderGraph({c['words']} words, {c['components']} components, "
+                f"{len(self.nodes)} corners, {len(self.edges)} arcs {c['arcs']})")
+
+
+def _curves(region):
+    for comp in region.components:
+        yield comp.boundary
+        yield from comp.holes
+
+
+def border_graph(regions):
+    """border_graph(regions) -> BorderGraph
+
+    The planar graph of the traced borders of ``regions`` (from
+    :func:`window_regions`): nodes are the corners (shared by the regions that
+    meet there, merged within 1e-11 of the window's size), edges the arcs
+    between consecutive corners of each boundary, an arc between two regions
+    kept once with the words on both sides.  Arcs are not split at a corner
+    that only one side's boundary has (a junction seen from one side): such an
+    arc may overlap the other side's two shorter arcs; ``counts`` then counts
+    both."""
+    regions = list(regions)
+    if not regions:
+        return BorderGraph([], [], [])
+    e, u = regions[0].e, regions[0].u
+    tol = 1e-11 * max(e[1] - e[0], u[1] - u[0])
+    nodes, index = [], {}
+
+    def node(x, events):
+        key = (round(x[0] / tol), round(x[1] / tol))
+        for dk in ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (-1, 1)):
+            k = (key[0] + dk[0], key[1] + dk[1])
+            if k in index:
+                return index[k]
+        index[key] = len(nodes)
+        nodes.append(Corner(float(x[0]), float(x[1]), events))
+        return index[key]
+
+    edges, seen = [], {}
+    for r in regions:
+        for curve in _curves(r):
+            for i, arc in enumerate(curve):
+                prev = curve[i - 1]
+                a = node((arc.e[0], arc.u[0]), ((prev.kind, prev.step), (arc.kind, arc.step)))
+                nxt = curve[(i + 1) % len(curve)]
+                b = node((arc.e[-1], arc.u[-1]), ((arc.kind, arc.step), (nxt.kind, nxt.step)))
+                mid = arc.e.size // 2
+                key = (arc.kind, arc.step, frozenset((a, b)),
+                       round(arc.e[mid] / (1e5 * tol)), round(arc.u[mid] / (1e5 * tol)))
+                if arc.kind != "window" and key in seen:
+                    seen[key].outside = arc.inside
+                    continue
+                if arc.kind != "window" and len(curve) == 1:
+                    key = (arc.kind, arc.step, id(arc))
+                seen[key] = arc
+                edges.append((a, b, arc))
+    return BorderGraph(nodes, edges, regions)
+
+
+# --------------------------------------------------------------------------- #
+# Export                                                                      #
+# --------------------------------------------------------------------------- #
+
+KIND_COLOURS = {"graze": "#1f77b4", "edge": "#2ca02c", "chatter": "#d62728", "window": "#999999"}
+
+
+def regions_geojson(regions) -> dict:
+    """regions_geojson(regions) -> dict
+
+    A GeoJSON FeatureCollection of ``regions`` (from :func:`word_region` or
+    :func:`window_regions`): one Polygon feature per connected component,
+    coordinates ``[e, u]``, the outer ring counter-clockwise and the holes
+    clockwise; properties ``word``, ``period``, ``impacts``, ``area``,
+    ``area_error``, ``kinds`` (arcs by kind) and ``corners``.
+    """
+    feats = []
+    for r in ([regions] if isinstance(regions, Region) else regions):
+        for ci, comp in enumerate(r.components):
+            rings = []
+            for h in [None] + list(range(len(comp.holes))):
+                pe, pu = comp.polygon(h)
+                rings.append(np.stack([pe, pu], 1).tolist())
+            feats.append({
+                "type": "Feature",
+                "geometry": {"type": "Polygon", "coordinates": rings},
+                "properties": {"word": r.word.format(ascii=True), "period": r.word.period,
+                               "impacts": r.word.impacts, "component": ci,
+                               "area": comp.area, "area_error": comp.area_error,
+                               "kinds": comp.kinds, "corners": len(comp.corners)},
+            })
+    return {"type": "FeatureCollection", "features": feats}
+
+
+def regions_svg(regions, size=800) -> str:
+    """regions_svg(regions, size=800) -> str
+
+    An SVG drawing of the traced borders of ``regions`` in their window, each
+    arc coloured by its kind (graze blue, edge green, chatter red, window
+    grey), e to the right and u upwards.
+    """
+    regions = [regions] if isinstance(regions, Region) else list(regions)
+    size = check_count("size", size, 16, 100000)
+    if not regions:
+        return f'<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{size}"/>\n'
+    e, u = regions[0].e, regions[0].u
+    sx, sy = size / (e[1] - e[0]), size / (u[1] - u[0])
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{size}" '
+           f'viewBox="0 0 {size} {size}">',
+           f'<title>borders of [{e[0]:g}, {e[1]:g}] x [{u[0]:g}, {u[1]:g}]</title>',
+           '<rect width="100%" height="100%" fill="white"/>']
+    for r in regions:
+        for curve in _curves(r):
+            for arc in curve:
+                if arc.kind == "window":
+                    continue
+                pts = " ".join(f"{(x - e[0]) * sx:.3f},{(u[1] - y) * sy:.3f}" for x, y in zip(arc.e, arc.u))
+                out.append(f'<polyline fill="none" stroke="{KIND_COLOURS[arc.kind]}" '
+                           f'stroke-width="0.6" points="{pts}"><title>{arc.kind} at step {arc.step}: '
+                           f'{arc.inside}</title></polyline>')
+    out.append("</svg>")
+    return "\n".join(out) + "\n"
+
+
+def write_regions(regions, path, overwrite=False):
+    """Write ``regions`` as GeoJSON (``.geojson``/``.json``) or SVG (``.svg``),
+    atomically; ValueError for another suffix."""
+    import json
+    from pathlib import Path
+
+    from ._io import atomic_path
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".geojson", ".json", ".svg"):
+        raise ValueError(f"out must end in .geojson, .json or .svg, got {path.name!r}")
+    text = regions_svg(regions) if suffix == ".svg" else json.dumps(regions_geojson(regions))
+    with atomic_path(path, overwrite) as tmp:
+        Path(tmp).write_text(text)
+    return path
+
+
+# --------------------------------------------------------------------------- #
+# Self-similarity on the exact borders                                        #
+# --------------------------------------------------------------------------- #
+
+
+def band_similarity(n=(2, 3, 4, 5, 6), repeats=(2, 3), *, resolution=256):
+    """band_similarity(n=(2, ..., 6), repeats=(2, 3), *, resolution=256) -> dict
+
+    Self-similarity between the bands ``sqrt((n-1)/2) < u <= sqrt(n/2)`` of
+    Figs. 5a-c, measured on exact borders: in band n, the region of the word
+    ``(n, ..., n)`` (``m`` letters, m in ``repeats``; the first members of the
+    family the band shows), its area and its corner of largest e (its tip),
+    and the ratios of both between consecutive bands.  A constant scale factor
+    would make each row of ratios constant.
+
+    Returns a dict ``{m: {"n": [...], "area": [...], "tip_e": [...],
+    "tip_u": [...], "area_ratio": [...], "tip_ratio": [...]}}`` and
+    ``"tongue_tip_ratio"``, the ratio e_{n+1}/e_n of Theorem 3.1's tips.
+    """
+    ns = [check_count("n", k, 2, 50) for k in n]
+    out = {}
+    for m in repeats:
+        m = check_count("repeats", m, 1, 20)
+        rows = {"n": [], "area": [], "area_error": [], "tip_e": [], "tip_u": []}
+        for k in ns:
+            lo, hi = math.sqrt((k - 1) / 2.0), math.sqrt(k / 2.0)
+            tip = (math.sqrt(k) - math.sqrt(k - 1)) ** 2
+            r = word_region((k,) * m, e=(1e-9, min(0.999, 2.0 * tip)), u=(lo, hi),
+                            resolution=resolution, max_iter=max(1000, 2 * k * m))
+            xs = [(c.e, c.u) for c in r.corners if c.events[0][0] != "window" or
+                  c.events[1][0] != "window"]
+            te, tu = max(xs) if xs else (math.nan, math.nan)
+            rows["n"].append(k)
+            rows["area"].append(r.area)
+            rows["area_error"].append(r.area_error)
+            rows["tip_e"].append(te)
+            rows["tip_u"].append(tu)
+        rows["area_ratio"] = [b / a if a else math.nan for a, b in zip(rows["area"], rows["area"][1:])]
+        rows["tip_ratio"] = [b / a if a else math.nan for a, b in zip(rows["tip_e"], rows["tip_e"][1:])]
+        out[m] = rows
+    tips = [(math.sqrt(k) - math.sqrt(k - 1)) ** 2 for k in ns]
+    out["tongue_tip_ratio"] = [b / a for a, b in zip(tips, tips[1:])]
+    return out
+
+
+def traced_columns(tab):
+    """Add ``traced_area``, ``traced_area_error``, ``components`` and ``complete``
+    to a word table (:func:`stairbounce.word_table` with ``regions=True``):
+    :func:`window_regions` of its window, seeded by a square scan of the larger
+    side of the table's grid, matched to the rows by the word's text."""
+    import xarray as xr
+
+    try:
+        e = (float(tab.attrs["e_min"]), float(tab.attrs["e_max"]))
+        u = (float(tab.attrs["u_min"]), float(tab.attrs["u_max"]))
+        res = max(int(tab.attrs["n_e"]), int(tab.attrs["n_u"]))
+    except KeyError:
+        raise ValueError("regions=True needs the scan's window (attributes e_min, e_max, u_min, "
+                         "u_max, n_e, n_u)") from None
+    e = (e[0], min(e[1], 1.0 - 1e-12))
+    u = (max(u[0], 1e-9), u[1])
+    found = {r.word.format(ascii=True): r for r in
+             window_regions(e, u, resolution=res, max_iter=int(tab.attrs.get("max_iter", 1000)))}
+    rows = [found.get(str(t)) for t in tab.text.values]
+    dim = ("word",)
+    return tab.assign(
+        traced_area=(dim, np.array([r.area if r else np.nan for r in rows]),
+                     {"long_name": "area of the traced region (stairbounce.regions)"}),
+        traced_area_error=(dim, np.array([r.area_error if r else np.nan for r in rows]),
+                           {"long_name": "error estimate of traced_area"}),
+        components=(dim, np.array([len(r.components) if r else 0 for r in rows], np.int64),
+                    {"long_name": "connected components traced"}),
+        complete=(dim, np.array([bool(r and r.complete) for r in rows]),
+                  {"long_name": "every seed's walk closed"}),
+    ) if isinstance(tab, xr.Dataset) else tab
