@@ -59,7 +59,11 @@ def mount(where, options):
 
 
 def umount(where):
-    subprocess.run(["umount", str(where)], check=False)
+    # a file the failed write left open (netCDF's handle after ENOSPC) keeps the
+    # mount busy until the process ends: detach it lazily then, so pytest can
+    # remove its temporary folders
+    if subprocess.run(["umount", str(where)], capture_output=True).returncode != 0:
+        subprocess.run(["umount", "-l", str(where)], check=False, capture_output=True)
 
 
 # --------------------------------------------------------------------------- #

@@ -97,3 +97,22 @@ def test_bad_parameters_name_themselves(kwargs, name):
 def test_a_border_the_lines_miss_is_refused():
     with pytest.raises(ValueError, match="no crossing"):
         slicing_dimension(lambda x, y: np.zeros(x.shape, bool), UNIT, n_lines=4)
+
+
+def test_the_classifier_takes_points_next_to_the_edge_e_0():
+    """A line refined next to a window's edge e = 0 lands in (0, 2^-53), outside the
+    valid numeric range (model.check_e refuses it by name); the estimators' classifier
+    evaluates such points at e = 0 (the rebound of e < 2^-53 accumulates at once), so
+    the Fig. 6 window's slicing run at the gallery's size no longer stops there."""
+    import numpy as np
+    import pytest
+
+    import stairbounce as sb
+
+    with pytest.raises(ValueError, match="2\\^-53"):
+        sb.scan_points(np.array([4.6e-18]), np.array([0.5]), max_iter=50)
+    c = sb.sliding_classifier(max_iter=300)
+    u = np.array([0.3, 0.5, 0.7, 1.2])
+    tiny = c(np.full(4, 4.6e-18), u)
+    assert (tiny == c(np.zeros(4), u)).all()
+    assert (c(np.full(4, 0.1), u) == sb.scan_points(np.full(4, 0.1), u, max_iter=300).status.values).all()

@@ -23,7 +23,16 @@ class SlidingClassifier:
     def __call__(self, e, u):
         from ..plane import scan_points
 
-        ds = scan_points(np.asarray(e, dtype=float), np.asarray(u, dtype=float),
+        from .._validate import E_MIN
+
+        e = np.asarray(e, dtype=float)
+        # a random point or a line refined next to a window's edge e = 0 may land in
+        # (0, 2^-53), outside the valid numeric range: there (1+e)/(1-e) rounds to 1 and
+        # the model cannot tell e from 0. Such a point is evaluated at e = 0; the exact
+        # answer differs only within about e|v| ~ 1e-16 in time of a graze (the rebound
+        # of e < 2^-53 accumulates at once), far below every scale the estimators fit.
+        e = np.where((e > 0.0) & (e < E_MIN), 0.0, e)
+        ds = scan_points(e, np.asarray(u, dtype=float),
                          max_iter=self.max_iter, y0=self.y0, v0=self.v0, prune=self.prune)
         name = "status" if self.which == "sliding" else "word_length"
         return np.asarray(ds[name])
