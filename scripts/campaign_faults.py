@@ -312,7 +312,9 @@ def part_damage(t, work, args):
 LONG_KERNELS = {
     "orbit-diagram transient 1e12": ["orbit-diagram", "--e", "0.1", "--u", "0.3:1", "--n", "50",
                                      "--transient", "1000000000000", "--png", "x.png"],
-    "scan max_iter 2e9": ["scan", "--e", "0.999:1", "--u", "0:0.001", "--size", "64x64",
+    # below Corollary 2.1's bound (nothing pruned), where orbits need not slide: the
+    # window e 0.999:1, u 0:0.001 used before now finishes in about 11 s (faster kernels)
+    "scan max_iter 2e9": ["scan", "--e", "0.5:0.51", "--u", "0.2:0.249", "--size", "64x64",
                           "--max-iter", "2000000000", "--png", "x.png"],
 }
 
