@@ -29,7 +29,11 @@ any case unmarked: a re-run computes it again.  A re-run also reads every tile
 marked done and compares it with its checksum: a deleted, truncated or garbled
 chunk is found, said (a ``RuntimeWarning``) and the tile computed again.  A
 chunk never written reads as :data:`stairbounce.plane.FILL_VALUES` (status
-255, counts -1), never as a result.
+255, counts -1), never as a result.  The coordinates (outside the tiles'
+checksums) are compared with the pixel centres of the window and rewritten
+when wrong; a done flag or checksum that cannot be read counts as a damaged
+tile.  Where no lock can be taken (a read-only file system) a complete,
+intact store opens read-only.
 
 One writer at a time: a scan holds the store's lock
 (:func:`stairbounce._io.store_lock`, a lock file beside the store with the
@@ -37,7 +41,10 @@ owner's host, pid and a token) from before it creates the store until it
 returns; a second scan on the same path is refused with the holder's name.
 Every tile, wherever it runs, checks that the lock still holds the token of
 the scan that handed it out before it writes, so only the client holding the
-lock ever writes into the store.
+lock ever writes into the store.  The lock is that of the store a path leads
+to (symlinks resolved), and every tile also checks, before and after it
+writes, that the store at the path is still the one its scan opened (its
+token): a store replaced under a running scan stops it with an error.
 
 Dask and Numba threads: each tile runs the parallel numba kernel of
 :mod:`stairbounce.plane`, which releases the GIL.  On a Dask worker a tile uses
