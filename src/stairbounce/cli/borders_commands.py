@@ -92,7 +92,7 @@ def _figure(png, dpi, force, draw):
     save_figure(fig, png, dpi, force)
 
 
-@app.command("borders")
+@app.command("borders", short_help="Borders between pixels located to rounding, by event.")
 def borders_(
     e: str = typer.Option("0:1", "--e", help=E_HELP),
     u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5."),
@@ -137,7 +137,7 @@ def borders_(
                f"{int(pts.sliding_border.values.sum())} on the border of the sliding region")
 
 
-@app.command("words")
+@app.command("words", short_help="The distinct words of a window and N(p), or regions.")
 def words_(
     e: str = typer.Option("0:1", "--e", help=E_HELP),
     u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5."),
@@ -189,7 +189,7 @@ def words_(
                    f"chatter {int(r.chatter)}")
 
 
-@app.command("itinerary")
+@app.command("itinerary", short_help="Impact numbers and event margins, step by step.")
 def itinerary_(
     e: float = typer.Option(..., "--e", help="Restitution coefficient, in [0, 1)."),
     u: float = typer.Option(None, "--u", help="Horizontal speed in normalised units (u > 0). Or --speed with "

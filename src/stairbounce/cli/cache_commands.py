@@ -12,7 +12,7 @@ cache_app = typer.Typer(
     help="See or empty the cache of computed scans that 'figures' keeps (default ~/.cache/stairbounce).",
     no_args_is_help=True,
 )
-app.add_typer(cache_app, name="cache")
+app.add_typer(cache_app, name="cache", short_help="See or empty the figures' cache of scans.")
 
 CACHE_DIR_HELP = "The cache folder (default $XDG_CACHE_HOME/stairbounce, ~/.cache/stairbounce)."
 
