@@ -1223,6 +1223,8 @@ def test_tap_reports_the_words_row_of_the_views_word_table(explorer):
     ref = _row_of(tab, "(2, 0^inf)")
     found = V.word_row(app.view, "(2, 0^inf)")
     assert found["row"] == ref and found["grid"] == (60, 50) and found["words"] == tab.sizes["word"]
+    assert app._word_table[0] == (V.border_grid(app.view), 300)
+    assert app._word_table[1].identical(tab)  # kept for the next tap in this view
     assert ref["pixels"] > 100 and ref["graze"] + ref["chatter"] > 0  # a row that could be wrong
     text = app.point_pane.object
     assert "computing" not in text
@@ -1235,7 +1237,13 @@ def test_tap_reports_the_words_row_of_the_views_word_table(explorer):
                  f"u {ref['u_min']:.6g} .. {ref['u_max']:.6g}",
                  f"graze {ref['graze']}, edge {ref['edge']}, chatter {ref['chatter']}"):
         assert part in text, part
-    # with the exact borders drawn, the tap reuses their points: the same row
+    # a second tap in the view reuses the table; with the exact borders drawn, the
+    # tap reuses their points: the same row either way
+    kept = app._word_table[1]
+    app._on_tap(SimpleNamespace(x=0.05, y=0.8))
+    assert app._word_table[1] is kept
+    assert f"graze {ref['graze']}, edge {ref['edge']}, chatter {ref['chatter']}" in app.point_pane.object
+    app._word_table = None
     app.overlays.value = ["borders"]
     assert app._borders[0] == (V.border_grid(app.view), 300)
     app._on_tap(SimpleNamespace(x=0.05, y=0.8))

@@ -219,6 +219,8 @@ class Explorer:
         self._point_text = ""  # the tap's word line, the word table row appended below it
         # the exact borders last drawn: ((grid, max_iter), border_points Dataset), reused by a tap
         self._borders = None
+        # the word table of the last tap's view: ((grid, max_iter), Dataset), reused by the next tap there
+        self._word_table = None
         self._syncing = False
         self._closed = False
         self._connected = False
@@ -867,24 +869,27 @@ class Explorer:
         # the exact borders overlay's points of the same grid, when drawn: the row's border counts
         borders = self._borders
         points = borders[1] if borders is not None and borders[0] == _border_key(view) else None
+        cached = self._word_table
+        table = cached[1] if cached is not None and cached[0] == _border_key(view) else None
         self._sched.submit(
-            self, "point", self._point_work(e, u, view, points),
+            self, "point", self._point_work(e, u, view, points, table),
             on_slice=lambda d: self._next_tick(
                 self._show_word_row if "word_row" in d else self._show_point, gen, view, d),
             on_done=lambda result, error, _job: self._next_tick(self._show_orbit, gen, view, result, error),
             alive=self._alive,
         )
 
-    def _point_work(self, e, u, view, points=None):
+    def _point_work(self, e, u, view, points=None, table=None):
         """Slices: the word and trajectory (shown at once); for a sliding point
         its row of the view's word table (view.word_row, on a grid of at most
         BORDER_SIDE x BORDER_SIDE pixels; ``points``: that grid's border points
-        when the overlay has them); then the orbit diagram."""
+        when the overlay has them, ``table``: its word table when a previous
+        tap computed it); then the orbit diagram."""
         details = point_details(e, u, view.max_iter, max_steps=MAX_TRAJECTORY_STEPS)
         yield details
         if details["word"] is not None:
             text = details["word"].format(ascii=True)
-            yield {"word_row": word_row(view, text, points=points), "text": text}
+            yield {"word_row": word_row(view, text, points=points, table=table), "text": text}
         return orbit_along_u(e, max(view.u_lo, 0.0), view.u_hi)
 
     def _show_point(self, gen, view, d):
@@ -937,6 +942,7 @@ class Explorer:
 
     def _show_word_row(self, gen, view, d):
         """The tapped word's row of the view's word table, under the word line."""
+        self._word_table = (_border_key(view), d["word_row"]["table"])
         if gen != self._tap_gen:
             return
         head = self._point_text.split('<br><span class="sb-row">')[0]

@@ -787,28 +787,30 @@ WORD_ROW_FIELDS = ("text", "letters", "period", "impacts", "pixels", "area_fract
 """The columns of :func:`stairbounce.word_table` a tap reports (:func:`word_row`)."""
 
 
-def word_row(view: View, text: str, side: int = BORDER_SIDE, points: xr.Dataset | None = None) -> dict:
-    """word_row(view, text, side=BORDER_SIDE, points=None) -> dict
+def word_row(view: View, text: str, side: int = BORDER_SIDE, points: xr.Dataset | None = None,
+             table: xr.Dataset | None = None) -> dict:
+    """word_row(view, text, side=BORDER_SIDE, points=None, table=None) -> dict
 
     The row of the word ``text`` (ASCII, as ``Word.format(ascii=True)``) in
     :func:`stairbounce.word_table` of the view: the grid :func:`border_grid`
     (at most ``side`` x ``side`` pixels of the window, the view's max_iter);
     ``points``: that grid's :func:`view_border_points` when already computed
-    (the "exact borders" overlay).  Returns ``{"grid": (n_e, n_u), "words":
-    number of distinct words there, "row": {column: value} or None}`` (None:
-    the word has no pixel centre on that grid, e.g. a region smaller than
-    its pixels).
+    (the "exact borders" overlay); ``table``: that grid's word table when
+    already computed (a previous tap in the same view).  Returns ``{"grid":
+    (n_e, n_u), "words": number of distinct words there, "row": {column:
+    value} or None, "table": the word table}`` (row None: the word has no
+    pixel centre on that grid, e.g. a region smaller than its pixels).
     """
     from ..borders import word_table
 
     e, u = border_grid(view, side)
-    tab = word_table(e=e, u=u, max_iter=view.max_iter, points=points)
+    tab = word_table(e=e, u=u, max_iter=view.max_iter, points=points) if table is None else table
     hit = np.flatnonzero(tab["text"].values == text)
     row = None
     if hit.size:
         r = tab.isel(word=int(hit[0]))
         row = {k: r[k].item() for k in WORD_ROW_FIELDS}
-    return {"grid": (e[2], u[2]), "words": int(tab.sizes["word"]), "row": row}
+    return {"grid": (e[2], u[2]), "words": int(tab.sizes["word"]), "row": row, "table": tab}
 
 
 def point_details(e: float, u: float, max_iter: int, steps: int | None = None,
