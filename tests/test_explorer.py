@@ -1204,7 +1204,7 @@ def _row_of(tab, text):
     return {k: r[k].item() for k in V.WORD_ROW_FIELDS}
 
 
-def test_tap_reports_the_words_row_of_the_views_word_table(explorer):
+def test_tap_reports_the_words_row_of_the_views_word_table(explorer, monkeypatch):
     """Issue 21 item 6: a tap reports its word's row of stairbounce.word_table of
     the view (on the border grid, here the view's own 60 x 50 pixels), computed
     in the tap's scheduler job; a point that does not slide has no row."""
@@ -1212,9 +1212,13 @@ def test_tap_reports_the_words_row_of_the_views_word_table(explorer):
 
     app, ex = explorer
     n = len(ex.calls)
+    scans = []  # the view is at most BORDER_SIDE per side: the tap uses its own scan, computes none
+    real_scan = plane.scan
+    monkeypatch.setattr(plane, "scan", lambda *a, **k: scans.append(1) or real_scan(*a, **k))
     # inside the n = 2 tongue of Theorem 3.1 at e = 0.05: sqrt(1/2) < u <= sqrt(1) (0.95 / 1.05)
     app._on_tap(SimpleNamespace(x=0.05, y=0.8))
     assert ex.calls[n:] == ["point"]  # the row came with the tap's own job
+    assert scans == []
     e, u = app.view.point
     w = sliding_word(e, u, 300)
     assert w.format(ascii=True) == "(2, 0^inf)"
@@ -1225,6 +1229,8 @@ def test_tap_reports_the_words_row_of_the_views_word_table(explorer):
     assert found["row"] == ref and found["grid"] == (60, 50) and found["words"] == tab.sizes["word"]
     assert app._word_table[0] == (V.border_grid(app.view), 300)
     assert app._word_table[1].identical(tab)  # kept for the next tap in this view
+    # computed from the view's own scan (its pixels are the grid): the same table
+    assert sb.word_table(app.ds).equals(tab) and V.word_row(app.view, "(2, 0^inf)", scan=app.ds)["row"] == ref
     assert ref["pixels"] > 100 and ref["graze"] + ref["chatter"] > 0  # a row that could be wrong
     text = app.point_pane.object
     assert "computing" not in text

@@ -64,6 +64,7 @@ from .view import (
     SLIDES_COLOR,
     U_LIMIT,
     View,
+    BORDER_SIDE,
     border_grid,
     border_overlay,
     check_view,
@@ -871,25 +872,31 @@ class Explorer:
         points = borders[1] if borders is not None and borders[0] == _border_key(view) else None
         cached = self._word_table
         table = cached[1] if cached is not None and cached[0] == _border_key(view) else None
+        # the view's own scan when its pixels are the grid (a view of at most BORDER_SIDE per side)
+        shown = self.shown
+        scan = (self.ds if shown is not None and self.ds is not None and _border_key(shown) == _border_key(view)
+                and (shown.width, shown.height) == (view.width, view.height)
+                and max(view.width, view.height) <= BORDER_SIDE else None)
         self._sched.submit(
-            self, "point", self._point_work(e, u, view, points, table),
+            self, "point", self._point_work(e, u, view, points, table, scan),
             on_slice=lambda d: self._next_tick(
                 self._show_word_row if "word_row" in d else self._show_point, gen, view, d),
             on_done=lambda result, error, _job: self._next_tick(self._show_orbit, gen, view, result, error),
             alive=self._alive,
         )
 
-    def _point_work(self, e, u, view, points=None, table=None):
+    def _point_work(self, e, u, view, points=None, table=None, scan=None):
         """Slices: the word and trajectory (shown at once); for a sliding point
         its row of the view's word table (view.word_row, on a grid of at most
         BORDER_SIDE x BORDER_SIDE pixels; ``points``: that grid's border points
         when the overlay has them, ``table``: its word table when a previous
-        tap computed it); then the orbit diagram."""
+        tap computed it, ``scan``: the view's own scan when it is that grid);
+        then the orbit diagram."""
         details = point_details(e, u, view.max_iter, max_steps=MAX_TRAJECTORY_STEPS)
         yield details
         if details["word"] is not None:
             text = details["word"].format(ascii=True)
-            yield {"word_row": word_row(view, text, points=points, table=table), "text": text}
+            yield {"word_row": word_row(view, text, points=points, table=table, scan=scan), "text": text}
         return orbit_along_u(e, max(view.u_lo, 0.0), view.u_hi)
 
     def _show_point(self, gen, view, d):

@@ -788,15 +788,16 @@ WORD_ROW_FIELDS = ("text", "letters", "period", "impacts", "pixels", "area_fract
 
 
 def word_row(view: View, text: str, side: int = BORDER_SIDE, points: xr.Dataset | None = None,
-             table: xr.Dataset | None = None) -> dict:
-    """word_row(view, text, side=BORDER_SIDE, points=None, table=None) -> dict
+             table: xr.Dataset | None = None, scan: xr.Dataset | None = None) -> dict:
+    """word_row(view, text, side=BORDER_SIDE, points=None, table=None, scan=None) -> dict
 
     The row of the word ``text`` (ASCII, as ``Word.format(ascii=True)``) in
     :func:`stairbounce.word_table` of the view: the grid :func:`border_grid`
     (at most ``side`` x ``side`` pixels of the window, the view's max_iter);
     ``points``: that grid's :func:`view_border_points` when already computed
     (the "exact borders" overlay); ``table``: that grid's word table when
-    already computed (a previous tap in the same view).  Returns ``{"grid":
+    already computed (a previous tap in the same view); ``scan``: the view's
+    own scan when its pixels are that grid (no scan is computed then).  Returns ``{"grid":
     (n_e, n_u), "words": number of distinct words there, "row": {column:
     value} or None, "table": the word table}`` (row None: the word has no
     pixel centre on that grid, e.g. a region smaller than its pixels).
@@ -804,7 +805,12 @@ def word_row(view: View, text: str, side: int = BORDER_SIDE, points: xr.Dataset 
     from ..borders import word_table
 
     e, u = border_grid(view, side)
-    tab = word_table(e=e, u=u, max_iter=view.max_iter, points=points) if table is None else table
+    if table is not None:
+        tab = table
+    elif scan is not None:
+        tab = word_table(scan, points=points)
+    else:
+        tab = word_table(e=e, u=u, max_iter=view.max_iter, points=points)
     hit = np.flatnonzero(tab["text"].values == text)
     row = None
     if hit.size:
