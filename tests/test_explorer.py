@@ -1196,6 +1196,79 @@ def test_exact_borders_overlay_shows_the_views_border_points(explorer):
     assert app.border_src.data["e"] == []
 
 
+def _row_of(tab, text):
+    """The row of ``text`` in a word_table, as {column: value}."""
+    hit = np.flatnonzero(tab["text"].values == text)
+    assert hit.size == 1
+    r = tab.isel(word=int(hit[0]))
+    return {k: r[k].item() for k in V.WORD_ROW_FIELDS}
+
+
+def test_tap_reports_the_words_row_of_the_views_word_table(explorer, monkeypatch):
+    """Issue 21 item 6: a tap reports its word's row of stairbounce.word_table of
+    the view (on the border grid, here the view's own 60 x 50 pixels), computed
+    in the tap's scheduler job; a point that does not slide has no row."""
+    import stairbounce as sb
+
+    app, ex = explorer
+    n = len(ex.calls)
+    scans = []  # the view is at most BORDER_SIDE per side: the tap uses its own scan, computes none
+    real_scan = plane.scan
+    monkeypatch.setattr(plane, "scan", lambda *a, **k: scans.append(1) or real_scan(*a, **k))
+    # inside the n = 2 tongue of Theorem 3.1 at e = 0.05: sqrt(1/2) < u <= sqrt(1) (0.95 / 1.05)
+    app._on_tap(SimpleNamespace(x=0.05, y=0.8))
+    assert ex.calls[n:] == ["point"]  # the row came with the tap's own job
+    assert scans == []
+    e, u = app.view.point
+    w = sliding_word(e, u, 300)
+    assert w.format(ascii=True) == "(2, 0^inf)"
+    assert V.border_grid(app.view) == ((0.0, 0.4, 60), (0.3, 1.1, 50))
+    tab = sb.word_table(e=(0.0, 0.4, 60), u=(0.3, 1.1, 50), max_iter=300)
+    ref = _row_of(tab, "(2, 0^inf)")
+    found = V.word_row(app.view, "(2, 0^inf)")
+    assert found["row"] == ref and found["grid"] == (60, 50) and found["words"] == tab.sizes["word"]
+    assert app._word_table[0] == (V.border_grid(app.view), 300)
+    assert app._word_table[1].identical(tab)  # kept for the next tap in this view
+    # computed from the view's own scan (its pixels are the grid): the same table
+    assert sb.word_table(app.ds).equals(tab) and V.word_row(app.view, "(2, 0^inf)", scan=app.ds)["row"] == ref
+    assert ref["pixels"] > 100 and ref["graze"] + ref["chatter"] > 0  # a row that could be wrong
+    text = app.point_pane.object
+    assert "computing" not in text
+    assert f"word table of this view (60 x 50 pixels, {tab.sizes['word']} words)" in text
+    # the row's letters, period and impacts are the tapped Word's
+    assert (ref["letters"], ref["period"], ref["impacts"]) == (len(w), w.period, w.impacts) == (1, 2, 0)
+    for part in ("(2, 0^inf)", "1 letter,", "period 2,", "0 finite impacts per period",
+                 f"{ref['pixels']} pixels", f"{100 * ref['area_fraction']:.3g} % of the view",
+                 f"({ref['e_rep']:.6g}, {ref['u_rep']:.6g})", f"e {ref['e_min']:.6g} .. {ref['e_max']:.6g}",
+                 f"u {ref['u_min']:.6g} .. {ref['u_max']:.6g}",
+                 f"graze {ref['graze']}, edge {ref['edge']}, chatter {ref['chatter']}"):
+        assert part in text, part
+    # a second tap in the view reuses the table; with the exact borders drawn, the
+    # tap reuses their points: the same row either way
+    kept = app._word_table[1]
+    app._on_tap(SimpleNamespace(x=0.05, y=0.8))
+    assert app._word_table[1] is kept
+    assert f"graze {ref['graze']}, edge {ref['edge']}, chatter {ref['chatter']}" in app.point_pane.object
+    app._word_table = None
+    app.overlays.value = ["borders"]
+    assert app._borders[0] == (V.border_grid(app.view), 300)
+    app._on_tap(SimpleNamespace(x=0.05, y=0.8))
+    assert f"graze {ref['graze']}, edge {ref['edge']}, chatter {ref['chatter']}" in app.point_pane.object
+    # a point that does not slide within max_iter: no row
+    app._on_tap(SimpleNamespace(x=0.4, y=0.33))
+    assert sliding_word(*app.view.point, 300) is None
+    text = app.point_pane.object
+    assert "none within max_iter (no row)" in text and "word table of this view" not in text
+
+
+def test_tap_word_row_grid_is_at_most_border_side_and_says_when_the_word_is_off_it():
+    big = V.View(0.0, 0.4, 0.3, 1.1, 600, 400, max_iter=300)
+    assert V.border_grid(big) == ((0.0, 0.4, V.BORDER_SIDE), (0.3, 1.1, V.BORDER_SIDE))
+    small = V.View(0.0, 0.4, 0.3, 1.1, 12, 10, max_iter=300)
+    found = V.word_row(small, "(7, 0, 3, 0^inf)")  # no such word in this window
+    assert found["row"] is None and found["grid"] == (12, 10) and found["words"] >= 2
+
+
 def test_png_export_draws_the_exact_borders_overlay():
     from PIL import Image
 

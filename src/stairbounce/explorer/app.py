@@ -64,6 +64,8 @@ from .view import (
     SLIDES_COLOR,
     U_LIMIT,
     View,
+    BORDER_SIDE,
+    border_grid,
     border_overlay,
     check_view,
     color_key,
@@ -76,6 +78,8 @@ from .view import (
     parse_window,
     pixel_of,
     point_details,
+    view_border_points,
+    word_row,
     preview_rgba,
     render_slices,
     shade,
@@ -213,6 +217,11 @@ class Explorer:
         self._doc = pn.state.curdoc
         self._gen = 0
         self._tap_gen = 0
+        self._point_text = ""  # the tap's word line, the word table row appended below it
+        # the exact borders last drawn: ((grid, max_iter), border_points Dataset), reused by a tap
+        self._borders = None
+        # the word table of the last tap's view: ((grid, max_iter), Dataset), reused by the next tap there
+        self._word_table = None
         self._syncing = False
         self._closed = False
         self._connected = False
@@ -618,7 +627,9 @@ class Explorer:
         if "borders" not in view.overlays:
             data = dict(e=[], u=[], kind=[], step=[], word_low=[], word_high=[])
         else:
-            data = border_overlay(view)
+            pts = view_border_points(view)
+            self._borders = (_border_key(view), pts)
+            data = border_overlay(view, points=pts)
         data["color"] = [KIND_COLORS[k] for k in data["kind"]]
         self.border_src.data = data
 
@@ -856,17 +867,36 @@ class Explorer:
         view = self.view
         self.point_src.data = dict(x=[e], y=[u])
         self.point_pane.object = f"<i>computing the orbit at e = {e!r}, u = {u!r} ...</i>"
+        # the exact borders overlay's points of the same grid, when drawn: the row's border counts
+        borders = self._borders
+        points = borders[1] if borders is not None and borders[0] == _border_key(view) else None
+        cached = self._word_table
+        table = cached[1] if cached is not None and cached[0] == _border_key(view) else None
+        # the view's own scan when its pixels are the grid (a view of at most BORDER_SIDE per side)
+        shown = self.shown
+        scan = (self.ds if shown is not None and self.ds is not None and _border_key(shown) == _border_key(view)
+                and (shown.width, shown.height) == (view.width, view.height)
+                and max(view.width, view.height) <= BORDER_SIDE else None)
         self._sched.submit(
-            self, "point", self._point_work(e, u, view),
-            on_slice=lambda d: self._next_tick(self._show_point, gen, view, d),
+            self, "point", self._point_work(e, u, view, points, table, scan),
+            on_slice=lambda d: self._next_tick(
+                self._show_word_row if "word_row" in d else self._show_point, gen, view, d),
             on_done=lambda result, error, _job: self._next_tick(self._show_orbit, gen, view, result, error),
             alive=self._alive,
         )
 
-    def _point_work(self, e, u, view):
-        """Two slices: the word and trajectory (shown at once), then the orbit diagram."""
+    def _point_work(self, e, u, view, points=None, table=None, scan=None):
+        """Slices: the word and trajectory (shown at once); for a sliding point
+        its row of the view's word table (view.word_row, on a grid of at most
+        BORDER_SIDE x BORDER_SIDE pixels; ``points``: that grid's border points
+        when the overlay has them, ``table``: its word table when a previous
+        tap computed it, ``scan``: the view's own scan when it is that grid);
+        then the orbit diagram."""
         details = point_details(e, u, view.max_iter, max_steps=MAX_TRAJECTORY_STEPS)
         yield details
+        if details["word"] is not None:
+            text = details["word"].format(ascii=True)
+            yield {"word_row": word_row(view, text, points=points, table=table, scan=scan), "text": text}
         return orbit_along_u(e, max(view.u_lo, 0.0), view.u_hi)
 
     def _show_point(self, gen, view, d):
@@ -893,6 +923,13 @@ class Explorer:
                     f"(plus the accumulation), {_plural(w.jumps, 'non-zero letter')}")
             shown = "one full period" if steps >= w.period else f"first {steps} steps of the period"
             title = f"trajectory from (1, 0), {_plural(steps, 'step')}: {shown} (period {w.period})"
+        if w is None:
+            body += '<br><span class="sb-row">its row of the word table: none within max_iter (no row)</span>'
+        else:
+            (_, _, n_e), (_, _, n_u) = border_grid(view)
+            body += (f'<br><span class="sb-row"><i>its row of the word table of this view '
+                     f"({n_e} x {n_u} pixels): computing ...</i></span>")
+        self._point_text = head + body
         self.point_pane.object = head + body + _motion_table(d.get("motion"))
         sec = d.get("section")
         self.section_src.data = dict(x=sec[0], y=sec[1]) if sec is not None else dict(x=[], y=[])
@@ -909,6 +946,15 @@ class Explorer:
                                    ys=[[y, y] for _, _, y in d["slides"]])
         self.traj_fig.title.text = title
         self.traj_fig.legend.visible = True
+
+    def _show_word_row(self, gen, view, d):
+        """The tapped word's row of the view's word table, under the word line."""
+        self._word_table = (_border_key(view), d["word_row"]["table"])
+        if gen != self._tap_gen:
+            return
+        head = self._point_text.split('<br><span class="sb-row">')[0]
+        self._point_text = head + '<br><span class="sb-row">' + _row_text(d["word_row"], d["text"]) + "</span>"
+        self.point_pane.object = self._point_text
 
     def _show_orbit(self, gen, view, orbit, error):
         if gen != self._tap_gen:
@@ -941,6 +987,28 @@ class Explorer:
         ds = self.ds
         data = await asyncio.wrap_future(_EXPORTS.submit(view_netcdf, ds))
         return io.BytesIO(data)
+
+
+def _border_key(view):
+    """What the exact borders of a view depend on: their grid and max_iter."""
+    return border_grid(view), view.max_iter
+
+
+def _row_text(found, text):
+    """Two short lines: the tapped word's row of the view's word table
+    (view.word_row), or why it has none."""
+    n_e, n_u = found["grid"]
+    r = found["row"]
+    where = f"word table of this view ({n_e} x {n_u} pixels, {_plural(found['words'], 'word')})"
+    if r is None:
+        return f"<i>{html.escape(text)}: no pixel centre of the {where}</i>"
+    return (f'{where}: <span class="sb-row-word">{html.escape(r["text"])}</span>, '
+            f"{_plural(r['letters'], 'letter')}, period {r['period']}, "
+            f"{_plural(r['impacts'], 'finite impact')} per period, {_plural(r['pixels'], 'pixel')} "
+            f"({100 * r['area_fraction']:.3g} % of the view)<br>"
+            f"representative (e, u) = ({r['e_rep']:.6g}, {r['u_rep']:.6g}), "
+            f"box e {r['e_min']:.6g} .. {r['e_max']:.6g}, u {r['u_min']:.6g} .. {r['u_max']:.6g}; "
+            f"border points: graze {r['graze']}, edge {r['edge']}, chatter {r['chatter']}")
 
 
 def _motion_table(m):

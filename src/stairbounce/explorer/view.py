@@ -749,21 +749,74 @@ def overlay_curves(view: View, samples: int = 400, max_tongues: int = 400) -> di
     return {"tongues": (txs, tys), "no_sliding": ([e[ok]], [ns[ok]])}
 
 
-def border_overlay(view: View, side: int = BORDER_SIDE) -> dict:
-    """border_overlay(view, side=BORDER_SIDE) -> dict
+def border_grid(view: View, side: int = BORDER_SIDE) -> tuple:
+    """border_grid(view, side=BORDER_SIDE) -> ((e_lo, e_hi, n_e), (u_lo, u_hi, n_u))
+
+    The window arguments of the grid of at most ``side`` x ``side`` pixels of
+    the view's window on which the exact borders and the tap's word table row
+    are computed (the view's own pixels when it is no larger).
+    """
+    n_e = max(2, min(side, view.width))
+    n_u = max(2, min(side, view.height))
+    return (view.e_lo, view.e_hi, n_e), (view.u_lo, view.u_hi, n_u)
+
+
+def view_border_points(view: View, side: int = BORDER_SIDE) -> xr.Dataset:
+    """:func:`stairbounce.border_points` of :func:`border_grid` (the view's max_iter)."""
+    from ..borders import border_points
+
+    e, u = border_grid(view, side)
+    return border_points(e=e, u=u, max_iter=view.max_iter)
+
+
+def border_overlay(view: View, side: int = BORDER_SIDE, points: xr.Dataset | None = None) -> dict:
+    """border_overlay(view, side=BORDER_SIDE, points=None) -> dict
 
     The exact borders of the view (:func:`stairbounce.border_points` on a grid
     of at most ``side`` x ``side`` pixels of its window, the view's
-    max_iter), as columns for a scatter: ``e``, ``u``, ``kind``, ``step``,
-    ``word_low``, ``word_high``.
+    max_iter; ``points`` when already computed: :func:`view_border_points`),
+    as columns for a scatter: ``e``, ``u``, ``kind``, ``step``, ``word_low``,
+    ``word_high``.
     """
-    from ..borders import border_points
-
-    n_e = max(2, min(side, view.width))
-    n_u = max(2, min(side, view.height))
-    pts = border_points(e=(view.e_lo, view.e_hi, n_e), u=(view.u_lo, view.u_hi, n_u),
-                        max_iter=view.max_iter)
+    pts = view_border_points(view, side) if points is None else points
     return {k: pts[k].values.tolist() for k in ("e", "u", "kind", "step", "word_low", "word_high")}
+
+
+WORD_ROW_FIELDS = ("text", "letters", "period", "impacts", "pixels", "area_fraction", "e_rep", "u_rep",
+                   "e_min", "e_max", "u_min", "u_max", "graze", "edge", "chatter")
+"""The columns of :func:`stairbounce.word_table` a tap reports (:func:`word_row`)."""
+
+
+def word_row(view: View, text: str, side: int = BORDER_SIDE, points: xr.Dataset | None = None,
+             table: xr.Dataset | None = None, scan: xr.Dataset | None = None) -> dict:
+    """word_row(view, text, side=BORDER_SIDE, points=None, table=None, scan=None) -> dict
+
+    The row of the word ``text`` (ASCII, as ``Word.format(ascii=True)``) in
+    :func:`stairbounce.word_table` of the view: the grid :func:`border_grid`
+    (at most ``side`` x ``side`` pixels of the window, the view's max_iter);
+    ``points``: that grid's :func:`view_border_points` when already computed
+    (the "exact borders" overlay); ``table``: that grid's word table when
+    already computed (a previous tap in the same view); ``scan``: the view's
+    own scan when its pixels are that grid (no scan is computed then).  Returns ``{"grid":
+    (n_e, n_u), "words": number of distinct words there, "row": {column:
+    value} or None, "table": the word table}`` (row None: the word has no
+    pixel centre on that grid, e.g. a region smaller than its pixels).
+    """
+    from ..borders import word_table
+
+    e, u = border_grid(view, side)
+    if table is not None:
+        tab = table
+    elif scan is not None:
+        tab = word_table(scan, points=points)
+    else:
+        tab = word_table(e=e, u=u, max_iter=view.max_iter, points=points)
+    hit = np.flatnonzero(tab["text"].values == text)
+    row = None
+    if hit.size:
+        r = tab.isel(word=int(hit[0]))
+        row = {k: r[k].item() for k in WORD_ROW_FIELDS}
+    return {"grid": (e[2], u[2]), "words": int(tab.sizes["word"]), "row": row, "table": tab}
 
 
 def point_details(e: float, u: float, max_iter: int, steps: int | None = None,
