@@ -792,26 +792,54 @@ estimate, and about how many minutes it takes on a 2-core machine."""
 # slicing in the report: scales where max_iter 1000 is converged (docs/guide/dimension.md)
 SLICING_SCALES = (1e-6, 1e-2)
 SLICING_LINES = 64
+# the slicing row is measured again at this many times the run's max_iter
+SLICING_CHECK = 4
 
 
 def _slicing_row(s, name, e, u, paper):
     """The third estimator, computed in this run: slicing along random lines
-    (seed 0) over SLICING_SCALES of the window, at the run's max_iter."""
-    from .dimension import sliding_classifier, slicing_dimension
+    (seed 0) over SLICING_SCALES of the window, at the run's max_iter and
+    again at SLICING_CHECK x max_iter on the same lines; the fit is cut to the
+    scales where the larger max_iter does not move the local dimension, and
+    the verdict is the cut fit's."""
+    from .dimension import max_iter_check, sliding_classifier, slicing_dimension
 
     lines = max(8, int(round(SLICING_LINES * min(s.scale, 1.0))))
-    s.note(f"{name}: slicing along {lines} lines")
-    est = slicing_dimension(sliding_classifier(max_iter=s.max_iter), (e, u), n_lines=lines,
-                            scale_min=SLICING_SCALES[0], scale_max=SLICING_SCALES[1], seed=0)
+    more = SLICING_CHECK * s.max_iter
+    s.note(f"{name}: slicing along {lines} lines, max_iter {s.max_iter} and {more}")
+    est, again = (slicing_dimension(sliding_classifier(max_iter=m), (e, u), n_lines=lines,
+                                    scale_min=SLICING_SCALES[0], scale_max=SLICING_SCALES[1], seed=0)
+                  for m in (s.max_iter, more))
+    check = max_iter_check(est, again)
+    cut = check.cut(est.scales)
+    what = ("dimension by slicing (crossings along random lines), computed in this run, "
+            f"checked at max_iter {more}")
+    setup = f"{lines} lines, seed 0, max_iter {s.max_iter}"
+    if check.converged:
+        conv = (f"max_iter {s.max_iter} -> {more}: converged at scales "
+                f"{check.scales.min():.2g}..{check.scales.max():.2g}")
+    else:
+        bad = check.not_converged
+        conv = (f"max_iter {s.max_iter} -> {more}: "
+                + ("no scale measured at both" if bad is None
+                   else f"not converged at scales {bad[0]:.2g}..{bad[1]:.2g}")
+                + ": fitted range cut to " + ("nothing" if cut is None else f"{cut[0]:.2g}..{cut[1]:.2g}"))
+        try:
+            est = est.refit(cut) if cut is not None else None
+        except ValueError:  # fewer than 3 converged levels
+            est = None
+        if est is None:
+            return Row(what, f"D = {paper}", f"{conv}; fewer than 3 converged levels, no fit ({setup})",
+                       verdict="not comparable",
+                       why=f"max_iter {s.max_iter} is not converged over enough scales to fit")
     v, w = _compare(est.dimension, paper, est.interval)
     lo, hi = est.interval
     warn = est.warning()
-    return Row("dimension by slicing (crossings along random lines), computed in this run",
-               f"D = {paper}",
+    return Row(what, f"D = {paper}",
                f"D = {est.dimension:.3f}, interval [{lo:.3f}, {hi:.3f}] (95% statistical "
                f"+-{est.statistical:.3f}, drift +-{est.systematic:.3f}), scales "
-               f"{est.scales[0]:.2g}..{est.scales[1]:.2g} of the window, {lines} lines, seed 0, "
-               f"max_iter {s.max_iter}; biased low by 0.01-0.04 (Weierstrass validation)"
+               f"{est.scales[0]:.2g}..{est.scales[1]:.2g} of the window, {setup}; {conv}; "
+               "biased low by 0.01-0.04 (Weierstrass validation)"
                + (f". {warn[0].upper()}{warn[1:]}" if warn else ""), verdict=v, why=w)
 
 
