@@ -817,21 +817,22 @@ def _slicing_row(s, name, e, u, paper):
     setup = f"{lines} lines, seed 0, max_iter {s.max_iter}"
     if check.converged:
         conv = (f"max_iter {s.max_iter} -> {more}: converged at scales "
-                f"{check.scales.min():.2g}..{check.scales.max():.2g}")
+                f"{est.scales[0]:.2g}..{est.scales[1]:.2g}")
     else:
         bad = check.not_converged
         conv = (f"max_iter {s.max_iter} -> {more}: "
                 + ("no scale measured at both" if bad is None
-                   else f"not converged at scales {bad[0]:.2g}..{bad[1]:.2g}")
-                + ": fitted range cut to " + ("nothing" if cut is None else f"{cut[0]:.2g}..{cut[1]:.2g}"))
+                   else f"not converged at scales {bad[0]:.2g}..{bad[1]:.2g} (local dimensions)")
+                + ": fitted range cut to ")
         try:
             est = est.refit(cut) if cut is not None else None
         except ValueError:  # fewer than 3 converged levels
             est = None
         if est is None:
-            return Row(what, f"D = {paper}", f"{conv}; fewer than 3 converged levels, no fit ({setup})",
+            return Row(what, f"D = {paper}", f"{conv}fewer than 3 converged levels, no fit ({setup})",
                        verdict="not comparable",
                        why=f"max_iter {s.max_iter} is not converged over enough scales to fit")
+        conv += f"{est.scales[0]:.2g}..{est.scales[1]:.2g}"
     v, w = _compare(est.dimension, paper, est.interval)
     lo, hi = est.interval
     warn = est.warning()
