@@ -567,3 +567,30 @@ def test_the_slicing_row_is_checked_at_four_times_max_iter(tmp_path):
         assert d == pytest.approx(fit.dimension, abs=5e-4)
         assert scales[0] == pytest.approx(fit.scales[0], rel=0.05) and scales[0] > lo
         assert row.verdict == F._compare(fit.dimension, paper, fit.interval)[0]
+
+
+def test_box_rows_are_cut_where_four_times_max_iter_moves_the_local_slope():
+    """The box-counting rows' check (F._box_checked) on counts with a known
+    local slope: 1.5 at every size, and at 4 x max_iter 1.5 above 4 px but
+    1.9 below (as if the finer boxes saw more border): the fit 1..64 px is cut
+    to 4..64 px, where both slopes are exactly 1.5."""
+    from stairbounce.dimension import box_dimension_from_counts
+
+    sizes = 2 ** np.arange(8)  # 1 .. 128 px
+    counts = np.round(1e6 * sizes ** -1.5)
+    more = counts.copy()
+    more[:2] = np.round(counts[2] * (sizes[:2] / 4.0) ** -1.9)  # steeper below 4 px
+    a = box_dimension_from_counts(sizes, counts, fit_range=(1, 64))
+    b = box_dimension_from_counts(sizes, more, fit_range=(1, 64))
+    fit, text, ok = F._box_checked(a, b, 1000, 4000)
+    assert ok and fit.fit_range == (4, 64)
+    assert "max_iter 1000 -> 4000: not converged at the local slopes of boxes 1.41..2.83 px" in text
+    assert text.endswith("fitted range cut to boxes 4..64 px")
+    assert fit.dimension == pytest.approx(1.5, abs=2e-3)
+    # nothing moves: the fit as it was
+    fit, text, ok = F._box_checked(a, a, 1000, 4000)
+    assert ok and fit is a and text.endswith("converged at boxes 1..64 px")
+    # the slope moves at every size but the coarsest: no fit, no verdict
+    worse = np.round(counts[-2] * (sizes / 64.0) ** -1.9)
+    fit, text, ok = F._box_checked(a, box_dimension_from_counts(sizes, worse, fit_range=(1, 64)), 1000, 4000)
+    assert not ok and "fewer than 3 converged box sizes" in text

@@ -702,6 +702,16 @@ def _dimension(name):
         fit_range = (1, max(4, 2 ** round(math.log2(res / 8))))
         est = box_dimension(border, fit_range=fit_range)
         auto = box_dimension(border)
+        # the same picture at SLICING_CHECK x max_iter: the fits cut to the box
+        # sizes where it does not move the local slope
+        from dataclasses import replace
+
+        more = SLICING_CHECK * s.max_iter
+        again = boundary(_scan(replace(s, max_iter=more), name, e, u, res, res)
+                         .status.transpose("u", "e").values == 0)
+        checked = [_box_checked(fit, box_dimension(again, fit_range=fit.fit_range), s.max_iter, more)
+                   for fit in (est, auto)]
+        est, auto = (fit for fit, _, _ in checked)
         study = load_border_dimension(s.border_dimension)
         best = None if study is None else study.get(name)
         # fixed panels: the border's panel square (the window is square), and at
@@ -737,11 +747,16 @@ def _dimension(name):
         v2, w2 = _compare(auto.dimension, paper, auto.interval)
         if v1 != "not comparable" and est.r <= 0.99:
             v1, w1 = "differs", w1 + f"; r = {est.r:.4f} <= 0.99, the paper's r > 0.99"
+        if not checked[0][2]:
+            v1, w1 = "not comparable", f"max_iter {s.max_iter} is not converged over enough box sizes to fit"
+        if not checked[1][2]:
+            v2, w2 = "not comparable", f"max_iter {s.max_iter} is not converged over enough box sizes to fit"
         rows = [
             Row(f"box-counting dimension, boxes {fit_range[0]}..{fit_range[1]} px",
-                f"D = {paper}, r > 0.99", _dimension_text(est, res, s.max_iter), verdict=v1, why=w1),
+                f"D = {paper}, r > 0.99", _dimension_text(est, res, s.max_iter) + checked[0][1],
+                verdict=v1, why=w1),
             Row("box-counting dimension, automatic linear range (heuristic)", f"D = {paper}",
-                _dimension_text(auto, res, s.max_iter),
+                _dimension_text(auto, res, s.max_iter) + checked[1][1],
                 verdict=v2, why=w2 + "; this range leaves out the pixel scale the paper's "
                 "fit includes (docs/guide/dimension-study.md)"),
         ]
@@ -842,6 +857,36 @@ def _slicing_row(s, name, e, u, paper):
                f"{est.scales[0]:.2g}..{est.scales[1]:.2g} of the window, {setup}; {conv}; "
                "biased low by 0.01-0.04 (Weierstrass validation)"
                + (f". {warn[0].upper()}{warn[1:]}" if warn else ""), verdict=v, why=w)
+
+
+def _box_checked(est, again, max_iter, more):
+    """A box-counting fit checked against the same picture at ``more``
+    iterations: ``(fit, text, ok)``, the fit cut to the box sizes whose local
+    slopes do not move (``est`` itself when none moves); with fewer than 3
+    converged sizes ``est`` as it was and ``ok`` False (no verdict)."""
+    from .dimension import box_dimension_from_counts, max_iter_check
+
+    check = max_iter_check(est, again)
+    a, b = est.fit_range
+    head = f"; max_iter {max_iter} -> {more}: "
+    if check.converged:
+        return est, head + f"converged at boxes {a}..{b} px", True
+    bad = check.not_converged
+    moved = ("no box size measured at both" if bad is None
+             else f"not converged at the local slopes of boxes {bad[0]:.3g}..{bad[1]:.3g} px")
+    cut = check.cut(est.fit_range)
+    sizes = np.asarray(est.sizes)[est.usable]
+    mids = est.local_dimensions[0]  # between sizes[k] and sizes[k + 1], as the check's scales
+    if cut is not None:
+        k = np.flatnonzero((mids >= cut[0]) & (mids <= cut[1]))
+        try:
+            fit = box_dimension_from_counts(est.sizes, est.counts,
+                                            fit_range=(sizes[k[0]], sizes[k[-1] + 1]))
+            return (fit, head + f"{moved}: fitted range cut to boxes {fit.fit_range[0]}.."
+                    f"{fit.fit_range[1]} px", True)
+        except ValueError:  # fewer than 3 sizes
+            pass
+    return est, head + f"{moved}: fewer than 3 converged box sizes, no fit", False
 
 
 def _dimension_text(est, res, max_iter):
