@@ -594,3 +594,13 @@ def test_box_rows_are_cut_where_four_times_max_iter_moves_the_local_slope():
     worse = np.round(counts[-2] * (sizes / 64.0) ** -1.9)
     fit, text, ok = F._box_checked(a, box_dimension_from_counts(sizes, worse, fit_range=(1, 64)), 1000, 4000)
     assert not ok and "fewer than 3 converged box sizes" in text
+
+
+def test_every_dimension_row_computed_in_the_run_states_its_max_iter_check(made):
+    _, _, manifest = made
+    by_name = {f["name"]: f for f in manifest["figures"]}
+    for name in ("fig6", "fig7"):
+        rows = [r for r in by_name[name]["rows"] if r["quantity"].startswith(("box-counting", "dimension by"))]
+        assert len(rows) == 3
+        for row in rows:
+            assert re.search(r"max_iter 1000 -> 4000: (converged at|not converged at)", row["measured"]), row
