@@ -522,3 +522,85 @@ def test_ours_rows_quote_no_paper():
     row = F._ours("x", "measured 3", False, "criterion")
     assert row.paper == "-" and row.quantity.startswith("ours: ") and "FAILS" in row.measured
     assert row.verdict == "not comparable"
+
+
+def _slicing_row_values(row):
+    d = float(re.search(r"D = (\S+?),", row.measured).group(1))
+    lo, hi = (float(x) for x in re.search(r"interval \[(\S+?), (\S+?)\]", row.measured).groups())
+    a, b = (float(x) for x in re.search(r"scales (\S+?)\.\.(\S+?) of the window", row.measured).groups())
+    return d, (lo, hi), (a, b)
+
+
+def test_the_slicing_row_is_checked_at_four_times_max_iter(tmp_path):
+    """Issue 24: the slicing row of Figs. 6/7 is measured again at 4 x max_iter
+    on the same lines; it states the outcome, and where the larger max_iter
+    moves the local dimension the fit is cut to the converged scales and the
+    verdict is the cut fit's (re-derived here from the check itself)."""
+    from stairbounce.dimension import max_iter_check, sliding_classifier, slicing_dimension
+
+    (e, u), paper = F.DIMENSION_WINDOWS["fig7"]
+    for max_iter in (50, 1000):
+        s = F.Settings(out=tmp_path, scale=SCALE, max_iter=max_iter)
+        row = F._slicing_row(s, "fig7", e, u, paper)
+        assert f"checked at max_iter {4 * max_iter}" in row.quantity
+        lines = max(8, round(F.SLICING_LINES * SCALE))
+        a, b = (slicing_dimension(sliding_classifier(max_iter=m), (e, u), n_lines=lines,
+                                  scale_min=F.SLICING_SCALES[0], scale_max=F.SLICING_SCALES[1], seed=0)
+                for m in (max_iter, 4 * max_iter))
+        check = max_iter_check(a, b)
+        assert not (max_iter == 50 and check.converged)  # the check can fail, and fails at 50 (test_slicing.py)
+        head = f"max_iter {max_iter} -> {4 * max_iter}: "
+        if check.converged:
+            assert f"{head}converged at scales {a.scales[0]:.2g}..{a.scales[1]:.2g}" in row.measured
+            assert _slicing_row_values(row)[0] == pytest.approx(a.dimension, abs=5e-4)
+            continue
+        lo, hi = check.not_converged
+        assert (f"{head}not converged at scales {lo:.2g}..{hi:.2g} (local dimensions): fitted range cut to"
+                in row.measured)
+        cut = check.cut(a.scales)
+        if cut is None or np.count_nonzero((a.local[0] >= cut[0]) & (a.local[0] <= cut[1])) < 3:
+            assert row.verdict == "not comparable" and "not converged" in row.why
+            assert max_iter == 50  # 50 truncates all but the coarsest scales (tests/test_slicing.py)
+            continue
+        fit = a.refit(cut)
+        d, interval, scales = _slicing_row_values(row)
+        assert d == pytest.approx(fit.dimension, abs=5e-4)
+        assert scales[0] == pytest.approx(fit.scales[0], rel=0.05) and scales[0] > lo
+        assert row.verdict == F._compare(fit.dimension, paper, fit.interval)[0]
+
+
+def test_box_rows_are_cut_where_four_times_max_iter_moves_the_local_slope():
+    """The box-counting rows' check (F._box_checked) on counts with a known
+    local slope: 1.5 at every size, and at 4 x max_iter 1.5 above 4 px but
+    1.9 below (as if the finer boxes saw more border): the fit 1..64 px is cut
+    to 4..64 px, where both slopes are exactly 1.5."""
+    from stairbounce.dimension import box_dimension_from_counts
+
+    sizes = 2 ** np.arange(8)  # 1 .. 128 px
+    counts = np.round(1e6 * sizes ** -1.5)
+    more = counts.copy()
+    more[:2] = np.round(counts[2] * (sizes[:2] / 4.0) ** -1.9)  # steeper below 4 px
+    a = box_dimension_from_counts(sizes, counts, fit_range=(1, 64))
+    b = box_dimension_from_counts(sizes, more, fit_range=(1, 64))
+    fit, text, ok = F._box_checked(a, b, 1000, 4000)
+    assert ok and fit.fit_range == (4, 64)
+    assert "max_iter 1000 -> 4000: not converged at the local slopes of boxes 1.41..2.83 px" in text
+    assert text.endswith("fitted range cut to boxes 4..64 px")
+    assert fit.dimension == pytest.approx(1.5, abs=2e-3)
+    # nothing moves: the fit as it was
+    fit, text, ok = F._box_checked(a, a, 1000, 4000)
+    assert ok and fit is a and text.endswith("converged at boxes 1..64 px")
+    # the slope moves at every size but the coarsest: no fit, no verdict
+    worse = np.round(counts[-2] * (sizes / 64.0) ** -1.9)
+    fit, text, ok = F._box_checked(a, box_dimension_from_counts(sizes, worse, fit_range=(1, 64)), 1000, 4000)
+    assert not ok and "fewer than 3 converged box sizes" in text
+
+
+def test_every_dimension_row_computed_in_the_run_states_its_max_iter_check(made):
+    _, _, manifest = made
+    by_name = {f["name"]: f for f in manifest["figures"]}
+    for name in ("fig6", "fig7"):
+        rows = [r for r in by_name[name]["rows"] if r["quantity"].startswith(("box-counting", "dimension by"))]
+        assert len(rows) == 3
+        for row in rows:
+            assert re.search(r"max_iter 1000 -> 4000: (converged at|not converged at)", row["measured"]), row

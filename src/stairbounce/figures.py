@@ -702,6 +702,16 @@ def _dimension(name):
         fit_range = (1, max(4, 2 ** round(math.log2(res / 8))))
         est = box_dimension(border, fit_range=fit_range)
         auto = box_dimension(border)
+        # the same picture at SLICING_CHECK x max_iter: the fits cut to the box
+        # sizes where it does not move the local slope
+        from dataclasses import replace
+
+        more = SLICING_CHECK * s.max_iter
+        again = boundary(_scan(replace(s, max_iter=more), name, e, u, res, res)
+                         .status.transpose("u", "e").values == 0)
+        checked = [_box_checked(fit, box_dimension(again, fit_range=fit.fit_range), s.max_iter, more)
+                   for fit in (est, auto)]
+        est, auto = (fit for fit, _, _ in checked)
         study = load_border_dimension(s.border_dimension)
         best = None if study is None else study.get(name)
         # fixed panels: the border's panel square (the window is square), and at
@@ -737,11 +747,16 @@ def _dimension(name):
         v2, w2 = _compare(auto.dimension, paper, auto.interval)
         if v1 != "not comparable" and est.r <= 0.99:
             v1, w1 = "differs", w1 + f"; r = {est.r:.4f} <= 0.99, the paper's r > 0.99"
+        if not checked[0][2]:
+            v1, w1 = "not comparable", f"max_iter {s.max_iter} is not converged over enough box sizes to fit"
+        if not checked[1][2]:
+            v2, w2 = "not comparable", f"max_iter {s.max_iter} is not converged over enough box sizes to fit"
         rows = [
             Row(f"box-counting dimension, boxes {fit_range[0]}..{fit_range[1]} px",
-                f"D = {paper}, r > 0.99", _dimension_text(est, res, s.max_iter), verdict=v1, why=w1),
+                f"D = {paper}, r > 0.99", _dimension_text(est, res, s.max_iter) + checked[0][1],
+                verdict=v1, why=w1),
             Row("box-counting dimension, automatic linear range (heuristic)", f"D = {paper}",
-                _dimension_text(auto, res, s.max_iter),
+                _dimension_text(auto, res, s.max_iter) + checked[1][1],
                 verdict=v2, why=w2 + "; this range leaves out the pixel scale the paper's "
                 "fit includes (docs/guide/dimension-study.md)"),
         ]
@@ -792,27 +807,86 @@ estimate, and about how many minutes it takes on a 2-core machine."""
 # slicing in the report: scales where max_iter 1000 is converged (docs/guide/dimension.md)
 SLICING_SCALES = (1e-6, 1e-2)
 SLICING_LINES = 64
+# the slicing row is measured again at this many times the run's max_iter
+SLICING_CHECK = 4
 
 
 def _slicing_row(s, name, e, u, paper):
     """The third estimator, computed in this run: slicing along random lines
-    (seed 0) over SLICING_SCALES of the window, at the run's max_iter."""
-    from .dimension import sliding_classifier, slicing_dimension
+    (seed 0) over SLICING_SCALES of the window, at the run's max_iter and
+    again at SLICING_CHECK x max_iter on the same lines; the fit is cut to the
+    scales where the larger max_iter does not move the local dimension, and
+    the verdict is the cut fit's."""
+    from .dimension import max_iter_check, sliding_classifier, slicing_dimension
 
     lines = max(8, int(round(SLICING_LINES * min(s.scale, 1.0))))
-    s.note(f"{name}: slicing along {lines} lines")
-    est = slicing_dimension(sliding_classifier(max_iter=s.max_iter), (e, u), n_lines=lines,
-                            scale_min=SLICING_SCALES[0], scale_max=SLICING_SCALES[1], seed=0)
+    more = SLICING_CHECK * s.max_iter
+    s.note(f"{name}: slicing along {lines} lines, max_iter {s.max_iter} and {more}")
+    est, again = (slicing_dimension(sliding_classifier(max_iter=m), (e, u), n_lines=lines,
+                                    scale_min=SLICING_SCALES[0], scale_max=SLICING_SCALES[1], seed=0)
+                  for m in (s.max_iter, more))
+    check = max_iter_check(est, again)
+    cut = check.cut(est.scales)
+    what = ("dimension by slicing (crossings along random lines), computed in this run, "
+            f"checked at max_iter {more}")
+    setup = f"{lines} lines, seed 0, max_iter {s.max_iter}"
+    if check.converged:
+        conv = (f"max_iter {s.max_iter} -> {more}: converged at scales "
+                f"{est.scales[0]:.2g}..{est.scales[1]:.2g}")
+    else:
+        bad = check.not_converged
+        conv = (f"max_iter {s.max_iter} -> {more}: "
+                + ("no scale measured at both" if bad is None
+                   else f"not converged at scales {bad[0]:.2g}..{bad[1]:.2g} (local dimensions)")
+                + ": fitted range cut to ")
+        try:
+            est = est.refit(cut) if cut is not None else None
+        except ValueError:  # fewer than 3 converged levels
+            est = None
+        if est is None:
+            return Row(what, f"D = {paper}", f"{conv}fewer than 3 converged levels, no fit ({setup})",
+                       verdict="not comparable",
+                       why=f"max_iter {s.max_iter} is not converged over enough scales to fit")
+        conv += f"{est.scales[0]:.2g}..{est.scales[1]:.2g}"
     v, w = _compare(est.dimension, paper, est.interval)
     lo, hi = est.interval
     warn = est.warning()
-    return Row("dimension by slicing (crossings along random lines), computed in this run",
-               f"D = {paper}",
+    return Row(what, f"D = {paper}",
                f"D = {est.dimension:.3f}, interval [{lo:.3f}, {hi:.3f}] (95% statistical "
                f"+-{est.statistical:.3f}, drift +-{est.systematic:.3f}), scales "
-               f"{est.scales[0]:.2g}..{est.scales[1]:.2g} of the window, {lines} lines, seed 0, "
-               f"max_iter {s.max_iter}; biased low by 0.01-0.04 (Weierstrass validation)"
+               f"{est.scales[0]:.2g}..{est.scales[1]:.2g} of the window, {setup}; {conv}; "
+               "biased low by 0.01-0.04 (Weierstrass validation)"
                + (f". {warn[0].upper()}{warn[1:]}" if warn else ""), verdict=v, why=w)
+
+
+def _box_checked(est, again, max_iter, more):
+    """A box-counting fit checked against the same picture at ``more``
+    iterations: ``(fit, text, ok)``, the fit cut to the box sizes whose local
+    slopes do not move (``est`` itself when none moves); with fewer than 3
+    converged sizes ``est`` as it was and ``ok`` False (no verdict)."""
+    from .dimension import box_dimension_from_counts, max_iter_check
+
+    check = max_iter_check(est, again)
+    a, b = est.fit_range
+    head = f"; max_iter {max_iter} -> {more}: "
+    if check.converged:
+        return est, head + f"converged at boxes {a}..{b} px", True
+    bad = check.not_converged
+    moved = ("no box size measured at both" if bad is None
+             else f"not converged at the local slopes of boxes {bad[0]:.3g}..{bad[1]:.3g} px")
+    cut = check.cut(est.fit_range)
+    sizes = np.asarray(est.sizes)[est.usable]
+    mids = est.local_dimensions[0]  # between sizes[k] and sizes[k + 1], as the check's scales
+    if cut is not None:
+        k = np.flatnonzero((mids >= cut[0]) & (mids <= cut[1]))
+        try:
+            fit = box_dimension_from_counts(est.sizes, est.counts,
+                                            fit_range=(sizes[k[0]], sizes[k[-1] + 1]))
+            return (fit, head + f"{moved}: fitted range cut to boxes {fit.fit_range[0]}.."
+                    f"{fit.fit_range[1]} px", True)
+        except ValueError:  # fewer than 3 sizes
+            pass
+    return est, head + f"{moved}: fewer than 3 converged box sizes, no fit", False
 
 
 def _dimension_text(est, res, max_iter):

@@ -137,32 +137,22 @@ def _measure_again(result, run, max_iter):
 
 def _check_max_iter(result, again, max_iter):
     """Scale by scale: does 4 x max_iter move the local dimension?  The same
-    random points at both (same seed): the band is the two bands combined."""
-    m1, d1, h1 = result.local_band()
-    m2, d2, h2 = again.local_band()
-    n = min(len(m1), len(m2))
-    _print_check(m1[:n], d1[:n], d2[:n], np.hypot(h1[:n], h2[:n]), max_iter)
+    random points at both (same seed): the band is the two bands combined
+    (:func:`stairbounce.dimension.convergence.max_iter_check`)."""
+    from ..dimension.convergence import NO_NOISE_MODEL_BAND, max_iter_check
 
-
-def _print_check(mid, d1, d2, band, max_iter):
-    """Both local dimensions, their difference and the scales where it
-    exceeds its 95% band: where max_iter is not converged."""
+    check = max_iter_check(result, again)
     typer.echo(f"max_iter check: local dimension at max_iter {max_iter} and {4 * max_iter} "
-               "(difference, and the band it is held to: the two 95% bands combined, or 0.03 where "
-               "the estimator has no noise model)")
-    moved = []
-    for k in range(len(mid)):
-        tol = band[k] if np.isfinite(band[k]) else 0.03
-        diff = d2[k] - d1[k]
-        flag = abs(diff) > tol
-        if flag:
-            moved.append(mid[k])
-        typer.echo(f"  {mid[k]:10.3g}  {d1[k]:8.4f}  {d2[k]:8.4f}  {diff:+.4f} +- {tol:.4f}"
+               "(difference, and the band it is held to: the two 95% bands combined, or "
+               f"{NO_NOISE_MODEL_BAND:g} where the estimator has no noise model)")
+    for mid, d1, d2, diff, tol, flag in check.rows():
+        typer.echo(f"  {mid:10.3g}  {d1:8.4f}  {d2:8.4f}  {diff:+.4f} +- {tol:.4f}"
                    f"{'  moved' if flag else ''}")
-    if moved:
-        typer.echo(f"warning: max_iter {max_iter} is not converged at scales {min(moved):.3g}..{max(moved):.3g}: "
+    bad = check.not_converged
+    if bad is not None:
+        typer.echo(f"warning: max_iter {max_iter} is not converged at scales {bad[0]:.3g}..{bad[1]:.3g}: "
                    f"the local dimension moves with max_iter {4 * max_iter} there; fit scales above "
-                   f"{max(moved):.3g} (--fit-range) or raise --max-iter")
+                   f"{bad[1]:.3g} (--fit-range) or raise --max-iter")
     else:
         typer.echo(f"max_iter {max_iter} converged at every scale measured (within the band)")
 

@@ -26,6 +26,9 @@ estimator where its name says:
     what every estimate states: its scales, ``max_iter``, the local dimension
     against scale and an interval covering the drift (systematic) beside the
     statistical one;
+``convergence``
+    whether ``max_iter`` moves an estimate, scale by scale, against the same
+    measurement at a larger one (:func:`max_iter_check`);
 ``classifier``
     the model's classification of ``(e, u)`` points (:func:`sliding_classifier`);
 ``perimeter``
@@ -40,6 +43,7 @@ estimator where its name says:
 from .borders import boundary, label_boundary
 from .boxes import BoxDimension, box_counts, box_dimension, box_dimension_from_counts
 from .classifier import SlidingClassifier, sliding_classifier
+from .convergence import MaxIterCheck, max_iter_check
 from .fit import SlopeFit, linear_region, slope_fit
 from .perimeter import PerimeterDimension, perimeter_dimension
 from .result import disagree
@@ -57,6 +61,7 @@ from .uncertainty import (
 
 __all__ = [
     "BoxDimension",
+    "MaxIterCheck",
     "DEFAULT_EPS",
     "PerimeterDimension",
     "SlicingDimension",
@@ -72,6 +77,7 @@ __all__ = [
     "disagree",
     "label_boundary",
     "linear_region",
+    "max_iter_check",
     "perimeter_dimension",
     "random_points",
     "sliding_classifier",

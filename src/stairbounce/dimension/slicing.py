@@ -42,7 +42,7 @@ less with more samples.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -105,6 +105,14 @@ class SlicingDimension(Estimate):
         95% statistical half-widths (normal)."""
         mid, dl, se = self.local
         return mid, dl, 1.96 * se
+
+    def refit(self, fit_range) -> SlicingDimension:
+        """The same measurement with ``dimension`` (and its intervals) over the
+        levels whose midpoints lie in ``fit_range = (scale_min, scale_max)``:
+        nothing is classified again.  Raises ValueError when fewer than 3
+        levels are left."""
+        mid, dl, se = self.local
+        return replace(self, **_fit(mid, dl, se, self.scales_measured, fit_range))
 
     def table(self) -> str:
         """The measurement as text: scale, occupied boxes, refined parents,
@@ -247,8 +255,6 @@ def slicing_dimension(classify, window, n_lines=64, scale_min=1e-10, scale_max=1
     graph of a Weierstrass function (box dimension ``2 + ln a / ln b``,
     Kaplan, Mallet-Paret and Yorke 1984).
     """
-    from scipy import stats
-
     if not callable(classify):
         raise ValueError(f"classify must be a callable classify(x, y) -> labels, got {classify!r}")
     window = _check_plane_window(window)
@@ -317,6 +323,31 @@ def slicing_dimension(classify, window, n_lines=64, scale_min=1e-10, scale_max=1
     scales_measured = scales[: levels + 1]
     mid = np.sqrt(scales_measured[1:] * scales_measured[:-1])
     dl, se = np.asarray(local), np.asarray(stderr)
+    fit = _fit(mid, dl, se, scales_measured, fit_range)
+    return SlicingDimension(
+        **fit,
+        scales_measured=scales_measured,
+        counts=np.asarray(counts[: levels + 1]),
+        parents=np.asarray(parents),
+        children=np.asarray(children),
+        local=(mid, dl, se),
+        max_iter=getattr(classify, "max_iter", None),
+        n_lines=n_lines,
+        seed=int(seed),
+        samples=samples,
+        ratio=ratio,
+        window=window,
+        evaluations=int(evaluations),
+        label=label,
+    )
+
+
+def _fit(mid, dl, se, scales_measured, fit_range):
+    """``D`` over the levels whose midpoints lie in ``fit_range`` (None: all):
+    the fields ``dimension``, ``stderr``, ``ci``, ``fit_range``,
+    ``systematic`` and ``halves`` of :class:`SlicingDimension`."""
+    from scipy import stats
+
     keep = np.isfinite(dl)
     if fit_range is not None:
         try:
@@ -343,25 +374,11 @@ def slicing_dimension(classify, window, n_lines=64, scale_min=1e-10, scale_max=1
     # the finer and the coarser half (the middle level in both when odd)
     coarse, fine = idx[: (n + 1) // 2], idx[n - (n + 1) // 2:]
     halves = (float(dl[fine].mean()), float(dl[coarse].mean()))
-    systematic = float(max(abs(d - h) for h in halves))
-    return SlicingDimension(
-        dimension=d,
-        stderr=sd,
-        ci=(d - half, d + half),
-        scales_measured=scales_measured,
-        counts=np.asarray(counts[: levels + 1]),
-        parents=np.asarray(parents),
-        children=np.asarray(children),
-        local=(mid, dl, se),
-        fit_range=(float(scales_measured[idx[-1] + 1]), float(scales_measured[idx[0]])),
-        systematic=systematic,
-        halves=halves,
-        max_iter=getattr(classify, "max_iter", None),
-        n_lines=n_lines,
-        seed=int(seed),
-        samples=samples,
-        ratio=ratio,
-        window=window,
-        evaluations=int(evaluations),
-        label=label,
-    )
+    return {
+        "dimension": d,
+        "stderr": sd,
+        "ci": (d - half, d + half),
+        "fit_range": (float(scales_measured[idx[-1] + 1]), float(scales_measured[idx[0]])),
+        "systematic": float(max(abs(d - h) for h in halves)),
+        "halves": halves,
+    }
