@@ -379,3 +379,28 @@ def test_pruning_changes_no_label_of_the_classifier():
         a = sliding_classifier(300, which=which)(x, y)
         b = sliding_classifier(300, which=which, prune=False)(x, y)
         np.testing.assert_array_equal(a, b)
+
+
+def test_the_study_row_states_its_max_iter_check():
+    """Issue 24: the study's fine-scale estimate (eps down to 1e-9, max_iter 16000)
+    states its max_iter check, measured with the study (shipped, not in the run):
+    the default-scale exponent at max_iter 1000/4000/16000 and slicing at 4000 and
+    16000 over its fine scales, with the converged range; without those entries the
+    row says nothing of a check it does not have."""
+    import copy
+
+    from stairbounce.figures import _study_row, load_border_dimension
+
+    for name, paper in (("fig6", 1.324), ("fig7", 1.403)):
+        best = load_border_dimension()[name]
+        chk = best["max_iter_check"]
+        assert chk["max_iter"] == [4000, 16000] and chk["scales"][0] <= 1e-8
+        row = _study_row(name, paper, best)
+        assert "max_iter check (measured with the study, not in this run)" in row.measured
+        by = best["uncertainty_by_max_iter"]
+        assert "/".join(f"{by[k]['sliding']['dimension']:.3f}" for k in ("1000", "4000", "16000")) in row.measured
+        a, b = chk["dimension"]
+        assert f"{a:.3f} and {b:.3f}, converged down to about 1e-07" in row.measured
+        bare = copy.deepcopy(best)
+        del bare["max_iter_check"], bare["uncertainty_by_max_iter"]
+        assert "max_iter check" not in _study_row(name, paper, bare).measured

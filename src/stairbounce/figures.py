@@ -183,7 +183,8 @@ def load_border_dimension(path=None):
     The dimension study's result, ``{"fig6": {"dimension": D, "ci95": [lo,
     hi], "method": str, "details": str, "systematic": s, "interval": [lo - s,
     hi + s]}, "fig7": {...}}`` (``systematic``: the drift of the estimate
-    across its scales, 0 when the file has none), read from ``path``
+    across its scales, 0 when the file has none; ``uncertainty_by_max_iter`` and
+    ``max_iter_check``, its max_iter check, when the file has them), read from ``path``
     (default :data:`STUDY_FILE`); None when the file is absent, so that a
     figure says "no study result" rather than show a number nobody measured.
 
@@ -210,6 +211,9 @@ def load_border_dimension(path=None):
             out[name] = {"dimension": d, "ci95": [lo, hi], "method": str(entry["method"]),
                          "details": str(entry.get("details", "")), "systematic": sys_,
                          "interval": [lo - sys_, hi + sys_]}
+            for key in ("uncertainty_by_max_iter", "max_iter_check"):  # its max_iter check, if any
+                if isinstance(entry.get(key), dict):
+                    out[name][key] = entry[key]
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise ValueError(f"border_dimension: {path} is not a dimension study result "
                          f"({type(exc).__name__}: {exc})") from None
@@ -920,8 +924,29 @@ def _study_row(name, paper, best):
                f"[{best['ci95'][0]:.3f}, {best['ci95'][1]:.3f}], drift +-{best['systematic']:.3f}; "
                f"{best['method']}, eps 1e-9..1e-3 of the window, max_iter 16000){_same_scales(name)}; "
                f"from the dimension study, not "
-               f"recomputed: `{command}` recomputes it in about {minutes} minutes",
+               f"recomputed: `{command}` recomputes it in about {minutes} minutes"
+               f"{_study_max_iter_text(best)}",
                verdict=v, why=w)
+
+
+def _study_max_iter_text(best):
+    """The max_iter check of the study's estimate, as measured (shipped with it):
+    the uncertainty exponent at max_iter 1000/4000/16000 over its default scales, and
+    slicing at 4000 and 16000 over the fine scales the best estimate covers."""
+    parts = []
+    by = best.get("uncertainty_by_max_iter") or {}
+    if by:
+        ds = [f"{by[k]['sliding']['dimension']:.3f}" for k in sorted(by, key=int)]
+        parts.append(f"max_iter {'/'.join(sorted(by, key=int))} move the default-scale estimate "
+                     f"(eps 1e-6..1e-1): {'/'.join(ds)}")
+    chk = best.get("max_iter_check")
+    if chk:
+        a, b = chk["max_iter"]
+        da, db = chk["dimension"]
+        parts.append(f"slicing at max_iter {a} and {b} over {chk['scales'][0]:g}..{chk['scales'][1]:g}: "
+                     f"{da:.3f} and {db:.3f}, converged down to about {chk['converged_down_to']:g} of the "
+                     f"window; {chk['finest_decade']}")
+    return ("; max_iter check (measured with the study, not in this run): " + "; ".join(parts)) if parts else ""
 
 
 def _same_scales(name):
