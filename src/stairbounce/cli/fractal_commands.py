@@ -143,11 +143,12 @@ def _check_max_iter(result, again, max_iter):
 
     check = max_iter_check(result, again)
     typer.echo(f"max_iter check: local dimension at max_iter {max_iter} and {4 * max_iter} "
-               "(difference, and the band it is held to: the two 95% bands combined, or "
-               f"{NO_NOISE_MODEL_BAND:g} where the estimator has no noise model)")
-    for mid, d1, d2, diff, tol, flag in check.rows():
-        typer.echo(f"  {mid:10.3g}  {d1:8.4f}  {d2:8.4f}  {diff:+.4f} +- {tol:.4f}"
-                   f"{'  moved' if flag else ''}")
+               "(difference, and the band it is held to: the two 95% bands combined and widened "
+               f"for the scales compared, or {NO_NOISE_MODEL_BAND:g} where the estimator has no "
+               "noise model)")
+    for (mid, d1, d2, diff, tol, flag), cut in zip(check.rows(), check.truncated):
+        mark = "  moved" if cut else ("  moved (a chance flag: every finer scale agrees)" if flag else "")
+        typer.echo(f"  {mid:10.3g}  {d1:8.4f}  {d2:8.4f}  {diff:+.4f} +- {tol:.4f}{mark}")
     bad = check.not_converged
     if bad is not None:
         typer.echo(f"warning: max_iter {max_iter} is not converged at scales {bad[0]:.3g}..{bad[1]:.3g}: "
