@@ -164,7 +164,8 @@ def max_iter_check(estimate_a, estimate_b, rtol=1e-9) -> MaxIterCheck:
             ia.append(i)
             ib.append(int(j[0]))
     ia_, ib_ = np.asarray(ia, dtype=int), np.asarray(ib, dtype=int)
-    band = np.hypot(h1[ia_], h2[ib_]) * _family_factor(int(np.isfinite(np.hypot(h1[ia_], h2[ib_])).sum()))
+    band = np.hypot(h1[ia_], h2[ib_])
+    band = band * _family_factor(int(np.isfinite(band).sum()))
     band = np.where(np.isfinite(band), band, NO_NOISE_MODEL_BAND)
     a, b = d1[ia_], d2[ib_]
     return MaxIterCheck(
