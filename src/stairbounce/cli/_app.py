@@ -170,7 +170,8 @@ def with_row_progress(run, description, rows):
     from rich.console import Console
 
     with progress_bar(Console(stderr=True), description, rows) as (bar, task):
-        return run(lambda done, total: bar.update(task, completed=done, total=total))
+        # a run may report that it has nothing to do (total 0): the bar shows 0/1
+        return run(lambda done, total: bar.update(task, completed=done, total=max(total, 1)))
 
 
 def parse_overlays(values, allowed) -> tuple[str, ...]:

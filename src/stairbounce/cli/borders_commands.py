@@ -17,8 +17,8 @@ from ._app import (
     check_outputs,
     parse_range,
     parse_size,
-    progress_bar,
     save_figure,
+    with_row_progress,
 )
 
 _DATA_SUFFIXES = (".nc", ".csv")
@@ -72,14 +72,6 @@ def _write(ds, path: Path, overwrite: bool, dim: str) -> None:
             ds.drop_dims([d for d in ds.dims if d != dim]).to_dataframe().to_csv(tmp)
 
 
-def _with_progress(what, compute):
-    """Run ``compute(progress)`` under a transient progress bar on stderr."""
-    from rich.console import Console
-
-    with progress_bar(Console(stderr=True), what, 1) as (bar, task):
-        return compute(lambda done, total: bar.update(task, completed=done, total=max(total, 1)))
-
-
 def _figure(png, dpi, force, draw):
     import matplotlib
 
@@ -117,10 +109,10 @@ def borders_(
     if outcome not in ("word", "sliding"):
         raise CLIError(f"--outcome must be word or sliding, got {outcome!r}")
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force)
-    ds = _with_progress("scan rows",
-                        lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
-    pts = _with_progress("border pairs",
-                         lambda p: borders.border_points(ds, outcome=outcome, progress=p))
+    ds = with_row_progress(description="scan rows", rows=1,
+                           run=lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
+    pts = with_row_progress(description="border pairs", rows=1,
+                            run=lambda p: borders.border_points(ds, outcome=outcome, progress=p))
     if out is not None:
         _write(pts, out, force, "point")
         typer.echo(f"wrote {out}")
@@ -165,8 +157,10 @@ def words_(
     if regions:
         return _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force)
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force)
-    ds = _with_progress("scan rows", lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
-    tab = _with_progress("border pairs", lambda p: borders.word_table(ds, progress=p))
+    ds = with_row_progress(description="scan rows", rows=1,
+                           run=lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
+    tab = with_row_progress(description="border pairs", rows=1,
+                            run=lambda p: borders.word_table(ds, progress=p))
     if out is not None:
         _write(tab, out, force, "word")
         typer.echo(f"wrote {out}")
@@ -241,7 +235,7 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
                      outputs=False)
     check_outputs(force, out=out)
     res = max(ew[2], uw[2])
-    regs = _with_progress("words traced", lambda p: rg.window_regions(
+    regs = with_row_progress(description="words traced", rows=1, run=lambda p: rg.window_regions(
         ew[:2], uw[:2], resolution=res, max_iter=max_iter, progress=p))
     rg.write_regions(regs, out, overwrite=force)
     graph = rg.border_graph(regs)
