@@ -99,11 +99,16 @@ def test_a_preview_over_its_budget_is_cancelled_and_the_page_goes_without(monkey
     assert len(slices) < 200, "the preview was waited for, or ran on after the page went without it"
 
 
-def test_with_preview_puts_the_snippet_first_in_the_body():
-    page = '<html><head><script src="x.js"></script></head><body class="a">\n<div id="root"></div></body></html>'
+def test_with_preview_puts_the_snippet_before_the_scripts_or_first_in_the_body():
+    page = ('<html><head><meta charset="utf-8"><title>t</title><script src="x.js"></script></head>'
+            '<body class="a">\n<div id="root"></div></body></html>')
     out = pv.with_preview(page, "<img id='p'>")
-    assert out.index("<img id='p'>") == out.index('<body class="a">') + len('<body class="a">')
+    assert out.index("<img id='p'>") + len("<img id='p'>") == out.index("<script")
+    assert out.index("<title>") < out.index("<img id='p'>")
     assert out.replace("<img id='p'>", "") == page
+    no_script = '<html><head><title>t</title></head><body class="a"><div></div></body></html>'
+    out = pv.with_preview(no_script, "<img id='p'>")
+    assert out.index("<img id='p'>") == out.index('<body class="a">') + len('<body class="a">')
     assert pv.with_preview(page, "") == page
     assert pv.with_preview("<html>no body</html>", "<img>") == "<html>no body</html>"
 

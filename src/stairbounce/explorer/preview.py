@@ -5,8 +5,9 @@ a websocket, the session's document and the browser's views built before its
 pixels can be painted: about 1.5 s on the idle 2-core machine for a 300 x 300
 view whose computation takes 13 ms (``benchmarks/explorer_first_picture.py``
 breaks it down).  So the page's HTML carries the view's picture itself, a PNG
-in an ``<img>`` placed where the map's frame will be, painted as soon as the
-browser has the page's head; the interactive picture replaces it (the
+in an ``<img>`` placed where the map's frame will be, ahead of the page's
+scripts, so it is painted as soon as the HTML arrives; the interactive
+picture replaces it (the
 preview is removed by the map's own data source in the browser, the moment
 the first pixels of the session arrive).
 
@@ -88,10 +89,19 @@ def preview_html(view: View, png: bytes) -> str:
 
 
 def with_preview(page: str, snippet: str) -> str:
-    """``page`` with ``snippet`` first in its ``<body>`` (unchanged without one)."""
-    at = page.find("<body")
-    end = page.find(">", at) if at >= 0 else -1
-    if end < 0 or not snippet:
+    """``page`` with ``snippet`` before its first script (Bokeh's and Panel's,
+    which block the parser while they load and run: ahead of them the
+    picture is painted at once), else first in its ``<body>``; unchanged
+    with neither.  The page's ``<meta charset>`` and title come before its
+    scripts and stay in the head."""
+    if not snippet:
+        return page
+    body = page.find("<body")
+    script = page.find("<script")
+    if script >= 0 and (body < 0 or script < body):
+        return page[:script] + snippet + page[script:]
+    end = page.find(">", body) if body >= 0 else -1
+    if end < 0:
         return page
     return page[: end + 1] + snippet + page[end + 1 :]
 
