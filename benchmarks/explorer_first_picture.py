@@ -53,6 +53,16 @@ _WRAP_WS = """
     });
     return ws;
   };
+  // the picture sent with the page's HTML: the first frame it is decoded and on the page
+  window.__sb_preview = {shown: null, removed: null};
+  const poll = () => {
+    const img = document.querySelector('#sb-preview img');
+    const p = window.__sb_preview;
+    if (p.shown === null && img && img.complete && img.naturalWidth > 0) p.shown = performance.now();
+    if (p.shown !== null && !img) { p.removed = performance.now(); return; }
+    requestAnimationFrame(poll);
+  };
+  requestAnimationFrame(poll);
   window.WebSocket.prototype = Native.prototype;
   Object.assign(window.WebSocket, Native);
 })();
@@ -85,12 +95,13 @@ def one_page(browser, url, size):
         const js = performance.getEntriesByType('resource').filter(r => r.name.includes('.js'));
         return {start: nav.startTime, html: nav.responseEnd,
                 scripts: Math.max(0, ...js.map(r => r.responseEnd)),
-                ws: window.__sb_ws, drawn: performance.now()};
+                ws: window.__sb_ws, preview: window.__sb_preview, drawn: performance.now()};
     }""")
     page.close()
     ws = t["ws"]
     return {"html": t["html"], "scripts": t["scripts"], "ws open": ws["open"], "document": ws["doc"],
-            "picture": ws["picture"], "drawn": t["drawn"], "kB": (ws["bytes_at_picture"] or 0) / 1e3}
+            "picture": ws["picture"], "drawn": t["drawn"], "kB": (ws["bytes_at_picture"] or 0) / 1e3,
+            "preview": t["preview"]["shown"], "preview gone": t["preview"]["removed"]}
 
 
 def main():
@@ -123,7 +134,7 @@ def main():
         proc.wait(timeout=20)
     print(f"{args.size} x {args.size} pixels, Fig. 4 window, max_iter 1000; median of {args.repeat} pages "
           f"(ms from the request; min..max)")
-    for key in ("html", "scripts", "ws open", "document", "picture", "drawn"):
+    for key in ("html", "preview", "scripts", "ws open", "document", "picture", "drawn", "preview gone"):
         vals = [r[key] for r in runs if r[key] is not None]
         if vals:
             print(f"  {key:<9} {statistics.median(vals):7.0f}   ({min(vals):.0f}..{max(vals):.0f})")

@@ -583,3 +583,68 @@ def test_tap_panels_use_the_page_width_and_the_title_is_clean(server, page):
     assert canvases[1]["width"] + canvases[2]["width"] > 0.8 * width
     assert "\u00b6" not in page.locator(".sb-title").inner_text()
     assert page.locator(".sb-title h2").inner_text() == "stairbounce explorer"
+
+
+_FRAME_ON_PAGE = """() => {
+    let found = null;
+    function walk(v) {
+      const t = v.model && v.model.title && v.model.title.text;
+      if (t && t.startsWith('periodic sliding') && v.frame && v.canvas_view) {
+        const r = v.canvas_view.el.getBoundingClientRect(), b = v.frame.bbox;
+        found = {left: r.left + b.x0 + window.scrollX, top: r.top + b.y0 + window.scrollY};
+      }
+      for (const c of (v.child_views ?? [])) walk(c);
+    }
+    for (const root of Bokeh.index) walk(root);
+    return found;
+}"""
+
+
+@pytest.mark.parametrize("width", [1600, 800])
+def test_the_first_picture_comes_with_the_page_where_the_map_will_be(server, browser, width):
+    """The page's HTML carries the view's picture (explorer/preview.py): with
+    Bokeh's scripts cut off it is still on the page, with the view's own
+    pixels, over the place of the map's frame (side by side with the controls
+    at 1600 px, below them at 800); on a working page it is gone once the
+    session's picture is drawn."""
+    from stairbounce.explorer.view import compute_view, parse_query, shade
+
+    query = "?e=0:1&u=0:1.5&size=300x300&max_iter=1000"
+    live = browser.new_page(viewport={"width": width, "height": 1000})
+    try:
+        live.goto(server.url + query)
+        _wait_rendered(live)  # also: the server's kernels are loaded, so it sends previews
+        live.wait_for_function("() => !document.getElementById('sb-preview')", timeout=10_000)
+        frame = live.evaluate(_FRAME_ON_PAGE)
+    finally:
+        live.close()
+    still = browser.new_page(viewport={"width": width, "height": 1000})
+    still.route("**/*.js*", lambda route: route.abort())  # no Bokeh, no Panel: the HTML alone
+    try:
+        still.goto(server.url + query)
+        img = still.locator("#sb-preview img")
+        img.wait_for(timeout=10_000)
+        still.wait_for_function("() => document.querySelector('#sb-preview img').naturalWidth > 0")
+        box = img.bounding_box()
+        src = img.get_attribute("src")
+        still.screenshot(path=str(ARTIFACTS / f"explorer-preview-{width}.png"))
+    finally:
+        still.close()
+    assert box["width"] == 300 and box["height"] == 300
+    assert abs(box["x"] - frame["left"]) <= 3 and abs(box["y"] - frame["top"]) <= 3, (box, frame)
+    import base64
+
+    pixels = np.asarray(Image.open(io.BytesIO(base64.b64decode(src.partition(",")[2]))).convert("RGBA"))
+    view, _ = parse_query({k: v[-1] for k, v in parse_qs(query[1:]).items()})
+    assert np.array_equal(pixels.view(np.uint32)[..., 0], shade(compute_view(view), view.color)[::-1])
+
+
+def test_a_page_with_a_bad_value_comes_without_a_preview(server):
+    import urllib.request
+
+    with urllib.request.urlopen(server.url + "?size=300x300&max_iter=oops", timeout=30) as answer:
+        page = answer.read().decode()
+    assert "<body" in page and 'id="sb-preview"' not in page
+    with urllib.request.urlopen(server.url + "?size=300x300&max_iter=100", timeout=30) as answer:
+        page = answer.read().decode()
+    assert 'id="sb-preview"' in page

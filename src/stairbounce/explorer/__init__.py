@@ -20,6 +20,7 @@ from .view import (
     view_query,
 )
 from ._inline import inline
+from .preview import page_preview, with_preview
 
 __all__ = [
     "DEFAULT_VIEW",
@@ -149,6 +150,8 @@ def _guard_long_queries(tornado_app) -> None:
     from panel.io.server import DocHandler, WSHandler
 
     class _CutQueryDocHandler(DocHandler):
+        _preview = ""
+
         async def get(self, *args, **kwargs):
             args_ = self.request.query_arguments
             if any(len(v) > MAX_QUERY_VALUE for vs in args_.values() for v in vs):
@@ -157,7 +160,14 @@ def _guard_long_queries(tornado_app) -> None:
                 self.redirect(self.request.path + "?" + urlencode(cut, safe=":,"))
                 return
             _label_ipv6_host(self.request)
+            self._preview = await _page_preview(args_)
             return await super().get(*args, **kwargs)
+
+        def write(self, chunk):
+            if self._preview and isinstance(chunk, (str, bytes)):
+                text = chunk.decode("utf-8") if isinstance(chunk, bytes) else chunk
+                chunk, self._preview = with_preview(text, self._preview), ""
+            return super().write(chunk)
 
     class _IPv6WSHandler(WSHandler):
         def open(self, *args, **kwargs):
@@ -169,6 +179,18 @@ def _guard_long_queries(tornado_app) -> None:
             rule.target = _CutQueryDocHandler
         elif rule.target is WSHandler:
             rule.target = _IPv6WSHandler
+
+
+async def _page_preview(query_arguments) -> str:
+    """The view's picture for the page's HTML (:mod:`.preview`), computed on
+    the app's scheduler once its kernels are loaded; ``""`` when there is
+    none (a bad query, a large view, a busy server) or it failed."""
+    from .app import _WARM, SCHEDULER
+
+    try:
+        return await page_preview(query_arguments, SCHEDULER, ready=_WARM)
+    except Exception:  # the page works without its preview
+        return ""
 
 
 def _host_key(host: str) -> str:

@@ -51,6 +51,7 @@ from bokeh.plotting import figure
 from panel.io.state import set_curdoc
 
 from .export import export_name, view_netcdf, view_png
+from .preview import REMOVE_JS
 from .scheduler import Scheduler
 from .view import (
     DEFAULT_VIEW,
@@ -308,6 +309,8 @@ class Explorer:
                  x=[v.e_lo], y=[v.u_lo], dw=[v.e_hi - v.e_lo], dh=[v.u_hi - v.u_lo])
         )
         img = fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.img_src)
+        # the picture sent with the page's HTML (.preview) goes when the session's first pixels come
+        self.img_src.js_on_change("data", CustomJS(code=REMOVE_JS))
         self.hover = HoverTool(renderers=[img], formatters={
             "$x": "printf", "$y": "printf", "@val": CustomJSHover(code=_HOVER_VALUE_JS)})
         fig.add_tools(self.hover)
