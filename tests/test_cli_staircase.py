@@ -344,3 +344,27 @@ def test_tiled_scan_over_speeds_records_the_staircase(tmp_path, capsys):
     assert (ds.attrs["step_height"], ds.attrs["step_length"], ds.attrs["g"]) == (A, B, G)
     code, _, err = run(args[:8] + [str(B + 0.01)] + args[9:], capsys)
     assert code == 2 and "step_length: store 0.29, asked 0.3" in err
+
+
+def test_trajectory_figure_keeps_the_path_title_inside(tmp_path, capsys, monkeypatch):
+    # the path's title (speed and staircase) sits above the clock axis; it was cut off above
+    # the figure (title box up to 486 px in a 480 px figure) before the layout made room
+    from stairbounce.cli import model_commands
+
+    seen = []
+    real = model_commands.save_figure
+
+    def keep(fig, *args, **kwargs):
+        fig.canvas.draw()
+        r = fig.canvas.get_renderer()
+        seen.append([(ax.get_title(), ax.title.get_window_extent(r), fig.bbox) for ax in fig.axes])
+        return real(fig, *args, **kwargs)
+
+    monkeypatch.setattr(model_commands, "save_figure", keep)
+    code, _, _ = run(["trajectory", "--e", "0.5", "--speed", "1.2", "--step-height", str(A),
+                      "--step-length", str(B), "--steps", "5", "--out", str(tmp_path / "t.png")], capsys)
+    assert code == 0 and len(seen) == 1
+    titles = [(title, box, fig) for title, box, fig in seen[0] if title]
+    assert any("U = 1.2 m/s" in title for title, _, _ in titles)
+    for title, box, fig in titles:
+        assert box.y1 <= fig.y1 and box.y0 >= fig.y0, title

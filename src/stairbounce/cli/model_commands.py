@@ -128,7 +128,8 @@ def trajectory_(
     plot_poincare_section(traj.edge_y, traj.edge_v, traj.edge_impacts, ax=a2, staircase=traj)
     if stairs is not None:
         typer.echo(st.describe(u, stairs))
-    fig.tight_layout()
+    # the path's title sits above its clock axis, which the layout does not count: room for it
+    fig.tight_layout(rect=None if stairs is None else (0.0, 0.0, 1.0, 0.94))
     save_figure(fig, out, dpi, force)
     typer.echo(
         f"wrote {out}: {plural(len(traj.impacts), 'impact')} listed, "

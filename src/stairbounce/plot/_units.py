@@ -68,7 +68,7 @@ def path_in_metres(ax, stairs: Staircase, u: float):
     top = ax.secondary_xaxis("top", functions=(lambda x: x * seconds_per_x, lambda t: t / seconds_per_x))
     top.set_xlabel("t (s)")
     ax.set_title(f"{ax.get_title()}  (U = {u * stairs.speed_unit:.3g} m/s, a = {a:g} m, "
-                 f"b = {b:g} m)", fontsize="medium", pad=28)
+                 f"b = {b:g} m)", fontsize="medium")
 
 
 def staircase_given(obj, name="staircase") -> Staircase | None:
