@@ -115,15 +115,12 @@ def test_trajectory_axes_in_metres_and_seconds(tmp_path, capsys):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from stairbounce.cli import _staircase as st
-
     speed = 1.2
-    u = u_of(speed)
-    traj = sb.trajectory(0.5, u, steps=4)
+    traj = sb.trajectory(0.5, sb.Staircase(A, B, G).speed(speed), steps=4)
+    assert traj.u == u_of(speed)
     fig, (a1, a2) = plt.subplots(1, 2)
     sb.plot.plot_trajectory(traj, ax=a1)
-    sb.plot.plot_poincare_section(traj.edge_y, traj.edge_v, traj.edge_impacts, ax=a2)
-    st.physical_trajectory_axes(a1, a2, sb.Staircase(A, B, G), u)
+    sb.plot.plot_poincare_section(traj.edge_y, traj.edge_v, traj.edge_impacts, ax=a2, staircase=traj)
     fig.canvas.draw()
     assert a1.get_xlabel() == "x (m)" and a1.get_ylabel() == "height (m)"
     assert a2.get_ylabel().endswith("(m/s)")
@@ -147,6 +144,75 @@ def test_trajectory_axes_in_metres_and_seconds(tmp_path, capsys):
     code, out, _ = run(["trajectory", "--e", "0.5", "--speed", "1.2", "--step-height", str(A),
                         "--step-length", str(B), "--steps", "3", "--out", str(tmp_path / "t.png")], capsys)
     assert code == 0 and (tmp_path / "t.png").stat().st_size > 0 and "U = 1.2 m/s" in out
+
+
+def _round_grid(values):
+    """The values are multiples of one step of mantissa 1, 2, 2.5 or 5 (a MaxNLocator grid)."""
+    step = np.min(np.diff(values))
+    np.testing.assert_allclose(values / step, np.round(values / step), atol=1e-9)
+    mantissa = step / 10 ** math.floor(math.log10(step) + 1e-12)
+    assert min(abs(mantissa - m) for m in (1, 2, 2.5, 5, 10)) < 1e-9, values
+    return step
+
+
+@pytest.mark.parametrize("given", ["staircase", "speed", "trajectory"])
+def test_poincare_section_in_metres_given_a_staircase(given):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    stairs = sb.Staircase(A, B, G)
+    staircase = {"staircase": stairs, "speed": stairs.speed(1.2),
+                 "trajectory": sb.trajectory(0.5, stairs.speed(1.2), steps=2)}[given]
+    ys, vs = np.array([1.0, 2.0, 3.0]), np.array([-2.0, 0.0, 2.0])
+    ax = sb.plot.plot_poincare_section(ys, vs, staircase=staircase, colorbar=False)
+    ax.set_xlim(1.0, 3.0)  # heights 0.17..0.51 m
+    ax.set_ylim(-2.0, 2.0)  # velocities -+2 sqrt(a g) = -+2.583 m/s
+    ax.figure.canvas.draw()
+    assert ax.get_xlabel() == "height at the edge (m)"
+    assert ax.get_ylabel() == "vertical velocity at the edge (m/s)"
+    assert "a = 0.17 m, b = 0.29 m" in ax.get_title()
+    # the data stay normalised; the ticks sit at round metres and m/s, labelled with them
+    assert ax.collections[0].get_offsets()[:, 0].tolist() == [1.0, 2.0, 3.0]
+    for axis, factor, (lo, hi) in ((ax.xaxis, A, (0.17, 0.51)),
+                                   (ax.yaxis, math.sqrt(A * G), (-2.0 * math.sqrt(A * G), 2.0 * math.sqrt(A * G)))):
+        view = sorted(axis.get_view_interval())
+        shown = [(t, label.get_text()) for t, label in zip(axis.get_ticklocs(), axis.get_ticklabels())
+                 if view[0] - 1e-12 <= t <= view[1] + 1e-12]
+        values = np.array([t for t, _ in shown]) * factor
+        step = _round_grid(values)
+        # the ticks span the view: the first within a step of its low end, the last of its high end
+        assert lo - 1e-12 <= values[0] < lo + step and hi - step < values[-1] <= hi + 1e-12, (values, lo, hi)
+        texts = [float(text.replace("\N{MINUS SIGN}", "-")) for _, text in shown]
+        np.testing.assert_allclose(texts, values, atol=1e-9)
+    # the dashed edge y = 1 is the step height
+    assert "y = 0.17 m: edge of the domain of P" in ax.get_legend_handles_labels()[1]
+    plt.close(ax.figure)
+
+
+def test_poincare_section_normalised_without_a_staircase():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    traj = sb.trajectory(0.5, u_of(1.2), steps=2)  # a plain u: the trajectory carries no staircase
+    for staircase in (None, traj):
+        ax = sb.plot.plot_poincare_section([1.0, 2.0, 3.0], [-2.0, 0.0, 2.0], colorbar=False,
+                                           staircase=staircase)
+        ax.set_xlim(1.0, 3.0)
+        ax.figure.canvas.draw()
+        assert ax.get_xlabel() == "y (height at the edge)"
+        assert ax.get_ylabel() == "v (vertical velocity at the edge)"
+        assert ax.get_title() == "Poincare section"
+        ticks = np.array([t for t in ax.get_xticks() if 1.0 <= t <= 3.0])
+        _round_grid(ticks)
+        assert ticks[0] == 1.0 and ticks[-1] == 3.0
+        assert "y = 1: edge of the domain of P" in ax.get_legend_handles_labels()[1]
+        plt.close(ax.figure)
+    with pytest.raises(ValueError, match="staircase must be a stairbounce.Staircase"):
+        sb.plot.plot_poincare_section([1.0], [0.0], staircase=0.17)
 
 
 @pytest.mark.parametrize(
@@ -278,3 +344,27 @@ def test_tiled_scan_over_speeds_records_the_staircase(tmp_path, capsys):
     assert (ds.attrs["step_height"], ds.attrs["step_length"], ds.attrs["g"]) == (A, B, G)
     code, _, err = run(args[:8] + [str(B + 0.01)] + args[9:], capsys)
     assert code == 2 and "step_length: store 0.29, asked 0.3" in err
+
+
+def test_trajectory_figure_keeps_the_path_title_inside(tmp_path, capsys, monkeypatch):
+    # the path's title (speed and staircase) sits above the clock axis; it was cut off above
+    # the figure (title box up to 486 px in a 480 px figure) before the layout made room
+    from stairbounce.cli import model_commands
+
+    seen = []
+    real = model_commands.save_figure
+
+    def keep(fig, *args, **kwargs):
+        fig.canvas.draw()
+        r = fig.canvas.get_renderer()
+        seen.append([(ax.get_title(), ax.title.get_window_extent(r), fig.bbox) for ax in fig.axes])
+        return real(fig, *args, **kwargs)
+
+    monkeypatch.setattr(model_commands, "save_figure", keep)
+    code, _, _ = run(["trajectory", "--e", "0.5", "--speed", "1.2", "--step-height", str(A),
+                      "--step-length", str(B), "--steps", "5", "--out", str(tmp_path / "t.png")], capsys)
+    assert code == 0 and len(seen) == 1
+    titles = [(title, box, fig) for title, box, fig in seen[0] if title]
+    assert any("U = 1.2 m/s" in title for title, _, _ in titles)
+    for title, box, fig in titles:
+        assert box.y1 <= fig.y1 and box.y0 >= fig.y0, title

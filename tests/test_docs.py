@@ -82,7 +82,8 @@ def test_html_site_builds_without_warnings(tmp_path):
     order = [guide.index(f'href="{name}.html"') for name in ("model", "scans", "paper", "dimension", "orbits")]
     assert order == sorted(order)
     # pages whose examples draw show the figures, made while the site was built
-    for page, least in (("getting-started", 1), ("guide/model", 1), ("guide/scans", 2), ("guide/orbits", 1)):
+    for page, least in (("getting-started", 1), ("guide/model", 1), ("guide/scans", 2), ("guide/orbits", 1),
+                        ("guide/dimension", 2), ("guide/motion", 3), ("guide/dask", 1), ("guide/explorer", 2)):
         html = (out / f"{page}.html").read_text()
         images = re.findall(r'<img[^>]+src="(?:\.\./)?_images/([^"]+)"', html)
         assert len(images) >= least, page

@@ -106,18 +106,3 @@ def describe(u: float, stairs: Staircase | None) -> str:
         return f"u = {u:g}"
     return (f"speed U = {stairs.to_speed(u):g} m/s on {stairs.describe()}: u = U sqrt(a/g) / b = {u:.6g} "
             f"(one step takes {stairs.step_length / stairs.to_speed(u):.4g} s)")
-
-
-# --------------------------------------------------------------------------- #
-# figures in metres and seconds                                               #
-# --------------------------------------------------------------------------- #
-
-
-def physical_trajectory_axes(ax_path, ax_section, stairs: Staircase, u: float):
-    """Relabel the trajectory figure (Fig. 1 and the Poincare section) in SI
-    units (:func:`stairbounce.plot._units.path_in_metres`,
-    :func:`~stairbounce.plot._units.section_in_metres`)."""
-    from ..plot._units import path_in_metres, section_in_metres
-
-    path_in_metres(ax_path, stairs, u)
-    section_in_metres(ax_section, stairs)

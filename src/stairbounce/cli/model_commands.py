@@ -112,7 +112,9 @@ def trajectory_(
         raise CLIError(f"--animate must end in .gif, got {str(animate)!r}")
     check_dpi(dpi)
     check_outputs(force, out=out, animate=animate)
-    traj = trajectory(e, u, y0, v0, steps)
+    # on a physical staircase the trajectory carries it (the same u), and both
+    # panels draw themselves in metres, m/s and seconds
+    traj = trajectory(e, u if stairs is None else stairs.speed(speed), y0, v0, steps)
 
     import matplotlib
 
@@ -123,11 +125,11 @@ def trajectory_(
 
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.8), gridspec_kw={"width_ratios": [1.6, 1]})
     plot_trajectory(traj, ax=a1)
-    plot_poincare_section(traj.edge_y, traj.edge_v, traj.edge_impacts, ax=a2)
+    plot_poincare_section(traj.edge_y, traj.edge_v, traj.edge_impacts, ax=a2, staircase=traj)
     if stairs is not None:
         typer.echo(st.describe(u, stairs))
-        st.physical_trajectory_axes(a1, a2, stairs, u)
-    fig.tight_layout()
+    # the path's title sits above its clock axis, which the layout does not count: room for it
+    fig.tight_layout(rect=None if stairs is None else (0.0, 0.0, 1.0, 0.94))
     save_figure(fig, out, dpi, force)
     typer.echo(
         f"wrote {out}: {plural(len(traj.impacts), 'impact')} listed, "

@@ -68,18 +68,24 @@ def path_in_metres(ax, stairs: Staircase, u: float):
     top = ax.secondary_xaxis("top", functions=(lambda x: x * seconds_per_x, lambda t: t / seconds_per_x))
     top.set_xlabel("t (s)")
     ax.set_title(f"{ax.get_title()}  (U = {u * stairs.speed_unit:.3g} m/s, a = {a:g} m, "
-                 f"b = {b:g} m)", fontsize="medium", pad=28)
+                 f"b = {b:g} m)", fontsize="medium")
+
+
+def staircase_given(obj, name="staircase") -> Staircase | None:
+    """The staircase of a plot's ``staircase`` argument: a :class:`Staircase`,
+    an object carrying one in its ``staircase`` attribute (a ``Speed``, a
+    ``Trajectory``; None there means normalised units), or None."""
+    stairs = getattr(obj, "staircase", obj) if not isinstance(obj, Staircase) else obj
+    if stairs is None or isinstance(stairs, Staircase):
+        return stairs
+    raise ValueError(f"{name} must be a stairbounce.Staircase or an object carrying one (a speed made by "
+                     f"Staircase.speed, a Trajectory), got {type(obj).__name__}")
 
 
 def section_in_metres(ax, stairs: Staircase):
-    """A Poincare section (drawn in normalised y, v) ticked in metres and m/s;
-    its dashed edge ``y = 1`` is the step height ``a``."""
-    a = stairs.step_height
-    scaled_axis(ax.xaxis, a)
+    """Tick a Poincare section (drawn in normalised y, v) in metres and m/s."""
+    scaled_axis(ax.xaxis, stairs.step_height)
     scaled_axis(ax.yaxis, stairs.velocity_unit)
     ax.set_xlabel("height at the edge (m)")
     ax.set_ylabel("vertical velocity at the edge (m/s)")
-    for line in ax.get_lines():
-        if line.get_label().startswith("y = 1:"):
-            line.set_label(f"y = {a:g} m: edge of the domain of P")
-    ax.legend(loc="best", fontsize="small")
+    ax.set_title(f"{ax.get_title()} ({describe(stairs)})", fontsize="medium")

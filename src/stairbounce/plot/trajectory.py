@@ -64,8 +64,8 @@ def plot_trajectory(traj, ax=None, samples_per_step=400, show_impacts=True):
     return ax
 
 
-def plot_poincare_section(ys, vs, impacts=None, ax=None, colorbar=True):
-    """plot_poincare_section(ys, vs, impacts=None, ax=None, colorbar=True) -> Axes
+def plot_poincare_section(ys, vs, impacts=None, ax=None, colorbar=True, staircase=None):
+    """plot_poincare_section(ys, vs, impacts=None, ax=None, colorbar=True, staircase=None) -> Axes
 
     Draw Poincare iterates ``(y_n, v_n)`` at consecutive step edges (Fig. 2),
     coloured by the index n (with a colour bar saying so).
@@ -74,7 +74,17 @@ def plot_poincare_section(ys, vs, impacts=None, ax=None, colorbar=True):
     point (1, 0), are drawn as a larger marker.  The dashed line ``y = 1`` is
     the edge of the map's domain ``[1, inf) x R``: the height of the step
     just left.
+
+    ``staircase``, a :class:`~stairbounce.Staircase` or what carries one (a
+    speed ``stairs.speed(U)``, or the :class:`~stairbounce.Trajectory`
+    computed from it), draws the axes in metres and m/s: heights ``y a`` and
+    vertical velocities ``v sqrt(a g)``, ticked at round values, and the edge
+    is the step height ``a``.  The iterates stay in the paper's normalised
+    units, which are the labels without a staircase.
     """
+    from ._units import section_in_metres, staircase_given
+
+    stairs = staircase_given(staircase)
     ax = _axes(ax)
     ys, vs = np.asarray(ys), np.asarray(vs)
     if len(ys) <= 40:  # the order of a few iterates helps; of many it is clutter
@@ -90,10 +100,13 @@ def plot_poincare_section(ys, vs, impacts=None, ax=None, colorbar=True):
         if sl.any():
             ax.plot(ys[sl], vs[sl], "*", ms=12, color="C1", mec="k", mew=0.5,
                     label="after sliding (1, 0)", zorder=3)
-    ax.axvline(1.0, color="0.5", lw=0.8, ls="--", label="y = 1: edge of the domain of P")
+    edge = "y = 1" if stairs is None else f"y = {stairs.step_height:g} m"
+    ax.axvline(1.0, color="0.5", lw=0.8, ls="--", label=f"{edge}: edge of the domain of P")
     ax.set_xlabel("y (height at the edge)")
     ax.set_ylabel("v (vertical velocity at the edge)")
     ax.set_title("Poincare section")
+    if stairs is not None:
+        section_in_metres(ax, stairs)
     ax.legend(loc="best", fontsize="small")
     return ax
 
