@@ -60,6 +60,30 @@ def _corner_report(name, e, u, res, plain, dt_plain):
           f"{sum(r.area for r in regs):.9g} (seeded alone {sum(r.area for r in plain):.9g})")
 
 
+def _coverage(e, u, res=32, fine=512):
+    """Seeded at ``res`` with and without corners: how many of the words a ``fine``
+    scan sees (by their pixel count there) each run finds."""
+    es, us = regions._grid(e, u, fine)
+    h1, h2, _ = regions._label_grid(es, us, 1000, 1.0, 0.0)
+    keys, counts = np.unique(np.stack([h1.ravel(), h2.ravel()], 1), axis=0, return_counts=True)
+    px = {(int(a), int(b)): int(c) for (a, b), c in zip(keys, counts) if a != 0}
+    per = (fine // res) ** 2  # fine pixels per seed pixel
+    for fc in (False, True):
+        t = time.perf_counter()
+        regs = sb.window_regions(e, u, resolution=res, from_corners=fc)
+        dt = time.perf_counter() - t
+        found = set()
+        for r in regs:
+            ks = regions.itinerary_of_word(r.word)
+            found.add(tuple(int(h) for h in regions._hash_itinerary(ks, ks.size)))
+        row = []
+        for frac in (1.0, 0.25, 1 / 16, 1 / 64):
+            big = {k for k, c in px.items() if c >= frac * per}
+            row.append(f">= {frac:g} seed pixel: {len(big & found)} of {len(big)}")
+        print(f"  seeds {res}x{res}{' + corners' if fc else ''}: {dt:.1f} s, {len(regs)} words; words of a "
+              f"{fine}x{fine} scan found, by size: " + ", ".join(row))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--resolution", type=int, default=128)
@@ -94,6 +118,8 @@ def main(argv=None):
 
     regs5, dt5 = _window_report("Fig. 5e", e5, u5, a.resolution)
     _corner_report("Fig. 5e", e5, u5, a.resolution, regs5, dt5)
+    if not a.quick:
+        _coverage(e5, u5)
     if not a.quick:
         (e7, u7), _ = DIMENSION_WINDOWS["fig7"]
         regs7, dt7 = _window_report("Fig. 7", e7, u7, a.resolution)

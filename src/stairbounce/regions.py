@@ -978,9 +978,10 @@ def _words_points(pe, pu, y0, v0, max_iter, h1, h2):
 # seed spacing (per axis), in the four sectors between the corner's two arcs and
 # at _CORNER_DIRECTIONS equally spaced directions; at most _CORNER_ROUNDS rounds.
 # Measured on Fig. 5e seeded at 32 x 32 (benchmarks/README.md): one ring at 1/4
-# finds 392 of the 411 words of >= 16 pixels at 512 x 512 in 15 s; adding rings
-# at 1/20 (410 of 411, 27 s) or at 1/128 and 1/4096 (410, 48 s) finds a few more
-# words of a pixel's size and many smaller ones, at two to three times the cost.
+# finds 392 of the 411 words of >= 16 pixels at 512 x 512 (15 s in that trial);
+# adding rings at 1/20 (410 of 411, 27 s) or at 1/128 and 1/4096 (410, 48 s)
+# finds a few more words of a pixel's size and many smaller ones, at two to three
+# times the cost.
 _CORNER_RADII = (0.25,)
 _CORNER_DIRECTIONS = 12
 _CORNER_ROUNDS = 8
@@ -1119,7 +1120,7 @@ def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, point
     no new word appears.  On the Fig. 5e window seeded at 32 x 32 this finds
     159 of the 160 words of 1/4 of a seed pixel or more that a 512 x 512 scan
     sees (the seed scan alone: 95), and 392 of the 411 of 1/16 or more (121);
-    it costs 2.5 to 8 times the seeded run (``benchmarks/README.md``).
+    it costs 3 to 13 times the seeded run (``benchmarks/README.md``).
 
     What it can still miss: a region (or a component, or a hole) that contains
     no seed pixel centre and either touches no corner of a traced component of
