@@ -129,3 +129,24 @@ def test_region_area_against_pixel_counts_at_4096(labels_4096, word):
     # relative differences are 1.8e-6, 1.8e-6 and 9.2e-6, diff / bound <= 0.003)
     n = (hi - lo) / cell
     assert diff <= 3.0 * math.sqrt(n) * cell
+
+
+def test_cli_words_regions_from_corners(tmp_path, capsys):
+    from stairbounce.cli import main
+
+    def run(args):
+        with pytest.raises(SystemExit) as exc:
+            main(args)
+        out, err = capsys.readouterr()
+        return exc.value.code, out, err
+
+    e, u = (0.08, 0.12), (0.98, 1.02)
+    window = ["words", "--e", "0.08:0.12", "--u", "0.98:1.02", "--size", "8x8", "--regions"]
+    code, text, err = run(window + ["--from-corners", "--out", str(tmp_path / "c.geojson")])
+    assert code == 0, err
+    ref = sb.window_regions(e, u, resolution=8, from_corners=True)
+    assert len(ref) > 10 * len(sb.window_regions(e, u, resolution=8))
+    assert f"{len(ref)} words in" in text
+    assert "(3, 0, 3, 0^inf)" in (tmp_path / "c.geojson").read_text()
+    code, _, err = run(["words", "--from-corners"])
+    assert code == 2 and "--from-corners goes with --regions" in err and "Traceback" not in err
