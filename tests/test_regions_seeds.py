@@ -14,6 +14,7 @@ import pytest
 
 import stairbounce as sb
 from stairbounce import regions
+from tests.test_cli_consistency import run as run_cli
 from tests.test_regions import _pixel_area
 
 
@@ -132,13 +133,8 @@ def test_region_area_against_pixel_counts_at_4096(labels_4096, word):
 
 
 def test_cli_words_regions_from_corners(tmp_path, capsys):
-    from stairbounce.cli import main
-
     def run(args):
-        with pytest.raises(SystemExit) as exc:
-            main(args)
-        out, err = capsys.readouterr()
-        return exc.value.code, out, err
+        return run_cli(args, capsys)
 
     e, u = (0.08, 0.12), (0.98, 1.02)
     window = ["words", "--e", "0.08:0.12", "--u", "0.98:1.02", "--size", "8x8", "--regions"]
