@@ -1,7 +1,8 @@
 """Borders as curves (stairbounce.regions, issue 22): time per traced point and
 per arc, all regions of the Fig. 5e window, counts of regions, arcs and corners
 by kind in the Fig. 5e and Fig. 7 windows, N(p) from regions, areas against
-pixel counts, and the bands' self-similarity.
+pixel counts, the bands' self-similarity, and the words found from corners
+(``window_regions(from_corners=True)``) against the seeded run alone.
 
     python benchmarks/regions.py [--resolution 128] [--pixels 2048] [--quick]
 
@@ -44,6 +45,45 @@ def _window_report(name, e, u, res):
     return regs, dt
 
 
+def _corner_report(name, e, u, res, plain, dt_plain):
+    """Words found with corner seeding against the seeded run alone (``plain``)."""
+    t = time.perf_counter()
+    regs = sb.window_regions(e, u, resolution=res, from_corners=True)
+    dt = time.perf_counter() - t
+    before = {r.word.letters for r in plain}
+    new = [r for r in regs if r.word.letters not in before]
+    pixel = (e[1] - e[0]) * (u[1] - u[0]) / res**2
+    sizes = np.array([r.area / pixel for r in new])
+    print(f"  from corners: {dt:.1f} s ({dt / dt_plain:.1f} x the seeded run); {len(regs)} words "
+          f"({len(new)} new: {np.sum(sizes >= 0.25)} of >= 1/4 seed pixel, {np.sum(sizes >= 1 / 16)} of "
+          f">= 1/16; {sum(not r.complete for r in new)} incomplete); traced area "
+          f"{sum(r.area for r in regs):.9g} (seeded alone {sum(r.area for r in plain):.9g})")
+
+
+def _coverage(e, u, res=32, fine=512):
+    """Seeded at ``res`` with and without corners: how many of the words a ``fine``
+    scan sees (by their pixel count there) each run finds."""
+    es, us = regions._grid(e, u, fine)
+    h1, h2, _ = regions._label_grid(es, us, 1000, 1.0, 0.0)
+    keys, counts = np.unique(np.stack([h1.ravel(), h2.ravel()], 1), axis=0, return_counts=True)
+    px = {(int(a), int(b)): int(c) for (a, b), c in zip(keys, counts) if a != 0}
+    per = (fine // res) ** 2  # fine pixels per seed pixel
+    for fc in (False, True):
+        t = time.perf_counter()
+        regs = sb.window_regions(e, u, resolution=res, from_corners=fc)
+        dt = time.perf_counter() - t
+        found = set()
+        for r in regs:
+            ks = regions.itinerary_of_word(r.word)
+            found.add(tuple(int(h) for h in regions._hash_itinerary(ks, ks.size)))
+        row = []
+        for frac in (1.0, 0.25, 1 / 16, 1 / 64):
+            big = {k for k, c in px.items() if c >= frac * per}
+            row.append(f">= {frac:g} seed pixel: {len(big & found)} of {len(big)}")
+        print(f"  seeds {res}x{res}{' + corners' if fc else ''}: {dt:.1f} s, {len(regs)} words; words of a "
+              f"{fine}x{fine} scan found, by size: " + ", ".join(row))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--resolution", type=int, default=128)
@@ -76,10 +116,14 @@ def main(argv=None):
           f"{dt / pts * 1e6:.1f} us per point ({pts} points; "
           f"{scan_rate * dt / pts:.0f} seed-scan pixels per traced point)")
 
-    regs5, _ = _window_report("Fig. 5e", e5, u5, a.resolution)
+    regs5, dt5 = _window_report("Fig. 5e", e5, u5, a.resolution)
+    _corner_report("Fig. 5e", e5, u5, a.resolution, regs5, dt5)
+    if not a.quick:
+        _coverage(e5, u5)
     if not a.quick:
         (e7, u7), _ = DIMENSION_WINDOWS["fig7"]
-        _window_report("Fig. 7", e7, u7, a.resolution)
+        regs7, dt7 = _window_report("Fig. 7", e7, u7, a.resolution)
+        _corner_report("Fig. 7", e7, u7, a.resolution, regs7, dt7)
 
         # areas against pixel counts
         n = a.pixels
@@ -91,9 +135,16 @@ def main(argv=None):
         for r in regs5[:6]:
             ks = regions.itinerary_of_word(r.word)
             h = regions._hash_itinerary(ks, ks.size)
-            px = ((h1 == h[0]) & (h2 == h[1])).sum() * cell
+            mask = (h1 == h[0]) & (h2 == h[1])
+            px = mask.sum() * cell
+            # the pixel-boundary error: half the pixels between those surely inside
+            # (all four neighbours in the region) and those touching it
+            m = np.pad(mask, 1, mode="edge")
+            nbs = (m[:-2, 1:-1], m[2:, 1:-1], m[1:-1, :-2], m[1:-1, 2:])
+            gap = ((mask & ~np.logical_and.reduce(nbs)) | (~mask & np.logical_or.reduce(nbs))).sum() * cell
             print(f"  {r.word.format(ascii=True):>32s}: traced {r.area:.12e} (+- {r.area_error:.1e}), "
-                  f"pixels {px:.12e}, relative difference {(px - r.area) / r.area:+.2e}")
+                  f"pixels {px:.12e}, relative difference {(px - r.area) / r.area:+.2e} "
+                  f"(pixel-boundary error {0.5 * gap / r.area:.1e})")
 
         t = time.perf_counter()
         s = sb.band_similarity(resolution=a.resolution)

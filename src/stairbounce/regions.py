@@ -960,19 +960,181 @@ def _point_seeds(points, e, u, y0, v0, max_iter):
     return seeds
 
 
-def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, points=None, progress=None):
-    """window_regions(e, u, *, resolution=256, max_iter=1000, points=None) -> list[Region]
+@njit(cache=True, parallel=True)
+def _words_points(pe, pu, y0, v0, max_iter, h1, h2):
+    """The two itinerary hashes of :func:`_words_grid` at the points ``(pe, pu)``
+    (0, 0 where the map does not slide within max_iter)."""
+    for i in prange(pe.size):
+        ks = np.empty(max_iter, dtype=np.int64)
+        n = _itinerary_of(pe[i], pu[i], y0, v0, max_iter, ks)
+        if n <= 0:
+            h1[i] = 0
+            h2[i] = 0
+        else:
+            h1[i], h2[i] = _hash_itinerary(ks, n)
+
+
+# corner seeding: probes on a ring around every corner, at this fraction of the
+# seed spacing (per axis), in the four sectors between the corner's two arcs and
+# at _CORNER_DIRECTIONS equally spaced directions; at most _CORNER_ROUNDS rounds.
+# Measured on Fig. 5e seeded at 32 x 32 (benchmarks/README.md): one ring at 1/4
+# finds 392 of the 411 words of >= 16 pixels at 512 x 512 (15 s in that trial);
+# adding rings at 1/20 (410 of 411, 27 s) or at 1/128 and 1/4096 (410, 48 s)
+# finds a few more words of a pixel's size and many smaller ones, at two to three
+# times the cost.
+_CORNER_RADII = (0.25,)
+_CORNER_DIRECTIONS = 12
+_CORNER_ROUNDS = 8
+_CORNER_SEEDS = 8          # border points kept per new word and round
+# only the corners of components of at least this fraction of a seed pixel's area
+# are probed (a cascade through ever smaller regions would not end: the plane is
+# fractal)
+_CORNER_MIN_AREA = 1.0 / 16
+
+
+def _corner_rings(regs, pixel):
+    """The corners of ``regs`` and, for each, rings of probe points around it:
+    (centres C x 2, probes C x R x D x 2), directions in angular order, in
+    coordinates scaled by the seed pixel ``pixel`` = (de, du)."""
+    centres, dirs = [], []
+    uni = 2.0 * math.pi * (np.arange(_CORNER_DIRECTIONS) + 0.5) / _CORNER_DIRECTIONS
+    for r in regs:
+        for comp in r.components:
+            if comp.area < _CORNER_MIN_AREA * pixel[0] * pixel[1]:
+                continue
+            for curve in [comp.boundary] + comp.holes:
+                if len(curve) < 2:
+                    continue
+                for i, arc in enumerate(curve):
+                    nxt = curve[(i + 1) % len(curve)]
+                    t_in, t_out = arc._tans[-1], nxt._tans[0]
+                    # the two arcs' directions away from the corner, in pixel units
+                    d1 = np.array([-t_in[0] / pixel[0], -t_in[1] / pixel[1]])
+                    d2 = np.array([t_out[0] / pixel[0], t_out[1] / pixel[1]])
+                    n1, n2 = np.hypot(*d1), np.hypot(*d2)
+                    if not (n1 > 0 and n2 > 0 and math.isfinite(n1 + n2)):
+                        continue
+                    d1, d2 = d1 / n1, d2 / n2
+                    # the bisectors of the four sectors between the two tangent lines
+                    bis = [d1 + d2, d2 - d1, -d1 - d2, d1 - d2]
+                    ang = [math.atan2(b[1], b[0]) for b in bis if np.hypot(*b) > 1e-12]
+                    a = np.sort(np.mod(np.concatenate([uni, ang]), 2.0 * math.pi))
+                    centres.append((arc.e[-1], arc.u[-1]))
+                    dirs.append(a)
+    if not centres:
+        return np.zeros((0, 2)), np.zeros((0, len(_CORNER_RADII), 0, 2))
+    D = max(len(a) for a in dirs)
+    ang = np.array([np.concatenate([a, np.full(D - len(a), a[-1])]) for a in dirs])
+    C = np.array(centres, dtype=float)
+    rad = np.array(_CORNER_RADII)
+    P = np.empty((len(C), rad.size, D, 2))
+    P[..., 0] = C[:, None, None, 0] + rad[None, :, None] * np.cos(ang)[:, None, :] * pixel[0]
+    P[..., 1] = C[:, None, None, 1] + rad[None, :, None] * np.sin(ang)[:, None, :] * pixel[1]
+    return C, P
+
+
+def _bisect_into(F, xin, xout):
+    """Bisect between ``xin`` (inside the region of ``F``) and ``xout`` (outside)
+    with the region's own margins, to rounding: the inside end, on its border."""
+    xin, xout = np.array(xin, float), np.array(xout, float)
+    while True:
+        mid = 0.5 * (xin + xout)
+        if (mid == xin).all() or (mid == xout).all():
+            return xin
+        if F.inside(F(mid)[0]):
+            xin = mid
+        else:
+            xout = mid
+
+
+def _corner_seeds(regs, known, e, u, pixel, y0, v0, max_iter):
+    """Probe around every corner of ``regs`` with the map: the words not in
+    ``known`` (hash pairs) as ``{key: (itinerary, [border points])}``, each
+    border point the word's end of a bisection towards a neighbouring probe of
+    another outcome on the same ring."""
+    C, P = _corner_rings(regs, pixel)
+    if not len(C):
+        return {}
+    flat = P.reshape(-1, 2)
+    inwin = (flat[:, 0] >= e[0]) & (flat[:, 0] <= e[1]) & (flat[:, 1] >= u[0]) & (flat[:, 1] <= u[1])
+    h1 = np.zeros(len(flat), dtype=np.uint64)
+    h2 = np.zeros(len(flat), dtype=np.uint64)
+    sel = np.nonzero(inwin)[0]
+    a1, a2 = np.empty(sel.size, np.uint64), np.empty(sel.size, np.uint64)
+    _words_points(np.ascontiguousarray(flat[sel, 0]), np.ascontiguousarray(flat[sel, 1]),
+                  y0, v0, max_iter, a1, a2)
+    h1[sel], h2[sel] = a1, a2
+    shape = P.shape[:3]
+    H1, H2, W = h1.reshape(shape), h2.reshape(shape), inwin.reshape(shape)
+    new = {}
+    buf = np.empty(max_iter, dtype=np.int64)
+    margins = {}
+    for c, r, d in zip(*np.nonzero(W & (H1 != 0))):
+        key = (int(H1[c, r, d]), int(H2[c, r, d]))
+        if key in known:
+            continue
+        if key in new and len(new[key][1]) >= _CORNER_SEEDS:
+            continue
+        # the nearest probe of the same ring with another outcome, inside the window
+        D = shape[2]
+        other = None
+        for step in range(1, D // 2 + 1):
+            for dd in ((d + step) % D, (d - step) % D):
+                if W[c, r, dd] and (H1[c, r, dd], H2[c, r, dd]) != (H1[c, r, d], H2[c, r, d]):
+                    other = dd
+                    break
+            if other is not None:
+                break
+        if other is None:
+            continue
+        if key not in new:
+            n = _itinerary_of(P[c, r, d, 0], P[c, r, d, 1], y0, v0, max_iter, buf)
+            new[key] = (buf[:n].copy(), [])
+            margins[key] = _Margins(new[key][0], (e[0], e[1], u[0], u[1]), y0, v0)
+        F = margins[key]
+        if not F.inside(F(P[c, r, d])[0]) or F.inside(F(P[c, r, other])[0]):
+            continue  # the margins disagree with the map there
+        new[key][1].append(_bisect_into(F, P[c, r, d], P[c, r, other]))
+    return {k: v for k, v in new.items() if v[1]}
+
+
+def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, points=None, progress=None,
+                   from_corners=False):
+    """window_regions(e, u, *, resolution=256, max_iter=1000, points=None, from_corners=False) -> list[Region]
 
     Every word's region in a window (the words seen by a scan of
     ``resolution`` x ``resolution`` pixel centres, and, with ``points`` (a
     :func:`stairbounce.border_points` Dataset, e.g. of a finer scan), the
     words on either side of those border points, each traced from there),
-    largest area first; see :func:`word_region` for the method and what it
-    can miss.
+    largest area first; see :func:`word_region` for the method.
+
+    With ``from_corners=True``, regions smaller than a seed pixel are also
+    found from the corners of their neighbours: after the seeded words are
+    traced, the map is evaluated on a ring around every corner of every
+    component of at least 1/16 of a seed pixel's area (radius a quarter of the
+    seed spacing along each axis; 16 points: the bisectors of the four sectors
+    between the corner's two arcs and 12 equally spaced directions); each word
+    not traced yet is bisected (with its own margins) towards a neighbouring
+    point of the ring with another outcome, and walked from that border point.
+    The new regions' corners are probed in turn, for at most 8 rounds or until
+    no new word appears.  On the Fig. 5e window seeded at 32 x 32 this finds
+    159 of the 160 words of 1/4 of a seed pixel or more that a 512 x 512 scan
+    sees (the seed scan alone: 95), and 392 of the 411 of 1/16 or more (121);
+    it costs 3 to 13 times the seeded run (``benchmarks/README.md``).
+
+    What it can still miss: a region (or a component, or a hole) that contains
+    no seed pixel centre and either touches no corner of a traced component of
+    at least 1/16 pixel (an island inside one region, or a region meeting its
+    neighbours only along arcs, at corners of smaller regions, or at the
+    corners of a component that was itself missed), or lies in a sector of a
+    corner narrower than the ring's spacing of directions (a cusp) or entirely
+    within a quarter pixel of it; and a further component of a word already
+    traced (only words not yet traced are seeded from corners).
     """
     e, u = _check_window(e, u)
     resolution = check_count("resolution", resolution, 2, 8192)
     max_iter = check_count("max_iter", max_iter, 1)
+    from_corners = _v.flag("from_corners", from_corners)
     y0, v0 = float(y0), float(v0)
     if points is not None and not all(k in getattr(points, "variables", ()) for k in ("e", "u", "width", "axis")):
         raise ValueError("points must be a Dataset from border_points (variables e, u, width, axis)")
@@ -991,14 +1153,31 @@ def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, point
     for key, (ks, _) in seeds.items():
         todo.setdefault(key, ks)
     out = []
-    for key, ks in todo.items():
-        w = word_from_impacts(ks)
-        mask = (h1 == np.uint64(key[0])) & (h2 == np.uint64(key[1]))
-        comps, failures = _trace_word(ks, w, e, u, es, us, mask, y0, v0,
-                                      seeds=seeds.get(key, (None, ()))[1])
-        out.append(Region(w, e, u, comps, complete=failures == 0, failures=failures))
-        if progress is not None:
-            progress(len(out), len(todo))
+    total = len(todo)
+
+    def trace(todo, seeds):
+        regs = []
+        for key, ks in todo.items():
+            w = word_from_impacts(ks)
+            mask = (h1 == np.uint64(key[0])) & (h2 == np.uint64(key[1]))
+            comps, failures = _trace_word(ks, w, e, u, es, us, mask, y0, v0,
+                                          seeds=seeds.get(key, (None, ()))[1])
+            regs.append(Region(w, e, u, comps, complete=failures == 0, failures=failures))
+            out.append(regs[-1])
+            if progress is not None:
+                progress(len(out), total)
+        return regs
+
+    fresh = trace(todo, seeds)
+    known = set(todo)
+    pixel = ((e[1] - e[0]) / resolution, (u[1] - u[0]) / resolution)
+    for _ in range(_CORNER_ROUNDS if from_corners else 0):
+        seeds = _corner_seeds(fresh, known, e, u, pixel, y0, v0, max_iter)
+        if not seeds:
+            break
+        known.update(seeds)
+        total += len(seeds)
+        fresh = trace({k: v[0] for k, v in seeds.items()}, seeds)
     out.sort(key=lambda r: -r.area)
     return out
 

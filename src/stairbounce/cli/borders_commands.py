@@ -147,6 +147,9 @@ def words_(
     regions: bool = typer.Option(False, "--regions", help="Trace every word's region as polygons "
                                  "(stairbounce.regions; seeded by a square scan of the larger side of "
                                  "--size) and write them to --out .geojson or .svg."),
+    from_corners: bool = typer.Option(False, "--from-corners", help="With --regions: also trace the "
+                                      "regions smaller than a seed pixel found around the corners of "
+                                      "their neighbours (several times slower)."),
 ):
     """The distinct words of the periodic sliding solutions in a window: letters, period,
     pixels, area, a representative point, bounding box, border points by kind; and N(p)."""
@@ -154,8 +157,10 @@ def words_(
 
     if top < 0:
         raise CLIError(f"--top must be >= 0, got {top}")
+    if from_corners and not regions:
+        raise CLIError("--from-corners goes with --regions")
     if regions:
-        return _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force)
+        return _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners)
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force)
     ds = with_row_progress(description="scan rows", rows=1,
                            run=lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
@@ -225,7 +230,7 @@ def itinerary_(
                                          else f"no slide within {max_iter} steps"))
 
 
-def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force):
+def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners=False):
     """``words --regions``: the window's regions traced (stairbounce.regions) to GeoJSON or SVG."""
     from .. import regions as rg
 
@@ -236,7 +241,7 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
     check_outputs(force, out=out)
     res = max(ew[2], uw[2])
     regs = with_row_progress(description="words traced", rows=1, run=lambda p: rg.window_regions(
-        ew[:2], uw[:2], resolution=res, max_iter=max_iter, progress=p))
+        ew[:2], uw[:2], resolution=res, max_iter=max_iter, progress=p, from_corners=from_corners))
     rg.write_regions(regs, out, overwrite=force)
     graph = rg.border_graph(regs)
     c = graph.counts()
