@@ -398,6 +398,7 @@ class _Arc:
     tans: list
     end: str = ""            # corner, closed, window, junction, domain, limit
     end_slot: int = -1
+    area: tuple = None       # (area, error) of the closed curve that starts with this arc
 
 
 def _follow(F, a, x, g, sign, scale, *, others, stop_at=None, max_points=20000, junction=None):
@@ -917,7 +918,8 @@ def _below_rounding(curve):
     P = _closed(curve)
     perimeter = float(np.hypot(*np.diff(P, axis=0).T).sum())
     ulp = _ROUND_ULPS * _EPS * float(np.abs(P).max())
-    return abs(_curve_area(curve)[0]) <= perimeter * ulp
+    curve[0].area = _curve_area(curve)  # kept for the region's area
+    return abs(curve[0].area[0]) <= perimeter * ulp
 
 
 def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=()):
@@ -960,7 +962,7 @@ def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=())
     text = word.format(ascii=True)
     outer, holes = [], []
     for curve in curves:
-        A, err = _curve_area(curve)
+        A, err = curve[0].area
         P = _closed(curve)
         (outer if A > 0 else holes).append((A, err, curve, P))
     comps = []
