@@ -857,25 +857,31 @@ def _to_arcs(F, curve, word_text):
     return out
 
 
-def _chord_position(P, x, tol):
-    """Where ``x`` lies along the polyline ``P`` (N x 2) of a traced arc: ``i + tau``
-    for the nearest chord ``P[i] -> P[i+1]`` that has ``x`` beside it within its
-    sagitta (a turn of at most ``_MAX_TURN`` per step bends the curve at most
-    0.01 of the chord away from it) or within ``tol`` of its ends (past them,
-    another piece of the same level set may start); None when none has."""
-    A, B = P[:-1], P[1:]
-    AB = B - A
+def _chord_positions(P, X, tol):
+    """Where the points ``X`` (M x 2) lie along the polyline ``P`` (N x 2) of a
+    traced arc: ``i + tau`` for the nearest chord ``P[i] -> P[i+1]`` that has the
+    point beside it within its sagitta (a turn of at most ``_MAX_TURN`` per step
+    bends the curve at most 0.01 of the chord away from it) or within ``tol`` of
+    its ends (past them, another piece of the same level set may start); NaN
+    where none has."""
+    A, AB = P[:-1], P[1:] - P[:-1]
     L2 = (AB ** 2).sum(1)
-    raw = ((x - A) * AB).sum(1) / np.where(L2 > 0, L2, 1)
-    tau = np.clip(raw, 0, 1)
-    C = A + tau[:, None] * AB
-    d = np.hypot(C[:, 0] - x[0], C[:, 1] - x[1])
+    rel = X[:, None, :] - A[None, :, :]
+    raw = (rel * AB).sum(2) / np.where(L2 > 0, L2, 1)
+    tau = np.clip(raw, 0.0, 1.0)
+    off = rel - tau[:, :, None] * AB
+    d = np.hypot(off[:, :, 0], off[:, :, 1])
     near = np.where((raw > 0) & (raw < 1), np.maximum(tol, 0.015 * np.sqrt(L2)), tol)
-    ok = d <= near
-    if not ok.any():
-        return None
-    i = int(np.argmin(np.where(ok, d, np.inf)))
-    return i + float(tau[i])
+    d = np.where(d <= near, d, np.inf)
+    i = np.argmin(d, axis=1)
+    rows = np.arange(len(X))
+    return np.where(np.isfinite(d[rows, i]), i + tau[rows, i], np.nan)
+
+
+def _chord_position(P, x, tol):
+    """:func:`_chord_positions` of one point, None for NaN."""
+    pos = _chord_positions(P, np.asarray(x, dtype=float)[None], tol)[0]
+    return None if math.isnan(pos) else float(pos)
 
 
 def _on_curves(x, slot, curves, tol):
@@ -1426,6 +1432,55 @@ def _split_arc(arc, cuts, nodes, F):
     return out
 
 
+def _corners_on_arcs(arcs, xy, corners, margins, tol, scale, bins=64):
+    """For each arc ``(a, b, arc, closed)``, the corners (node indices ``corners``
+    at ``xy``) other than its ends that lie on it: ``[(position along its
+    chords, node), ...]``; beside a chord within its sagitta, and on the arc's
+    curve (:func:`_on_arc_curve`)."""
+    A, B, owner = [], [], []
+    for k, (_, _, arc, _) in enumerate(arcs):
+        P = np.stack([arc.e, arc.u], 1)
+        A.append(P[:-1])
+        B.append(P[1:])
+        owner.append(np.stack([np.full(len(P) - 1, k), np.arange(len(P) - 1)], 1))
+    A, B, owner = np.concatenate(A), np.concatenate(B), np.concatenate(owner)
+    AB = B - A
+    L2 = (AB ** 2).sum(1)
+    pad = np.maximum(tol, 0.015 * np.sqrt(L2))
+    size = scale / bins
+    lo = np.floor((np.minimum(A, B) - pad[:, None]) / size).astype(np.int64)
+    hi = np.floor((np.maximum(A, B) + pad[:, None]) / size).astype(np.int64)
+    cells = {}
+    for c in range(len(A)):
+        for i in range(lo[c, 0], hi[c, 0] + 1):
+            for j in range(lo[c, 1], hi[c, 1] + 1):
+                cells.setdefault((i, j), []).append(c)
+    out = [[] for _ in arcs]
+    for n in corners:
+        x = xy[n]
+        cand = cells.get((int(math.floor(x[0] / size)), int(math.floor(x[1] / size))))
+        if not cand:
+            continue
+        cand = np.array(cand)
+        raw = ((x - A[cand]) * AB[cand]).sum(1) / np.where(L2[cand] > 0, L2[cand], 1)
+        tau = np.clip(raw, 0.0, 1.0)
+        off = x - (A[cand] + tau[:, None] * AB[cand])
+        d = np.hypot(off[:, 0], off[:, 1])
+        ok = d <= np.where((raw > 0) & (raw < 1), pad[cand], tol)
+        best = {}
+        for c, t, dd in zip(cand[ok], tau[ok], d[ok]):
+            k, i = owner[c]
+            if k not in best or dd < best[k][1]:
+                best[k] = (i + t, dd)
+        for k, (pos, _) in best.items():
+            a, b, arc, _ = arcs[k]
+            if n in (a, b) or not 0.0 < pos < arc.e.size - 1:
+                continue
+            if _on_arc_curve(margins(arc), arc._slot, x, 2.0 * tol):
+                out[k].append((float(pos), int(n)))
+    return out
+
+
 def border_graph(regions):
     """border_graph(regions) -> BorderGraph
 
@@ -1473,33 +1528,20 @@ def border_graph(regions):
                 arcs.append((a, b, arc, len(curve) == 1))
     margins = _GraphMargins(regions)
     xy = np.array([(c.e, c.u) for c in nodes])
-    cid = np.array(sorted(corner), dtype=np.int64)
 
-    # split every arc at the corners on it
+    # split every arc at the corners on it (chords binned on a grid: a corner is
+    # compared with the chords of its cell only)
+    cuts = _corners_on_arcs(arcs, xy, sorted(corner), margins, tol, scale)
     pieces, junctions = [], 0
-    for a, b, arc, closed in arcs:
-        cuts = []
-        if cid.size:
-            P = np.stack([arc.e, arc.u], 1)
-            pad = 0.02 * float(np.hypot(*np.diff(P, axis=0).T).max(initial=0.0)) + tol
-            lo, hi = P.min(0) - pad, P.max(0) + pad
-            near = cid[np.all((xy[cid] >= lo) & (xy[cid] <= hi), axis=1)]
-            for n in near:
-                if n in (a, b):
-                    continue
-                pos = _chord_position(P, xy[n], tol)
-                if pos is None or pos <= 0.0 or pos >= len(P) - 1:
-                    continue
-                if _on_arc_curve(margins(arc), arc._slot, xy[n], 2.0 * tol):
-                    cuts.append((pos, int(n)))
-        if not cuts:
+    for k, (a, b, arc, closed) in enumerate(arcs):
+        if not cuts[k]:
             pieces.append((a, b, arc, closed))
             continue
-        cuts.sort()
-        junctions += len(cuts)
-        ends = [a] + [n for _, n in cuts] + [b]
-        for k, piece in enumerate(_split_arc(arc, cuts, nodes, margins(arc))):
-            pieces.append((ends[k], ends[k + 1], piece, False))
+        cut = sorted(cuts[k])
+        junctions += len(cut)
+        ends = [a] + [n for _, n in cut] + [b]
+        for m, piece in enumerate(_split_arc(arc, cut, nodes, margins(arc))):
+            pieces.append((ends[m], ends[m + 1], piece, False))
 
     # one edge per piece of border: the pieces of the same event between the same
     # nodes whose middles lie on each other's curve are its two sides
