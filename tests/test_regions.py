@@ -262,21 +262,15 @@ def test_regions_of_a_window_sum_to_its_sliding_area():
     res = 128
     regs = sb.window_regions(e, u, resolution=res)
     es, us = regions._grid(e, u, res)
-    h1, h2, steps = regions._label_grid(es, us, 1000, 1.0, 0.0)
+    _, _, steps = regions._label_grid(es, us, 1000, 1.0, 0.0)
     sliding = steps > 0
     cell = (0.18 / res) * (0.1 / res)
     lo, hi = _pixel_area(sliding, cell)
-    # a walk that failed (a corner where many margins vanish) leaves its word
-    # incomplete: its pixels are then an allowance, and such words are rare
-    failed = [r for r in regs if not r.complete]
-    assert len(failed) <= 0.02 * len(regs)
-    allowance = 0.0
-    for r in failed:
-        ks = regions.itinerary_of_word(r.word)
-        a, b = regions._hash_itinerary(ks, ks.size)
-        allowance += ((h1 == a) & (h2 == b)).sum() * cell
+    # every walk closes (2 of the 438 words stalled before, at corners of margins that
+    # cross at a tiny angle)
+    assert [r for r in regs if not r.complete] == []
     total = sum(r.area for r in regs)
-    assert lo - allowance <= total <= hi
+    assert lo <= total <= hi
     words = {r.word.letters for r in regs}
     assert (2,) in words and (3,) in words
 

@@ -1330,8 +1330,10 @@ def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-
 class BorderGraph:
     """Nodes (corners) and edges (arcs between them) of a window's borders.
 
-    ``edges`` are ``(i, j, arc)`` with node indices; an arc shared by two
-    regions is one edge, its ``inside`` and ``outside`` the two words."""
+    ``edges`` are ``(i, j, arc)`` with node indices; a piece of border shared
+    by two regions is one edge, its ``inside`` and ``outside`` the two words;
+    arcs are cut at every corner on them, so edges meet only at nodes.
+    ``junctions`` counts the cuts at corners of another region's boundary."""
 
     nodes: list
     edges: list
