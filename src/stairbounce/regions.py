@@ -1011,7 +1011,9 @@ def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=256, max
 
     What it can miss: a component (or hole) that contains no pixel centre of
     the scan, i.e. narrower than a pixel everywhere.  Raise ``resolution`` to
-    find smaller ones.
+    find smaller ones.  A component narrower than rounding (its area below its
+    perimeter times 32 ulps), or one whose walk stalls, is not traced and the
+    region is marked ``complete=False`` (docs/guide/regions.md).
 
     Parameters
     ----------
