@@ -35,7 +35,9 @@ def _window_report(name, e, u, res):
     print(f"{name}: e {e} u {u}, seeds {res}x{res}: {dt:.1f} s; {c['words']} words, "
           f"{c['components']} components, {len(graph.nodes)} corners, {len(graph.edges)} arcs "
           f"({points} points, {dt / max(points, 1) * 1e6:.1f} us per point)")
-    print(f"  arcs by kind {c['arcs']}")
+    two_sided = sum(1 for _, _, a in graph.edges if a.outside)
+    print(f"  arcs by kind {c['arcs']}; {two_sided} arcs with a traced word on both sides, "
+          f"{getattr(graph, 'junctions', 0)} cuts at one-sided junctions")
     print(f"  corners by kinds {c['corners']}")
     print(f"  traced area {total:.9g} of the window's {(e[1] - e[0]) * (u[1] - u[0]):.6g}; "
           f"largest area error estimate {worst:.2e}; {sum(not r.complete for r in regs)} words incomplete")

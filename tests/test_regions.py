@@ -262,28 +262,107 @@ def test_regions_of_a_window_sum_to_its_sliding_area():
     res = 128
     regs = sb.window_regions(e, u, resolution=res)
     es, us = regions._grid(e, u, res)
-    h1, h2, steps = regions._label_grid(es, us, 1000, 1.0, 0.0)
+    _, _, steps = regions._label_grid(es, us, 1000, 1.0, 0.0)
     sliding = steps > 0
     cell = (0.18 / res) * (0.1 / res)
     lo, hi = _pixel_area(sliding, cell)
-    # a walk that failed (a corner where many margins vanish) leaves its word
-    # incomplete: its pixels are then an allowance, and such words are rare
-    failed = [r for r in regs if not r.complete]
-    assert len(failed) <= 0.02 * len(regs)
-    allowance = 0.0
-    for r in failed:
-        ks = regions.itinerary_of_word(r.word)
-        a, b = regions._hash_itinerary(ks, ks.size)
-        allowance += ((h1 == a) & (h2 == b)).sum() * cell
+    # every walk closes (2 of the 438 words stalled before, at corners of margins that
+    # cross at a tiny angle)
+    assert [r for r in regs if not r.complete] == []
     total = sum(r.area for r in regs)
-    assert lo - allowance <= total <= hi
+    assert lo <= total <= hi
     words = {r.word.letters for r in regs}
     assert (2,) in words and (3,) in words
 
 
-def test_graph_counts_and_exports(tmp_path):
-    regs = sb.window_regions((0.02, 0.2), (0.95, 1.05), resolution=32)
-    graph = sb.border_graph(regs)
+GRAPH_WINDOW = ((0.02, 0.2), (0.95, 1.05))
+
+
+@pytest.fixture(scope="module")
+def graph32():
+    return sb.border_graph(sb.window_regions(*GRAPH_WINDOW, resolution=32))
+
+
+def test_graph_splits_arcs_at_one_sided_junctions(graph32):
+    # tongue 3 (word (3)) lies above the graze line u = 1 (Theorem 3.1); below it, the
+    # region of (2, 3, 0, 0, 2, 3) reaches the line between two corners, one of them where
+    # its edge border of step 5 ends on the line: a T-junction that tongue 3's boundary
+    # does not have (its arc along u = 1 runs past it)
+    graph = graph32
+    regs = {r.word.format(ascii=True): r for r in graph.regions}
+    low = regs["(2, 3, 0, 0, 2, 3, 0^inf)"]
+    tongue = regs["(3, 0^inf)"]
+    (j,) = [c for c in low.corners if sorted(ev[0] for ev in c.events) == ["edge", "graze"]
+            and ("graze", 2) in c.events and ("edge", 5) in c.events]
+    assert j.u == 1.0  # on the graze line u^2 = (3 - 1)/2
+    assert all(math.hypot(c.e - j.e, c.u - j.u) > 1e-6 for c in tongue.corners)
+    (arc,) = [a for a in tongue.components[0].boundary if a.kind == "graze"
+              and a.e.min() < j.e < a.e.max()]  # tongue 3's own arc runs through it
+    node = [n for n, c in enumerate(graph.nodes) if math.hypot(c.e - j.e, c.u - j.u) <= 1e-12]
+    assert len(node) == 1
+    # in the graph the tongue's arc is cut there: two of its edges end at the junction,
+    # one of them the border it shares with the word below
+    ends = [(a, b, edge) for a, b, edge in graph.edges if node[0] in (a, b)
+            and edge.inside == "(3, 0^inf)" and edge.kind == "graze"]
+    assert len(ends) == 2
+    assert "(2, 3, 0, 0, 2, 3, 0^inf)" in {edge.outside for _, _, edge in ends}
+    assert graph.junctions > 0
+
+
+def _edge_boxes(graph):
+    return np.array([(a.e.min(), a.e.max(), a.u.min(), a.u.max()) for _, _, a in graph.edges])
+
+
+def test_graph_edges_meet_only_at_nodes_and_separate_two_words(graph32):
+    graph = graph32
+    (e0, e1), (u0, u1) = GRAPH_WINDOW
+    scale = max(e1 - e0, u1 - u0)
+    tol = 1e-11 * scale
+    margins = regions._GraphMargins(graph.regions)
+    boxes = _edge_boxes(graph)
+    buf = np.empty(1000, np.int64)
+    shared = 0
+    for k, (a, b, edge) in enumerate(graph.edges):
+        # every traced point of an edge (its ends aside) lies on no other edge, away
+        # from that edge's nodes: edges overlap nowhere but at nodes
+        pts = np.stack([edge.e, edge.u], 1)[1:-1]
+        if len(pts) == 0:
+            pts = margins.middle(edge)[None]
+        for x in pts[:: max(1, len(pts) // 4)]:
+            near = np.nonzero((boxes[:, 0] - tol <= x[0]) & (x[0] <= boxes[:, 1] + tol)
+                              & (boxes[:, 2] - tol <= x[1]) & (x[1] <= boxes[:, 3] + tol))[0]
+            for m in near:
+                if m == k:
+                    continue
+                a2, b2, other = graph.edges[m]
+                if min(math.hypot(x[0] - graph.nodes[n].e, x[1] - graph.nodes[n].u) for n in (a2, b2)) <= 1e-9 * scale:
+                    continue
+                assert not (regions._chord_position(np.stack([other.e, other.u], 1), x, tol) is not None and
+                            regions._on_arc_curve(margins(other), other._slot, x, 2 * tol)), (edge, other)
+        if edge.kind == "window":
+            assert edge.outside == ""
+            continue
+        # the two sides: the map's word just across the middle of the edge is another
+        # word than inside, and the one named outside where the other side was traced
+        x = margins.middle(edge)
+        i = min(edge.e.size // 2, edge.e.size - 2)
+        t = np.array([edge.e[i + 1] - edge.e[i], edge.u[i + 1] - edge.u[i]])
+        left = np.array([-t[1], t[0]]) / np.hypot(*t)
+        words = []
+        for side in (1, -1):
+            y = x + side * 1e-9 * scale * left
+            n = regions._itinerary_of(y[0], y[1], 1.0, 0.0, 1000, buf)
+            words.append(word_from_impacts(buf[:n]).format(ascii=True) if n > 0 else "")
+        assert words[0] == edge.inside and words[1] != edge.inside
+        if edge.outside:
+            shared += 1
+            assert words[1] == edge.outside
+    assert shared >= 20
+
+
+def test_graph_counts_and_exports(tmp_path, graph32):
+    graph = graph32
+    regs = graph.regions
     counts = graph.counts()
     assert counts["words"] == len(regs)
     assert sum(graph.words_by_period().values()) == len(regs)
@@ -405,8 +484,11 @@ def test_regions_seeded_from_finer_border_points():
     assert len(words) > len({r.word.letters for r in coarse})
     # no component twice, and nothing outside the sliding set: the total lies below the
     # pixels touching a sliding pixel at 512 x 512
+    # (per word: slivers along chatter borders, W 0^k W..., have areas below 1e-15)
+    for r in seeded:
+        areas = np.sort([c.area for c in r.components])
+        assert np.all(np.diff(areas) > 1e-9 * areas[1:]), r
     areas = [c.area for r in seeded for c in r.components]
-    assert len(set(np.round(areas, 15))) == len(areas)
     res = 512
     es, us = regions._grid(e, u, res)
     _, _, steps = regions._label_grid(es, us, 1000, 1.0, 0.0)
@@ -421,6 +503,50 @@ def test_regions_seeded_from_finer_border_points():
         sb.window_regions(e, u, resolution=8, points=42)
 
 
+FIG7 = ((0.155, 0.2138), (0.6, 0.658))
+
+
+# Words whose boundary walks failed before (they were marked incomplete), each named by
+# a pixel (i, j) of the 128 x 128 seed scan of its window and its number of steps:
+# - 78 steps: a long sliver; a pixel centre between a traced curve and its chord (inside
+#   the polygon, outside the region) was taken for a missed component, whose search failed;
+# - 252 (Fig. 5e) and 126 (Fig. 7) steps: corners where the margins of the same step in
+#   consecutive repeats of the word cross at a tiny angle, so 2-D Newton never settled to
+#   4 ulps (the corner is fixed along the arc only to the margins' rounding, 1e-14).
+@pytest.mark.parametrize("window, pixel, steps", [(FIG5E, (30, 92), 78), (FIG5E, (67, 33), 252),
+                                                  (FIG7, (109, 71), 126)])
+def test_previously_incomplete_walks_close(window, pixel, steps):
+    e, u = window
+    es, us = regions._grid(e, u, 128)
+    buf = np.empty(1000, np.int64)
+    n = regions._itinerary_of(es[pixel[1]], us[pixel[0]], 1.0, 0.0, 1000, buf)
+    assert n == steps
+    ks = buf[:n].copy()
+    r = sb.word_region(word_from_impacts(ks), e, u, resolution=128)
+    assert r.complete and len(r.components) == 1
+    # every traced point lies on its arc's curve and in the closure of the region, to the
+    # margins' rounding (32 ulps of the position times the gradient)
+    F = regions._Margins(ks, (*e, *u))
+    for arc in r.components[0].boundary:
+        for x in zip(arc.e, arc.u):
+            g = F(np.array(x))
+            tol = regions._noise(g, x)
+            assert abs(g[0][arc._slot]) <= tol[arc._slot]
+            assert np.all(g[0] >= -tol)
+    # the area between the pixels surely inside and those touching at 1024 x 1024 over the
+    # region's bounding box (with a quarter of its size around it)
+    pe, pu = r.components[0].polygon()
+    de, du = np.ptp(pe), np.ptp(pu)
+    ze = (max(e[0], pe.min() - 0.25 * de), min(e[1], pe.max() + 0.25 * de))
+    zu = (max(u[0], pu.min() - 0.25 * du), min(u[1], pu.max() + 0.25 * du))
+    res = 1024
+    zs, ws = regions._grid(ze, zu, res)
+    h1, h2, _ = regions._label_grid(zs, ws, 1000, 1.0, 0.0)
+    a, b = regions._hash_itinerary(ks, ks.size)
+    lo, hi = _pixel_area((h1 == a) & (h2 == b), (ze[1] - ze[0]) * (zu[1] - zu[0]) / res ** 2)
+    assert hi > 0 and lo <= r.area <= hi
+
+
 def test_fig5e_regions_no_component_twice():
     # the seeds of one component all land on its traced boundary: each component is
     # walked once (an earlier version walked 7 of the 918 twice here)
@@ -430,4 +556,6 @@ def test_fig5e_regions_no_component_twice():
         areas = [round(c.area, 16) for c in r.components]
         assert len(set(areas)) == len(areas), r
     assert sum(r.area for r in regs) < 0.025 ** 2
-    assert sum(not r.complete for r in regs) <= 0.02 * len(regs)
+    # every walk closes (13 of the 920 words stalled before, at corners of margins that
+    # cross at a tiny angle and at pixel centres within a chord's sagitta)
+    assert [r for r in regs if not r.complete] == []

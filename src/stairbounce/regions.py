@@ -304,6 +304,18 @@ def _ulps(x):
     return 4.0 * _EPS * max(abs(x[0]), abs(x[1]), 1e-300)
 
 
+# a margin within this many ulps of the position (times its gradient) of zero is zero
+# to rounding: along a long itinerary the margins are exact to about one ulp of the
+# position, but their rounding errors are 1e-14 .. 1e-13 in value (gradients of 1e2 .. 1e3)
+_ROUND_ULPS = 32.0
+
+
+def _noise(g, x):
+    """Per-margin rounding tolerance at ``x`` (margins ``g = (values, d/de, d/du)``):
+    the change of each margin over ``_ROUND_ULPS`` ulps of the position."""
+    return _ROUND_ULPS * _EPS * max(abs(x[0]), abs(x[1]), 1.0) * (np.abs(g[1]) + np.abs(g[2]))
+
+
 def _solve2(a, b, c, d, r0, r1):
     """Solve [[a, b], [c, d]] z = (r0, r1); None when singular (Python floats:
     an overflow is inf, quietly, and then rejected by the caller)."""
@@ -347,6 +359,38 @@ def _corner(F, a, b, x):
     return None
 
 
+def _corner_on_arc(F, a, b, x, y):
+    """The corner of ``g_a = 0`` and ``g_b = 0`` between the points ``x`` and ``y``
+    of ``g_a = 0`` (``g_b(x) >= 0 > g_b(y)``) by bisection along the arc: points
+    of the chord projected onto ``g_a = 0`` along its normal, halved until they
+    are a few ulps apart.  Where the two curves cross at a very small angle (the
+    margins of the same step in consecutive repeats of a long word), 2-D Newton
+    cannot settle: the crossing is then fixed along the arc only to the
+    margins' rounding, and this finds a point of ``g_a = 0`` where ``g_b``
+    changes sign.  Returns (x, margins) at the end where ``g_b >= 0``, or None."""
+    x = np.array(x, dtype=float)
+    y = np.array(y, dtype=float)
+    gx = F(x)
+    if not gx[0][b] >= 0.0:
+        return x, gx
+    t = _unit(y[0] - x[0], y[1] - x[1])
+    for _ in range(200):
+        if math.hypot(y[0] - x[0], y[1] - x[1]) <= _ulps(x):
+            break
+        mid = 0.5 * (x + y)
+        r = _correct(F, a, mid, t)
+        if r is None:
+            return None
+        m = r[0]
+        if (m == x).all() or (m == y).all():
+            break
+        if r[1][0][b] >= 0.0:
+            x, gx = m, r[1]
+        else:
+            y = m
+    return x, gx
+
+
 @dataclass
 class _Arc:
     slot: int
@@ -354,6 +398,7 @@ class _Arc:
     tans: list
     end: str = ""            # corner, closed, window, junction, domain, limit
     end_slot: int = -1
+    area: tuple = None       # (area, error) of the closed curve that starts with this arc
 
 
 def _follow(F, a, x, g, sign, scale, *, others, stop_at=None, max_points=20000, junction=None):
@@ -364,10 +409,12 @@ def _follow(F, a, x, g, sign, scale, *, others, stop_at=None, max_points=20000, 
     leaves the domain (a margin turns NaN)."""
     gg, ge, gu = g
     t = _tangent(ge[a], gu[a], sign)
+    tol = _noise(g, x)
     arc = _Arc(a, [np.array(x, float)], [t])
     h = 1e-3 * scale
     hmin = 1e-14 * scale
     hmax = 0.02 * scale
+    labour = 0  # consecutive points where Newton barely settled
     while True:
         if len(arc.pts) > max_points:
             arc.end = "limit"
@@ -390,7 +437,11 @@ def _follow(F, a, x, g, sign, scale, *, others, stop_at=None, max_points=20000, 
                 return arc
             continue
         gyv = gy[0]
-        neg = others[(gyv[others] < 0.0) & ((gg[others] > 0.0) | (gyv[others] < gg[others]))]
+        # a margin that is zero to rounding at x (at a corner, or along a curve that
+        # coincides with this one to rounding) crosses only when clearly negative
+        to, go, yo = tol[others], gg[others], gyv[others]
+        active = np.abs(go) <= to
+        neg = others[np.where(active, yo < -to, (yo < 0.0) & ((go > 0.0) | (yo < go)))]
         if stop_at is not None:
             # closed when the start lies on the chord x -> y
             dx, dy = y[0] - x[0], y[1] - x[1]
@@ -427,6 +478,14 @@ def _follow(F, a, x, g, sign, scale, *, others, stop_at=None, max_points=20000, 
         arc.pts.append(y)
         arc.tans.append(tn)
         x, gg, t = y, gyv, tn
+        tol = _noise(gy, y)
+        # Newton converging only linearly point after point: the margin is not smooth
+        # to rounding here (a step whose k-th and (k+1)-th impacts coincide to rounding,
+        # a sliver of no width): the step would never grow, so the arc ends
+        labour = labour + 1 if it >= _NEWTON - 1 else 0
+        if labour > 50:
+            arc.end = "domain"
+            return arc
         if it <= 2 and cos > math.cos(0.5 * _MAX_TURN):
             h = min(1.6 * h, hmax)
 
@@ -435,20 +494,23 @@ def _locate_corner(F, a, x, gx, y, gy, neg, others):
     """The first margin of ``neg`` to vanish between x and y, and the corner where
     it meets ``g_a = 0`` (Newton from the linear estimate; retried with another
     margin when one of the others is then negative)."""
-    lam = gx[neg] / (gx[neg] - gy[neg])
+    lam = np.clip(gx[neg] / (gx[neg] - gy[neg]), 0.0, 1.0)
     order = np.argsort(lam)
+    step = math.hypot(y[0] - x[0], y[1] - x[1])
     for i in order:
         b = int(neg[i])
         x0 = (x[0] + lam[i] * (y[0] - x[0]), x[1] + lam[i] * (y[1] - x[1]))
-        r = _corner(F, a, b, x0)
-        if r is None:
-            continue
-        xc, gc = r
-        rest = others[others != b]
-        scale = max(abs(xc[0]), abs(xc[1]), 1.0)
-        if np.all(gc[0][rest] >= -1e3 * _EPS * scale) and \
-                math.hypot(xc[0] - x[0], xc[1] - x[1]) <= 1.5 * math.hypot(y[0] - x[0], y[1] - x[1]):
-            return xc, b, gc
+        # 2-D Newton; where it does not settle or lands off the arc (the curves cross
+        # at a tiny angle), the crossing along the arc
+        for solve in (lambda: _corner(F, a, b, x0), lambda: _corner_on_arc(F, a, b, x, y)):
+            r = solve()
+            if r is None:
+                continue
+            xc, gc = r
+            rest = others[others != b]
+            tol = np.maximum(_noise(gc, xc)[rest], 1e3 * _EPS * max(abs(xc[0]), abs(xc[1]), 1.0))
+            if np.all(gc[0][rest] >= -tol) and math.hypot(xc[0] - x[0], xc[1] - x[1]) <= 1.5 * step:
+                return xc, b, gc
     return None
 
 
@@ -471,6 +533,7 @@ def _walk(F, a0, x0, scale, max_corners=2000, max_points=50000):
     start = (x, a0, a)
     used = len(first.pts)
     stuck = 0
+    visited = {}
     for _ in range(max_corners):
         arc = _follow(F, a, x, g, 1, scale, others=allc[allc != a], max_points=max_points - used)
         used += len(arc.pts)
@@ -490,6 +553,13 @@ def _walk(F, a0, x0, scale, max_corners=2000, max_points=50000):
                 math.hypot(x[0] - start[0][0], x[1] - start[0][1]) <= 1e-9 * scale:
             arc.pts[-1] = start[0]  # the same corner: close exactly
             return arcs
+        # a corner passed before, but not the start: the walk goes round a loop that
+        # does not lead back (two margins that coincide to rounding, a sliver of no
+        # width): it fails now rather than at its point budget
+        seen = visited.setdefault((arc.slot, a), [])
+        if any(math.hypot(x[0] - p[0], x[1] - p[1]) <= 1e-9 * scale for p in seen):
+            return None
+        seen.append(x)
     return None
 
 
@@ -787,27 +857,43 @@ def _to_arcs(F, curve, word_text):
     return out
 
 
+def _chord_positions(P, X, tol):
+    """Where the points ``X`` (M x 2) lie along the polyline ``P`` (N x 2) of a
+    traced arc: ``i + tau`` for the nearest chord ``P[i] -> P[i+1]`` that has the
+    point beside it within its sagitta (a turn of at most ``_MAX_TURN`` per step
+    bends the curve at most 0.01 of the chord away from it) or within ``tol`` of
+    its ends (past them, another piece of the same level set may start); NaN
+    where none has."""
+    A, AB = P[:-1], P[1:] - P[:-1]
+    L2 = (AB ** 2).sum(1)
+    rel = X[:, None, :] - A[None, :, :]
+    raw = (rel * AB).sum(2) / np.where(L2 > 0, L2, 1)
+    tau = np.clip(raw, 0.0, 1.0)
+    off = rel - tau[:, :, None] * AB
+    d = np.hypot(off[:, :, 0], off[:, :, 1])
+    near = np.where((raw > 0) & (raw < 1), np.maximum(tol, 0.015 * np.sqrt(L2)), tol)
+    d = np.where(d <= near, d, np.inf)
+    i = np.argmin(d, axis=1)
+    rows = np.arange(len(X))
+    return np.where(np.isfinite(d[rows, i]), i + tau[rows, i], np.nan)
+
+
+def _chord_position(P, x, tol):
+    """:func:`_chord_positions` of one point, None for NaN."""
+    pos = _chord_positions(P, np.asarray(x, dtype=float)[None], tol)[0]
+    return None if math.isnan(pos) else float(pos)
+
+
 def _on_curves(x, slot, curves, tol):
+    """Whether ``x`` lies on a traced arc of margin ``slot`` (any margin: None),
+    within ``tol`` or, beside a chord, within the chord's sagitta."""
     for curve in curves:
         for arc in curve:
-            if arc.slot != slot:
+            if slot is not None and arc.slot != slot:
                 continue
             P = np.array(arc.pts)
-            d = np.hypot(P[:, 0] - x[0], P[:, 1] - x[1])
-            if d.min() <= tol:
-                return True
-            # distance to the chords
-            A, B = P[:-1], P[1:]
-            AB = B - A
-            L2 = (AB ** 2).sum(1)
-            raw = ((x - A) * AB).sum(1) / np.where(L2 > 0, L2, 1)
-            tau = np.clip(raw, 0, 1)
-            C = A + tau[:, None] * AB
-            # beside a chord, within its sagitta (a turn of at most _MAX_TURN per step
-            # bends the curve at most 0.01 of the chord away from it); past its ends,
-            # within tol only (another piece of the same level set may start there)
-            near = np.where((raw > 0) & (raw < 1), np.maximum(tol, 0.015 * np.sqrt(L2)), tol)
-            if np.any(np.hypot(C[:, 0] - x[0], C[:, 1] - x[1]) <= near):
+            if np.hypot(P[:, 0] - x[0], P[:, 1] - x[1]).min() <= tol or \
+                    _chord_position(P, x, tol) is not None:
                 return True
     return False
 
@@ -824,10 +910,22 @@ def _new_curve(F, x, slot, curves, scale):
     if _on_curves(x, slot, curves, 1e-9 * scale):
         return None
     curve = _walk(F, slot, x, scale)
-    if curve is None:
+    if curve is None or _below_rounding(curve):
         return False
     curves.append(curve)
     return curve
+
+
+def _below_rounding(curve):
+    """Whether a closed curve encloses less than its perimeter times the rounding
+    of its points (``_ROUND_ULPS`` ulps): a sliver of no width to rounding (the
+    k-th and (k+1)-th impacts of a step coinciding, ``2 e^k s`` below an ulp),
+    whose traced area would be rounding noise."""
+    P = _closed(curve)
+    perimeter = float(np.hypot(*np.diff(P, axis=0).T).sum())
+    ulp = _ROUND_ULPS * _EPS * float(np.abs(P).max())
+    curve[0].area = _curve_area(curve)  # kept for the region's area
+    return abs(curve[0].area[0]) <= perimeter * ulp
 
 
 def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=()):
@@ -845,6 +943,10 @@ def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=())
             break
         i, j = (int(t) for t in todo[0])
         tried[i, j] = True
+        if fill[i, j] and _on_curves(np.array([es[j], us[i]]), None, curves, 1e-9 * scale):
+            # a pixel centre between a traced curve and its chord (within the sagitta):
+            # the polygon's chords, not a missed piece of boundary
+            continue
         c = _crossing(F, mask, es, us, i, j, e, u)
         if c is None:
             failures += 1
@@ -866,7 +968,7 @@ def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=())
     text = word.format(ascii=True)
     outer, holes = [], []
     for curve in curves:
-        A, err = _curve_area(curve)
+        A, err = curve[0].area
         P = _closed(curve)
         (outer if A > 0 else holes).append((A, err, curve, P))
     comps = []
@@ -909,7 +1011,9 @@ def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=256, max
 
     What it can miss: a component (or hole) that contains no pixel centre of
     the scan, i.e. narrower than a pixel everywhere.  Raise ``resolution`` to
-    find smaller ones.
+    find smaller ones.  A component narrower than rounding (its area below its
+    perimeter times 32 ulps), or one whose walk stalls, is not traced and the
+    region is marked ``complete=False`` (docs/guide/regions.md).
 
     Parameters
     ----------
@@ -1407,12 +1511,15 @@ def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-
 class BorderGraph:
     """Nodes (corners) and edges (arcs between them) of a window's borders.
 
-    ``edges`` are ``(i, j, arc)`` with node indices; an arc shared by two
-    regions is one edge, its ``inside`` and ``outside`` the two words."""
+    ``edges`` are ``(i, j, arc)`` with node indices; a piece of border shared
+    by two regions is one edge, its ``inside`` and ``outside`` the two words;
+    arcs are cut at every corner on them, so edges meet only at nodes.
+    ``junctions`` counts the cuts at corners of another region's boundary."""
 
     nodes: list
     edges: list
     regions: list
+    junctions: int = 0       # arcs cut at a corner of another region's boundary (one-sided)
 
     def counts(self):
         """Regions, arcs by kind and corners by their pair of kinds."""
@@ -1444,22 +1551,141 @@ def _curves(region):
         yield from comp.holes
 
 
+class _GraphMargins:
+    """The margins of the word inside each arc (for the tests of a point against it)."""
+
+    def __init__(self, regions):
+        self.regions = {r.word.format(ascii=True): r for r in regions}
+        self.cache = {}
+
+    def __call__(self, arc):
+        F = self.cache.get(arc.inside)
+        if F is None:
+            r = self.regions[arc.inside]
+            F = self.cache[arc.inside] = _Margins(itinerary_of_word(r.word),
+                                                  (r.e[0], r.e[1], r.u[0], r.u[1]))
+        return F
+
+    def middle(self, arc):
+        """A point of the arc's curve in its middle: its middle traced point, or for
+        an arc of two points the middle of its chord corrected onto the curve."""
+        n = arc.e.size
+        if n >= 3:
+            return np.array([arc.e[n // 2], arc.u[n // 2]])
+        x = np.array([0.5 * (arc.e[0] + arc.e[-1]), 0.5 * (arc.u[0] + arc.u[-1])])
+        r = _correct(self(arc), arc._slot, x, _unit(arc.e[-1] - arc.e[0], arc.u[-1] - arc.u[0]))
+        return x if r is None else r[0]
+
+
+def _on_arc_curve(F, slot, x, slack):
+    """Whether ``x`` lies on the curve ``g_slot = 0`` of margins ``F``: within four
+    times the margin's rounding or ``slack`` of the position (times its gradient)."""
+    g = F(np.asarray(x, dtype=float))
+    if not math.isfinite(g[0][slot]):
+        return False
+    grad = abs(g[1][slot]) + abs(g[2][slot])
+    return abs(g[0][slot]) <= max(4.0 * _noise(g, x)[slot], slack * grad)
+
+
+def _split_arc(arc, cuts, nodes, F):
+    """``arc`` cut at ``cuts`` (sorted ``(position along its chords, node)``): the
+    pieces as new BorderArcs with the node's point inserted (its tangent from the
+    margin's gradient there, region on the left)."""
+    P = np.stack([arc.e, arc.u], 1)
+    T = np.asarray(arc._tans, dtype=float)
+    pieces, start, head, head_t = [], 0, [P[0]], [T[0]]
+    for pos, n in cuts:
+        i = int(pos)
+        x = np.array([nodes[n].e, nodes[n].u])
+        g = F(x)
+        t = _tangent(g[1][arc._slot], g[2][arc._slot], 1)
+        body = list(P[start + 1:i + 1]) if pos > i else list(P[start + 1:i])
+        body_t = list(T[start + 1:i + 1]) if pos > i else list(T[start + 1:i])
+        pieces.append((head + body + [x], head_t + body_t + [t]))
+        start = i
+        head, head_t = [x], [t]
+    pieces.append((head + list(P[start + 1:]), head_t + list(T[start + 1:])))
+    out = []
+    for pts, tans in pieces:
+        Q = np.array(pts)
+        b = BorderArc(Q[:, 0].copy(), Q[:, 1].copy(), arc.kind, arc.step, arc.inside, arc.outside,
+                      ("corner", "corner"))
+        b._tans, b._slot = tans, arc._slot
+        out.append(b)
+    return out
+
+
+def _corners_on_arcs(arcs, xy, corners, margins, tol, scale, bins=64):
+    """For each arc ``(a, b, arc, closed)``, the corners (node indices ``corners``
+    at ``xy``) other than its ends that lie on it: ``[(position along its
+    chords, node), ...]``; beside a chord within its sagitta, and on the arc's
+    curve (:func:`_on_arc_curve`)."""
+    A, B, owner = [], [], []
+    for k, (_, _, arc, _) in enumerate(arcs):
+        P = np.stack([arc.e, arc.u], 1)
+        A.append(P[:-1])
+        B.append(P[1:])
+        owner.append(np.stack([np.full(len(P) - 1, k), np.arange(len(P) - 1)], 1))
+    A, B, owner = np.concatenate(A), np.concatenate(B), np.concatenate(owner)
+    AB = B - A
+    L2 = (AB ** 2).sum(1)
+    pad = np.maximum(tol, 0.015 * np.sqrt(L2))
+    size = scale / bins
+    lo = np.floor((np.minimum(A, B) - pad[:, None]) / size).astype(np.int64)
+    hi = np.floor((np.maximum(A, B) + pad[:, None]) / size).astype(np.int64)
+    cells = {}
+    for c in range(len(A)):
+        for i in range(lo[c, 0], hi[c, 0] + 1):
+            for j in range(lo[c, 1], hi[c, 1] + 1):
+                cells.setdefault((i, j), []).append(c)
+    out = [[] for _ in arcs]
+    for n in corners:
+        x = xy[n]
+        cand = cells.get((int(math.floor(x[0] / size)), int(math.floor(x[1] / size))))
+        if not cand:
+            continue
+        cand = np.array(cand)
+        raw = ((x - A[cand]) * AB[cand]).sum(1) / np.where(L2[cand] > 0, L2[cand], 1)
+        tau = np.clip(raw, 0.0, 1.0)
+        off = x - (A[cand] + tau[:, None] * AB[cand])
+        d = np.hypot(off[:, 0], off[:, 1])
+        ok = d <= np.where((raw > 0) & (raw < 1), pad[cand], tol)
+        best = {}
+        for c, t, dd in zip(cand[ok], tau[ok], d[ok]):
+            k, i = owner[c]
+            if k not in best or dd < best[k][1]:
+                best[k] = (i + t, dd)
+        for k, (pos, _) in best.items():
+            a, b, arc, _ = arcs[k]
+            if n in (a, b) or not 0.0 < pos < arc.e.size - 1:
+                continue
+            if _on_arc_curve(margins(arc), arc._slot, x, 2.0 * tol):
+                out[k].append((float(pos), int(n)))
+    return out
+
+
 def border_graph(regions):
     """border_graph(regions) -> BorderGraph
 
     The planar graph of the traced borders of ``regions`` (from
     :func:`window_regions`): nodes are the corners (shared by the regions that
     meet there, merged within 1e-11 of the window's size), edges the arcs
-    between consecutive corners of each boundary, an arc between two regions
-    kept once with the words on both sides.  Arcs are not split at a corner
-    that only one side's boundary has (a junction seen from one side): such an
-    arc may overlap the other side's two shorter arcs; ``counts`` then counts
-    both."""
+    between consecutive nodes.  An arc is split at every corner that lies on
+    it, also one that only the region on its other side has (a one-sided
+    junction: a third border ends on the arc), so that a piece of border
+    between two regions is one edge, with the words on both sides
+    (``inside`` and ``outside``; ``outside`` is "" where the other side was
+    not traced: outside the window, no slide, or a region no seed found), and
+    edges meet only at nodes.  A corner lies on an arc when it is beside the
+    arc's chords (within their sagitta) and the arc's margin vanishes there to
+    rounding (or within the merging distance, times its gradient).
+    """
     regions = list(regions)
     if not regions:
         return BorderGraph([], [], [])
     e, u = regions[0].e, regions[0].u
-    tol = 1e-11 * max(e[1] - e[0], u[1] - u[0])
+    scale = max(e[1] - e[0], u[1] - u[0])
+    tol = 1e-11 * scale
     nodes, index = [], {}
 
     def node(x, events):
@@ -1472,25 +1698,55 @@ def border_graph(regions):
         nodes.append(Corner(float(x[0]), float(x[1]), events))
         return index[key]
 
-    edges, seen = [], {}
+    # every arc with its end nodes; a closed curve's start is no corner
+    arcs, corner = [], set()
     for r in regions:
         for curve in _curves(r):
             for i, arc in enumerate(curve):
-                prev = curve[i - 1]
+                prev, nxt = curve[i - 1], curve[(i + 1) % len(curve)]
                 a = node((arc.e[0], arc.u[0]), ((prev.kind, prev.step), (arc.kind, arc.step)))
-                nxt = curve[(i + 1) % len(curve)]
                 b = node((arc.e[-1], arc.u[-1]), ((arc.kind, arc.step), (nxt.kind, nxt.step)))
-                mid = arc.e.size // 2
-                key = (arc.kind, arc.step, frozenset((a, b)),
-                       round(arc.e[mid] / (1e5 * tol)), round(arc.u[mid] / (1e5 * tol)))
-                if arc.kind != "window" and key in seen:
-                    seen[key].outside = arc.inside
-                    continue
-                if arc.kind != "window" and len(curve) == 1:
-                    key = (arc.kind, arc.step, id(arc))
-                seen[key] = arc
-                edges.append((a, b, arc))
-    return BorderGraph(nodes, edges, regions)
+                if len(curve) > 1:
+                    corner.update((a, b))
+                arcs.append((a, b, arc, len(curve) == 1))
+    margins = _GraphMargins(regions)
+    xy = np.array([(c.e, c.u) for c in nodes])
+
+    # split every arc at the corners on it (chords binned on a grid: a corner is
+    # compared with the chords of its cell only)
+    cuts = _corners_on_arcs(arcs, xy, sorted(corner), margins, tol, scale)
+    pieces, junctions = [], 0
+    for k, (a, b, arc, closed) in enumerate(arcs):
+        if not cuts[k]:
+            pieces.append((a, b, arc, closed))
+            continue
+        cut = sorted(cuts[k])
+        junctions += len(cut)
+        ends = [a] + [n for _, n in cut] + [b]
+        for m, piece in enumerate(_split_arc(arc, cut, nodes, margins(arc))):
+            pieces.append((ends[m], ends[m + 1], piece, False))
+
+    # one edge per piece of border: the pieces of the same event between the same
+    # nodes whose middles lie on each other's curve are its two sides
+    edges, groups = [], {}
+    for a, b, arc, closed in pieces:
+        if arc.kind != "window":
+            key = (arc.kind, arc.step) + (("closed",) if closed else (frozenset((a, b)),))
+            mid = margins.middle(arc)
+            twin = None
+            for other in groups.get(key, ()):
+                Q = np.stack([other.e, other.u], 1)
+                if _chord_position(Q, mid, tol) is not None and \
+                        _on_arc_curve(margins(other), other._slot, mid, 2.0 * tol):
+                    twin = other
+                    break
+            if twin is not None:
+                if twin.inside != arc.inside:
+                    twin.outside = arc.inside
+                continue
+            groups.setdefault(key, []).append(arc)
+        edges.append((a, b, arc))
+    return BorderGraph(nodes, edges, regions, junctions)
 
 
 # --------------------------------------------------------------------------- #
