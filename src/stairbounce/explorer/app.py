@@ -682,7 +682,7 @@ class Explorer:
 
         def on_slice(value):
             now = time.monotonic()
-            if value[0] == "points" or value[1] == value[2] or now - last[0] >= _TRACE_PROGRESS_EVERY:
+            if value[0] == "points" or value[1] in (0, value[2]) or now - last[0] >= _TRACE_PROGRESS_EVERY:
                 last[0] = now
                 self._next_tick(self._borders_progress, gen, key, value)
 

@@ -115,13 +115,15 @@ DEFAULT_OVERLAYS = ("tongues", "no_sliding")
 BORDER_SIDE = 160
 """Pixels per side, at most, of the grid whose borders the overlay locates."""
 
-TRACE_SIDE = 64
+TRACE_SIDE = 48
 """Seed pixels per side of the traced borders (:func:`trace_slices`): every
 word with a pixel centre on a ``TRACE_SIDE`` x ``TRACE_SIDE`` grid of the view
-has its region traced.  64 keeps a view to one or two seconds (the Fig. 5e
-window: 409 words in 1.7 s; benchmarks/README.md, section "explorer: traced
-borders"); a region narrower than a seed pixel everywhere is not traced, and
-its border points stay on the map."""
+has its region traced.  48 keeps a zoomed view to a second or two (the Fig.
+5e window: 280 words in 1.5 s on the loaded 2-core machine; 64 seeds: 409
+words, 2.9 s; benchmarks/README.md, "explorer: traced borders"); a region
+narrower than a seed pixel everywhere is not traced, and its border points
+stay on the map.  The whole Fig. 4 window takes longer (about 8 s there),
+most of it in the walks that give up (words marked incomplete)."""
 
 PIXEL_BUDGET = 1_000_000
 """Largest view, in pixels, that is computed (1000 x 1000)."""
