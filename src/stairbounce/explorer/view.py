@@ -118,12 +118,13 @@ BORDER_SIDE = 160
 TRACE_SIDE = 48
 """Seed pixels per side of the traced borders (:func:`trace_slices`): every
 word with a pixel centre on a ``TRACE_SIDE`` x ``TRACE_SIDE`` grid of the view
-has its region traced.  48 keeps a zoomed view to a second or two (the Fig.
-5e window: 280 words in 1.5 s on the loaded 2-core machine; 64 seeds: 409
-words, 2.9 s; benchmarks/README.md, "explorer: traced borders"); a region
-narrower than a seed pixel everywhere is not traced, and its border points
-stay on the map.  The whole Fig. 4 window takes longer (about 8 s there),
-most of it in the walks that give up (words marked incomplete)."""
+has its region traced.  48 keeps a zoomed view to a few seconds: the Fig. 5e
+window, 280 words, 1.5 to 4.4 s on the shared 2-core machine (64 seeds: 409
+words, 6.1 s in the same run; 32: 163 words, 2.8 s); benchmarks/README.md,
+"The explorer's traced borders".  A region narrower than a seed pixel
+everywhere is not traced, and its border points stay on the map.  The whole
+Fig. 4 window takes about 8 s, most of it in walks that give up (6 of its 48
+words, marked incomplete; one such word is one slice of up to 5 s)."""
 
 PIXEL_BUDGET = 1_000_000
 """Largest view, in pixels, that is computed (1000 x 1000)."""
