@@ -343,6 +343,8 @@ class Explorer:
         # the traced arcs (view.traced_overlay): one polyline per arc; named for the browser tests
         self.arc_src = ColumnDataSource(dict(xs=[], ys=[], kind=[], step=[], word_low=[], word_high=[],
                                              color=[]), name="sb-traced-arcs")
+        # a white casing under each arc (same data) sets it off from the map's orange and red classes
+        fig.multi_line("xs", "ys", source=self.arc_src, line_color="white", line_width=4, line_alpha=0.8)
         arcs = fig.multi_line("xs", "ys", source=self.arc_src, line_color="color", line_width=2)
         fig.add_tools(HoverTool(renderers=[arcs], line_policy="interp", tooltips=[
             ("traced border", "@kind at step @step"), ("low side", "@word_low"), ("high side", "@word_high")]))
