@@ -676,7 +676,8 @@ class Explorer:
         self._show_borders(pts, done)
         if key is None or (pts is not None and (tkey is None or done is not None)):
             self._sched.cancel(self, "borders")
-            self._trace_message("" if done is None else self._traced_text(done, None), "info")
+            self._trace_message("" if done is None else self._traced_text(done, None),
+                                "warning" if done is not None and done["incomplete"] else "info")
             return
         self._trace_message("locating the border points ..." if pts is None else
                             f"tracing borders: finding the words ({TRACE_SIDE} x {TRACE_SIDE} seeds) ...", "busy")
