@@ -1026,9 +1026,9 @@ def test_downloads_run_off_the_event_loop(explorer, monkeypatch):
     seen = []
     real = A.view_png
 
-    def spy(ds, view):
+    def spy(ds, view, **kw):
         seen.append(threading.current_thread())
-        return real(ds, view)
+        return real(ds, view, **kw)
 
     monkeypatch.setattr(A, "view_png", spy)
     assert inspect.iscoroutinefunction(app.png_button.callback)

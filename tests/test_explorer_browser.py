@@ -648,3 +648,33 @@ def test_a_page_with_a_bad_value_comes_without_a_preview(server):
     with urllib.request.urlopen(server.url + "?size=300x300&max_iter=100", timeout=30) as answer:
         page = answer.read().decode()
     assert 'id="sb-preview"' in page
+def test_traced_borders_mode_draws_the_arcs(server, page):
+    """Issue 22 item 4: the "traced" overlay, turned on in a view of Theorem 3.1's
+    first tongue (one word, (1, 0^inf)), draws its chatter arc and the window's
+    sides as traced arcs (the page's Bokeh model of the arcs, read in the
+    browser), says so in the status, and puts the mode in the URL."""
+    page.goto(server.url + "?e=0.6:0.8&u=0.05:0.2&size=200x150&max_iter=300&overlays=none")
+    _wait_rendered(page)
+    boxes = page.locator(".sb-overlays input")
+    assert boxes.count() == 4
+    boxes.nth(3).check()
+    line = page.locator(".sb-status .sb-trace").get_by_text("traced borders: 1 word")
+    line.wait_for(timeout=60_000)
+    assert "chatter 1" in line.inner_text() and "replaced by arcs" in line.inner_text()
+    assert _query(page)["overlays"] == "traced"
+    arcs = page.evaluate(
+        """() => {
+            for (const doc of Bokeh.documents) {
+              const m = doc.get_model_by_name('sb-traced-arcs');
+              if (m == null) continue;
+              const d = m.data instanceof Map ? Object.fromEntries(m.data) : m.data;
+              return {kind: Array.from(d.kind), points: Array.from(d.xs, (x) => x.length),
+                      low: Array.from(d.word_low)};
+            }
+            return null;
+        }"""
+    )
+    assert arcs is not None and sorted(set(arcs["kind"])) == ["chatter", "window"]
+    i = arcs["kind"].index("chatter")
+    assert arcs["points"][i] > 5 and arcs["low"][i] == "(1, 0^inf)"
+    page.screenshot(path=str(ARTIFACTS / "explorer-traced.png"))

@@ -63,6 +63,7 @@ from .view import (
     NOT_COMPUTED_COLOR,
     OVERLAYS,
     SLIDES_COLOR,
+    TRACE_SIDE,
     U_LIMIT,
     View,
     BORDER_SIDE,
@@ -85,6 +86,9 @@ from .view import (
     render_slices,
     shade,
     tidy,
+    trace_slices,
+    trace_window,
+    traced_overlay,
     view_url_query,
     window_digits,
 )
@@ -113,9 +117,16 @@ _PREVIEW_AFTER = 0.25
 
 _COLOR_OPTIONS = {menu: var for var, (menu, _, _) in FIELDS.items()}
 _OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bound, Cor. 2.1": "no_sliding",
-                    "exact borders (graze, edge, chatter)": "borders"}
+                    "exact borders (graze, edge, chatter)": "borders",
+                    "exact borders as traced arcs (seconds)": "traced"}
 _OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u = (1-e)/(2\u221a(2e)), Cor. 2.1",
-                   "borders": "exact borders: graze blue, edge orange, chatter red"}
+                   "borders": "exact borders: graze blue, edge orange, chatter red",
+                   "traced": "traced arcs (same colours; window grey)"}
+
+# the traced arcs' colour on the window's sides (the other kinds: plot.borders.KIND_COLORS)
+_WINDOW_ARC_COLOR = "#8c8c8c"
+# least time between two "tracing borders: N of M words" lines sent to the page (s)
+_TRACE_PROGRESS_EVERY = 0.25
 
 # milliseconds without wheel events after which a wheel zoom is taken as done
 ZOOM_SETTLE_MS = 150
@@ -223,6 +234,12 @@ class Explorer:
         self._borders = None
         # the word table of the last tap's view: ((grid, max_iter), Dataset), reused by the next tap there
         self._word_table = None
+        # the traced borders last computed: ((trace window, max_iter, points' key), traced_overlay dict)
+        self._traced = None
+        # what the borders overlay shows or is computing: (points' key or None, trace key or None)
+        self._borders_want = (None, None)
+        self._borders_gen = 0
+        self._trace_text, self._trace_level = "", "busy"
         self._syncing = False
         self._closed = False
         self._connected = False
@@ -326,10 +343,19 @@ class Explorer:
         borders = fig.scatter("e", "u", source=self.border_src, size=3, color="color", line_width=0)
         fig.add_tools(HoverTool(renderers=[borders], tooltips=[
             ("border", "@kind at step @step"), ("low side", "@word_low"), ("high side", "@word_high")]))
+        # the traced arcs (view.traced_overlay): one polyline per arc; named for the browser tests
+        self.arc_src = ColumnDataSource(dict(xs=[], ys=[], kind=[], step=[], word_low=[], word_high=[],
+                                             color=[]), name="sb-traced-arcs")
+        # a white casing under each arc (same data) sets it off from the map's orange and red classes
+        fig.multi_line("xs", "ys", source=self.arc_src, line_color="white", line_width=4, line_alpha=0.8)
+        arcs = fig.multi_line("xs", "ys", source=self.arc_src, line_color="color", line_width=2)
+        fig.add_tools(HoverTool(renderers=[arcs], line_policy="interp", tooltips=[
+            ("traced border", "@kind at step @step"), ("low side", "@word_low"), ("high side", "@word_high")]))
         self._overlay_items = {
             "tongues": LegendItem(label=_OVERLAY_LEGEND["tongues"], renderers=[tongues]),
             "no_sliding": LegendItem(label=_OVERLAY_LEGEND["no_sliding"], renderers=[bound]),
             "borders": LegendItem(label=_OVERLAY_LEGEND["borders"], renderers=[borders]),
+            "traced": LegendItem(label=_OVERLAY_LEGEND["traced"], renderers=[arcs]),
         }
         self.legend = Legend(items=[], orientation="horizontal", label_text_font_size="9pt",
                              border_line_alpha=0)
@@ -464,7 +490,7 @@ class Explorer:
         """First render (and the URL's point) once the page is connected."""
         self._connected = True
         self._set_url("replace")
-        self._draw_overlays(self.view)
+        self._draw_overlays(self.view, borders=False)  # the borders after the render (_request)
         self._request(self.view, history=None)
         if self.view.point is not None:
             self._request_point(*self.view.point)
@@ -486,12 +512,18 @@ class Explorer:
             self._show_status()
 
     def _show_status(self):
-        colours = {"info": "#1a5e1a", "busy": "#555555", "error": "#b00020"}
-        parts = [(self._status_level, self._status_text), ("error", self._error_text)]
+        colours = {"info": "#1a5e1a", "busy": "#555555", "error": "#b00020", "warning": "#8a5a00"}
+        parts = [(self._status_level, self._status_text, ""), (self._trace_level, self._trace_text, " sb-trace"),
+                 ("error", self._error_text, "")]
         self.status.object = "<br>".join(
-            f'<span class="sb-{lv}" style="color:{colours[lv]}">{html.escape(t)}</span>'
-            for lv, t in parts if t
+            f'<span class="sb-{lv}{extra}" style="color:{colours[lv]}">{html.escape(t)}</span>'
+            for lv, t, extra in parts if t
         )
+
+    def _trace_message(self, text, level="busy"):
+        """The traced borders' line of the status (empty: none)."""
+        self._trace_text, self._trace_level = text, level
+        self._show_status()
 
     def _refuse(self, exc):
         """A refused request: say why, and put widgets and plot back to the view."""
@@ -614,27 +646,145 @@ class Explorer:
         self._draw_overlays(self.view)
         self._set_url("replace")
 
-    def _draw_overlays(self, view):
+    def _draw_overlays(self, view, borders=True):
         curves = overlay_curves(view)
         for name, src in (("tongues", self.tongue_src), ("no_sliding", self.bound_src)):
             xs, ys = curves[name] if name in view.overlays else ([], [])
             src.data = dict(xs=list(xs), ys=list(ys))
-        self._draw_borders(view)
+        if borders:
+            self._draw_borders(view)
         self.legend.items = [self._overlay_items[n] for n in OVERLAYS if n in view.overlays]
         self.legend.visible = bool(view.overlays)
 
+    # ---------------------------------------------------------- exact borders
+
     def _draw_borders(self, view):
-        """The exact borders of the view (view.border_overlay), when that overlay is on."""
+        """The exact borders of the view, when the "borders" or "traced" overlay
+        is on: its border points (view.border_overlay) and, with "traced", the
+        traced arcs (view.trace_slices, view.traced_overlay), which replace the
+        points they pass through.  Both are computed in one "borders" job on
+        the scheduler (points first, then one word's region per slice); a
+        view with other borders supersedes (cancels) the job under way, and
+        what is already computed for the view is drawn at once."""
+        traced = "traced" in view.overlays
+        key = _border_key(view) if traced or "borders" in view.overlays else None
+        tkey = (trace_window(view), view.max_iter, key) if traced else None
+        if (key, tkey) == self._borders_want:
+            return  # drawn, or being computed
+        self._borders_want = (key, tkey)
+        self._borders_gen += 1
+        gen = self._borders_gen
+        pts = self._borders[1] if key is not None and self._borders is not None and self._borders[0] == key else None
+        done = self._traced[1] if tkey is not None and self._traced is not None and self._traced[0] == tkey else None
+        self._show_borders(pts, done)
+        if key is None or (pts is not None and (tkey is None or done is not None)):
+            self._sched.cancel(self, "borders")
+            self._trace_message("" if done is None else self._traced_text(done, None),
+                                "warning" if done is not None and done["incomplete"] else "info")
+            return
+        self._trace_message("locating the border points ..." if pts is None else
+                            f"tracing borders: finding the words ({TRACE_SIDE} x {TRACE_SIDE} seeds) ...", "busy")
+        last = [0.0]  # when progress was last sent (worker thread)
+
+        def on_slice(value):
+            now = time.monotonic()
+            if value[0] == "points" or value[1] in (0, value[2]) or now - last[0] >= _TRACE_PROGRESS_EVERY:
+                last[0] = now
+                self._next_tick(self._borders_progress, gen, key, value)
+
+        self._sched.submit(
+            self, "borders", self._borders_work(view, pts, traced),
+            on_slice=on_slice,
+            on_done=lambda result, error, job: self._next_tick(self._borders_done, gen, key, tkey, result, error, job),
+            alive=self._alive,
+        )
+
+    def _borders_work(self, view, pts, traced):
+        """Slices of the "borders" job: the view's border points (unless given),
+        then, for the traced arcs, the seed scan, one word's region per slice,
+        and the overlay's data; returns ``(points, traced_overlay dict or None)``."""
+        if pts is None:
+            pts = view_border_points(view)
+            yield "points", pts
+        if not traced:
+            return pts, None
+        work = trace_slices(view)
+        while True:
+            try:
+                done, total = next(work)
+            except StopIteration as stop:
+                regions = stop.value
+                break
+            yield "trace", done, total
+        return pts, traced_overlay(view, regions, pts)
+
+    def _show_borders(self, pts, traced):
+        """Draw border points (a view_border_points Dataset or None) and the
+        traced overlay (or None): the points a traced arc passes through are
+        left out."""
         from ..plot.borders import KIND_COLORS
 
-        if "borders" not in view.overlays:
-            data = dict(e=[], u=[], kind=[], step=[], word_low=[], word_high=[])
-        else:
-            pts = view_border_points(view)
-            self._borders = (_border_key(view), pts)
-            data = border_overlay(view, points=pts)
+        data = dict(e=[], u=[], kind=[], step=[], word_low=[], word_high=[])
+        if pts is not None:
+            data = border_overlay(None, points=pts)
+            if traced is not None and traced["covered"]:
+                keep = ~np.asarray(traced["covered"], dtype=bool)
+                data = {k: [x for x, y in zip(v, keep) if y] for k, v in data.items()}
         data["color"] = [KIND_COLORS[k] for k in data["kind"]]
         self.border_src.data = data
+        arcs = dict(xs=[], ys=[], kind=[], step=[], word_low=[], word_high=[])
+        if traced is not None:
+            arcs = dict(traced["arcs"])
+        arcs["color"] = [KIND_COLORS.get(k, _WINDOW_ARC_COLOR) for k in arcs["kind"]]
+        self.arc_src.data = arcs
+
+    def _borders_progress(self, gen, key, value):
+        if gen != self._borders_gen:
+            return
+        if value[0] == "points":
+            self._borders = (key, value[1])
+            self._show_borders(value[1], None)
+            if "traced" in self.view.overlays:
+                self._trace_message(f"tracing borders: finding the words ({TRACE_SIDE} x {TRACE_SIDE} seeds) ...")
+            return
+        _, done, total = value
+        self._trace_message(f"tracing borders: {done} of {_plural(total, 'word')} ({TRACE_SIDE} x {TRACE_SIDE} "
+                            f"seeds) ..." if done < total else
+                            f"tracing borders: {total} of {_plural(total, 'word')}, joining the arcs ...")
+
+    def _borders_done(self, gen, key, tkey, result, error, job):
+        if gen != self._borders_gen:
+            return
+        if error is not None:
+            pts = self._borders[1] if self._borders is not None and self._borders[0] == key else None
+            what = "tracing borders" if pts is not None else "locating the border points"
+            self._trace_message(f"{what} failed: {error}" + ("; the border points are shown" if pts is not None
+                                                               else ""), "error")
+            return
+        pts, traced = result
+        self._borders = (key, pts)
+        self._show_borders(pts, traced)
+        if traced is None:
+            self._trace_message("", "info")
+            return
+        self._traced = (tkey, traced)
+        self._trace_message(self._traced_text(traced, job), "warning" if traced["incomplete"] else "info")
+
+    @staticmethod
+    def _traced_text(traced, job):
+        """The status line of a finished trace."""
+        kinds = ", ".join(f"{k} {n}" for k, n in sorted(traced["counts"].items()))
+        covered = traced["covered"]
+        text = (f"traced borders: {_plural(traced['words'], 'word')} ({TRACE_SIDE} x {TRACE_SIDE} seeds), "
+                f"{_plural(sum(traced['counts'].values()), 'arc')} ({kinds or 'none'}); "
+                f"{sum(covered)} of {_plural(len(covered), 'border point')} replaced by arcs"
+                + (f", traced in {job.attained:.2f} s" if job is not None else ""))
+        bad = traced["incomplete"]
+        if bad:
+            short = [w if len(w) <= 40 else w[:37] + "..." for w in bad[:3]]
+            text += (f". Incomplete (a walk gave up; their border points are kept): {_plural(len(bad), 'word')}, "
+                     + "; ".join(short) + ("; ..." if len(bad) > 3 else ""))
+        return text
 
     def _set_url(self, mode):
         """Address bar := the view's query; ``push`` makes a history entry."""
@@ -699,7 +849,7 @@ class Explorer:
         self._sync_widgets(view)
         if history is not None:
             self._set_url(history)
-        self._draw_overlays(view)
+        self._draw_overlays(view, borders=False)
         if (view.width, view.height) != (self.map_fig.frame_width, self.map_fig.frame_height):
             self.map_fig.update(frame_width=view.width, frame_height=view.height)
         self._gen += 1
@@ -712,6 +862,7 @@ class Explorer:
         )
         if gen == self._gen and job.started is False:
             self._message(self._waiting_text(view, job), "busy")
+        self._draw_borders(view)  # queued after the render: the picture comes first
 
     def _waiting_text(self, view, job):
         what = f"{view.width} x {view.height} pixels, max_iter {view.max_iter}"
@@ -981,9 +1132,14 @@ class Explorer:
     # --------------------------------------------------------------- exports
 
     async def _png(self):
-        """The PNG of the view shown, made on the export thread."""
+        """The PNG of the view shown, made on the export thread, with the exact
+        borders (points and traced arcs) as drawn when they are the shown view's."""
         ds, shown = self.ds, self.shown
-        data = await asyncio.wrap_future(_EXPORTS.submit(view_png, ds, shown))
+        drawn = None
+        if shown is not None and self._borders_want[0] is not None and self._borders_want[0] == _border_key(shown):
+            drawn = {"points": {k: list(self.border_src.data[k]) for k in ("e", "u", "kind")},
+                     "arcs": {k: list(self.arc_src.data[k]) for k in ("xs", "ys", "kind")}}
+        data = await asyncio.wrap_future(_EXPORTS.submit(view_png, ds, shown, borders=drawn))
         return io.BytesIO(data)
 
     async def _netcdf(self):

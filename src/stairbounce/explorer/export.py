@@ -28,12 +28,16 @@ def export_name(view: View, suffix: str) -> str:
     return f"stairbounce_e{f(view.e_lo)}-{f(view.e_hi)}_u{f(view.u_lo)}-{f(view.u_hi)}{suffix}"
 
 
-def view_png(ds, view: View, dpi: int = 100) -> bytes:
-    """view_png(ds, view, dpi=100) -> bytes
+def view_png(ds, view: View, dpi: int = 100, borders: dict | None = None) -> bytes:
+    """view_png(ds, view, dpi=100, borders=None) -> bytes
 
     A PNG of the map as shown: one image pixel per scan pixel (nearest
     neighbour), axes in e and u, the colour key, the overlays of the view,
-    the window and max_iter in the title.
+    the window and max_iter in the title.  ``borders``: the exact borders as
+    the page draws them, ``{"points": {"e", "u", "kind"}, "arcs": {"xs",
+    "ys", "kind"}}`` (the traced arcs and the border points they leave);
+    without it the "borders" and "traced" overlays draw the view's border
+    points (:func:`~stairbounce.explorer.view.border_overlay`).
     """
     # the Figure API without pyplot: no global state, so the server can make
     # PNGs on a thread of its own
@@ -58,12 +62,12 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     curves = overlay_curves(view)
     styles: dict[str, dict[str, Any]] = {"tongues": dict(color="0.6", lw=0.7),
                                         "no_sliding": dict(color="C3", lw=1.2, ls="--")}
+    drew_borders = False
     for name in view.overlays:
-        if name == "borders":  # the exact border points, coloured by kind
-            from ..plot.borders import KIND_COLORS
-
-            b = border_overlay(view)
-            ax.scatter(b["e"], b["u"], s=2, c=[KIND_COLORS[k] for k in b["kind"]], linewidths=0)
+        if name in ("borders", "traced"):  # the exact borders, coloured by kind
+            if not drew_borders:
+                _draw_borders(ax, view, borders)
+            drew_borders = True
             continue
         for xs, ys in zip(*curves[name]):
             ax.plot(xs, ys, **styles[name])
@@ -85,6 +89,21 @@ def view_png(ds, view: View, dpi: int = 100) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
     return buf.getvalue()
+
+
+def _draw_borders(ax, view, borders):
+    """The border points (and traced arcs) of ``borders``, else the view's border points."""
+    from matplotlib.collections import LineCollection
+
+    from ..plot.borders import KIND_COLORS
+
+    b = border_overlay(view) if borders is None else borders["points"]
+    ax.scatter(b["e"], b["u"], s=2, c=[KIND_COLORS[k] for k in b["kind"]], linewidths=0)
+    arcs = {} if borders is None else borders.get("arcs", {})
+    if arcs.get("xs"):
+        lines = [np.column_stack([x, y]) for x, y in zip(arcs["xs"], arcs["ys"])]
+        ax.add_collection(LineCollection(lines, colors=[KIND_COLORS.get(k, "0.55") for k in arcs["kind"]],
+                                         linewidths=1.2))
 
 
 def view_netcdf(ds) -> bytes:

@@ -70,6 +70,10 @@ __all__ = [
     "point_details",
     "orbit_along_u",
     "pixel_of",
+    "TRACE_SIDE",
+    "trace_window",
+    "trace_slices",
+    "traced_overlay",
 ]
 
 MOTION_COLOR_VARS = ("k_mean", "lyap1")
@@ -98,16 +102,29 @@ COLOR_VARS = tuple(FIELDS)
 NO_SLIDING_LABEL = "none within max_iter"
 """Key entry of white pixels: no periodic sliding solution within max_iter steps."""
 
-OVERLAYS = ("tongues", "no_sliding", "borders")
+OVERLAYS = ("tongues", "no_sliding", "borders", "traced")
 """What can be drawn over the map: the (n, 0^inf) tongues of Theorem 3.1, the
-no-sliding bound of Corollary 2.1 and the exact borders of the view
-(:func:`border_overlay`)."""
+no-sliding bound of Corollary 2.1, the exact borders of the view
+(:func:`border_overlay`) and, ``"traced"``, those borders as traced arcs
+(:func:`trace_slices`, :func:`traced_overlay`; the border points are shown
+until the arcs come and where there are none)."""
 
 DEFAULT_OVERLAYS = ("tongues", "no_sliding")
 """The overlays a new view shows (the exact borders cost a computation: off)."""
 
 BORDER_SIDE = 160
 """Pixels per side, at most, of the grid whose borders the overlay locates."""
+
+TRACE_SIDE = 48
+"""Seed pixels per side of the traced borders (:func:`trace_slices`): every
+word with a pixel centre on a ``TRACE_SIDE`` x ``TRACE_SIDE`` grid of the view
+has its region traced.  48 keeps a zoomed view to a few seconds: the Fig. 5e
+window, 280 words, 1.5 to 4.4 s on the shared 2-core machine (64 seeds: 409
+words, 6.1 s in the same run; 32: 163 words, 2.8 s); benchmarks/README.md,
+"The explorer's traced borders".  A region narrower than a seed pixel
+everywhere is not traced, and its border points stay on the map.  The whole
+Fig. 4 window takes about 8 s, most of it in walks that give up (6 of its 48
+words, marked incomplete; one such word is one slice of up to 5 s)."""
 
 PIXEL_BUDGET = 1_000_000
 """Largest view, in pixels, that is computed (1000 x 1000)."""
@@ -780,6 +797,179 @@ def border_overlay(view: View, side: int = BORDER_SIDE, points: xr.Dataset | Non
     """
     pts = view_border_points(view, side) if points is None else points
     return {k: pts[k].values.tolist() for k in ("e", "u", "kind", "step", "word_low", "word_high")}
+
+
+def trace_window(view: View) -> tuple:
+    """trace_window(view) -> ((e_lo, e_hi), (u_lo, u_hi))
+
+    The window whose regions :func:`trace_slices` traces: the view's, with e
+    below 1 and u above 0 (the margins of :mod:`stairbounce.regions` need
+    both; as :func:`stairbounce.word_table` with ``regions=True``).
+    """
+    return (view.e_lo, min(view.e_hi, 1.0 - 1e-12)), (max(view.u_lo, 1e-9), view.u_hi)
+
+
+def trace_slices(view: View, side: int = TRACE_SIDE):
+    """trace_slices(view, side=TRACE_SIDE) -> generator of (done, total), returning list[Region]
+
+    The regions of every word of the view (:func:`stairbounce.window_regions`'
+    method, the words seen by ``side`` x ``side`` seed pixel centres of
+    :func:`trace_window`, the view's max_iter), one word per ``next()``: the
+    scheduler's slices, so a trace of many words stays cancellable and shares
+    the worker.  Yields ``(0, total)`` once the words are known, then
+    ``(done, total)`` after each word; returns the regions, largest first.
+    """
+    from .. import regions as rg
+    from ..symbolic import word_from_impacts
+
+    e, u = rg._check_window(*trace_window(view))
+    es, us = rg._grid(e, u, side)
+    h1, h2, _ = rg._label_grid(es, us, view.max_iter, 1.0, 0.0)
+    keys, first = np.unique(np.stack([h1.ravel(), h2.ravel()], 1), axis=0, return_index=True)
+    buf = np.empty(view.max_iter, dtype=np.int64)
+    todo = []
+    for idx, (a, b) in zip(first, keys):
+        if a != 0:  # 0: no slide within max_iter
+            i, j = divmod(int(idx), es.size)
+            todo.append((a, b, buf[:rg._itinerary_of(es[j], us[i], 1.0, 0.0, view.max_iter, buf)].copy()))
+    yield 0, len(todo)
+    out = []
+    for a, b, ks in todo:
+        w = word_from_impacts(ks)
+        comps, failures = rg._trace_word(ks, w, e, u, es, us, (h1 == a) & (h2 == b), 1.0, 0.0)
+        out.append(rg.Region(w, e, u, comps, complete=failures == 0, failures=failures))
+        yield len(out), len(todo)
+    out.sort(key=lambda r: -r.area)
+    return out
+
+
+def _word_at(e, u, window, max_iter, buf, texts):
+    """The word text of the orbit of (1, 0) at (e, u) as the border points write
+    it, or "outside the view" outside ``window`` (``texts``: the texts found
+    so far, by the itinerary's hashes)."""
+    from ..borders import NONE_WORD, _word_text
+    from ..regions import _hash_itinerary, _itinerary_of
+
+    (e0, e1), (u0, u1) = window
+    if not (e0 <= e <= e1 and u0 <= u <= u1):
+        return OUTSIDE_WORD
+    n = _itinerary_of(e, u, 1.0, 0.0, max_iter, buf)
+    if n <= 0:
+        return NONE_WORD
+    key = (n, *(int(h) for h in _hash_itinerary(buf, n)))
+    if key not in texts:
+        texts[key] = _word_text(buf[:n])
+    return texts[key]
+
+
+OUTSIDE_WORD = "outside the view"
+"""The word of the outer side of a traced arc on the window's edge."""
+
+
+def _arc_sides(arc, window, max_iter, buf, texts):
+    """``(word_low, word_high)``: the map's words just off the middle of ``arc``
+    on its two sides, the low side being the one of smaller u (smaller e where
+    the arc is nearer vertical than horizontal, in the window's scaled units,
+    as a border point's bisection axis would be)."""
+    (e0, e1), (u0, u1) = window
+    x = (np.asarray(arc.e) - e0) / (e1 - e0)
+    y = (np.asarray(arc.u) - u0) / (u1 - u0)
+    n = x.size
+    if n >= 3:  # a traced point: on the curve to rounding
+        m = n // 2
+        px, py, tx, ty = x[m], y[m], x[m + 1] - x[m - 1], y[m + 1] - y[m - 1]
+    else:  # two corners: the chord's middle, off the curve by its sagitta at most
+        px, py, tx, ty = 0.5 * (x[0] + x[-1]), 0.5 * (y[0] + y[-1]), x[-1] - x[0], y[-1] - y[0]
+    norm = math.hypot(tx, ty) or 1.0
+    nx, ny = -ty / norm, tx / norm  # the left normal
+    if abs(ny) >= abs(nx):
+        low = -1.0 if ny > 0 else 1.0  # the side of smaller u
+    else:
+        low = -1.0 if nx > 0 else 1.0  # the side of smaller e
+    words = None
+    for d in (1e-9, 1e-7, 1e-5, 1e-3):  # the nearest offset that sees two words
+        words = [_word_at(e0 + (px + s * d * nx) * (e1 - e0), u0 + (py + s * d * ny) * (u1 - u0), window,
+                          max_iter, buf, texts)
+                 for s in (low, -low)]
+        if words[0] != words[1]:
+            break
+    return words[0], words[1]
+
+
+def _on_arcs(points, arcs, window):
+    """Which border points lie on a traced arc of their own kind and step: in
+    the window's scaled units (its sides 1), within 1e-9 of one of the arc's
+    points or beside one of its chords within 1.5 % of the chord's length
+    (the arcs turn by at most 0.08 rad per chord, so a chord leaves its curve
+    by at most 1 % of its length)."""
+    (e0, e1), (u0, u1) = window
+    pe = (np.asarray(points["e"]) - e0) / (e1 - e0)
+    pu = (np.asarray(points["u"]) - u0) / (u1 - u0)
+    kinds, steps = np.asarray(points["kind"]).astype(str), np.asarray(points["step"])
+    hit = np.zeros(pe.size, dtype=bool)
+    groups: dict = {}
+    for arc in arcs:
+        if arc.kind != "window":
+            P = np.stack([(arc.e - e0) / (e1 - e0), (arc.u - u0) / (u1 - u0)], 1)
+            groups.setdefault((arc.kind, arc.step), []).append(P)
+    tol = 1e-9
+    for (kind, step), polys in groups.items():
+        A = np.concatenate([P[:-1] for P in polys])
+        B = np.concatenate([P[1:] for P in polys])
+        AB = B - A
+        L2 = (AB**2).sum(1)
+        near = np.maximum(tol, 0.015 * np.sqrt(L2))
+        idx = np.flatnonzero((kinds == kind) & (steps == step))
+        chunk = max(1, 2_000_000 // A.shape[0])
+        for lo in range(0, idx.size, chunk):  # points x chords at a time, in bounded blocks
+            i = idx[lo:lo + chunk]
+            dx, dy = pe[i, None] - A[None, :, 0], pu[i, None] - A[None, :, 1]
+            raw = (dx * AB[:, 0] + dy * AB[:, 1]) / np.where(L2 > 0, L2, 1.0)
+            tau = np.clip(raw, 0.0, 1.0)
+            d = np.hypot(dx - tau * AB[:, 0], dy - tau * AB[:, 1])
+            hit[i] = np.any(d <= np.where((raw > 0) & (raw < 1), near, tol), axis=1)
+    return hit
+
+
+def traced_overlay(view: View, regions, points=None) -> dict:
+    """traced_overlay(view, regions, points=None) -> dict
+
+    The traced borders of the view as the overlay draws them: the edges of
+    :func:`stairbounce.border_graph` of ``regions`` (from :func:`trace_slices`)
+    as ``"arcs"``, columns ``xs``, ``ys`` (one polyline per arc), ``kind``
+    (graze, edge, chatter, or window for the window's sides), ``step``,
+    ``word_low``, ``word_high`` (the map's words just off the arc's middle,
+    :func:`_arc_sides`); ``"covered"``, per border point of ``points`` (a
+    :func:`view_border_points` Dataset or its :func:`border_overlay`
+    columns), whether a traced arc of its kind and step passes through it
+    and neither of its words is incomplete (those points are replaced by the
+    arcs; the others stay); ``"words"`` (words traced), ``"incomplete"``
+    (their texts: a walk gave up, their points are kept) and ``"counts"``
+    (arcs by kind).
+    """
+    from ..regions import border_graph
+
+    window = trace_window(view)
+    graph = border_graph(regions)
+    buf, texts = np.empty(view.max_iter, dtype=np.int64), {}
+    cols: dict = {k: [] for k in ("xs", "ys", "kind", "step", "word_low", "word_high")}
+    counts: dict = {}
+    for _, _, arc in graph.edges:
+        low, high = _arc_sides(arc, window, view.max_iter, buf, texts)
+        for k, v in (("xs", arc.e.tolist()), ("ys", arc.u.tolist()), ("kind", arc.kind), ("step", int(arc.step)),
+                     ("word_low", low), ("word_high", high)):
+            cols[k].append(v)
+        counts[arc.kind] = counts.get(arc.kind, 0) + 1
+    incomplete = sorted(r.word.format(ascii=True) for r in regions if not r.complete)
+    covered = []
+    if points is not None and len(points["e"]):
+        covered = _on_arcs(points, [a for _, _, a in graph.edges], window)
+        bad = set(incomplete)
+        covered &= ~np.array([lo in bad or hi in bad for lo, hi in
+                              zip(np.asarray(points["word_low"], dtype=object).tolist(),
+                                  np.asarray(points["word_high"], dtype=object).tolist())], dtype=bool)
+        covered = covered.tolist()
+    return {"arcs": cols, "covered": covered, "words": len(regions), "incomplete": incomplete, "counts": counts}
 
 
 WORD_ROW_FIELDS = ("text", "letters", "period", "impacts", "pixels", "area_fraction", "e_rep", "u_rep",
