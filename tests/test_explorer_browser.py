@@ -648,6 +648,8 @@ def test_a_page_with_a_bad_value_comes_without_a_preview(server):
     with urllib.request.urlopen(server.url + "?size=300x300&max_iter=100", timeout=30) as answer:
         page = answer.read().decode()
     assert 'id="sb-preview"' in page
+
+
 def test_traced_borders_mode_draws_the_arcs(server, page):
     """Issue 22 item 4: the "traced" overlay, turned on in a view of Theorem 3.1's
     first tongue (one word, (1, 0^inf)), draws its chatter arc and the window's
