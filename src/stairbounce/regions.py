@@ -398,7 +398,7 @@ class _Arc:
     tans: list
     end: str = ""            # corner, closed, window, junction, domain, limit
     end_slot: int = -1
-    area: tuple = None       # (area, error) of the closed curve that starts with this arc
+    area: tuple | None = None  # (area, error) of the closed curve that starts with this arc
 
 
 def _follow(F, a, x, g, sign, scale, *, others, stop_at=None, max_points=20000, junction=None):

@@ -951,7 +951,7 @@ def traced_overlay(view: View, regions, points=None) -> dict:
 
     window = trace_window(view)
     graph = border_graph(regions)
-    buf, texts = np.empty(view.max_iter, dtype=np.int64), {}
+    buf, texts = np.empty(view.max_iter, dtype=np.int64), dict[tuple, str]()
     cols: dict = {k: [] for k in ("xs", "ys", "kind", "step", "word_low", "word_high")}
     counts: dict = {}
     for _, _, arc in graph.edges:
