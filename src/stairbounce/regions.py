@@ -1235,6 +1235,27 @@ def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, point
     within a quarter pixel of it; and a further component of a word already
     traced (only words not yet traced are seeded from corners).
     """
+    gen = iter_window_regions(e, u, resolution=resolution, max_iter=max_iter, y0=y0, v0=v0,
+                              points=points, from_corners=from_corners)
+    while True:
+        try:
+            done, total = next(gen)
+        except StopIteration as stop:
+            return stop.value
+        if progress is not None and done:
+            progress(done, total)
+
+
+def iter_window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, points=None,
+                        from_corners=False):
+    """iter_window_regions(e, u, ...) -> generator of (done, total), returning list[Region]
+
+    :func:`window_regions` one word at a time: yields ``(0, total)`` once the
+    seeded words are known, then ``(done, total)`` after each word traced
+    (``total`` grows when corner seeding finds new words); returns the
+    regions, largest area first.  For callers that share a worker between
+    words (the explorer's scheduler).
+    """
     e, u = _check_window(e, u)
     resolution = check_count("resolution", resolution, 2, 8192)
     max_iter = check_count("max_iter", max_iter, 1)
@@ -1258,6 +1279,7 @@ def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, point
         todo.setdefault(key, ks)
     out = []
     total = len(todo)
+    yield 0, total
 
     def trace(todo, seeds):
         regs = []
@@ -1268,11 +1290,10 @@ def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, point
                                           seeds=seeds.get(key, (None, ()))[1])
             regs.append(Region(w, e, u, comps, complete=failures == 0, failures=failures))
             out.append(regs[-1])
-            if progress is not None:
-                progress(len(out), total)
+            yield len(out), total
         return regs
 
-    fresh = trace(todo, seeds)
+    fresh = yield from trace(todo, seeds)
     known = set(todo)
     pixel = ((e[1] - e[0]) / resolution, (u[1] - u[0]) / resolution)
     for _ in range(_CORNER_ROUNDS if from_corners else 0):
@@ -1281,7 +1302,7 @@ def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, point
             break
         known.update(seeds)
         total += len(seeds)
-        fresh = trace({k: v[0] for k, v in seeds.items()}, seeds)
+        fresh = yield from trace({k: v[0] for k, v in seeds.items()}, seeds)
     out.sort(key=lambda r: -r.area)
     return out
 

@@ -819,28 +819,10 @@ def trace_slices(view: View, side: int = TRACE_SIDE):
     the worker.  Yields ``(0, total)`` once the words are known, then
     ``(done, total)`` after each word; returns the regions, largest first.
     """
-    from .. import regions as rg
-    from ..symbolic import word_from_impacts
+    from ..regions import iter_window_regions
 
-    e, u = rg._check_window(*trace_window(view))
-    es, us = rg._grid(e, u, side)
-    h1, h2, _ = rg._label_grid(es, us, view.max_iter, 1.0, 0.0)
-    keys, first = np.unique(np.stack([h1.ravel(), h2.ravel()], 1), axis=0, return_index=True)
-    buf = np.empty(view.max_iter, dtype=np.int64)
-    todo = []
-    for idx, (a, b) in zip(first, keys):
-        if a != 0:  # 0: no slide within max_iter
-            i, j = divmod(int(idx), es.size)
-            todo.append((a, b, buf[:rg._itinerary_of(es[j], us[i], 1.0, 0.0, view.max_iter, buf)].copy()))
-    yield 0, len(todo)
-    out = []
-    for a, b, ks in todo:
-        w = word_from_impacts(ks)
-        comps, failures = rg._trace_word(ks, w, e, u, es, us, (h1 == a) & (h2 == b), 1.0, 0.0)
-        out.append(rg.Region(w, e, u, comps, complete=failures == 0, failures=failures))
-        yield len(out), len(todo)
-    out.sort(key=lambda r: -r.area)
-    return out
+    e, u = trace_window(view)
+    return (yield from iter_window_regions(e, u, resolution=side, max_iter=view.max_iter))
 
 
 def _word_at(e, u, window, max_iter, buf, texts):
