@@ -145,59 +145,180 @@ def _impact_number_closed(y, v, e, T):
         return 0
     if e == 0.0:  # plastic impact: it sticks at its first contact
         return SLIDING
-    return _impacts_and_time(v, s, e, T, math.log(e), None)[0]
+    return _impacts_and_time(v, s, e, T, math.log(e), None, 0)[0]
+
+
+# Values kept per pixel by the scan's lanes (``memo``, a float array of
+# _MEMO_SIZE, -1 where nothing is kept): [0] the last impact number k of a
+# closed-form step and [1] its e^k; then _MEMO_SLOTS slots of G(n) (tag n,
+# value) and of e^n, direct-mapped by n mod _MEMO_SLOTS.  An orbit's many-
+# impact steps keep to a narrow band of k (on the paper's grid 99.6 % of the
+# G values and 99.7 % of the powers are found kept with 8 slots, 50 % with
+# the one-per-parity memo this replaces).
+_MEMO_SLOTS = 8
+_MEMO_SIZE = 2 + 4 * _MEMO_SLOTS
+# Tags are floats: only impact numbers below 2^52 are kept (exact as floats)
+_MEMO_N_MAX = 2**52
 
 
 @njit(cache=True, inline="always")
-def _geometric_memo(e, n, log_e, memo):
+def _geometric_memo(e, n, log_e, memo, base):
     """:func:`_geometric`, or with ``memo`` (not None) its value kept from an earlier call.
 
-    ``memo`` is a float array of 6 of one ``e``: ``[n, G(n)]`` for an even
-    and for an odd ``n`` (the two the impact number needs, ``k-1`` and ``k``,
-    have different parities) and ``[k, e^k]`` (:func:`_power_memo`); -1 where
-    nothing is kept.  The kept value is the one :func:`_geometric` computed,
-    so the answer is the same bits either way.  Along an orbit the impact
-    number of the steps with many impacts repeats (99.8 % of those values
-    are found kept on the paper's grid), and this saves their ``expm1``.
+    ``memo``: the values kept for one ``e`` (layout at ``_MEMO_SIZE``).  The
+    kept value is the one :func:`_geometric` computed, so the answer is the
+    same bits either way; it saves the ``expm1``.
     """
-    if memo is None:
+    if memo is None or n >= _MEMO_N_MAX:
         return _geometric(e, n, log_e)
-    slot = 2 * (n & 1)
-    if memo[slot] == n:
-        return memo[slot + 1]
+    slot = 2 + (n & (_MEMO_SLOTS - 1))
+    if memo[base + slot] == n:
+        return memo[base + slot + _MEMO_SLOTS]
     g = _geometric(e, n, log_e)
-    memo[slot] = n
-    memo[slot + 1] = g
+    memo[base + slot] = n
+    memo[base + slot + _MEMO_SLOTS] = g
     return g
 
 
 @njit(cache=True, inline="always")
-def _power_memo(s, e, k, memo):
-    """:func:`_impact_velocity`, with ``e^k`` kept in ``memo[4:6]`` (:func:`_geometric_memo`)."""
+def _power_memo(s, e, k, memo, base):
+    """:func:`_impact_velocity`, with ``e^k`` kept in ``memo`` (:func:`_geometric_memo`);
+    ``k`` and ``e^k`` become the kept impact number ``memo[0:2]`` (from ``base``)."""
     if memo is None:
         return _impact_velocity(s, e, k)
-    if memo[4] != k:
-        memo[4] = k
-        memo[5] = math.pow(e, float(k))
-    return memo[5] * s
+    if k >= _MEMO_N_MAX:
+        memo[base + 0] = -1.0
+        return _impact_velocity(s, e, k)
+    slot = 2 + 2 * _MEMO_SLOTS + (k & (_MEMO_SLOTS - 1))
+    if memo[base + slot] != k:
+        memo[base + slot] = k
+        memo[base + slot + _MEMO_SLOTS] = math.pow(e, float(k))
+    p = memo[base + slot + _MEMO_SLOTS]
+    memo[base + 0] = k
+    memo[base + 1] = p
+    return p * s
 
 
 @njit(cache=True, inline="always")
-def _impact_time_memo(v, s, e, k, log_e, memo):
+def _impact_time_memo(v, s, e, k, log_e, memo, base):
     """:func:`_impact_time_log` through :func:`_geometric_memo` (the same operations)."""
-    return v + s + 2.0 * e * s * _geometric_memo(e, k - 1, log_e, memo)
+    return v + s + 2.0 * e * s * _geometric_memo(e, k - 1, log_e, memo, base)
+
+
+# Bounds of the kept-k shortcut (_impacts_kept): the speed e^(k+2) s of a
+# late bounce against the size of the impact times, and e^(k+3) |log e|, must
+# exceed this; and k at most _KEPT_K_MAX.  The proof needs 2^-45 and 2^-12.
+_KEPT_MARGIN = 2.0**-40
+_KEPT_K_MAX = 2.0**20
 
 
 @njit(cache=True)
-def _impacts_and_time(v, s, e, T, log_e, memo):
+def _impacts_and_time(v, s, e, T, log_e, memo, base):
     """The impact number ``k`` of :func:`_impact_number_closed` and ``t_k``, given
     ``s``, ``log_e = log(e)``, ``e > 0`` and a first impact before the edge
     (``v + s <= T``); ``(SLIDING, 0)`` where the logarithm's argument is not
     positive.  ``t_k`` is the value :func:`_impact_time` gives: the one the
     correction loop computed for the final ``k`` when it did, so it is not
     computed twice.  ``memo``: None, or the values kept for this ``e``
-    (:func:`_geometric_memo`).
+    (:func:`_geometric_memo`); with a memo, the impact number kept in it is
+    tried first (:func:`_impacts_kept`), which gives the same answer where
+    it answers at all.
     """
+    if memo is not None:
+        k, t = _impacts_kept(v, s, e, T, log_e, memo, base)
+        if k > 0:
+            return k, t
+        k, t = _impacts_and_time_log(v, s, e, T, log_e, memo, base)
+        if k >= 3:  # keep what the kept path will ask for next time
+            for n in range(k - 3, k + 3):
+                _geometric_memo(e, n, log_e, memo, base)
+        return k, t
+    return _impacts_and_time_log(v, s, e, T, log_e, memo, base)
+
+
+@njit(cache=True, inline="always")
+def _kept_g(n, memo, base):
+    """``(G(n), found)``: the value kept for ``n`` in ``memo``'s slots (:func:`_geometric_memo`)."""
+    slot = 2 + (n & (_MEMO_SLOTS - 1))
+    return memo[base + slot + _MEMO_SLOTS], memo[base + slot] == n
+
+
+@njit(cache=True)
+def _impacts_kept(v, s, e, T, log_e, memo, base):
+    """The answer of :func:`_impacts_and_time_log` without its logarithm, or ``(0, 0)``.
+
+    The impact number ``k`` kept in ``memo[0]`` (the last one of this pixel's
+    closed-form steps, with ``e^k`` in ``memo[1]``; indices from ``base``) and its neighbours
+    ``k - 1`` and ``k + 1`` are tried, without a branch: ``j`` among them
+    with ``tau(j) <= T < tau(j+1)`` (``tau``: the computed impact times of
+    :func:`_impact_time_memo`, the ones the correction loop compares, from
+    the values ``G(k-2) .. G(k+1)`` kept in ``memo``) is returned with
+    ``tau(j)``, provided ``3 <= k <= 2^20``, ``e^(k+2) s >= 2^-40 (T + |v| + s)``
+    and ``e^(k+3) |log e| >= 2^-40``.  Otherwise (or when a value is not
+    kept) ``(0, 0)``, and the caller takes the logarithm.
+
+    Why it is the same answer (exact arithmetic on the floats v, s, e, T,
+    eps = 2^-53; the error bounds of expm1, log1p, log and pow are an ulp;
+    the bounds above imply ``e^(j+1) s >= 2^-40 (T + |v| + s)`` and
+    ``e^(j+2) |log e| >= 2^-40``):
+
+    1. Every computed time is close: for the i the correction loop can
+       visit (within 7 of j), ``|tau(i) - t*(i)| <= 2^8 eps (T + |v| + s)``
+       = ``E``, with ``t*(i) = v + s + 2 e s (1 - e^(i-1))/(1-e)`` exact
+       (``expm1`` of ``(i-1) log e`` has a relative error of at most 3 eps from
+       its argument, as ``x e^x/(1 - e^x) <= 1``, and 2 eps of its own).
+    2. The gaps are wide: ``t*(i+1) - t*(i) = 2 e^i s``, and
+       ``e^(j+1) s >= 2^-40 (...) > E``.  So from ``tau(j) <= T < tau(j+1)``,
+       ``tau(i) <= T`` for every ``i < j`` and ``tau(i) > T`` for every
+       ``i > j + 1``: along the loop's path the test ``tau(i) <= T`` is the
+       step function ``i <= j``; and the exact impact number ``k*``
+       (``t*(k*) <= T < t*(k*+1)``) is ``j - 1``, ``j`` or ``j + 1``.
+    3. The logarithm's start is close: ``k* = floor(L*)``,
+       ``L* = log(1 - q*)/log e`` with ``1 - q* = e^(L*) >= e^(j+2)``.  The
+       computed ``q`` has a relative error of at most 5 eps, so the computed
+       ``L`` is within ``6 eps L* + 5.1 eps / ((1 - q*) |log e|)`` of ``L*``:
+       below ``1.4e-9 + 6e-4`` by ``j <= 2^20 + 1`` and
+       ``e^(j+2) |log e| >= 2^-40``.  So the loop starts within 2 of ``j``
+       (the clamp to ``[1, ...]`` only moves it towards ``j >= 1``), and
+       ``q < 1``.
+    4. The loop of :func:`_impacts_and_time_log` moves one step per pass
+       towards the step of the function in 2 and stops there: from a start
+       within 3 of ``j`` its four passes end at ``j``.
+
+    ``tests/test_kernel_paths.py`` compares the two on millions of states,
+    with kept numbers right, one off and far off, near e = 1 and near the
+    bounds.
+    """
+    kf = memo[base + 0]
+    if not (kf >= 3.0 and kf <= _KEPT_K_MAX):  # nothing kept (-1), or out of the bounds
+        return 0, 0.0
+    k = int(kf)
+    gm, f0 = _kept_g(k - 2, memo, base)
+    g0, f1 = _kept_g(k - 1, memo, base)
+    g1, f2 = _kept_g(k, memo, base)
+    g2, f3 = _kept_g(k + 1, memo, base)
+    big = memo[base + 1] * e * e
+    ok = (f0 and f1 and f2 and f3 and big * s >= _KEPT_MARGIN * (T + abs(v) + s)
+          and big * e * (-log_e) >= _KEPT_MARGIN)
+    # the operations of _impact_time_memo: (v + s) + ((2 e) s) G
+    a = v + s
+    b = 2.0 * e * s
+    tm = a + b * gm
+    t0 = a + b * g0
+    t1 = a + b * g1
+    t2 = a + b * g2
+    cm = tm <= T
+    c0 = t0 <= T
+    c1 = t1 <= T
+    c2 = t2 <= T
+    j = k if (c0 and not c1) else (k - 1 if (cm and not c0) else (k + 1 if (c1 and not c2) else 0))
+    t = t0 if j == k else (tm if j == k - 1 else t1)
+    return (j, t) if ok else (0, 0.0)
+
+
+@njit(cache=True)
+def _impacts_and_time_log(v, s, e, T, log_e, memo, base):
+    """:func:`_impacts_and_time` by the logarithm of Prop. 2.2 and the correction loop."""
     q = (1.0 - e) * ((T - v + s) / (2.0 * s))
     if q >= 1.0:
         return SLIDING, 0.0
@@ -209,18 +330,18 @@ def _impacts_and_time(v, s, e, T, log_e, memo):
     known, t_known = 0, 0.0  # the last impact time computed, and its index
     for _ in range(4):
         if k > 1:
-            t = _impact_time_memo(v, s, e, k, log_e, memo)
+            t = _impact_time_memo(v, s, e, k, log_e, memo, base)
             known, t_known = k, t
             if t > T:
                 k -= 1
                 continue
-        t = _impact_time_memo(v, s, e, k + 1, log_e, memo)
+        t = _impact_time_memo(v, s, e, k + 1, log_e, memo, base)
         known, t_known = k + 1, t
         if t <= T:
             k += 1
         else:
             break
-    return k, (t_known if known == k else _impact_time_memo(v, s, e, k, log_e, memo))
+    return k, (t_known if known == k else _impact_time_memo(v, s, e, k, log_e, memo, base))
 
 
 @njit(cache=True)
@@ -232,19 +353,20 @@ def _step_closed(y, v, e, T, ratio):
     impact-by-impact loop of ``tests/naive.py`` and against a 60-digit
     reference (``tests/test_precision.py``).
     """
-    return _step_closed_log(y, v, e, T, ratio, math.log(e) if e > 0.0 else -math.inf, None)
+    return _step_closed_log(y, v, e, T, ratio, math.log(e) if e > 0.0 else -math.inf, None, 0)
 
 
 @njit(cache=True)
-def _step_closed_log(y, v, e, T, ratio, log_e, memo):
+def _step_closed_log(y, v, e, T, ratio, log_e, memo, base):
     """:func:`_step_closed` with ``log_e = log(e)`` given (a kernel computes it once per pixel).
 
     The same operations on the same values, so the same bits, with ``t_k``
     taken from the correction loop of the impact number
     (:func:`_impacts_and_time`) instead of computed again, and with
-    ``memo`` (None, or an array of 6 kept for this ``e``, -1 when new) the
-    values ``expm1`` and ``pow`` gave at the same impact numbers before
-    (:func:`_geometric_memo`).
+    ``memo`` (None, or an array of ``_MEMO_SIZE`` kept for this ``e``, -1
+    when new) the values ``expm1`` and ``pow`` gave at the same impact
+    numbers before (:func:`_geometric_memo`) and the last impact number,
+    tried first (:func:`_impacts_kept`).
     """
     if _slides(y, v, T, ratio):
         return 1.0, 0.0, SLIDING
@@ -253,10 +375,10 @@ def _step_closed_log(y, v, e, T, ratio, log_e, memo):
         return y + v * T - 0.5 * T * T + 1.0, v - T, 0
     if e == 0.0:  # plastic impact: it sticks at its first contact
         return 1.0, 0.0, SLIDING
-    k, tk = _impacts_and_time(v, s, e, T, log_e, memo)
+    k, tk = _impacts_and_time(v, s, e, T, log_e, memo, base)
     if k == SLIDING:  # rounding at the boundary of (2.4)
         return 1.0, 0.0, SLIDING
-    vk = _power_memo(s, e, k, memo)
+    vk = _power_memo(s, e, k, memo, base)
     # t_k <= T < t_{k+1} = t_k + 2 v_k up to the rounding of t_k and v_k (a
     # few ulp of T): the clamp keeps that rounding from putting the ball a few
     # ulp below the edge; it moves d by no more than the error of t_k
