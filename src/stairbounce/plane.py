@@ -255,6 +255,8 @@ _CHUNK_MAX = 1024
 # Units of parallel work per thread, and the fewest pixels in one (_chunking)
 _UNITS_PER_THREAD = 4
 _UNIT_MIN = 4096
+# the counting continuation of _run_unit takes impacts two at a time, 2-3, 4-5, ...
+assert _COUNTED_IMPACTS % 2 == 0
 # Rows of the lane state block of _run_chunk (one float64 row of LANES per field)
 _Y, _V, _E, _T, _R, _H, _TS, _WS, _LOGE = range(9)
 # and of its integer block
@@ -481,9 +483,11 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
         if nmore > 0:
             # impacts 2, 3, ... counted on along t += 2w, w *= e as model._step
             # does, up to its _COUNTED_IMPACTS; past that, its closed form
-            k = 1
+            # two impacts per pass (k and k + 1): the same operations as one
+            # at a time, half the passes over the lanes
+            k = 0
             while nmore > 0:
-                k += 1
+                k += 2
                 if k == _COUNTED_IMPACTS:
                     # phase 4: impacts 2 to 7
                     for l in range(L):
@@ -498,23 +502,31 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                 for l in range(L):
                     m = MORE[l]
                     T = TT[l]
-                    t = TS[l] + 2.0 * WS[l]
-                    w = WS[l] * E[l]
-                    nxt = t + 2.0 * w <= T
-                    last = m if not nxt else 0
+                    e = E[l]
+                    ta = TS[l] + 2.0 * WS[l]  # impact k
+                    wa = WS[l] * e
+                    tb = ta + 2.0 * wa  # impact k + 1
+                    wb = wa * e
+                    nxa = tb <= T
+                    nxb = tb + 2.0 * wb <= T
+                    lasta = m if not nxa else 0
+                    lastb = m if (nxa and not nxb) else 0
+                    last = lasta | lastb
+                    t = ta if lasta else tb
+                    w = wa if lasta else wb
                     d = T - t
                     Y[l] = (-0.5 * d * d + w * d + 1.0) if last else Y[l]
                     V[l] = (w - d) if last else V[l]
                     n = N[l] + last
                     N[l] = n
-                    IMP[l] += k if last else 0
+                    IMP[l] += k if lasta else (k + 1 if lastb else 0)
                     JMP[l] += last
                     f = last if n >= max_iter else 0
                     FIN[l] |= f
                     nfin += f
-                    TS[l] = t
-                    WS[l] = w
-                    m = m if nxt else 0
+                    TS[l] = tb
+                    WS[l] = wb
+                    m = m if (nxa and nxb) else 0
                     MORE[l] = m
                     nmore += m
                 # phase 4: impacts 2 to 7
