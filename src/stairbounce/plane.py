@@ -259,7 +259,8 @@ _UNIT_MIN = 4096
 assert _COUNTED_IMPACTS % 2 == 0
 # Rows of the lane state block of _run_chunk (one float64 row of LANES per field)
 _Y, _V, _E, _T, _R, _H, _TS, _WS, _LOGE = range(9)
-# and of its integer block
+# and of its integer block (_N: the lockstep step the lane's pixel, or its
+# period, started after; its step count is the current lockstep step less that)
 _N, _IMP, _JMP, _MORE, _LIVE, _PER, _PIX, _FIN, _SL = range(9)
 
 
@@ -344,7 +345,7 @@ def _list_chunk(es, us, grid, cols, rows, prune, energy0, start, stop, todo, F,
 
 
 @njit(cache=True, inline="always")
-def _load(l, q, todo, F, y0, v0, from_rest, S, I):
+def _load(l, q, todo, F, y0, v0, from_rest, S, I, g):
     """Lane ``l`` takes listed pixel ``q`` (:func:`_list_chunk`), from ``(y0, v0)``."""
     S[_E, l] = F[0, q]
     S[_T, l] = F[1, q]
@@ -355,7 +356,7 @@ def _load(l, q, todo, F, y0, v0, from_rest, S, I):
     S[_V, l] = 0.0 if from_rest else v0
     I[_PER, l] = 1 if from_rest else 0
     I[_PIX, l] = todo[q]
-    I[_N, l] = 0
+    I[_N, l] = g  # the lockstep step the pixel starts after (steps done: g' - g after step g')
     I[_IMP, l] = 0
     I[_JMP, l] = 0
     I[_LIVE, l] = 1
@@ -380,7 +381,7 @@ def _take(l, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune, y
         pos[0] = 0
         pos[1] = n
         pos[3] += pruned
-    _load(l, pos[0], todo, F, y0, v0, from_rest, S, I)
+    _load(l, pos[0], todo, F, y0, v0, from_rest, S, I, pos[4])
     pos[0] += 1
     return True
 
@@ -406,7 +407,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     from_rest = y0 == 1.0 and v0 == 0.0
     todo = np.empty(chunk, np.int64)
     F = np.empty((4, chunk))
-    pos = np.zeros(4, np.int64)
+    pos = np.zeros(5, np.int64)  # (next listed, listed, next segment, pruned, lockstep step)
     # lane state: one block of float rows and one of integer rows (row indices
     # _Y.. and _N..), so that the compiler sees the rows cannot overlap
     S = np.zeros((9, L))
@@ -428,7 +429,12 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     HALF = S[_H]
     TS = S[_TS]
     WS = S[_WS]
+    # every live lane finishes exactly one map step per lockstep step (the
+    # common step, the passes or the closed form), so a lane's step count is
+    # the lockstep step g less the one its pixel (or its period) started
+    # after, kept in N: no count is stored per step
     N = I[_N]
+    g = 0
     IMP = I[_IMP]
     JMP = I[_JMP]
     MORE = I[_MORE]
@@ -439,6 +445,8 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     while active > 0:
         if halted(halt):
             return pos[3]
+        g += 1
+        last_start = g - max_iter  # a pixel that started after this step or before has done max_iter
         # the common step (model._step up to its first impact) and its
         # bookkeeping, vectorised over lanes; a lane with a second impact
         # keeps its state and goes on below
@@ -470,13 +478,13 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
             m = live if more else 0
             MORE[l] = m
             nmore += m
-            done = 0 if more else 1
-            n = N[l] + done
-            N[l] = n
             IMP[l] += 0 if (more or slide or fly) else 1
             JMP[l] += 0 if (more or fly) else 1
             SL[l] = 1 if slide else 0
-            f = live if (slide or (done and n >= max_iter)) else 0
+            # every live lane ends a step in this lockstep step (here, in
+            # the passes or in the closed form): its last one when it slides
+            # or reaches max_iter
+            f = live if (slide or N[l] <= last_start) else 0
             FIN[l] = f
             nfin += f
         # phase 2 if active == LANES else 3: the common step, all lanes live or a tail
@@ -492,10 +500,10 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                     # phase 4: impacts 2 to 7
                     for l in range(L):
                         if MORE[l]:
-                            r = _closed(l, max_iter, S, I, M)
-                            FIN[l] = 1 if r > 0 else 0
-                            SL[l] = 1 if r == 2 else 0
-                            nfin += FIN[l]
+                            if _closed(l, S, I, M):  # it slid
+                                SL[l] = 1
+                                nfin += 1 - FIN[l]
+                                FIN[l] = 1
                     # phase 5: the closed form past _COUNTED_IMPACTS
                     break
                 nmore = 0
@@ -517,13 +525,8 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                     d = T - t
                     Y[l] = (-0.5 * d * d + w * d + 1.0) if last else Y[l]
                     V[l] = (w - d) if last else V[l]
-                    n = N[l] + last
-                    N[l] = n
                     IMP[l] += k if lasta else (k + 1 if lastb else 0)
                     JMP[l] += last
-                    f = last if n >= max_iter else 0
-                    FIN[l] |= f
-                    nfin += f
                     TS[l] = tb
                     WS[l] = wb
                     m = m if (nxa and nxb) else 0
@@ -532,6 +535,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                 # phase 4: impacts 2 to 7
         if nfin == 0:
             continue
+        pos[4] = g  # a lane reloaded now starts after this step
         for l in range(L):
             f = FIN[l]
             if f == 0:
@@ -541,11 +545,11 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
             if sl and I[_PER, l] == 0:
                 # end of the transient: the ball leaves the edge at (1, 0)
                 I[_PER, l] = 1
-                N[l] = 0
+                N[l] = g
                 IMP[l] = 0
                 JMP[l] = 0
                 continue
-            _store(I[_PIX, l], N[l] if sl else 0, IMP[l], JMP[l],
+            _store(I[_PIX, l], g - N[l] if sl else 0, IMP[l], JMP[l],
                    status, word_length, jumps, period, impacts)
             if not _take(l, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune,
                          y0, v0, from_rest, S, I, status, word_length, jumps, period, impacts):
@@ -556,11 +560,11 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
 
 
 @njit(cache=True)
-def _closed(l, max_iter, S, I, M):
+def _closed(l, S, I, M):
     """Lane ``l``'s step by the closed form of ``model._step`` (past
     ``_COUNTED_IMPACTS`` impacts), from its state before the step, and its
-    bookkeeping as in the lane loops.  Returns 2 when it slid, 1 when the
-    pixel reached max_iter, else 0.  ``M[l * _MEMO_SIZE:][:_MEMO_SIZE]``: the
+    bookkeeping as in the lane loops.  Returns whether it slid (a pixel's
+    max_iter is told in the common step).  ``M[l * _MEMO_SIZE:][:_MEMO_SIZE]``: the
     values of ``expm1`` and ``pow`` and the impact number kept for the lane's
     pixel (``model._geometric_memo``), indexed in place (a view per call
     costs about 30 cycles)."""
@@ -574,13 +578,10 @@ def _closed(l, max_iter, S, I, M):
     S[_Y, l] = yn
     S[_V, l] = vn
     I[_MORE, l] = 0
-    I[_N, l] += 1
     if k > 0:
         I[_IMP, l] += k
     I[_JMP, l] += 1
-    if k == SLIDING:
-        return 2
-    return 1 if I[_N, l] >= max_iter else 0
+    return k == SLIDING
 
 
 @njit(cache=True, parallel=True, nogil=True)
