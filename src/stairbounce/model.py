@@ -375,6 +375,15 @@ def _step_closed_log(y, v, e, T, ratio, log_e, memo, base):
         return y + v * T - 0.5 * T * T + 1.0, v - T, 0
     if e == 0.0:  # plastic impact: it sticks at its first contact
         return 1.0, 0.0, SLIDING
+    return _step_closed_bounce(v, s, e, T, log_e, memo, base)
+
+
+@njit(cache=True, inline="always")
+def _step_closed_bounce(v, s, e, T, log_e, memo, base):
+    """:func:`_step_closed_log` past its tests: a step that does not slide by
+    (2.4), with its first impact before the edge and ``e > 0``; ``s`` is
+    ``sqrt(v^2 + 2y)`` as computed there (a scan lane has it from its common
+    step)."""
     k, tk = _impacts_and_time(v, s, e, T, log_e, memo, base)
     if k == SLIDING:  # rounding at the boundary of (2.4)
         return 1.0, 0.0, SLIDING

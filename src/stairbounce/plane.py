@@ -51,7 +51,7 @@ from .model import (
     _finite,
     _slide_or_steps_with,
     _step_closed,
-    _step_closed_log,
+    _step_closed_bounce,
     check_count,
     check_state,
 )
@@ -258,7 +258,7 @@ _UNIT_MIN = 4096
 # the counting continuation of _run_unit takes impacts two at a time, 2-3, 4-5, ...
 assert _COUNTED_IMPACTS % 2 == 0
 # Rows of the lane state block of _run_chunk (one float64 row of LANES per field)
-_Y, _V, _E, _T, _R, _H, _TS, _WS, _LOGE = range(9)
+_Y, _V, _E, _T, _R, _H, _TS, _WS, _LOGE, _SS = range(10)
 # and of its integer block (_N: the lockstep step the lane's pixel, or its
 # period, started after; its step count is the current lockstep step less that)
 _N, _IMP, _JMP, _MORE, _LIVE, _PER, _PIX, _FIN, _SL = range(9)
@@ -410,7 +410,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     pos = np.zeros(5, np.int64)  # (next listed, listed, next segment, pruned, lockstep step)
     # lane state: one block of float rows and one of integer rows (row indices
     # _Y.. and _N..), so that the compiler sees the rows cannot overlap
-    S = np.zeros((9, L))
+    S = np.zeros((10, L))
     S[_E] = 0.5
     S[_T] = 1.0
     S[_R] = 3.0
@@ -428,6 +428,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     RATIO = S[_R]
     HALF = S[_H]
     TS = S[_TS]
+    SS = S[_SS]
     WS = S[_WS]
     # every live lane finishes exactly one map step per lockstep step (the
     # common step, the passes or the closed form), so a lane's step count is
@@ -472,8 +473,8 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
             vn = 0.0 if slide else (v_fly if fly else v_bounce)
             Y[l] = y if more else yn
             V[l] = v if more else vn
-            TS[l] = t
             WS[l] = w
+            SS[l] = s  # the passes (t = v + s) and the closed form go on from it
             live = LIVE[l]
             m = live if more else 0
             MORE[l] = m
@@ -511,7 +512,8 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                     m = MORE[l]
                     T = TT[l]
                     e = E[l]
-                    ta = TS[l] + 2.0 * WS[l]  # impact k
+                    t1 = (V[l] + SS[l]) if k == 2 else TS[l]  # the first impact as the common step found it
+                    ta = t1 + 2.0 * WS[l]  # impact k
                     wa = WS[l] * e
                     tb = ta + 2.0 * wa  # impact k + 1
                     wb = wa * e
@@ -574,7 +576,8 @@ def _closed(l, S, I, M):
         S[_LOGE, l] = math.log(e) if e > 0.0 else -math.inf
         for i in range(base, base + _MEMO_SIZE):
             M[i] = -1.0
-    yn, vn, k = _step_closed_log(S[_Y, l], S[_V, l], e, S[_T, l], S[_R, l], S[_LOGE, l], M, base)
+    # a lane past its first impact neither slides by (2.4) nor flies over, and has e > 0
+    yn, vn, k = _step_closed_bounce(S[_V, l], S[_SS, l], e, S[_T, l], S[_LOGE, l], M, base)
     S[_Y, l] = yn
     S[_V, l] = vn
     I[_MORE, l] = 0
