@@ -148,6 +148,8 @@ def test_any_segments_and_units_give_the_pixel_by_pixel_arrays(y0, v0):
     # the window exercises what it is meant to: periods of several steps,
     # pixels that never slide, pruned pixels and steps past 8 impacts
     assert (ref["status"] == 1).any() and (ref["period"] > 5).any()
+    # and pixels answered while listed, sliding on their first step
+    assert ((ref["period"] == 1) & (ref["impacts"] == 0)).sum() > 20
     assert sc.prunable(*np.meshgrid(es, us), y0, v0).any()
     ks = np.concatenate([iterate(1.0, 0.0, e, u, 100)[2] for e in es[::2] for u in us[::2]])
     assert (ks >= 8).sum() > 50

@@ -290,17 +290,25 @@ def _grid_factors(es, us, energy0):
 
 
 @njit(cache=True)
-def _list_chunk(es, us, grid, cols, rows, prune, energy0, start, stop, todo, F,
+def _list_chunk(es, us, grid, cols, rows, prune, y0, v0, start, stop, todo, F,
                 status, word_length, jumps, period, impacts):
     """The pixels ``start..stop-1`` that need iterating, listed; the others answered.
 
     With ``prune``, a pixel that :func:`_never_slides` proves gets status 1
     here (by its row and column factors on a grid, :func:`_prune_pixel`).
-    The others go to ``todo[:n]`` (flat index) with their constants in
-    ``F[0:4, :n]`` (e, T, ratio, 0.5 T T).  Returns ``(n, pruned)``.
+    A pixel whose first step slides, from ``(y0, v0)`` and from ``(1, 0)``
+    (the sliding test (2.4) of ``model._step``, the same operations as a
+    lane's common step), is answered here too: period 1, no finite impact,
+    one letter (the whole ``(1, 0^inf)`` tongue of Theorem 3.1 on the
+    paper's grid, 18 % of its pixels).  The others go to ``todo[:n]`` (flat
+    index) with their constants in ``F[0:4, :n]`` (e, T, ratio, 0.5 T T).
+    Returns ``(n, pruned)``.
     """
     n = 0
     pruned = 0
+    energy0 = y0 + v0 * v0
+    s0 = math.sqrt(v0 * v0 + 2.0 * y0)  # the first step's s from the start
+    s1 = math.sqrt(0.0 * 0.0 + 2.0 * 1.0)  # and from (1, 0), as model._step computes them
     if grid:
         ne = es.shape[0]
         i = start // ne
@@ -314,9 +322,12 @@ def _list_chunk(es, us, grid, cols, rows, prune, energy0, start, stop, todo, F,
             half = rows[3, i]
             for jj in range(j, jend):
                 q = p + jj - j
+                ratio = cols[1, jj]
                 if prune and _prune_pixel(T, TT, a, cols[2, jj], cols[3, jj], cols[4, jj]):
                     _store(q, 0, 0, 0, status, word_length, jumps, period, impacts)
                     pruned += 1
+                elif v0 + ratio * s0 <= T and 0.0 + ratio * s1 <= T:
+                    _store(q, 1, 0, 1, status, word_length, jumps, period, impacts)
                 else:
                     todo[n] = q
                     F[0, n] = cols[0, jj]
@@ -334,6 +345,8 @@ def _list_chunk(es, us, grid, cols, rows, prune, energy0, start, stop, todo, F,
             if prune and _never_slides(e, T, ratio, energy0):
                 _store(q, 0, 0, 0, status, word_length, jumps, period, impacts)
                 pruned += 1
+            elif v0 + ratio * s0 <= T and 0.0 + ratio * s1 <= T:
+                _store(q, 1, 0, 1, status, word_length, jumps, period, impacts)
             else:
                 todo[n] = q
                 F[0, n] = e
@@ -376,7 +389,7 @@ def _take(l, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune, y
             return False
         start = segs[pos[2]] * chunk
         pos[2] += 1
-        n, pruned = _list_chunk(es, us, grid, cols, rows, prune, y0 + v0 * v0, start, min(start + chunk, npix),
+        n, pruned = _list_chunk(es, us, grid, cols, rows, prune, y0, v0, start, min(start + chunk, npix),
                                 todo, F, status, word_length, jumps, period, impacts)
         pos[0] = 0
         pos[1] = n
