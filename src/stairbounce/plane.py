@@ -412,10 +412,12 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     the end of the unit.  Each pixel sees exactly the sequence of operations
     of ``_slide_or_steps`` with ``model._step``.  Returns the number of
     pixels pruned.  Returns early, leaving pixels unwritten, once ``halt[0]``
-    is set (Ctrl-C, :mod:`stairbounce._interrupt`); it is read once per
-    lockstep step.
+    is set (Ctrl-C, :mod:`stairbounce._interrupt`); it is read before the
+    first segment is listed and then once per lockstep step.
     """
     L = LANES
+    if halted(halt):  # before listing: a segment's listing writes the pixels it answers
+        return 0
     # phase start (the "# phase" comments mark where benchmarks/scan_phases.py times phases)
     from_rest = y0 == 1.0 and v0 == 0.0
     todo = np.empty(chunk, np.int64)
