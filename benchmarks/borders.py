@@ -13,7 +13,10 @@ Cases (max_iter 1000):
    kernel with plain midpoint bisection (``secant=False``) for the trial count.
 2. The Fig. 5e window at big x big: ``border_points`` and ``word_table`` (given
    the points) times.
-3. The kinds' shares on the border of the sliding region in the Fig. 6 and 7
+3. ``outcome="sliding"`` on the paper grid and the Fig. 6 and 7 windows
+   (400 x 400): its bisection in rounds on the scan's kernel against the
+   per-pair kernel (``lanes=False``), the rows checked equal.
+4. The kinds' shares on the border of the sliding region in the Fig. 6 and 7
    windows (400 x 400), for the note: by crossings (``outcome="sliding"``)
    and among the word-border points that have a non-sliding side.
 
@@ -105,11 +108,30 @@ def main(argv=None):
           f"{tab.sizes['p']} periods")
 
     t_sl, q = best(lambda: sb.border_points(ds, outcome="sliding"), 1)
-    print(f"   border_points(outcome='sliding') {t_sl:.3f} s for {q.sizes['point']} crossings")
-    print("\n3. kinds on the border of the sliding region (400 x 400), by crossings "
+    print(f"\n3. border_points(outcome='sliding'), paper grid {n_e} x {n_u}: {t_sl:.3f} s for "
+          f"{q.sizes['point']} crossings (given the scan); its bisection, rounds on the scan's kernel "
+          f"against the per-pair kernel (model._step per trial), the same rows checked:")
+    m = int(400 * scale)
+    cases = {"paper grid": ds, **{name: sb.scan(e=(*e, m), u=(*u, m), max_iter=1000)
+                                  for name, (e, u) in WINDOWS.items()}}
+    for name, dsc in cases.items():
+        es, us, period, max_iter = borders._grid_input(dsc)
+        a, b, axis = borders._pairs(period, us.size, es.size, sliding=True)
+        t_pair, (f1, o1) = best(lambda: borders._run_pairs(es, us, period, a, b, axis, max_iter, None,
+                                                            sliding=True, lanes=False), args.repeat)
+        t_round, (f2, o2) = best(lambda: borders._sliding_rounds(es, us, period, a, b, axis, max_iter,
+                                                                  None), args.repeat)
+        same = np.array_equal(f1, f2) and np.array_equal(o1, o2)
+        steps = o2[:, 10].sum()
+        print(f"   {name}: {a.size} crossings, {steps / 1e6:.1f} M trial steps: per pair {t_pair:.3f} s, "
+              f"rounds {t_round:.3f} s ({steps / t_round / 1e6:.0f} M steps/s), x{t_pair / t_round:.2f}; "
+              f"same rows: {same}; border_points takes "
+              f"{'the rounds' if a.size >= borders._ROUND_LANES_MIN else 'the per-pair kernel'}")
+        if not same:
+            raise SystemExit("the rounds' rows differ from the per-pair kernel's")
+    print(f"\n4. kinds on the border of the sliding region ({m} x {m}), by crossings "
           "(outcome='sliding'), and among the word-border points with a side that does not slide:")
     for name, (e, u) in WINDOWS.items():
-        m = int(400 * scale)
         dsw = sb.scan(e=(*e, m), u=(*u, m), max_iter=1000)
         for outcome in ("sliding", "word"):
             q = sb.border_points(dsw, outcome=outcome)

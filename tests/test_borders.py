@@ -464,6 +464,41 @@ def test_outcome_sliding_bisects_the_crossings_of_the_sliding_region():
         sb.border_points(ds, outcome="status")
 
 
+@pytest.mark.parametrize("lanes_min", [0, 200, 10**9])
+def test_sliding_rounds_on_the_scan_kernel_give_the_per_pair_rows(monkeypatch, lanes_min):
+    # outcome="sliding" halves every bracket in a round and decides the
+    # midpoints with the scan's kernel (lanes in lockstep, pruning; a round
+    # with fewer than _ROUND_LANES_MIN midpoints one orbit per point); the
+    # per-pair kernel decides each by _slide_period (model._step from (1, 0)):
+    # the same brackets, trial and step counts, bit for bit (lanes_min 200:
+    # lanes while 200 or more brackets are open, of FIG5A's 209)
+    monkeypatch.setattr(borders, "_ROUND_LANES_MIN", lanes_min)
+    monkeypatch.setattr(borders, "_ROUND_UNIT_MIN", 64)  # several units, both threads
+    for win in (SMALL, FIG5A, {"e": (0.04, 0.065, 24), "u": (0.92, 0.945, 24)}):
+        ds = sb.scan(**win)
+        es, us, period, max_iter = borders._grid_input(ds)
+        a, b, axis = borders._pairs(period, us.size, es.size, sliding=True)
+        f1, o1 = borders._run_pairs(es, us, period, a, b, axis, max_iter, None, sliding=True,
+                                    lanes=False)
+        calls = []
+        f2, o2 = borders._sliding_rounds(es, us, period, a, b, axis, max_iter,
+                                         lambda d, t: calls.append((d, t)))
+        assert f1.sum() > 20 and np.array_equal(f1, f2) and np.array_equal(o1, o2)
+        done = [d for d, _ in calls]
+        assert done[0] == 0 and done == sorted(done) and done[-1] == calls[-1][1] > 40
+        assert len({t for _, t in calls}) == 1
+    # border_points takes the rounds from _ROUND_LANES_MIN crossings (80 here)
+    got = sb.border_points(ds, outcome="sliding")
+    monkeypatch.setattr(borders, "_ROUND_LANES_MIN", 10**9)
+    assert got.identical(sb.border_points(ds, outcome="sliding")) and got.sizes["point"] == f1.sum()
+    # the last stage reads the halt flag: set, it writes no row
+    out = np.full((a.size, borders._OUT), 7.0)
+    z = np.zeros(a.size, np.int64)
+    x = np.full(a.size, 0.5)
+    borders._finish_sliding(x, x, x, z, z + 1, z, z, f1, out, np.ones(1, np.int64))
+    assert (out == 7.0).all()
+
+
 def test_no_border_of_the_sliding_region_above_corollary_2_1():
     # Corollary 2.1: above u = (1-e)/(2 sqrt(2e)) nothing slides, so the sliding region's
     # border (its crossings, bisected to rounding) lies on or below the curve

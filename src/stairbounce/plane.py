@@ -627,12 +627,14 @@ def _scan_fast(es, us, grid, max_iter, y0, v0, prune, order, chunk,
     return pruned.sum()
 
 
-def _chunking(npix, threads):
+def _chunking(npix, threads, unit_min=_UNIT_MIN):
     """Segment size and the units of :func:`_scan_fast`: ``(chunk, order)``.
 
     A unit's lanes idle only at its end, while its last pixels run (up to
     max_iter steps), so units are few and large: _UNITS_PER_THREAD per thread,
-    at least _UNIT_MIN pixels each.  prange hands each thread a contiguous
+    at least ``unit_min`` pixels each (_UNIT_MIN; the bisection rounds of
+    :mod:`stairbounce.borders` ask for less, to use every thread on a few
+    thousand points).  prange hands each thread a contiguous
     block of units, and the plane is uneven (low u slides in a step or two,
     high u runs to max_iter, above the Corollary 2.1 curve nothing is
     iterated), so unit ``k`` takes segments ``k, k + n, k + 2n, ...`` of the
@@ -641,7 +643,7 @@ def _chunking(npix, threads):
     """
     chunk = int(min(_CHUNK_MAX, max(LANES, -(-npix // (16 * max(threads, 1))))))
     nseg = -(-npix // chunk)
-    units = int(max(1, min(_UNITS_PER_THREAD * max(threads, 1), npix // _UNIT_MIN, nseg)))
+    units = int(max(1, min(_UNITS_PER_THREAD * max(threads, 1), npix // unit_min, nseg)))
     per = -(-nseg // units)
     order = np.full((units, per), -1, np.int64)
     for k in range(units):
@@ -794,12 +796,13 @@ def _check_run(max_iter, y0, v0):
     return max_iter, y0, v0
 
 
-def _run(es, us, grid, max_iter, y0, v0, prune):
+def _run(es, us, grid, max_iter, y0, v0, prune, unit_min=_UNIT_MIN):
     """Allocate flat outputs and run :func:`_scan_fast`; returns them and the
-    number of pixels pruned (the kernel's own count, for tests and benchmarks)."""
+    number of pixels pruned (the kernel's own count, for tests and benchmarks).
+    ``unit_min``: the fewest pixels in a unit of parallel work (:func:`_chunking`)."""
     npix = es.size * us.size if grid else es.size
     out = {k: np.empty(npix, dtype=dt) for k, (dt, _) in _FIELDS.items()}
-    chunk, order = _chunking(npix, numba.get_num_threads())
+    chunk, order = _chunking(npix, numba.get_num_threads(), unit_min)
     pruned = 0
     if npix:
         from ._interrupt import run_kernel

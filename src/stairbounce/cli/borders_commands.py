@@ -111,8 +111,9 @@ def borders_(
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force)
     ds = with_row_progress(description="scan rows", rows=1,
                            run=lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
-    pts = with_row_progress(description="border pairs", rows=1,
-                            run=lambda p: borders.border_points(ds, outcome=outcome, progress=p))
+    # outcome sliding on many crossings reports the bisection's rounds, not pairs
+    pts = with_row_progress(description="border pairs" if outcome == "word" else "bisection",
+                            rows=1, run=lambda p: borders.border_points(ds, outcome=outcome, progress=p))
     if out is not None:
         _write(pts, out, force, "point")
         typer.echo(f"wrote {out}")
