@@ -243,7 +243,9 @@ def _kept_g(n, memo, base):
     return memo[base + slot + _MEMO_SLOTS], memo[base + slot] == n
 
 
-@njit(cache=True)
+# inlined: the scan's lanes call it in a loop of their own (plane._kept_pass),
+# where a call per lane cost more than the work
+@njit(cache=True, inline="always")
 def _impacts_kept(v, s, e, T, log_e, memo, base):
     """The answer of :func:`_impacts_and_time_log` without its logarithm, or ``(0, 0)``.
 
