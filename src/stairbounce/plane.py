@@ -480,23 +480,35 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
             t = v + s
             fly = t > T
             w = e * s
-            more = (t + 2.0 * w <= T) and not fly and not slide
-            d = T - t
-            y_bounce = -0.5 * d * d + w * d + 1.0
-            v_bounce = w - d
+            # impacts 2 and 3 as model._step counts them (t += 2w, w *= e)
+            ta = t + 2.0 * w
+            wa = w * e
+            tb = ta + 2.0 * wa
+            wb = wa * e
+            n2 = ta <= T
+            n3 = tb <= T
+            more = (tb + 2.0 * wb <= T) and not fly and not slide
+            # the last impact before the edge: the first, second or third
+            tl = tb if n3 else (ta if n2 else t)
+            wl = wb if n3 else (wa if n2 else w)
+            kl = 3 if n3 else (2 if n2 else 1)
+            d = T - tl
+            y_bounce = -0.5 * d * d + wl * d + 1.0
+            v_bounce = wl - d
             y_fly = y + v * T - HALF[l] + 1.0
             v_fly = v - T
             yn = 1.0 if slide else (y_fly if fly else y_bounce)
             vn = 0.0 if slide else (v_fly if fly else v_bounce)
             Y[l] = y if more else yn
             V[l] = v if more else vn
-            WS[l] = w
-            SS[l] = s  # the passes (t = v + s) and the closed form go on from it
+            TS[l] = tb  # the passes go on from the third impact
+            WS[l] = wb
+            SS[l] = s  # and the closed form from s
             live = LIVE[l]
             m = live if more else 0
             MORE[l] = m
             nmore += m
-            IMP[l] += 0 if (more or slide or fly) else 1
+            IMP[l] += 0 if (more or slide or fly) else kl
             JMP[l] += 0 if (more or fly) else 1
             SL[l] = 1 if slide else 0
             # every live lane ends a step in this lockstep step (here, in
@@ -507,11 +519,11 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
             nfin += f
         # phase 2 if active == LANES else 3: the common step, all lanes live or a tail
         if nmore > 0:
-            # impacts 2, 3, ... counted on along t += 2w, w *= e as model._step
+            # impacts 4, 5, ... counted on along t += 2w, w *= e as model._step
             # does, up to its _COUNTED_IMPACTS; past that, its closed form
             # two impacts per pass (k and k + 1): the same operations as one
             # at a time, half the passes over the lanes
-            k = 0
+            k = 2
             while nmore > 0:
                 k += 2
                 if k == _COUNTED_IMPACTS:
@@ -530,8 +542,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                     m = MORE[l]
                     T = TT[l]
                     e = E[l]
-                    t1 = (V[l] + SS[l]) if k == 2 else TS[l]  # the first impact as the common step found it
-                    ta = t1 + 2.0 * WS[l]  # impact k
+                    ta = TS[l] + 2.0 * WS[l]  # impact k
                     wa = WS[l] * e
                     tb = ta + 2.0 * wa  # impact k + 1
                     wb = wa * e
