@@ -13,7 +13,7 @@ counter N.  The counters live in the kernel's halt array past ``halt[0]``
 1. listing the first segments (pruning test, pruned pixels stored) and loading the lanes;
 2. the common step and its bookkeeping with all LANES lanes live;
 3. the same in the tail of a unit (fewer live lanes than LANES);
-4. impacts 2 to 7 (the counting continuation);
+4. impacts 4 to 7 (the counting continuation; 2 to 7 before the common step took impacts 2 and 3);
 5. the closed form past ``model._COUNTED_IMPACTS`` impacts (lane by lane);
 6. finished pixels: store, reload, and the listing of later segments.
 
@@ -45,7 +45,7 @@ from numba.extending import intrinsic
 import stairbounce.plane as P
 
 NAMES = {1: "list + first loads", 2: "common step, full lanes", 3: "common step, tail",
-         4: "impacts 2-7", 5: "closed form (>= 8)", 6: "finish, store, reload"}
+         4: "impacts 4-7", 5: "closed form (>= 8)", 6: "finish, store, reload"}
 
 
 @intrinsic

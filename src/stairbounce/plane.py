@@ -465,8 +465,8 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
             return pos[3]
         g += 1
         last_start = g - max_iter  # a pixel that started after this step or before has done max_iter
-        # the common step (model._step up to its first impact) and its
-        # bookkeeping, vectorised over lanes; a lane with a second impact
+        # the common step (model._step up to its third impact) and its
+        # bookkeeping, vectorised over lanes; a lane with a fourth impact
         # keeps its state and goes on below
         nmore = 0
         nfin = 0
@@ -527,7 +527,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
             while nmore > 0:
                 k += 2
                 if k == _COUNTED_IMPACTS:
-                    # phase 4: impacts 2 to 7
+                    # phase 4: impacts 4 to 7
                     _kept_pass(S, I, M)  # most closed-form steps; _closed the rest
                     for l in range(L):
                         if MORE[l]:
@@ -563,7 +563,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                     m = m if (nxa and nxb) else 0
                     MORE[l] = m
                     nmore += m
-                # phase 4: impacts 2 to 7
+                # phase 4: impacts 4 to 7
         if nfin == 0:
             continue
         pos[4] = g  # a lane reloaded now starts after this step
