@@ -889,10 +889,11 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, outcom
     does not shrink the bracket by half), about 24 trial points per border
     point on the paper's grid instead of 46.  ``outcome="sliding"`` bisects
     at midpoints, a trial on the non-sliding side costing max_iter steps:
-    every bracket is halved in the same round, and each round's midpoints are
-    decided together by the scan's kernel (LANES points in lockstep, pruned by
-    Corollary 2.1), bit for bit the answers of the per-pair loop (1.5-1.9x
-    faster on the paper's grid and the Fig. 5e, 6 and 7 windows).
+    from 1024 crossings every bracket is halved in the same round, and each
+    round's midpoints are decided together by the scan's kernel (LANES points
+    in lockstep, pruned by Corollary 2.1), bit for bit the answers of the
+    per-pair loop (x1.4-1.9 faster on the paper's grid and the Fig. 6 and 7
+    windows, ``benchmarks/README.md``).
 
     Parameters
     ----------
