@@ -23,11 +23,13 @@ import pytest
 from stairbounce import plane as sc
 from stairbounce.model import (
     _MEMO_SIZE,
+    _MEMO_SLOTS,
     _constants,
     _geometric_memo,
     _impact_time_log,
     _impacts_and_time_log,
     _impacts_kept,
+    _power_slot,
     _slide_or_steps,
     _step_closed,
     _step_closed_log,
@@ -266,7 +268,7 @@ def _pass_against_closed(S0, I0, M0, blocks, counts):
 
 
 def test_the_lanes_kept_pass_is_the_closed_form_lane_by_lane():
-    # plane._kept_pass answers, branch-free over the lanes, the closed-form
+    # plane._kept_pass answers, in one loop over the lanes, the closed-form
     # steps whose impact number the kept one gives (model._impacts_kept) with
     # e^j kept too, and leaves the rest to plane._closed; blocks of 32 lanes
     # with kept numbers right, one or three off, powers kept or not, log(e)
@@ -302,9 +304,8 @@ def test_the_lanes_kept_pass_is_the_closed_form_lane_by_lane():
         memo[1] = math.pow(e[i], float(kk))
         if rng.uniform() < 0.8:  # the powers of the neighbours kept too
             for m in (kk - 1, kk, kk + 1):
-                slot = 2 + 2 * 8 + (m & 7)
-                memo[slot] = m
-                memo[slot + 8] = math.pow(e[i], float(m))
+                memo[_power_slot(m)] = m
+                memo[_power_slot(m) + _MEMO_SLOTS] = math.pow(e[i], float(m))
     counts = np.zeros(3, np.int64)
     _pass_against_closed(S0, I0, M0, blocks, counts)
     assert counts[2] == 0, counts

@@ -652,7 +652,7 @@ def _run_pairs(es, us, period, a, b, axis, max_iter, progress, secant=True, slid
 # units of at least this many points (plane._chunking): both threads work on
 # the few thousand crossings of a picture.  Under _ROUND_LANES_MIN crossings
 # the per-pair kernel is faster (benchmarks/borders.py: the rounds x0.81-0.97
-# at 400-950 crossings, x1.5-1.9 from 2860), and a round with fewer midpoints
+# at 400-950 crossings, x1.4-1.9 from 2860), and a round with fewer midpoints
 # (its last ones) runs one orbit per point (_slide_periods)
 _ROUND_UNIT_MIN = 512
 _ROUND_LANES_MIN = 2 * _ROUND_UNIT_MIN

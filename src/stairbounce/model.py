@@ -181,6 +181,12 @@ def _geometric_memo(e, n, log_e, memo, base):
 
 
 @njit(cache=True, inline="always")
+def _power_slot(k):
+    """Where ``memo`` keeps ``k`` (a tag) for ``e^k`` (``_MEMO_SLOTS`` further on)."""
+    return 2 + 2 * _MEMO_SLOTS + (k & (_MEMO_SLOTS - 1))
+
+
+@njit(cache=True, inline="always")
 def _power_memo(s, e, k, memo, base):
     """:func:`_impact_velocity`, with ``e^k`` kept in ``memo`` (:func:`_geometric_memo`);
     ``k`` and ``e^k`` become the kept impact number ``memo[0:2]`` (from ``base``)."""
@@ -189,7 +195,7 @@ def _power_memo(s, e, k, memo, base):
     if k >= _MEMO_N_MAX:
         memo[base + 0] = -1.0
         return _impact_velocity(s, e, k)
-    slot = 2 + 2 * _MEMO_SLOTS + (k & (_MEMO_SLOTS - 1))
+    slot = _power_slot(k)
     if memo[base + slot] != k:
         memo[base + slot] = k
         memo[base + slot + _MEMO_SLOTS] = math.pow(e, float(k))
@@ -389,12 +395,18 @@ def _step_closed_bounce(v, s, e, T, log_e, memo, base):
     k, tk = _impacts_and_time(v, s, e, T, log_e, memo, base)
     if k == SLIDING:  # rounding at the boundary of (2.4)
         return 1.0, 0.0, SLIDING
-    vk = _power_memo(s, e, k, memo, base)
+    yn, vn = _after_last_impact(T, tk, _power_memo(s, e, k, memo, base))
+    return yn, vn, k
+
+
+@njit(cache=True, inline="always")
+def _after_last_impact(T, tk, vk):
+    """The state at the edge ``T`` after the last impact ``t_k`` with velocity ``v_k``."""
     # t_k <= T < t_{k+1} = t_k + 2 v_k up to the rounding of t_k and v_k (a
     # few ulp of T): the clamp keeps that rounding from putting the ball a few
     # ulp below the edge; it moves d by no more than the error of t_k
     d = min(max(T - tk, 0.0), 2.0 * vk)
-    return -0.5 * d * d + vk * d + 1.0, vk - d, k
+    return -0.5 * d * d + vk * d + 1.0, vk - d
 
 
 @njit(cache=True)

@@ -48,9 +48,11 @@ from .model import (
     _MEMO_SIZE,
     _MEMO_SLOTS,
     SLIDING,
+    _after_last_impact,
     _constants,
     _finite,
     _impacts_kept,
+    _power_slot,
     _slide_or_steps_with,
     _step_closed,
     _step_closed_bounce,
@@ -432,7 +434,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     S[_T] = 1.0
     S[_R] = 3.0
     I = np.zeros((9, L), np.int64)
-    M = np.full(L * _MEMO_SIZE, -1.0)  # kept values of the closed form, _MEMO_SIZE per lane (_kept_pass, _closed)
+    M = np.empty(L * _MEMO_SIZE)  # kept values of the closed form, _MEMO_SIZE per lane (_closed sets them)
     active = 0
     while active < L and _take(active, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune,
                                y0, v0, from_rest, S, I, status, word_length, jumps, period, impacts):
@@ -617,17 +619,14 @@ def _kept_pass(S, I, M):
         s = SS[l]
         T = TT[l]
         j, t = _impacts_kept(V[l], s, E[l], T, LOGE[l], M, base)
-        sp = base + 2 + 2 * _MEMO_SLOTS + (j & (_MEMO_SLOTS - 1))
+        sp = base + _power_slot(j)
         if j <= 0 or M[sp] != j:  # not answered, or e^j not kept: _closed
             continue
         p = M[sp + _MEMO_SLOTS]
         M[base] = j
         M[base + 1] = p
         # the rest of model._step_closed_bounce
-        vk = p * s
-        d = min(max(T - t, 0.0), 2.0 * vk)
-        Y[l] = -0.5 * d * d + vk * d + 1.0
-        V[l] = vk - d
+        Y[l], V[l] = _after_last_impact(T, t, p * s)
         IMP[l] += j
         JMP[l] += 1
         MORE[l] = 0
