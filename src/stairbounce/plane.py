@@ -42,6 +42,7 @@ from numba import njit, prange
 from ._version import __version__
 from . import _validate as _v
 from ._interrupt import halted
+from ._simd import prefer_wide_vectors
 from .units import staircase_of, with_speed
 from .model import (
     _COUNTED_IMPACTS,
@@ -251,8 +252,9 @@ def _prunable(es, us, energy0, out):
 
 # The fast kernel runs LANES pixels in lockstep.  The lane loops below are
 # written branch-free (selects only) so that LLVM vectorises them: 8 float64
-# per AVX-512 register, and it only enters the vector body for 16 lanes or more;
-# 32 measured fastest on the development machine (see benchmarks/README.md).
+# per AVX-512 register with _simd.prefer_wide_vectors (4 without it, LLVM's
+# tuning for these Xeons), 4 per AVX2 register; 32 measured fastest on the
+# development machine, 64 no faster with 8-wide vectors (benchmarks/README.md).
 LANES = 32
 # Pixels listed at a time (the segments of a unit of parallel work, _chunking)
 _CHUNK_MAX = 1024
@@ -419,6 +421,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     is set (Ctrl-C, :mod:`stairbounce._interrupt`); it is read before the
     first segment is listed and then once per lockstep step.
     """
+    prefer_wide_vectors()  # eight float64 per vector where the machine has them (_simd)
     L = LANES
     if halted(halt):  # before listing: a segment's listing writes the pixels it answers
         return 0
