@@ -108,6 +108,7 @@ import numpy as np
 import xarray as xr
 from numba import njit, prange
 
+from ._simd import prefer_wide_vectors
 from ._version import __version__
 from .units import staircase_of, with_speed
 from .model import (
@@ -358,8 +359,8 @@ def _motion_orbit(y, v, e, T, ratio, transient, steps, out, extra):
 
 
 # Pixels advanced in lockstep by one thread, in a branch-free loop that LLVM
-# vectorises (8 float64 per AVX-512 register; it enters the vector body from
-# 16 lanes); lanes with two impacts or more on a step fall back to the scalar
+# vectorises (8 float64 per AVX-512 register with _simd.prefer_wide_vectors,
+# 4 without it or with AVX2; it enters the vector body from 16 lanes); lanes with two impacts or more on a step fall back to the scalar
 # step.  Every pixel sees the operations of _motion_orbit, bit for bit.
 LANES = 32
 # Pixels per unit of parallel work, in an interleaved order so that both
@@ -399,6 +400,7 @@ def _motion_lanes(es, us, y0, v0, transient, steps, start, stop, out):
     A lane takes the next pixel as soon as its own is done (slid, or ran
     ``transient + steps`` steps), so cheap and expensive pixels mix freely.
     """
+    prefer_wide_vectors()  # eight float64 per vector where the machine has them (_simd)
     L = LANES
     ne = es.shape[0]
     total = transient + steps
