@@ -16,8 +16,9 @@ changes.
 The answers do not depend on it: the lane loops are compiled without
 fastmath, so each lane gets the same IEEE operations, rounded the same way,
 whatever the vector width; the bit-for-bit tests against ``model._step``
-hold either way.  Only the speed does (``benchmarks/README.md``: 10-28 % less
-CPU time on the paper's grid and the Fig. 5e window on the Xeon).
+hold either way.  Only the speed does (``benchmarks/README.md``, A/B on the
+Xeon: the paper's grid 23 % less CPU time on one thread and 29 % less wall
+time on two, the Fig. 5e window 14 % and 21 %; the motion scan 12 %).
 
 llvmlite's Python IR builder accepts only LLVM's keyword attributes on a
 function, and this one is a string attribute; it is added to the builder's
