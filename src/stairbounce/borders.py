@@ -649,15 +649,16 @@ def _run_pairs(es, us, period, a, b, axis, max_iter, progress, secant=True, slid
 
 
 # The rounds of _sliding_rounds decide their midpoints with the scan's kernel in
-# units of at least this many points (plane._chunking): both threads work on
-# the few thousand crossings of a picture.  Under _ROUND_LANES_MIN crossings
+# units of at least this many points (plane._chunking), so that both threads
+# work on a round of a few hundred midpoints.  Under _ROUND_LANES_MIN crossings
 # the per-pair kernel is used, and a round with fewer midpoints (its last
-# ones) runs one orbit per point (_slide_periods).  With 4-wide vectors the
-# rounds lost below about 1000 crossings (x0.81-0.97 at 400-950); with the
-# 8-wide ones (_simd) they win from 400 (x1.05-1.16 at 400-1000, x1.5 at
-# 1757, x2.1-2.6 from 2860; benchmarks/README.md)
-_ROUND_UNIT_MIN = 512
-_ROUND_LANES_MIN = _ROUND_UNIT_MIN // 2
+# ones) runs one orbit per point (_slide_periods).  With 4-wide vectors and
+# units of 512 the rounds lost below about 1000 crossings (x0.81-0.97 at
+# 400-950); with the 8-wide ones (_simd) and units of 128 they win from about
+# 150 (best of 3, two runs each: x1.1 at 153 crossings, x1.1-1.3 at 233,
+# x1.5 at 401, x1.6 at 1001, x1.7-1.8 at 2860; benchmarks/README.md)
+_ROUND_UNIT_MIN = 128
+_ROUND_LANES_MIN = _ROUND_UNIT_MIN
 
 
 def _sliding_rounds(es, us, period, a, b, axis, max_iter, progress):
@@ -891,11 +892,11 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, outcom
     does not shrink the bracket by half), about 24 trial points per border
     point on the paper's grid instead of 46.  ``outcome="sliding"`` bisects
     at midpoints, a trial on the non-sliding side costing max_iter steps:
-    from 256 crossings every bracket is halved in the same round, and each
+    from 128 crossings every bracket is halved in the same round, and each
     round's midpoints are decided together by the scan's kernel (LANES points
     in lockstep, pruned by Corollary 2.1), bit for bit the answers of the
-    per-pair loop (x2.1-2.6 faster on the paper's grid and the Fig. 6 and 7
-    windows, x1.05-1.16 at 400-1000 crossings, ``benchmarks/README.md``).
+    per-pair loop (x1.7-2.6 faster on the paper's grid and the Fig. 6 and 7
+    windows, x1.1-1.6 at 150-1000 crossings, ``benchmarks/README.md``).
 
     Parameters
     ----------
