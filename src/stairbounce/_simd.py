@@ -1,7 +1,7 @@
 """Wide vectors for the lane kernels (issue 26).
 
 The lane kernels (:func:`stairbounce.plane._run_unit`, the non-sliding
-motion's ``_run_chunk``) run the same operations on LANES pixels side by side
+motion's ``_motion_lanes``) run the same operations on LANES pixels side by side
 so that LLVM vectorises their loops.  On the x86 processors with AVX-512 of
 the Skylake-server line and later (our development machine is an Emerald
 Rapids Xeon), LLVM's tuning for the host prefers 256-bit vectors, four
@@ -39,21 +39,15 @@ __all__ = ["prefer_wide_vectors", "WIDE_ATTRIBUTE"]
 WIDE_ATTRIBUTE = '"prefer-vector-width"="512"'
 
 
-def _add_attribute(function, text):
-    """Add the string attribute ``text`` to an llvmlite IR function; False if it cannot."""
-    try:
-        set.add(function.attributes, text)
-    except Exception:  # a later llvmlite: compile without it (speed only, see above)
-        return False
-    return True
-
-
 @intrinsic
 def prefer_wide_vectors(typingctx):
     """prefer_wide_vectors() in a numba function: vectorise its loops 512 bits wide where possible."""
 
     def codegen(context, builder, signature, args):
-        _add_attribute(builder.function, WIDE_ATTRIBUTE)
+        try:  # past llvmlite's check of keyword attributes (see above)
+            set.add(builder.function.attributes, WIDE_ATTRIBUTE)
+        except Exception:  # a later llvmlite: compile without it (speed only)
+            pass
         return context.get_dummy_value()
 
     return types.none(), codegen

@@ -360,8 +360,9 @@ def _motion_orbit(y, v, e, T, ratio, transient, steps, out, extra):
 
 # Pixels advanced in lockstep by one thread, in a branch-free loop that LLVM
 # vectorises (8 float64 per AVX-512 register with _simd.prefer_wide_vectors,
-# 4 without it or with AVX2; it enters the vector body from 16 lanes); lanes with two impacts or more on a step fall back to the scalar
-# step.  Every pixel sees the operations of _motion_orbit, bit for bit.
+# 4 without it or with AVX2; it enters the vector body from 16 lanes); lanes
+# with two impacts or more on a step fall back to the scalar step.  Every
+# pixel sees the operations of _motion_orbit, bit for bit.
 LANES = 32
 # Pixels per unit of parallel work, in an interleaved order so that both
 # threads see cheap (sliding) and expensive (non-sliding) parts of the plane.

@@ -639,8 +639,8 @@ def _kept_pass(S, I, M):
 def _closed(l, S, I, M):
     """Lane ``l``'s step by the closed form of ``model._step`` (past
     ``_COUNTED_IMPACTS`` impacts), from its state before the step, and its
-    bookkeeping as in the lane loops (the lanes :func:`_kept_pass` leaves).  Returns whether it slid (a pixel's
-    max_iter is told in the common step).  ``M[l * _MEMO_SIZE:][:_MEMO_SIZE]``: the
+    bookkeeping as in the lane loops (the lanes :func:`_kept_pass` leaves).
+    Returns whether it slid (a pixel's max_iter is told in the common step).  ``M[l * _MEMO_SIZE:][:_MEMO_SIZE]``: the
     values of ``expm1`` and ``pow`` and the impact number kept for the lane's
     pixel (``model._geometric_memo``), indexed in place (a view per call
     costs about 30 cycles)."""
