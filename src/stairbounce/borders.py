@@ -443,9 +443,16 @@ def _bisect_sliding_pair(xa, xb, f, axis, pa, pb, max_iter, out, halt):
             xc, pc = m, pm
         else:
             xo = m
+    _write_sliding_point(out, xc, xo, f, axis, pc, trials, steps)
+    return True
+
+
+@njit(cache=True)
+def _write_sliding_point(out, xc, xo, f, axis, pc, trials, steps):
+    """The row of a bisected crossing of the sliding region's border: the first
+    step where its ends differ (:func:`_first_difference`), the other end not sliding."""
     j, kc, ko, _, _ = _first_difference(xc, xo, f, axis, pc)
     _write_point(out, xc, xo, j, kc, ko, pc, 0, trials, steps)
-    return True
 
 
 @njit(cache=True, parallel=True, nogil=True)
@@ -752,8 +759,7 @@ def _finish_sliding(xc, xo, f, axis, pc, trials, steps, found, out, halt):
     for p in prange(xc.shape[0]):
         if not found[p] or halted(halt):
             continue
-        j, kc, ko, _, _ = _first_difference(xc[p], xo[p], f[p], axis[p], pc[p])
-        _write_point(out[p], xc[p], xo[p], j, kc, ko, pc[p], 0, trials[p], steps[p])
+        _write_sliding_point(out[p], xc[p], xo[p], f[p], axis[p], pc[p], trials[p], steps[p])
 
 
 @njit(cache=True, parallel=True)
