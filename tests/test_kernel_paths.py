@@ -10,6 +10,8 @@
   segment size and any split into units give the arrays of one pixel at a time
   (``model._slide_or_steps``), transients, pruning and closed-form steps
   included;
+- the common step that counts to the seventh impact (after a lockstep step
+  with a fourth impact) gives the same arrays whenever it is switched on;
 - the wide-vector attribute (``_simd.prefer_wide_vectors``) reaches the
   LLVM function, and on a machine with AVX-512 its loops use the 512-bit
   registers.
@@ -159,6 +161,28 @@ def test_any_segments_and_units_give_the_pixel_by_pixel_arrays(y0, v0):
     assert sc.prunable(*np.meshgrid(es, us), y0, v0).any()
     ks = np.concatenate([iterate(1.0, 0.0, e, u, 100)[2] for e in es[::2] for u in us[::2]])
     assert (ks >= 8).sum() > 50
+
+
+@pytest.mark.parametrize("y0, v0", [(1.0, 0.0), (2.5, -0.7)])
+def test_the_long_common_step_at_any_switch_gives_the_pixel_by_pixel_arrays(y0, v0):
+    # the common step counts to the seventh impact in a lockstep step after
+    # one with a fourth impact in long_min lanes (1 in production): always
+    # (0), never (2**62) or switching (1, 3), the arrays of model._step one
+    # pixel at a time; a window of steps with every count of impacts 1 to 9
+    es = np.linspace(0.3, 0.97, 29)
+    us = np.linspace(0.01, 0.5, 23)
+    max_iter = 300
+    ref = _pixel_by_pixel(es, us, max_iter, y0, v0)
+    npix = es.size * us.size
+    chunk, order = sc._chunking(npix, 2, unit_min=64)
+    for long_min in (0, 1, 3, 2**62):
+        outs = [np.full(npix, 77, dtype=dt) for dt, _ in sc._FIELDS.values()]
+        sc._scan_fast(es, us, True, max_iter, y0, v0, False, order, chunk, *outs, np.zeros(1, np.int64), long_min)
+        for k, o in zip(FIELDS, outs):
+            assert np.array_equal(o.reshape(us.size, es.size), ref[k]), (long_min, k)
+    ks = np.concatenate([iterate(1.0, 0.0, e, u, 60)[2] for e in es[::2] for u in us[::2]])
+    counts = np.bincount(ks[ks >= 0], minlength=10)
+    assert (counts[1:10] > 20).all(), counts
 
 
 def test_chunking_covers_every_pixel_once():
