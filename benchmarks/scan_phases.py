@@ -13,7 +13,8 @@ counter N.  The counters live in the kernel's halt array past ``halt[0]``
 1. listing the first segments (pruning test, pruned pixels stored) and loading the lanes;
 2. the common step and its bookkeeping with all LANES lanes live;
 3. the same in the tail of a unit (fewer live lanes than LANES);
-4. impacts 4 to 7 (the counting continuation; 2 to 7 before the common step took impacts 2 and 3);
+4. impacts 4 to 7 (the counting continuation; 2 to 7 before the common step took impacts 2 and 3;
+   only after a common step that stopped at the third impact, since the sixth round);
 5. the closed form past ``model._COUNTED_IMPACTS`` impacts (lane by lane);
 6. finished pixels: store, reload, and the listing of later segments.
 
