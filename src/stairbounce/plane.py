@@ -493,8 +493,10 @@ def _common_step(seventh, last_start, S, I):
         f = live if (slide or N[l] <= last_start) else 0
         FIN[l] = f
         nfin += f
-        deep += live if (more or (kl >= 4 and not (fly or slide))) else 0
-    return nmore, nfin, deep
+        if seventh:  # counted to the seventh: a fourth impact with or without MORE
+            deep += live if (more or (kl >= 4 and not (fly or slide))) else 0
+    # counted to the third: the lanes with a fourth impact are those with MORE
+    return nmore, nfin, (deep if seventh else nmore)
 
 
 @njit(cache=True)
