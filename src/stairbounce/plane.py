@@ -383,14 +383,18 @@ def _load(l, q, todo, F, y0, v0, from_rest, S, I, g):
     I[_LIVE, l] = 1
 
 
-@njit(cache=True, inline="always")
-def _take(l, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune, y0, v0, from_rest, S, I,
-          status, word_length, jumps, period, impacts):
-    """Lane ``l`` takes the next pixel of its unit that needs iterating; False when none is left.
+@njit(cache=True)
+def _refill(segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune, y0, v0,
+            status, word_length, jumps, period, impacts):
+    """The list of a unit's pixels to iterate used up: list its next segments
+    until one has such a pixel; False when the unit has none left.
 
-    ``pos = (next listed, listed, next segment, pruned)``: when the list is
-    used up, the unit's next segment (``chunk`` pixels from
-    ``segs[...] * chunk``; -1 ends the unit) is listed by :func:`_list_chunk`.
+    ``pos = (next listed, listed, next segment, pruned, lockstep step)``: a
+    segment is the ``chunk`` pixels from ``segs[...] * chunk`` (-1 ends the
+    unit), listed by :func:`_list_chunk`.  A call, not inlined: an inlined
+    function counts a reference to each of its array arguments on entry and
+    on exit (two atomic operations each), and this one has fifteen; it runs
+    once per segment, a lane's reload (:func:`_load`) once per pixel.
     """
     while pos[0] == pos[1]:
         if pos[2] == segs.shape[0] or segs[pos[2]] < 0:
@@ -402,8 +406,6 @@ def _take(l, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune, y
         pos[0] = 0
         pos[1] = n
         pos[3] += pruned
-    _load(l, pos[0], todo, F, y0, v0, from_rest, S, I, pos[4])
-    pos[0] += 1
     return True
 
 
@@ -533,8 +535,11 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     I = np.zeros((9, L), np.int64)
     M = np.empty(L * _MEMO_SIZE)  # kept values of the closed form, _MEMO_SIZE per lane (_closed sets them)
     active = 0
-    while active < L and _take(active, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune,
-                               y0, v0, from_rest, S, I, status, word_length, jumps, period, impacts):
+    # each lane takes the next pixel of the unit that needs iterating
+    while active < L and (pos[0] < pos[1] or _refill(segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows,
+                                                     prune, y0, v0, status, word_length, jumps, period, impacts)):
+        _load(active, pos[0], todo, F, y0, v0, from_rest, S, I, pos[4])
+        pos[0] += 1
         active += 1
 
     Y = S[_Y]
@@ -639,8 +644,11 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                 continue
             _store(I[_PIX, l], g - N[l] if sl else 0, IMP[l], JMP[l],
                    status, word_length, jumps, period, impacts)
-            if not _take(l, segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune,
-                         y0, v0, from_rest, S, I, status, word_length, jumps, period, impacts):
+            if pos[0] < pos[1] or _refill(segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune,
+                                          y0, v0, status, word_length, jumps, period, impacts):
+                _load(l, pos[0], todo, F, y0, v0, from_rest, S, I, pos[4])  # the unit's next pixel
+                pos[0] += 1
+            else:
                 LIVE[l] = 0
                 active -= 1
         # phase 6: finished pixels stored, lanes reloaded (and segments listed)
