@@ -1,6 +1,6 @@
 """Where the scan kernel's cycles go, phase by phase (issue 26).
 
-    python benchmarks/scan_phases.py [--repeat 15] [--one-segment-units]
+    python benchmarks/scan_phases.py [--repeat 15] [--one-segment-units] [--fence]
 
 The machine gives no hardware counters to ``perf stat`` (a virtual machine),
 so this is numba-level timing in a benchmark build: ``stairbounce.plane`` is
@@ -22,9 +22,21 @@ One thread, so the counters add up to the kernel's time.  The counter
 ticks on while the process waits for a core, so each phase's figure is its
 least over the repeats.  The timer reads
 cost cycles themselves: the total with marks is printed beside the total of
-the production kernel, and the difference is the measuring overhead.  Cycles
-are time-stamp counter ticks (the nominal clock, 2.6 GHz on the development
-machine).  Steps: map steps done (useful iterations of the pixels iterated).
+the production kernel (timed with the same counter), and the difference is
+the measuring overhead.  Cycles are time-stamp counter ticks (the nominal
+clock: 2.1 GHz on the Xeon of 2026-11, 2.6 GHz on the EPYC before).  Steps:
+map steps done (useful iterations of the pixels iterated).
+
+A read of the counter does not wait for the instructions before it, so work
+still in flight at a mark (a common step's square roots) is counted in the
+next phase.  ``--fence`` puts an ``lfence`` before each read: each phase
+then gets its own work, but every mark drains the pipeline, so the marked
+total rises well above the production kernel's (about 40 % on the paper
+grid); the shares are the thing to read then.  Where the two runs agree, the
+phase really costs that.  For where the cycles go inside a phase, ``perf
+record -e cpu-clock`` on a running scan and the kernel's disassembly (read
+from ``/proc/<pid>/mem``) work on this virtual machine (no hardware
+counters, but the timer samples); benchmarks/README.md has what that found.
 """
 
 from __future__ import annotations
@@ -32,7 +44,6 @@ from __future__ import annotations
 import argparse
 import os
 import re
-import time
 import types
 from pathlib import Path
 
@@ -49,9 +60,16 @@ NAMES = {1: "list + first loads", 2: "common step, full lanes", 3: "common step,
          4: "impacts 4-7", 5: "closed form (>= 8)", 6: "finish, store, reload"}
 
 
+FENCE = False  # set by --fence before anything using the timer is compiled
+
+
 @intrinsic
 def _rdtsc(typingctx):
     def codegen(context, builder, signature, args):
+        if FENCE:
+            fence = cgutils.get_or_insert_function(builder.module, ir.FunctionType(ir.VoidType(), []),
+                                                   "llvm.x86.sse2.lfence")
+            builder.call(fence, [])
         fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(ir.IntType(64), []),
                                             "llvm.readcyclecounter")
         return builder.call(fn, [])
@@ -108,12 +126,16 @@ def main(argv=None):
     p.add_argument("--repeat", type=int, default=15)
     p.add_argument("--one-segment-units", action="store_true",
                    help="every unit one segment of 1024 pixels (the chunks before issue 26)")
+    p.add_argument("--fence", action="store_true", help="an lfence before each read of the counter (see above)")
     a = p.parse_args(argv)
+    global FENCE
+    FENCE = a.fence
     numba.set_num_threads(1)
     mod = phase_build(a.one_segment_units)
     cases = [("paper grid 500 x 350, pruned", (0.0, 1.0, 500), (0.0, 1.5, 350), True),
              ("Fig. 5e window 768 x 768", (0.04, 0.065, 768), (0.92, 0.945, 768), True)]
-    print(f"load average {os.getloadavg()[0]:.1f}; one thread; cycles = time-stamp counter ticks")
+    print(f"load average {os.getloadavg()[0]:.1f}; one thread; cycles = time-stamp counter ticks; "
+          f"marks {'fenced' if FENCE else 'not fenced'}")
     for name, e, u, prune in cases:
         ds = P.scan(e, u, 1000, prune=prune)
         per = np.where(ds.status.values == 0, ds.period.values, 1000)
@@ -122,9 +144,7 @@ def main(argv=None):
         best, best_plain = None, None
         for _ in range(a.repeat):
             c = np.zeros(16, np.int64)
-            t0 = _rdtsc_py()
             outs = run(mod, e, u, prune, c)
-            total = _rdtsc_py() - t0
             # preemption on a shared machine only adds: the least per phase
             best = c.copy() if best is None else np.minimum(best, c)
             t0 = _rdtsc_py()
@@ -140,12 +160,10 @@ def main(argv=None):
             print(f"  {i}. {NAMES[i]:26s} {best[i] / steps:7.2f} cycles/step  {100 * best[i] / marked:5.1f} %")
 
 
+@numba.njit
 def _rdtsc_py():
-    """The clock the marks use, read from Python (time.perf_counter_ns scaled to 2.6 GHz ticks)."""
-    return int(time.perf_counter_ns() * _GHZ)
-
-
-_GHZ = 2.6
+    """The counter the marks read, read from Python."""
+    return _rdtsc()
 
 
 if __name__ == "__main__":
