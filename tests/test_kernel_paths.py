@@ -290,7 +290,7 @@ def _pass_against_closed(S0, I0, M0, blocks, counts):
             if I2[sc._MORE, l]:
                 sc._closed(l, S2, I2, M2)
             same = (S[sc._Y, l] == S2[sc._Y, l] and S[sc._V, l] == S2[sc._V, l]
-                    and I[sc._IMP, l] == I2[sc._IMP, l] and I[sc._JMP, l] == I2[sc._JMP, l]
+                    and I[sc._IMP, l] == I2[sc._IMP, l]
                     and I[sc._MORE, l] == I2[sc._MORE, l] and M[l * _MEMO_SIZE] == M2[l * _MEMO_SIZE])
             counts[2] += 0 if same else 1
 

@@ -269,7 +269,7 @@ assert _COUNTED_IMPACTS % 2 == 0
 _Y, _V, _E, _T, _R, _H, _TS, _WS, _LOGE, _SS = range(10)
 # and of its integer block (_N: the lockstep step the lane's pixel, or its
 # period, started after; its step count is the current lockstep step less that)
-_N, _IMP, _JMP, _MORE, _LIVE, _PER, _PIX, _FIN, _SL = range(9)
+_N, _IMP, _FLY, _MORE, _LIVE, _PER, _PIX, _FIN, _SL = range(9)
 
 
 @njit(cache=True)
@@ -379,7 +379,7 @@ def _load(l, q, todo, F, y0, v0, from_rest, S, I, g):
     I[_PIX, l] = todo[q]
     I[_N, l] = g  # the lockstep step the pixel starts after (steps done: g' - g after step g')
     I[_IMP, l] = 0
-    I[_JMP, l] = 0
+    I[_FLY, l] = 0
     I[_LIVE, l] = 1
 
 
@@ -447,7 +447,7 @@ def _common_step(seventh, last_start, S, I):
     WS = S[_WS]
     N = I[_N]
     IMP = I[_IMP]
-    JMP = I[_JMP]
+    FLY = I[_FLY]
     MORE = I[_MORE]
     LIVE = I[_LIVE]
     FIN = I[_FIN]
@@ -487,7 +487,7 @@ def _common_step(seventh, last_start, S, I):
         MORE[l] = m
         nmore += m
         IMP[l] += 0 if (more or slide or fly) else kl
-        JMP[l] += 0 if (more or fly) else 1
+        FLY[l] += 1 if fly else 0  # jumps = steps - flights, at the end
         SL[l] = 1 if slide else 0
         # every live lane ends a step in this lockstep step (here, in
         # the passes or in the closed form): its last one when it slides
@@ -555,7 +555,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     N = I[_N]
     g = 0
     IMP = I[_IMP]
-    JMP = I[_JMP]
+    FLY = I[_FLY]  # steps that flew over (no landing): jumps = steps - FLY
     MORE = I[_MORE]
     LIVE = I[_LIVE]
     FIN = I[_FIN]  # 1: the pixel (or its transient) ends with this step
@@ -619,7 +619,6 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                     Y[l] = (-0.5 * d * d + w * d + 1.0) if last else Y[l]
                     V[l] = (w - d) if last else V[l]
                     IMP[l] += k if lasta else (k + 1 if lastb else 0)
-                    JMP[l] += last
                     TS[l] = tb
                     WS[l] = wb
                     m = m if (nxa and nxb) else 0
@@ -640,9 +639,9 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                 I[_PER, l] = 1
                 N[l] = g
                 IMP[l] = 0
-                JMP[l] = 0
+                FLY[l] = 0
                 continue
-            _store(I[_PIX, l], g - N[l] if sl else 0, IMP[l], JMP[l],
+            _store(I[_PIX, l], g - N[l] if sl else 0, IMP[l], g - N[l] - FLY[l],
                    status, word_length, jumps, period, impacts)
             if pos[0] < pos[1] or _refill(segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune,
                                           y0, v0, status, word_length, jumps, period, impacts):
@@ -674,7 +673,6 @@ def _kept_pass(S, I, M):
     LOGE = S[_LOGE]
     MORE = I[_MORE]
     IMP = I[_IMP]
-    JMP = I[_JMP]
     for l in range(LANES):
         if MORE[l] == 0 or LOGE[l] > 0.0:  # no step here, or a new pixel: nothing kept
             continue
@@ -691,7 +689,6 @@ def _kept_pass(S, I, M):
         # the rest of model._step_closed_bounce
         Y[l], V[l] = _after_last_impact(T, t, p * s)
         IMP[l] += j
-        JMP[l] += 1
         MORE[l] = 0
 
 
@@ -717,7 +714,6 @@ def _closed(l, S, I, M):
     I[_MORE, l] = 0
     if k > 0:
         I[_IMP, l] += k
-    I[_JMP, l] += 1
     return k == SLIDING
 
 
