@@ -309,8 +309,8 @@ def test_the_lanes_kept_pass_is_the_closed_form_lane_by_lane():
     rng.shuffle(e)
     v, s, T = _kept_states(rng, n, e)
     T = np.where(np.isfinite(T), T, v + s + 1.0)  # (an edge state from 0 x inf)
-    S0 = np.zeros((blocks, 10, L))
-    I0 = np.zeros((blocks, 9, L), np.int64)
+    S0 = np.zeros((blocks, sc._FLOAT_ROWS, L))
+    I0 = np.zeros((blocks, sc._INT_ROWS, L), np.int64)
     M0 = np.full((blocks, L * _MEMO_SIZE), -1.0)
     for i in range(n):
         b, l = divmod(i, L)

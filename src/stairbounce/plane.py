@@ -265,11 +265,12 @@ _UNIT_MIN = 4096
 _LONG_MIN = 1
 # the counting continuation of _run_unit takes impacts two at a time, 2-3, 4-5, ...
 assert _COUNTED_IMPACTS % 2 == 0
-# Rows of the lane state block of _run_chunk (one float64 row of LANES per field)
+# Rows of the lane state block of _run_unit (one float64 row of LANES per field)
 _Y, _V, _E, _T, _R, _H, _TS, _WS, _LOGE, _SS = range(10)
 # and of its integer block (_N: the lockstep step the lane's pixel, or its
 # period, started after; its step count is the current lockstep step less that)
-_N, _IMP, _FLY, _MORE, _LIVE, _PER, _PIX, _FIN, _SL = range(9)
+_N, _IMP, _FLY, _MORE, _LIVE, _PER, _PIX, _FIN = range(8)
+_FLOAT_ROWS, _INT_ROWS = 10, 8
 
 
 @njit(cache=True)
@@ -434,8 +435,9 @@ def _common_step(seventh, last_start, S, I):
     """The common step of every lane: model._step up to its third impact
     (its seventh when ``seventh``, a constant where it is called) and its
     bookkeeping, in one loop over the lanes that the compiler vectorises.
-    Returns the number of lanes with MORE impacts to count, the number that
-    FINish, and the number whose step has a fourth impact (deep)."""
+    Returns the number of lanes with MORE impacts to count, a number that
+    is not 0 when a lane FINishes, and the number whose step has a fourth
+    impact (deep)."""
     Y = S[_Y]
     V = S[_V]
     E = S[_E]
@@ -451,7 +453,6 @@ def _common_step(seventh, last_start, S, I):
     MORE = I[_MORE]
     LIVE = I[_LIVE]
     FIN = I[_FIN]
-    SL = I[_SL]
     nmore = 0
     nfin = 0
     deep = 0
@@ -488,11 +489,10 @@ def _common_step(seventh, last_start, S, I):
         nmore += m
         IMP[l] += 0 if (more or slide or fly) else kl
         FLY[l] += 1 if fly else 0  # jumps = steps - flights, at the end
-        SL[l] = 1 if slide else 0
         # every live lane ends a step in this lockstep step (here, in
         # the passes or in the closed form): its last one when it slides
-        # or reaches max_iter
-        f = live if (slide or N[l] <= last_start) else 0
+        # (FIN 2) or reaches max_iter (FIN 1)
+        f = (live + live) if slide else (live if N[l] <= last_start else 0)
         FIN[l] = f
         nfin += f
         if seventh:  # counted to the seventh: a fourth impact with or without MORE
@@ -528,11 +528,11 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     pos = np.zeros(5, np.int64)  # (next listed, listed, next segment, pruned, lockstep step)
     # lane state: one block of float rows and one of integer rows (row indices
     # _Y.. and _N..), so that the compiler sees the rows cannot overlap
-    S = np.zeros((10, L))
+    S = np.zeros((_FLOAT_ROWS, L))
     S[_E] = 0.5
     S[_T] = 1.0
     S[_R] = 3.0
-    I = np.zeros((9, L), np.int64)
+    I = np.zeros((_INT_ROWS, L), np.int64)
     M = np.empty(L * _MEMO_SIZE)  # kept values of the closed form, _MEMO_SIZE per lane (_closed sets them)
     active = 0
     # each lane takes the next pixel of the unit that needs iterating
@@ -558,8 +558,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     FLY = I[_FLY]  # steps that flew over (no landing): jumps = steps - FLY
     MORE = I[_MORE]
     LIVE = I[_LIVE]
-    FIN = I[_FIN]  # 1: the pixel (or its transient) ends with this step
-    SL = I[_SL]  # 1: it slid
+    FIN = I[_FIN]  # the pixel (or its transient) ends with this step: 2 it slid, 1 max_iter
     seventh = long_min <= 0
     # phase 1: listing the first segments, loading the lanes
     while active > 0:
@@ -594,9 +593,8 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                     for l in range(L):
                         if MORE[l]:
                             if _closed(l, S, I, M):  # it slid
-                                SL[l] = 1
-                                nfin += 1 - FIN[l]
-                                FIN[l] = 1
+                                nfin += 2
+                                FIN[l] = 2
                     # phase 5: the closed form past _COUNTED_IMPACTS
                     break
                 nmore = 0
@@ -633,7 +631,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
             if f == 0:
                 continue
             FIN[l] = 0
-            sl = SL[l]
+            sl = f == 2
             if sl and I[_PER, l] == 0:
                 # end of the transient: the ball leaves the edge at (1, 0)
                 I[_PER, l] = 1
