@@ -478,7 +478,9 @@ def _common_step(seventh, last_start, S, I):
         v_fly = v - T
         yn = 1.0 if slide else (y_fly if fly else y_bounce)
         vn = 0.0 if slide else (v_fly if fly else v_bounce)
-        Y[l] = y if more else yn
+        # a lane with MORE ends its step below, in this lockstep step, and
+        # writes Y there; what it needs of its state is V, s, t and w
+        Y[l] = yn
         V[l] = v if more else vn
         TS[l] = ta  # the passes go on from the last impact counted
         WS[l] = wa
