@@ -431,13 +431,14 @@ def _impact_pair(ta, wa, e, T, tl, wl, kl, j):
 
 
 @njit(cache=True, inline="always")
-def _common_step(seventh, last_start, S, I):
+def _common_step(seventh, S, I):
     """The common step of every lane: model._step up to its third impact
     (its seventh when ``seventh``, a constant where it is called) and its
     bookkeeping, in one loop over the lanes that the compiler vectorises.
     Returns the number of lanes with MORE impacts to count, a number that
-    is not 0 when a lane FINishes, and the number whose step has a fourth
-    impact (deep)."""
+    is not 0 when a lane FINishes (slides: the end by max_iter is set by
+    :func:`_max_iter_ends`), and the number whose step has a fourth impact
+    (deep)."""
     Y = S[_Y]
     V = S[_V]
     E = S[_E]
@@ -447,7 +448,6 @@ def _common_step(seventh, last_start, S, I):
     TS = S[_TS]
     SS = S[_SS]
     WS = S[_WS]
-    N = I[_N]
     IMP = I[_IMP]
     FLY = I[_FLY]
     MORE = I[_MORE]
@@ -493,14 +493,30 @@ def _common_step(seventh, last_start, S, I):
         FLY[l] += 1 if fly else 0  # jumps = steps - flights, at the end
         # every live lane ends a step in this lockstep step (here, in
         # the passes or in the closed form): its last one when it slides
-        # (FIN 2) or reaches max_iter (FIN 1)
-        f = (live + live) if slide else (live if N[l] <= last_start else 0)
+        # (FIN 2) or reaches max_iter (FIN 1, _max_iter_ends)
+        f = (live + live) if slide else 0
         FIN[l] = f
         nfin += f
         if seventh:  # counted to the seventh: a fourth impact with or without MORE
             deep += live if (more or (kl >= 4 and not (fly or slide))) else 0
     # counted to the third: the lanes with a fourth impact are those with MORE
     return nmore, nfin, (deep if seventh else nmore)
+
+
+@njit(cache=True, inline="always")
+def _max_iter_ends(last_start, I):
+    """FIN 1 for the live lanes whose pixel (or transient) started after
+    step ``last_start`` or before, so ends with max_iter steps in this one,
+    unless the common step ended it by a slide (FIN 2); returns how many."""
+    N = I[_N]
+    LIVE = I[_LIVE]
+    FIN = I[_FIN]
+    n = 0
+    for l in range(LANES):
+        f = LIVE[l] if (N[l] <= last_start and FIN[l] == 0) else 0
+        FIN[l] = FIN[l] + f
+        n += f
+    return n
 
 
 @njit(cache=True)
@@ -562,6 +578,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     LIVE = I[_LIVE]
     FIN = I[_FIN]  # the pixel (or its transient) ends with this step: 2 it slid, 1 max_iter
     seventh = long_min <= 0
+    first_start = 0  # the least N over the lanes (all start after step 0); set again when N changes
     # phase 1: listing the first segments, loading the lanes
     while active > 0:
         if halted(halt):
@@ -577,10 +594,15 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
         # (1 in production) had one.  The same operations either way.
         k = 6 if seventh else 2  # impacts counted
         if seventh:
-            nmore, nfin, deep = _common_step(True, last_start, S, I)
+            nmore, nfin, deep = _common_step(True, S, I)
         else:
-            nmore, nfin, deep = _common_step(False, last_start, S, I)
+            nmore, nfin, deep = _common_step(False, S, I)
         seventh = deep >= long_min
+        # the lanes that reach max_iter with this step: only when the oldest
+        # start is that old (about once per pixel that runs to max_iter), not
+        # a test per lane in every common step
+        if first_start <= last_start:
+            nfin += _max_iter_ends(last_start, I)
         # phase 2 if active == LANES else 3: the common step, all lanes live or a tail
         if nmore > 0:
             # impacts 4, 5, ... counted on along t += 2w, w *= e as model._step
@@ -650,6 +672,12 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
             else:
                 LIVE[l] = 0
                 active -= 1
+        # N changes only above (a reload, a transient's end): the least start
+        # again, over every lane (one no longer live keeps its last, which
+        # can only bring _max_iter_ends forward, never skip it)
+        first_start = N[0]
+        for l in range(1, L):
+            first_start = min(first_start, N[l])
         # phase 6: finished pixels stored, lanes reloaded (and segments listed)
     return pos[3]
 
