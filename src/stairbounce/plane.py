@@ -367,8 +367,12 @@ def _list_chunk(es, us, grid, cols, rows, prune, y0, v0, start, stop, todo, F,
 
 
 @njit(cache=True, inline="always")
-def _load(l, q, todo, F, y0, v0, from_rest, S, I, g):
-    """Lane ``l`` takes listed pixel ``q`` (:func:`_list_chunk`), from ``(y0, v0)``."""
+def _load(l, pos, todo, F, y0, v0, from_rest, S, I):
+    """Lane ``l`` takes the next listed pixel (:func:`_list_chunk`; ``pos``
+    as in :func:`_refill`, which must have left one), from ``(y0, v0)``."""
+    q = pos[0]
+    pos[0] = q + 1
+    g = pos[4]
     S[_E, l] = F[0, q]
     S[_T, l] = F[1, q]
     S[_R, l] = F[2, q]
@@ -556,8 +560,7 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
     # each lane takes the next pixel of the unit that needs iterating
     while active < L and (pos[0] < pos[1] or _refill(segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows,
                                                      prune, y0, v0, status, word_length, jumps, period, impacts)):
-        _load(active, pos[0], todo, F, y0, v0, from_rest, S, I, pos[4])
-        pos[0] += 1
+        _load(active, pos, todo, F, y0, v0, from_rest, S, I)
         active += 1
 
     Y = S[_Y]
@@ -667,14 +670,14 @@ def _run_unit(es, us, grid, cols, rows, max_iter, y0, v0, prune, segs, chunk, np
                    status, word_length, jumps, period, impacts)
             if pos[0] < pos[1] or _refill(segs, chunk, npix, pos, todo, F, es, us, grid, cols, rows, prune,
                                           y0, v0, status, word_length, jumps, period, impacts):
-                _load(l, pos[0], todo, F, y0, v0, from_rest, S, I, pos[4])  # the unit's next pixel
-                pos[0] += 1
+                _load(l, pos, todo, F, y0, v0, from_rest, S, I)  # the unit's next pixel
             else:
                 LIVE[l] = 0
                 active -= 1
         # N changes only above (a reload, a transient's end): the least start
         # again, over every lane (one no longer live keeps its last, which
-        # can only bring _max_iter_ends forward, never skip it)
+        # can only bring _max_iter_ends forward, never skip it); a loop, as
+        # N.min() puts a reference count in the loop (test_kernel_paths)
         first_start = N[0]
         for l in range(1, L):
             first_start = min(first_start, N[l])
