@@ -1,6 +1,6 @@
 """Where the scan kernel's cycles go, phase by phase (issue 26).
 
-    python benchmarks/scan_phases.py [--repeat 15] [--one-segment-units] [--fence]
+    python benchmarks/scan_phases.py [--repeat 15] [--fence]
 
 The machine gives no hardware counters to ``perf stat`` (a virtual machine),
 so this is numba-level timing in a benchmark build: ``stairbounce.plane`` is
@@ -84,13 +84,9 @@ def _lap(halt, idx, t):
     return now
 
 
-def phase_build(one_segment_units=False):
-    """``stairbounce.plane`` compiled again with the phase marks turned into timer reads;
-    ``one_segment_units``: every unit a single segment (the 1024-pixel chunks before issue 26)."""
+def phase_build():
+    """``stairbounce.plane`` compiled again with the phase marks turned into timer reads."""
     src = Path(P.__file__).read_text()
-    if one_segment_units:
-        src = src.replace("_UNITS_PER_THREAD = 4\n", "_UNITS_PER_THREAD = 2**40\n").replace(
-            "_UNIT_MIN = 4096\n", "_UNIT_MIN = 1\n")
     n = 0
 
     def mark(m):
@@ -116,22 +112,20 @@ def run(mod, e, u, prune, counters):
     es, us = P.pixel_centres(*e), P.pixel_centres(*u)
     npix = es.size * us.size
     outs = [np.empty(npix, dtype=dt) for dt, _ in P._FIELDS.values()]
-    chunk, order = mod._chunking(npix, 1)
-    mod._scan_fast(es, us, True, 1000, 1.0, 0.0, prune, order, chunk, *outs, counters)
+    chunk, units = mod._chunking(npix, 1)
+    mod._scan_fast(es, us, True, 1000, 1.0, 0.0, prune, units, chunk, *outs, counters)
     return outs
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--repeat", type=int, default=15)
-    p.add_argument("--one-segment-units", action="store_true",
-                   help="every unit one segment of 1024 pixels (the chunks before issue 26)")
     p.add_argument("--fence", action="store_true", help="an lfence before each read of the counter (see above)")
     a = p.parse_args(argv)
     global FENCE
     FENCE = a.fence
     numba.set_num_threads(1)
-    mod = phase_build(a.one_segment_units)
+    mod = phase_build()
     cases = [("paper grid 500 x 350, pruned", (0.0, 1.0, 500), (0.0, 1.5, 350), True),
              ("Fig. 5e window 768 x 768", (0.04, 0.065, 768), (0.92, 0.945, 768), True)]
     print(f"load average {os.getloadavg()[0]:.1f}; one thread; cycles = time-stamp counter ticks; "

@@ -43,13 +43,13 @@ from stairbounce.atlas import scan_to_zarr
 
 
 def no_check_copy():
-    """``stairbounce.plane`` compiled again with the halt check removed (not cached)."""
+    """``stairbounce.plane`` compiled again with the per-step halt check removed (not cached)."""
     src = Path(P.__file__).read_text()
-    check = "        if halted(halt):\n            return\n        # the common step"
+    check = "        if halted(halt):\n            return pos[2]\n        g += 1\n"
     if check not in src:
-        sys.exit("the halt check of _run_chunk is not where this script expects it")
-    src = src.replace(check, "        # the common step").replace("cache=True", "cache=False")
-    src = src.replace("from ._interrupt", "from stairbounce._interrupt").replace("from .model", "from stairbounce.model")
+        sys.exit("the halt check of _run_unit is not where this script expects it")
+    src = src.replace(check, "        g += 1\n").replace("cache=True", "cache=False")
+    src = src.replace("from . import", "from stairbounce import").replace("from .", "from stairbounce.")
     mod = types.ModuleType("plane_without_halt_check")
     exec(compile(src, "plane_without_halt_check.py", "exec"), mod.__dict__)
     return mod
@@ -147,12 +147,12 @@ def kernel_parts(args):
 
     es = P.pixel_centres(0, 1, 500)
     us = P.pixel_centres(0, 1.5, 350)
-    chunk, order = P._chunking(es.size * us.size, numba.get_num_threads())
+    chunk, units = P._chunking(es.size * us.size, numba.get_num_threads())
     base = no_check_copy()
 
     def run(kernel):
-        outs = [np.empty((us.size, es.size), dt) for dt, _ in P._FIELDS.values()]
-        kernel(es, us, 1000, 1.0, 0.0, order, chunk, *outs, np.zeros(1, np.int64))
+        outs = [np.empty(es.size * us.size, dt) for dt, _ in P._FIELDS.values()]
+        kernel(es, us, True, 1000, 1.0, 0.0, True, units, chunk, *outs, np.zeros(1, np.int64))
         return outs
 
     a, b = run(P._scan_fast), run(base._scan_fast)  # also compiles the copy

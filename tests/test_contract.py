@@ -231,3 +231,24 @@ def test_memory_of_the_dimension_and_orbit_commands_is_checked_first(capsys, mon
         err = capsys.readouterr().err
         assert exc.value.code == 2 and err.strip().count("\n") == 0 and "needs about" in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_available_memory_reads_memavailable():
+    # _validate.available_memory reads /proc/meminfo in one raw read and takes
+    # its MemAvailable line (mem_available); the free pages where there is none
+    from pathlib import Path
+
+    from stairbounce import _validate
+
+    assert _validate.mem_available(b"MemTotal: 100 kB\nMemFree: 50 kB\nMemAvailable:   70 kB\nCached: 1 kB\n") == 70 * 1024
+    assert _validate.mem_available(b"MemTotal: 100 kB\nMemAvailable: 70 kB") == 70 * 1024  # no newline at the end
+    assert _validate.mem_available(b"MemTotal: 100 kB\nMemFree: 50 kB\n") is None  # an old kernel
+    assert _validate.mem_available(b"MemTotal: 100 kB\nMemAvailable: lots kB\n") is None
+    assert _validate.mem_available(b"MemTotal: 100 kB\nMemAvailable: 70 MB\n") is None
+    assert _validate.mem_available(b"MemTotal: 100 kB\nXMemAvailable: 70 kB\n") is None
+    if not Path("/proc/meminfo").exists():
+        pytest.skip("no /proc/meminfo here: available_memory takes the free pages")
+    a = _validate.available_memory()
+    text = Path("/proc/meminfo").read_text()
+    b = int(next(line.split()[1] for line in text.splitlines() if line.startswith("MemAvailable:"))) * 1024
+    assert a > 0 and abs(a - b) < 256 * 2**20  # read twice, moments apart

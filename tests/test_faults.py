@@ -617,16 +617,16 @@ def test_kernels_return_at_once_when_halted_and_agree_when_not(reference):
     from stairbounce import plane
 
     es, us = reference.e.values, reference.u.values
-    chunk, order = plane._chunking(es.size * us.size, 2)
+    chunk, units = plane._chunking(es.size * us.size, 2)
     names = ("status", "word_length", "jumps", "period", "impacts")
     # pruned or not: a segment's listing answers pixels (pruned ones, those whose
     # first step slides), so the flag is read before the first listing
     for prune in (False, True):
         outs = [np.full(us.size * es.size, 99, dtype=reference[k].dtype) for k in names]
-        plane._scan_fast(es, us, True, 400, 1.0, 0.0, prune, order, chunk, *outs, np.ones(1, np.int64))
+        plane._scan_fast(es, us, True, 400, 1.0, 0.0, prune, units, chunk, *outs, np.ones(1, np.int64))
         assert all((o == 99).all() for o in outs)
     for prune in (False, True):
-        plane._scan_fast(es, us, True, 400, 1.0, 0.0, prune, order, chunk, *outs, np.zeros(1, np.int64))
+        plane._scan_fast(es, us, True, 400, 1.0, 0.0, prune, units, chunk, *outs, np.zeros(1, np.int64))
         for o, k in zip(outs, names):
             np.testing.assert_array_equal(o.reshape(us.size, es.size), reference[k].values)
 

