@@ -450,7 +450,7 @@ def test_no_reference_counting_inside_the_lane_kernels_loops():
     es, us = sc.pixel_centres(0.0, 1.0, 8), sc.pixel_centres(0.0, 1.5, 8)
     cols, rows = sc._grid_factors(es, us, 1.0)
     outs = [np.empty(64, dtype=dt) for dt, _ in sc._FIELDS.values()]
-    run_unit(es, us, True, cols, rows, 100, 1.0, 0.0, True, np.array([0], np.int64), 64, 64, *outs,
+    run_unit(es, us, True, cols, rows, 100, 1.0, 0.0, True, np.array([0, 1], np.int64), 64, 64, *outs,
              np.zeros(1, np.int64), sc._LONG_MIN)
     bad, nblocks = _counted_in_loops(run_unit.inspect_llvm(run_unit.signatures[0]), "_run_unit")
     assert nblocks > 20
