@@ -843,40 +843,38 @@ def _point_coords(name, values):
 
 
 def _check_centres(es, us):
-    """What :func:`_check_values` refuses in the pixel centres of windows that
-    :func:`_window` accepted (so finite, e in [0, 1), u > 0 unless it
-    underflows), with its messages, from the least and the largest centre:
-    centres do not decrease.  Python floats: a dozen numpy calls on arrays
-    cost 50 us in a scan of 5 ms."""
-    e_lo, u_lo, u_hi = float(es[0]), float(us[0]), float(us[-1])
-    if 0.0 < e_lo < _v.E_MIN:
-        raise ValueError(f"{_v.E_TINY_RULE}, got {e_lo}")
-    if not u_lo > 0.0:
-        raise ValueError(f"u (horizontal speed) values must be > 0, got min {u_lo}")
-    if not (u_lo >= _v.U_MIN and u_hi <= _v.U_MAX):
-        raise ValueError(
-            f"u (horizontal speed) values must be in [{_v.U_MIN:g}, {_v.U_MAX:g}] (the valid "
-            f"numeric range), got [{u_lo}, {u_hi}]"
-        )
+    """:func:`_check_values` on the pixel centres of windows that :func:`_window`
+    accepted (finite), from the least and the largest centre (centres do not
+    decrease, so the messages name the same values): Python floats, as a dozen
+    numpy calls on arrays cost 50 us in a scan of 5 ms."""
+    e_lo = float(es[0])
+    _check_range("e", e_lo, float(es[-1]), e_lo if _v.e_too_small(e_lo) else None)
+    _check_range("u", float(us[0]), float(us[-1]))
 
 
 def _check_values(name, a):
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} values must be finite")
-    if name == "e" and not np.all((a >= 0.0) & (a < 1.0)):
-        raise ValueError(
-            f"e (restitution coefficient) values must be in [0, 1), got [{a.min()}, {a.max()}]"
-        )
-    if name == "e" and np.any(_v.e_too_small(a)):
-        raise ValueError(f"{_v.E_TINY_RULE}, got {a[_v.e_too_small(a)].flat[0]}")
-    if name == "u" and not np.all(a > 0.0):
-        raise ValueError(f"u (horizontal speed) values must be > 0, got min {a.min()}")
-    if name == "u" and not np.all((a >= _v.U_MIN) & (a <= _v.U_MAX)):
+    tiny = a[_v.e_too_small(a)] if name == "e" else a[:0]
+    _check_range(name, a.min(), a.max(), tiny.flat[0] if tiny.size else None)
+    return np.ascontiguousarray(a)
+
+
+def _check_range(name, lo, hi, tiny=None):
+    """The range of finite ``e`` or ``u`` values from their least ``lo`` and
+    largest ``hi`` (and ``tiny``, the first e in (0, 2^-53), if any): ValueError
+    naming the parameter and the range."""
+    if name == "e" and not (lo >= 0.0 and hi < 1.0):
+        raise ValueError(f"e (restitution coefficient) values must be in [0, 1), got [{lo}, {hi}]")
+    if tiny is not None:
+        raise ValueError(f"{_v.E_TINY_RULE}, got {tiny}")
+    if name == "u" and not lo > 0.0:
+        raise ValueError(f"u (horizontal speed) values must be > 0, got min {lo}")
+    if name == "u" and not (lo >= _v.U_MIN and hi <= _v.U_MAX):
         raise ValueError(
             f"u (horizontal speed) values must be in [{_v.U_MIN:g}, {_v.U_MAX:g}] (the valid "
-            f"numeric range), got [{a.min()}, {a.max()}]"
+            f"numeric range), got [{lo}, {hi}]"
         )
-    return np.ascontiguousarray(a)
 
 
 def estimate_bytes(n_e, n_u):
@@ -998,22 +996,19 @@ def _outputs(npix):
     out = {}
     with _spare_lock:
         for k, (dt, _) in _FIELDS.items():
-            kept = _spare.pop(k, [])  # oldest first
+            kept = _spare.get(k, [])  # oldest first
             got = None
-            rest = []
-            while kept:
-                a = kept.pop()
-                # references: the name a and getrefcount's argument, nobody else's
-                if got is None and a.shape[0] == npix and sys.getrefcount(a) == 2:
-                    got = a
-                else:
-                    rest.insert(0, a)
-                a = None
+            for i in range(len(kept) - 1, -1, -1):
+                # references: the list's and getrefcount's argument, nobody else's
+                if kept[i].shape[0] == npix and sys.getrefcount(kept[i]) == 2:
+                    got = kept.pop(i)
+                    break
             if got is None:
-                del rest[: max(0, len(rest) - (_SPARE_SCANS - 1))]  # released before a new one is made
+                del kept[: max(0, len(kept) - (_SPARE_SCANS - 1))]  # released before a new one is made
                 got = np.empty(npix, dtype=dt)
+            kept.append(got)
             out[k] = got
-            _spare[k] = (rest + [got])[-_SPARE_SCANS:] if keep else rest[-(_SPARE_SCANS - 1):]
+            _spare[k] = kept[-_SPARE_SCANS:] if keep else kept[-_SPARE_SCANS:-1]
     return out
 
 
