@@ -1,0 +1,440 @@
+"""The independent checker of certificates: re-verifies what a certificate claims.
+
+``verify_arrays(e0, e1, u0, u1, status, max_iter, itinerary, offsets)`` checks
+N certificates in the array form of ``structure/certificate.py`` at once, with
+its own rigorous arithmetic (numpy float64 intervals, outward rounded), and
+shares no code with the certifier's kernel nor with ``stairbounce.model``; only
+``stairbounce.symbolic`` is used, to spell a word from an itinerary.
+
+What is checked, per box (the first failure is the box's verdict):
+
+* ``box``: ``0 < e0 <= e1 < 1`` and ``1e-150 <= u0 <= u1 <= 1e150``, finite;
+* ``status``: a known status code;
+* ``itinerary``: impact numbers >= -1, the slide (-1) only as the last entry;
+  ``word``: ends with -1 and has at most ``max_iter`` steps;
+  ``no_slide_within``: exactly ``max_iter`` steps, none -1; the others at most
+  ``max_iter`` steps, none -1;
+* ``corollary``: a ``no_sliding`` box satisfies Corollary 2.1 over the whole
+  box, ``8 e0 u0^2 > (1 - e0)^2`` (that is ``u0 > (1-e0)/(2 sqrt(2 e0))``,
+  the bound decreasing in e), enclosed;
+* along the itinerary, from ``(y, v) = (1, 0)``, every decision of every
+  listed step proven with the sign the itinerary says: the slide margin
+  ``T - (v + ratio s)`` (Prop. 2.1, eq. (2.4)) proven >= 0 on the sliding
+  step and < 0 on the others (``slide``); on a step with k >= 1 impacts the
+  margin ``T - t_k`` proven >= 0 (``impact``), and ``T - t_{k+1}`` proven < 0
+  (``no impact``).  The impact times increase (``t_{j+1} - t_j = 2 e^j s > 0``,
+  eq. (2.2)), so ``T - t_k >= 0`` proves the decisions of impacts 1..k too.
+
+The formulas (eq. (2.2), Prop. 2.3; ``s = sqrt(v^2 + 2y)``, ``T = 1/u``):
+``t_j = v + A_j s`` with ``A_j = (1 + e - 2 e^j) / (1 - e)``; after k impacts
+(k = 0: the fly-over) ``v' = v - T + B_k s`` with
+``B_k = (1+e)(1 - e^k)/(1 - e)`` (that is ``v_k - (T - t_k)``, ``v_k = e^k s``)
+and ``s'^2 = 2 + (e^k s)^2`` (energy: ``v'^2 + 2y' = v_k^2 + 2`` for Prop.
+2.3's ``y' = 1 - d^2/2 + v_k d``, and ``s^2 + 2`` after a fly-over).  The
+coefficients ``ratio = (1+e)/(1-e)``, ``A_j`` (a sum ``1 + 2e + ... + 2e^{j-1}``),
+``B_k`` and ``e^k`` increase with e on [0, 1): over ``[e0, e1]`` each lies
+between its values at e0 and e1, which are enclosed at those two floats.
+
+Rigour.  Every quantity is an interval ``[lo, hi]`` of float64 containing the
+exact real value for every (e, u) of the box.  The box's bounds are floats, so
+``e`` and ``u`` are exact intervals.  Each bound is computed by one IEEE-754
+operation (+, -, *, /, sqrt: correctly rounded to nearest in numpy, which
+neither contracts to fused multiply-adds nor uses another rounding mode) and
+then moved one float outward with ``np.nextafter`` (down for a lower bound, up
+for an upper): the exact result of the operation on the float operands lies
+within half an ulp of the rounded one, hence between the rounded value's two
+neighbours.  Sums and differences take the matching bounds
+(``[a - b] = [a_lo - b_hi, a_hi - b_lo]``), products of intervals of
+unknown sign the least and largest of the four bound products, products of
+non-negative intervals the bound products, quotients by positive intervals the
+least and largest of the four bound quotients, and ``sqrt`` (increasing) the
+roots of the bounds.  By induction over the operations every interval contains
+the exact value of its expression at every point of the box, and an exact value
+known to be >= 0 keeps its lower bound clipped at 0.  A decision accepted
+(``lo >= 0`` or ``hi < 0``) therefore holds at every point of the box.  The
+first step starts from the exact ``v = 0`` and ``s = sqrt 2`` (enclosed);
+every later state is the map applied along the decided itinerary, so the
+formulas of the step with k impacts apply to every point of the box.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import _validate as _v
+from ..symbolic import Word, parse_word, word_from_impacts
+from .certificate import STATUSES, Certificate
+
+__all__ = ["CHECKS", "Verdict", "verify", "verify_arrays", "verify_codes", "verify_file", "read_atlas_arrays"]
+
+CHECKS = ("ok", "box", "status", "itinerary", "corollary", "slide", "impact", "no impact", "word")
+"""Names of the checks; ``verify_codes`` returns indices into this tuple (0: accepted)."""
+
+_OK, _BOX, _STATUS, _ITIN, _COR, _SLIDE, _IMPACT, _NOIMPACT, _WORD = range(len(CHECKS))
+_WORD_S, _NOSLIDING_S, _WITHIN_S, _UNDECIDED_S = (STATUSES.index(s) for s in
+                                                   ("word", "no_sliding", "no_slide_within", "undecided"))
+_NINF, _PINF = -np.inf, np.inf
+
+
+def _down(x):
+    return np.nextafter(x, _NINF)
+
+
+def _up(x):
+    return np.nextafter(x, _PINF)
+
+
+def _add(alo, ahi, blo, bhi):
+    return _down(alo + blo), _up(ahi + bhi)
+
+
+def _sub(alo, ahi, blo, bhi):
+    return _down(alo - bhi), _up(ahi - blo)
+
+
+def _mul_pos(alo, ahi, blo, bhi):
+    """Product of two non-negative intervals (lower bounds clipped at 0)."""
+    return np.maximum(_down(alo * blo), 0.0), _up(ahi * bhi)
+
+
+def _div_pos(alo, ahi, blo, bhi):
+    """``a / b`` for ``b`` positive, ``a`` of any sign."""
+    q1, q2, q3, q4 = alo / blo, alo / bhi, ahi / blo, ahi / bhi
+    return _down(np.minimum(q1, q2)), _up(np.maximum(q3, q4))
+
+
+def _sqrt(alo, ahi):
+    return np.maximum(_down(np.sqrt(np.maximum(alo, 0.0))), 0.0), _up(np.sqrt(ahi))
+
+
+def _pow_point(e, k):
+    """``e^k`` enclosed, for floats ``0 < e < 1`` and ints ``k >= 0`` (arrays),
+    by binary powering with each product rounded outward."""
+    rlo = np.ones_like(e)
+    rhi = np.ones_like(e)
+    blo = e.copy()
+    bhi = e.copy()
+    k = k.copy()
+    while True:
+        odd = (k & 1).astype(bool)
+        if odd.any():
+            plo, phi = _mul_pos(rlo, rhi, blo, bhi)
+            rlo = np.where(odd, plo, rlo)
+            rhi = np.where(odd, phi, rhi)
+        k >>= 1
+        if not k.any():
+            return rlo, rhi
+        blo, bhi = _mul_pos(blo, bhi, blo, bhi)
+
+
+def _coefficients(e, k):
+    """At the floats ``e`` (exact), enclosures of ``e^k``, ``A_k``, ``A_{k+1}``
+    and ``B_k`` (see the module's docstring), each as ``(lo, hi)``."""
+    one_p = (_down(1.0 + e), _up(1.0 + e))
+    one_m = (_down(1.0 - e), _up(1.0 - e))
+    E = _pow_point(e, k)
+    two_E = (2.0 * E[0], 2.0 * E[1])  # exact: a power of two
+    eE = _mul_pos(e, e, *E)
+    two_eE = (2.0 * eE[0], 2.0 * eE[1])
+    A = _div_pos(*_sub(*one_p, *two_E), *one_m)
+    A1 = _div_pos(*_sub(*one_p, *two_eE), *one_m)
+    omE = _sub(1.0, 1.0, *E)
+    omE = (np.maximum(omE[0], 0.0), omE[1])  # 1 - e^k >= 0
+    B = _div_pos(*_mul_pos(*one_p, *omE), *one_m)
+    return E, A, A1, B
+
+
+def _structure(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
+    """The checks that need no arithmetic; returns (code, step) arrays."""
+    n = len(e0)
+    code = np.zeros(n, dtype=np.int8)
+    step = np.zeros(n, dtype=np.int64)
+    with np.errstate(invalid="ignore"):
+        bad_box = ~(np.isfinite(e0) & np.isfinite(e1) & np.isfinite(u0) & np.isfinite(u1)
+                    & (e0 > 0.0) & (e0 <= e1) & (e1 < 1.0) & (u0 >= _v.U_MIN) & (u0 <= u1) & (u1 <= _v.U_MAX))
+    code[bad_box] = _BOX
+    bad_status = (status < 0) | (status >= len(STATUSES))
+    code[(code == 0) & bad_status] = _STATUS
+    length = np.diff(offsets)
+    last = np.zeros(n, dtype=np.int64)
+    last[length > 0] = itinerary[offsets[1:][length > 0] - 1]
+    # entries < -1 anywhere, or -1 before the last entry of its box
+    box_of = np.repeat(np.arange(n), length)
+    is_last = np.zeros(len(itinerary), dtype=bool)
+    is_last[offsets[1:][length > 0] - 1] = True
+    bad_entry = (itinerary < -1) | ((itinerary == -1) & ~is_last)
+    bad_itin = np.zeros(n, dtype=bool)
+    bad_itin[box_of[bad_entry]] = True
+    ends_slide = (length > 0) & (last == -1)
+    bad_itin |= length > max_iter
+    bad_itin |= (status == _WORD_S) & ~ends_slide
+    bad_itin |= (status == _WITHIN_S) & ((length != max_iter) | ends_slide)
+    bad_itin |= ((status == _NOSLIDING_S) | (status == _UNDECIDED_S)) & ends_slide
+    code[(code == 0) & bad_itin] = _ITIN
+    return code, step
+
+
+def _corollary(e0, u0):
+    """Where Corollary 2.1 is proven over the box: ``8 e0 u0^2 > (1 - e0)^2``."""
+    lhs = _mul_pos(*_mul_pos(8.0 * e0, 8.0 * e0, u0, u0), u0, u0)[0]  # 8 e0 exact
+    one_m = _up(1.0 - e0)
+    rhs = _up(one_m * one_m)
+    return lhs > rhs
+
+
+def verify_codes(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
+    """verify_codes(e0, e1, u0, u1, status, max_iter, itinerary, offsets) -> (code, step)
+
+    The verdict of every box of the array form: ``code`` (int8, index into
+    :data:`CHECKS`, 0 when the certificate's claim is re-verified) and the
+    1-based ``step`` of the failed decision (0 when the failure is not a
+    step's).  The checks and the argument for their rigour are in the module's
+    docstring.
+    """
+    e0, e1, u0, u1 = (np.ascontiguousarray(np.asarray(a, dtype=np.float64).ravel()) for a in (e0, e1, u0, u1))
+    n = len(e0)
+    status = np.asarray(status).ravel()
+    if status.dtype.kind in "USO":
+        names = {s: i for i, s in enumerate(STATUSES)}
+        status = np.array([names.get(str(s), -1) for s in status], dtype=np.int64)
+    status = status.astype(np.int64)
+    itinerary = np.asarray(itinerary, dtype=np.int64).ravel()
+    offsets = np.asarray(offsets, dtype=np.int64).ravel()
+    max_iter = _v.count("max_iter", max_iter, 1)
+    if not (len(e1) == len(u0) == len(u1) == len(status) == n):
+        raise ValueError(f"e0, e1, u0, u1 and status must have one entry per box, got lengths "
+                         f"{[len(a) for a in (e0, e1, u0, u1, status)]}")
+    if (len(offsets) != n + 1 or (n + 1 and (offsets[0] != 0 or offsets[-1] != len(itinerary)))
+            or np.any(np.diff(offsets) < 0)):
+        raise ValueError("offsets must have one entry per box plus one, start at 0, never decrease and "
+                         f"end at len(itinerary) = {len(itinerary)}")
+    code, step = _structure(e0, e1, u0, u1, status, max_iter, itinerary, offsets)
+
+    nos = (code == 0) & (status == _NOSLIDING_S)
+    code[nos & ~_corollary(e0, u0)] = _COR
+
+    # the dynamics, along each itinerary; boxes sorted by itinerary length, so
+    # that the boxes still running at step n are a prefix
+    length = np.diff(offsets)
+    run = np.flatnonzero((code == 0) & (length > 0))
+    run = run[np.argsort(-length[run], kind="stable")]
+    if len(run):
+        _follow(e0[run], e1[run], u0[run], u1[run], itinerary, offsets[run], length[run],
+                code, step, run)
+    return code, step
+
+
+def _follow(e0, e1, u0, u1, itinerary, start, length, code, step, index):
+    """Re-decide every step of the boxes (sorted by decreasing ``length``);
+    writes the first failure of box ``index[i]`` into ``code`` and ``step``."""
+    m = len(e0)
+    Tlo, Thi = _down(1.0 / u1), _up(1.0 / u0)
+    # ratio = (1+e)/(1-e) over the box: its value at e0 (lower) and e1 (upper)
+    rlo = _div_pos(_down(1.0 + e0), _up(1.0 + e0), _down(1.0 - e0), _up(1.0 - e0))[0]
+    rhi = _div_pos(_down(1.0 + e1), _up(1.0 + e1), _down(1.0 - e1), _up(1.0 - e1))[1]
+    vlo = np.zeros(m)
+    vhi = np.zeros(m)
+    slo, shi = _sqrt(np.full(m, 2.0), np.full(m, 2.0))
+    fail = np.zeros(m, dtype=np.int8)
+    fstep = np.zeros(m, dtype=np.int64)
+    counts = np.bincount(length, minlength=length[0] + 1)
+    still = m - np.cumsum(counts)  # boxes with length > n
+    for n in range(int(length[0])):
+        sl = slice(0, int(still[n]))
+        k = itinerary[start[sl] + n]
+        T = (Tlo[sl], Thi[sl])
+        v = (vlo[sl], vhi[sl])
+        s = (slo[sl], shi[sl])
+        Tv = _sub(*T, *v)  # T - v
+        slide = _sub(*Tv, *_mul_pos(rlo[sl], rhi[sl], *s))
+        sliding = k == -1
+        ok_slide = np.where(sliding, slide[0] >= 0.0, slide[1] < 0.0)
+        kk = np.maximum(k, 0)
+        E0, A0, A10, B0 = _coefficients(e0[sl], kk)
+        E1, A1, A11, B1 = _coefficients(e1[sl], kk)
+        # T - t_k = T - v - A_k s, proven >= 0 (only where k >= 1)
+        hit = _sub(*Tv, *_mul_pos(np.maximum(A0[0], 0.0), A1[1], *s))
+        ok_hit = (k < 1) | (hit[0] >= 0.0)
+        miss = _sub(*Tv, *_mul_pos(np.maximum(A10[0], 0.0), A11[1], *s))
+        ok_miss = sliding | (miss[1] < 0.0)
+        new_fail = np.where(~ok_slide, _SLIDE, np.where(~ok_hit, _IMPACT, np.where(~ok_miss, _NOIMPACT, 0)))
+        first = (fail[sl] == 0) & (new_fail != 0)
+        fail[sl][first] = new_fail[first]
+        fstep[sl][first] = n + 1
+        # the next state: v' = v - T + B_k s, s' = sqrt(2 + (e^k s)^2)
+        Bs = _mul_pos(np.maximum(B0[0], 0.0), B1[1], *s)
+        nv = _add(*_sub(*v, *T), *Bs)
+        Es = _mul_pos(E0[0], E1[1], *s)
+        ns = _sqrt(*_add(*_mul_pos(*Es, *Es), 2.0, 2.0))
+        vlo[sl], vhi[sl] = nv
+        slo[sl], shi[sl] = ns
+    failed = fail != 0
+    code[index[failed]] = fail[failed]
+    step[index[failed]] = fstep[failed]
+
+
+def verify_arrays(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
+    """verify_arrays(e0, e1, u0, u1, status, max_iter, itinerary, offsets) -> bool array
+
+    Whether each box's certificate (the array form of
+    ``structure/certificate.py``) is re-verified: its itinerary re-decided
+    step by step with outward-rounded float64 intervals, vectorised across the
+    boxes (see the module's docstring for the checks and the rigour).  A
+    ``True`` is a proof of the box's claim; a ``False`` says the claim could
+    not be re-verified (``verify_codes`` says which check failed).
+    """
+    return verify_codes(e0, e1, u0, u1, status, max_iter, itinerary, offsets)[0] == _OK
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The checker's answer: ``ok``, and else which check failed, at which step.
+
+    For an atlas or a file, ``checked`` and ``rejected`` count its boxes and
+    ``check``/``step`` describe the first rejected one.  True in a boolean
+    context exactly when ``ok``.
+    """
+
+    ok: bool
+    check: str | None = None
+    step: int | None = None
+    message: str = ""
+    checked: int = 1
+    rejected: int = 0
+
+    def __bool__(self) -> bool:
+        return self.ok
+
+
+def _arrays_of_certificate(cert):
+    itin = np.asarray(cert.itinerary, dtype=np.int64).ravel()
+    status = STATUSES.index(cert.status) if cert.status in STATUSES else -1
+    return (np.array([cert.e[0]], dtype=float), np.array([cert.e[1]], dtype=float),
+            np.array([cert.u[0]], dtype=float), np.array([cert.u[1]], dtype=float),
+            np.array([status]), cert.max_iter, itin, np.array([0, len(itin)]))
+
+
+def _verify_certificate(cert):
+    try:
+        arrays = _arrays_of_certificate(cert)
+        code, step = verify_codes(*arrays)
+    except (ValueError, TypeError) as exc:
+        return Verdict(False, "box", None, f"malformed certificate: {exc}")
+    c, st = int(code[0]), int(step[0])
+    if c == _OK and cert.status == "word":
+        try:
+            spelled = word_from_impacts(cert.itinerary)
+        except ValueError:
+            spelled = None
+        if not isinstance(cert.word, Word) or cert.word != spelled:
+            return Verdict(False, "word", None,
+                           f"the itinerary spells {spelled}, the certificate states {cert.word}")
+    if c == _OK and cert.status != "word" and cert.word is not None:
+        return Verdict(False, "word", None, f"a {cert.status} certificate states a word ({cert.word})")
+    if c == _OK:
+        return Verdict(True, None, None, f"{cert.status}: re-verified")
+    where = f" at step {st}" if st else ""
+    return Verdict(False, CHECKS[c], st or None, f"{cert.status}: check '{CHECKS[c]}' failed{where}")
+
+
+def read_atlas_arrays(data):
+    """read_atlas_arrays(data) -> dict of the array form (and ``word`` if stored)
+
+    From an xarray Dataset with dimension ``box`` and variables ``e0, e1, u0,
+    u1, status`` (int8 codes into STATUSES, or strings), ``itinerary`` (its own
+    dimension), ``offsets`` (box + 1) and the attribute ``max_iter``.
+    """
+    need = ("e0", "e1", "u0", "u1", "status", "itinerary", "offsets")
+    missing = [name for name in need if name not in data.variables]
+    if missing or "max_iter" not in data.attrs:
+        raise ValueError(f"atlas must hold the variables {', '.join(need)} and the attribute max_iter; "
+                         f"missing: {', '.join(missing + ([] if 'max_iter' in data.attrs else ['max_iter']))}")
+    out = {name: np.asarray(data[name].values) for name in need}
+    out["max_iter"] = int(data.attrs["max_iter"])
+    if "word" in data.variables:
+        out["word"] = np.asarray(data["word"].values)
+    return out
+
+
+def _check_words(arrays, code):
+    """Where a stored word text disagrees with the word its itinerary spells."""
+    words = arrays.get("word")
+    if words is None:
+        return
+    status = np.asarray(arrays["status"])
+    if status.dtype.kind in "USO":
+        is_word = np.array([str(s) == "word" for s in status])
+    else:
+        is_word = status == _WORD_S
+    itin, off = np.asarray(arrays["itinerary"], dtype=np.int64), np.asarray(arrays["offsets"], dtype=np.int64)
+    for i in np.flatnonzero(is_word & (code == _OK)):
+        try:
+            same = parse_word(str(words[i])) == word_from_impacts(itin[off[i]:off[i + 1]])
+        except ValueError:
+            same = False
+        if not same:
+            code[i] = _WORD
+
+
+def _verify_dataset(data):
+    arrays = read_atlas_arrays(data)
+    code, step = verify_codes(arrays["e0"], arrays["e1"], arrays["u0"], arrays["u1"], arrays["status"],
+                              arrays["max_iter"], arrays["itinerary"], arrays["offsets"])
+    _check_words(arrays, code)
+    bad = np.flatnonzero(code != _OK)
+    n = len(code)
+    if not len(bad):
+        return Verdict(True, None, None, f"{n} boxes re-verified", checked=n, rejected=0)
+    i = int(bad[0])
+    st = int(step[i])
+    return Verdict(False, CHECKS[code[i]], st or None,
+                   f"{len(bad)} of {n} boxes rejected; the first, box {i}, failed check '{CHECKS[code[i]]}'"
+                   + (f" at step {st}" if st else ""), checked=n, rejected=len(bad))
+
+
+def _open(path):
+    import xarray as xr
+
+    path = Path(path)
+    if path.suffix == ".zarr":
+        return xr.open_zarr(path)
+    if path.suffix == ".nc":
+        return xr.open_dataset(path)
+    raise ValueError(f"path must be an atlas file ending in .nc or .zarr, got {str(path)!r}")
+
+
+def verify_file(path):
+    """verify_file(path) -> (n_checked, n_rejected)
+
+    Re-verify every box of an atlas file (``.nc`` or ``.zarr``, the layout of
+    :func:`read_atlas_arrays`) with :func:`verify_arrays`; a stored ``word``
+    text must be the word its itinerary spells.
+    """
+    with _open(path) as data:
+        verdict = _verify_dataset(data.load())
+    return verdict.checked, verdict.rejected
+
+
+def verify(obj):
+    """verify(cert_or_atlas_or_path) -> Verdict
+
+    Re-verify a claim with the independent checker: a :class:`Certificate`
+    (from its box, status, max_iter and itinerary alone; a ``word`` status
+    also needs the stated word to be the itinerary's), an atlas (an object
+    whose ``boxes`` is the Dataset of :func:`read_atlas_arrays`, or that
+    Dataset) or the path of an atlas file.  The verdict is true when every
+    claim is re-verified, and says otherwise which check failed first.
+    """
+    if isinstance(obj, Certificate):
+        return _verify_certificate(obj)
+    if isinstance(obj, (str, Path)):
+        with _open(obj) as data:
+            return _verify_dataset(data.load())
+    data = getattr(obj, "boxes", obj)
+    if hasattr(data, "variables") and hasattr(data, "attrs"):
+        return _verify_dataset(data)
+    raise ValueError(f"verify needs a Certificate, an atlas (with boxes) or a path, got {type(obj).__name__}")
+
