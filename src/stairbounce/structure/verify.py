@@ -76,74 +76,75 @@ CHECKS = ("ok", "box", "status", "itinerary", "corollary", "slide", "impact", "n
 _OK, _BOX, _STATUS, _ITIN, _COR, _SLIDE, _IMPACT, _NOIMPACT, _WORD = range(len(CHECKS))
 _WORD_S, _NOSLIDING_S, _WITHIN_S, _UNDECIDED_S = (STATUSES.index(s) for s in
                                                    ("word", "no_sliding", "no_slide_within", "undecided"))
-_NINF, _PINF = -np.inf, np.inf
+# an interval is a (2, n) array: row 0 the lower bounds, row 1 the upper ones;
+# one nextafter call moves both rows outward
+_OUTWARD = np.array([[-np.inf], [np.inf]])
+# boxes followed together: about 30 float64 arrays of (boxes x steps) entries
+_CHUNK = 1 << 15
 
 
-def _down(x):
-    return np.nextafter(x, _NINF)
+def _out(x):
+    """Each lower bound one float down, each upper bound one float up."""
+    return np.nextafter(x, _OUTWARD)
 
 
-def _up(x):
-    return np.nextafter(x, _PINF)
+def _point(x):
+    """The exact interval ``[x, x]`` of floats ``x``."""
+    return np.stack([x, x])
 
 
-def _add(alo, ahi, blo, bhi):
-    return _down(alo + blo), _up(ahi + bhi)
+def _add(a, b):
+    return _out(a + b)
 
 
-def _sub(alo, ahi, blo, bhi):
-    return _down(alo - bhi), _up(ahi - blo)
+def _sub(a, b):
+    return _out(a - b[::-1])  # [a_lo - b_hi, a_hi - b_lo]
 
 
-def _mul_pos(alo, ahi, blo, bhi):
-    """Product of two non-negative intervals (lower bounds clipped at 0)."""
-    return np.maximum(_down(alo * blo), 0.0), _up(ahi * bhi)
+def _mul_pos(a, b):
+    """Product of two non-negative intervals (bounds clipped at 0)."""
+    return np.maximum(_out(a * b), 0.0)
 
 
-def _div_pos(alo, ahi, blo, bhi):
+def _div_pos(a, b):
     """``a / b`` for ``b`` positive, ``a`` of any sign."""
-    q1, q2, q3, q4 = alo / blo, alo / bhi, ahi / blo, ahi / bhi
-    return _down(np.minimum(q1, q2)), _up(np.maximum(q3, q4))
+    q, r = a / b, a / b[::-1]  # [a_lo/b_lo, a_hi/b_hi], [a_lo/b_hi, a_hi/b_lo]
+    return _out(np.stack([np.minimum(q[0], r[0]), np.maximum(q[1], r[1])]))
 
 
-def _sqrt(alo, ahi):
-    return np.maximum(_down(np.sqrt(np.maximum(alo, 0.0))), 0.0), _up(np.sqrt(ahi))
+def _sqrt(a):
+    """Root of a non-negative interval."""
+    return np.maximum(_out(np.sqrt(np.maximum(a, 0.0))), 0.0)
 
 
 def _pow_point(e, k):
     """``e^k`` enclosed, for floats ``0 < e < 1`` and ints ``k >= 0`` (arrays),
     by binary powering with each product rounded outward."""
-    rlo = np.ones_like(e)
-    rhi = np.ones_like(e)
-    blo = e.copy()
-    bhi = e.copy()
+    result = np.ones((2, len(e)))
+    base = _point(e)
     k = k.copy()
     while True:
         odd = (k & 1).astype(bool)
         if odd.any():
-            plo, phi = _mul_pos(rlo, rhi, blo, bhi)
-            rlo = np.where(odd, plo, rlo)
-            rhi = np.where(odd, phi, rhi)
+            result = np.where(odd, _mul_pos(result, base), result)
         k >>= 1
         if not k.any():
-            return rlo, rhi
-        blo, bhi = _mul_pos(blo, bhi, blo, bhi)
+            return result
+        base = _mul_pos(base, base)
 
 
 def _coefficients(e, k):
     """At the floats ``e`` (exact), enclosures of ``e^k``, ``A_k``, ``A_{k+1}``
-    and ``B_k`` (see the module's docstring), each as ``(lo, hi)``."""
-    one_p = (_down(1.0 + e), _up(1.0 + e))
-    one_m = (_down(1.0 - e), _up(1.0 - e))
+    and ``B_k`` (see the module's docstring)."""
+    one = np.ones((2, len(e)))
+    ep = _point(e)
+    one_p, one_m = _add(one, ep), _sub(one, ep)
     E = _pow_point(e, k)
-    two_E = (2.0 * E[0], 2.0 * E[1])  # exact: a power of two
-    eE = _mul_pos(e, e, *E)
-    two_eE = (2.0 * eE[0], 2.0 * eE[1])
-    A = _div_pos(*_sub(*one_p, *two_E), *one_m)
-    A1 = _div_pos(*_sub(*one_p, *two_eE), *one_m)
-    omE = _sub(1.0, 1.0, *E)
-    omE = (np.maximum(omE[0], 0.0), omE[1])  # 1 - e^k >= 0
-    B = _div_pos(*_mul_pos(*one_p, *omE), *one_m)
+    eE = _mul_pos(ep, E)
+    A = _div_pos(_sub(one_p, 2.0 * E), one_m)  # 2 E exact: a power of two
+    A1 = _div_pos(_sub(one_p, 2.0 * eE), one_m)
+    omE = np.maximum(_sub(one, E), 0.0)  # 1 - e^k >= 0
+    B = _div_pos(_mul_pos(one_p, omE), one_m)
     return E, A, A1, B
 
 
@@ -179,10 +180,10 @@ def _structure(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
 
 def _corollary(e0, u0):
     """Where Corollary 2.1 is proven over the box: ``8 e0 u0^2 > (1 - e0)^2``."""
-    lhs = _mul_pos(*_mul_pos(8.0 * e0, 8.0 * e0, u0, u0), u0, u0)[0]  # 8 e0 exact
-    one_m = _up(1.0 - e0)
-    rhs = _up(one_m * one_m)
-    return lhs > rhs
+    u = _point(u0)
+    lhs = _mul_pos(_mul_pos(_point(8.0 * e0), u), u)  # 8 e0 exact
+    one_m = _sub(np.ones((2, len(e0))), _point(e0))
+    return lhs[0] > _mul_pos(one_m, one_m)[1]
 
 
 def verify_codes(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
@@ -221,56 +222,72 @@ def verify_codes(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
     length = np.diff(offsets)
     run = np.flatnonzero((code == 0) & (length > 0))
     run = run[np.argsort(-length[run], kind="stable")]
-    if len(run):
-        _follow(e0[run], e1[run], u0[run], u1[run], itinerary, offsets[run], length[run],
-                code, step, run)
+    # in chunks of boxes of similar length, so that memory stays bounded
+    for c in range(0, len(run), _CHUNK):
+        part = run[c:c + _CHUNK]
+        _follow(e0[part], e1[part], u0[part], u1[part], itinerary, offsets[part], length[part],
+                code, step, part)
     return code, step
 
 
 def _follow(e0, e1, u0, u1, itinerary, start, length, code, step, index):
     """Re-decide every step of the boxes (sorted by decreasing ``length``);
-    writes the first failure of box ``index[i]`` into ``code`` and ``step``."""
+    writes the first failure of box ``index[i]`` into ``code`` and ``step``.
+
+    The coefficients of every (box, step) are computed first, in one pass over
+    the itinerary entries laid out step-major (at step n the boxes still
+    running are a prefix, so their entries are one contiguous slice); the
+    loop over steps then only carries the state ``(v, s)``.
+    """
     m = len(e0)
-    Tlo, Thi = _down(1.0 / u1), _up(1.0 / u0)
+    counts = np.bincount(length, minlength=int(length[0]) + 1)
+    still = m - np.cumsum(counts)[:-1]  # boxes with length > n, n = 0 .. max - 1
+    edges = np.concatenate([[0], np.cumsum(still)])
+    rank = np.concatenate([np.arange(a) for a in still])  # step-major entries
+    n_of = np.repeat(np.arange(len(still)), still)
+    k = itinerary[start[rank] + n_of]
+    kk = np.maximum(k, 0)
+    E0, A0, A10, B0 = _coefficients(e0[rank], kk)
+    E1, A1, A11, B1 = _coefficients(e1[rank], kk)
+    # over [e0, e1] each coefficient lies between its values at e0 and e1
+    Ec = np.stack([E0[0], E1[1]])
+    Ac = np.stack([np.maximum(A0[0], 0.0), A1[1]])  # A_k >= 1 where k >= 1 (the only use)
+    A1c = np.stack([A10[0], A11[1]])
+    Bc = np.stack([B0[0], B1[1]])
+    del E0, A0, A10, B0, E1, A1, A11, B1
+    one = np.ones((2, m))
+    T = np.stack([_div_pos(one, _point(u1))[0], _div_pos(one, _point(u0))[1]])  # 1/u decreases
     # ratio = (1+e)/(1-e) over the box: its value at e0 (lower) and e1 (upper)
-    rlo = _div_pos(_down(1.0 + e0), _up(1.0 + e0), _down(1.0 - e0), _up(1.0 - e0))[0]
-    rhi = _div_pos(_down(1.0 + e1), _up(1.0 + e1), _down(1.0 - e1), _up(1.0 - e1))[1]
-    vlo = np.zeros(m)
-    vhi = np.zeros(m)
-    slo, shi = _sqrt(np.full(m, 2.0), np.full(m, 2.0))
+    ratio = [_div_pos(_add(one, _point(x)), _sub(one, _point(x))) for x in (e0, e1)]
+    R = np.stack([ratio[0][0], ratio[1][1]])
+    V = np.zeros((2, m))
+    S = _sqrt(2.0 * one)
+    two = 2.0 * one
     fail = np.zeros(m, dtype=np.int8)
     fstep = np.zeros(m, dtype=np.int64)
-    counts = np.bincount(length, minlength=length[0] + 1)
-    still = m - np.cumsum(counts)  # boxes with length > n
-    for n in range(int(length[0])):
-        sl = slice(0, int(still[n]))
-        k = itinerary[start[sl] + n]
-        T = (Tlo[sl], Thi[sl])
-        v = (vlo[sl], vhi[sl])
-        s = (slo[sl], shi[sl])
-        Tv = _sub(*T, *v)  # T - v
-        slide = _sub(*Tv, *_mul_pos(rlo[sl], rhi[sl], *s))
-        sliding = k == -1
+    for n in range(len(still)):
+        a = int(still[n])
+        at = slice(edges[n], edges[n + 1])
+        kn = k[at]
+        t, v, s = T[:, :a], V[:, :a], S[:, :a]
+        tv = _sub(t, v)  # T - v
+        slide = _sub(tv, _mul_pos(R[:, :a], s))  # (2.4)
+        hit = _sub(tv, _mul_pos(Ac[:, at], s))  # T - t_k, t_k = v + A_k s
+        miss = _sub(tv, _mul_pos(A1c[:, at], s))  # T - t_{k+1}
+        sliding = kn == -1
         ok_slide = np.where(sliding, slide[0] >= 0.0, slide[1] < 0.0)
-        kk = np.maximum(k, 0)
-        E0, A0, A10, B0 = _coefficients(e0[sl], kk)
-        E1, A1, A11, B1 = _coefficients(e1[sl], kk)
-        # T - t_k = T - v - A_k s, proven >= 0 (only where k >= 1)
-        hit = _sub(*Tv, *_mul_pos(np.maximum(A0[0], 0.0), A1[1], *s))
-        ok_hit = (k < 1) | (hit[0] >= 0.0)
-        miss = _sub(*Tv, *_mul_pos(np.maximum(A10[0], 0.0), A11[1], *s))
+        ok_hit = (kn < 1) | (hit[0] >= 0.0)
         ok_miss = sliding | (miss[1] < 0.0)
-        new_fail = np.where(~ok_slide, _SLIDE, np.where(~ok_hit, _IMPACT, np.where(~ok_miss, _NOIMPACT, 0)))
-        first = (fail[sl] == 0) & (new_fail != 0)
-        fail[sl][first] = new_fail[first]
-        fstep[sl][first] = n + 1
+        bad = ~(ok_slide & ok_hit & ok_miss)
+        if bad.any():
+            new_fail = np.where(~ok_slide, _SLIDE, np.where(~ok_hit, _IMPACT, _NOIMPACT))
+            first = (fail[:a] == 0) & bad
+            fail[:a][first] = new_fail[first]
+            fstep[:a][first] = n + 1
         # the next state: v' = v - T + B_k s, s' = sqrt(2 + (e^k s)^2)
-        Bs = _mul_pos(np.maximum(B0[0], 0.0), B1[1], *s)
-        nv = _add(*_sub(*v, *T), *Bs)
-        Es = _mul_pos(E0[0], E1[1], *s)
-        ns = _sqrt(*_add(*_mul_pos(*Es, *Es), 2.0, 2.0))
-        vlo[sl], vhi[sl] = nv
-        slo[sl], shi[sl] = ns
+        es = _mul_pos(Ec[:, at], s)
+        V[:, :a] = _add(_sub(v, t), _mul_pos(Bc[:, at], s))
+        S[:, :a] = _sqrt(_add(_mul_pos(es, es), two[:, :a]))
     failed = fail != 0
     code[index[failed]] = fail[failed]
     step[index[failed]] = fstep[failed]

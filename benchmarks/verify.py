@@ -1,0 +1,103 @@
+"""Re-verification of certificates by the independent checker (issue 36, item 4).
+
+    python benchmarks/verify.py [--n 20000] [--repeat 3] [--depth 12]
+
+Boxes: the Fig. 7 window cut into a 2^depth x 2^depth grid (depth 12: boxes of
+1.4e-5 x 1.4e-5), boxes drawn at random from it and certified by the Arb
+reference (``structure.reference``) until ``--n`` of them are proven (kept in
+memory, never written).  Timed, best of ``--repeat`` after a warm-up call:
+
+1. ``verify_arrays`` on all n proven boxes at once (numpy intervals), and on
+   the ``word`` boxes alone;
+2. baselines in the same process, per box: ``verify`` of one certificate at a
+   time (the same numpy checker on arrays of one box), and the Arb reference
+   re-deriving the certificate (``reference_certificate``), on a sample.
+
+Prints boxes per second and the ratios.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+from stairbounce.structure.certificate import STATUSES
+from stairbounce.structure.reference import reference_certificate
+from stairbounce.structure.verify import verify, verify_arrays
+
+FIG7 = ((0.155, 0.2138), (0.6, 0.658))
+
+
+def proven_boxes(n, depth, seed=0):
+    rng = np.random.default_rng(seed)
+    (ea, eb), (ua, ub) = FIG7
+    side = 2**depth
+    we, wu = (eb - ea) / side, (ub - ua) / side
+    certs, tried = [], 0
+    while len(certs) < n:
+        i, j = rng.integers(side, size=2)
+        c = reference_certificate((ea + i * we, ea + (i + 1) * we), (ua + j * wu, ua + (j + 1) * wu))
+        tried += 1
+        if c.proven:
+            certs.append(c)
+    return certs, tried
+
+
+def arrays(certs):
+    lengths = [len(c.itinerary) for c in certs]
+    return (np.array([c.e[0] for c in certs]), np.array([c.e[1] for c in certs]),
+            np.array([c.u[0] for c in certs]), np.array([c.u[1] for c in certs]),
+            np.array([STATUSES.index(c.status) for c in certs], dtype=np.int8), certs[0].max_iter,
+            np.concatenate([np.asarray(c.itinerary, dtype=np.int64) for c in certs]),
+            np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64))
+
+
+def best(f, repeat):
+    f()
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        f()
+        times.append(time.perf_counter() - t)
+    return min(times)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--n", type=int, default=20000)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--depth", type=int, default=12)
+    ap.add_argument("--sample", type=int, default=500, help="boxes of the per-box baselines")
+    a = ap.parse_args()
+    print(f"load before: {os.getloadavg()}")
+    t = time.perf_counter()
+    certs, tried = proven_boxes(a.n, a.depth)
+    t_ref = time.perf_counter() - t
+    by = {s: sum(c.status == s for c in certs) for s in STATUSES}
+    steps = sum(len(c.itinerary) for c in certs)
+    print(f"{a.n} proven boxes of {tried} tried (depth {a.depth}), {by}, {steps} steps in all; "
+          f"reference certifier: {tried / t_ref:.0f} boxes/s")
+    arr = arrays(certs)
+    assert verify_arrays(*arr).all()
+    t_all = best(lambda: verify_arrays(*arr), a.repeat)
+    words = [c for c in certs if c.status == "word"]
+    warr = arrays(words)
+    t_words = best(lambda: verify_arrays(*warr), a.repeat)
+    print(f"verify_arrays, all proven: {a.n / t_all:,.0f} boxes/s ({t_all:.3f} s)")
+    print(f"verify_arrays, word boxes: {len(words) / t_words:,.0f} boxes/s ({t_words:.3f} s, {len(words)} boxes)")
+    rng = np.random.default_rng(1)
+    sample = [certs[i] for i in rng.choice(len(certs), size=min(a.sample, len(certs)), replace=False)]
+    t_one = best(lambda: [verify(c) for c in sample], 1)
+    t_arb = best(lambda: [reference_certificate(c.e, c.u) for c in sample], 1)
+    print(f"per box, verify(certificate): {len(sample) / t_one:,.0f} boxes/s  "
+          f"(verify_arrays x{(a.n / t_all) / (len(sample) / t_one):.0f})")
+    print(f"per box, Arb reference re-derived: {len(sample) / t_arb:,.0f} boxes/s  "
+          f"(verify_arrays x{(a.n / t_all) / (len(sample) / t_arb):.0f})")
+    print(f"load after: {os.getloadavg()}")
+
+
+if __name__ == "__main__":
+    main()
