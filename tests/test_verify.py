@@ -378,3 +378,24 @@ def test_certificate_margins_enclose_the_decisions(fig7):
     # every decision proven: lo >= 0 (happens) or hi < 0 (does not)
     assert np.all((lo >= 0) | (hi < 0))
     assert c.decisions[-1] == "slide" and lo[-1] >= 0
+
+
+def test_a_claim_holds_on_a_box_exactly_when_it_holds_at_its_two_corners(fig7):
+    """Along a fixed itinerary every margin decreases in e and in u (the
+    docstring of structure/verify.py), so its range over the box is attained
+    at the corners (e1, u1) and (e0, u0): the checker's enclosures are the
+    exact ranges up to rounding, and it accepts a box exactly when it accepts
+    both corners as point boxes."""
+    rng = np.random.default_rng(9)
+    claims = []
+    for c in fig7[:700]:
+        if c.status != "word":
+            continue
+        w = 10 ** rng.uniform(-6, -2.5)
+        claims.append(dataclasses.replace(c, e=(c.e[0], c.e[0] + w), u=(c.u[0], c.u[0] + w)))
+    claims += _tamper_letters(fig7[:150], rng)
+    box = _accepted(_arrays(claims))
+    low = _accepted(_arrays([dataclasses.replace(c, e=(c.e[0],) * 2, u=(c.u[0],) * 2) for c in claims]))
+    high = _accepted(_arrays([dataclasses.replace(c, e=(c.e[1],) * 2, u=(c.u[1],) * 2) for c in claims]))
+    assert 0.1 < box.mean() < 0.9
+    assert np.array_equal(box, low & high)

@@ -35,6 +35,21 @@ coefficients ``ratio = (1+e)/(1-e)``, ``A_j`` (a sum ``1 + 2e + ... + 2e^{j-1}``
 ``B_k`` and ``e^k`` increase with e on [0, 1): over ``[e0, e1]`` each lies
 between its values at e0 and e1, which are enclosed at those two floats.
 
+Monotonicity (proven; why these enclosures are the exact ranges up to
+rounding).  Along a fixed itinerary ``s_{n+1}^2 = 2 + e^{2k} s_n^2`` and
+``v_{n+1} = v_n - 1/u + B_k(e) s_n`` from ``v = 0``, ``s = sqrt 2``, with
+``ratio``, ``A_j``, ``B_k``, ``e^k`` non-negative and increasing in e.  By
+induction ``s_n`` increases with e (and does not depend on u) and ``v_n``
+increases with e and with u; so every margin ``T - v - C s`` (``C`` = ratio or
+``A_j``) decreases with e and, strictly, with u.  Over the box a margin's least
+value is at the corner ``(e1, u1)`` and its largest at ``(e0, u0)``, and every
+interval below is computed from the bounds at those two corners: it is the
+exact range up to rounding, and no other enclosure (a mean-value form, say)
+can decide more.  A claim holds on a box exactly when it holds at its two
+corners (tests/test_verify.py checks the checker against this), and each
+border arc along a fixed itinerary (the zero set of one margin) is the graph
+of a non-increasing function ``u(e)``.
+
 Rigour.  Every quantity is an interval ``[lo, hi]`` of float64 containing the
 exact real value for every (e, u) of the box.  The box's bounds are floats, so
 ``e`` and ``u`` are exact intervals.  Each bound is computed by one IEEE-754
