@@ -94,8 +94,10 @@ _WORD_S, _NOSLIDING_S, _WITHIN_S, _UNDECIDED_S = (STATUSES.index(s) for s in
 # an interval is a (2, n) array: row 0 the lower bounds, row 1 the upper ones;
 # one nextafter call moves both rows outward
 _OUTWARD = np.array([[-np.inf], [np.inf]])
-# boxes followed together: about 30 float64 arrays of (boxes x steps) entries
+# boxes followed together, and itinerary entries whose coefficients are held
+# at once (about 40 float64 arrays of this length: some 80 MB)
 _CHUNK = 1 << 15
+_ENTRIES = 1 << 18
 
 
 def _out(x):
@@ -125,6 +127,11 @@ def _div_pos(a, b):
     """``a / b`` for ``b`` positive, ``a`` of any sign."""
     q, r = a / b, a / b[::-1]  # [a_lo/b_lo, a_hi/b_hi], [a_lo/b_hi, a_hi/b_lo]
     return _out(np.stack([np.minimum(q[0], r[0]), np.maximum(q[1], r[1])]))
+
+
+def _over_box(at_e0, at_e1):
+    """A function increasing in e over [e0, e1]: its lower bound at e0, upper at e1."""
+    return np.stack([at_e0[0], at_e1[1]])
 
 
 def _sqrt(a):
@@ -223,7 +230,7 @@ def verify_codes(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
     if not (len(e1) == len(u0) == len(u1) == len(status) == n):
         raise ValueError(f"e0, e1, u0, u1 and status must have one entry per box, got lengths "
                          f"{[len(a) for a in (e0, e1, u0, u1, status)]}")
-    if (len(offsets) != n + 1 or (n + 1 and (offsets[0] != 0 or offsets[-1] != len(itinerary)))
+    if (len(offsets) != n + 1 or offsets[0] != 0 or offsets[-1] != len(itinerary)
             or np.any(np.diff(offsets) < 0)):
         raise ValueError("offsets must have one entry per box plus one, start at 0, never decrease and "
                          f"end at len(itinerary) = {len(itinerary)}")
@@ -249,60 +256,59 @@ def _follow(e0, e1, u0, u1, itinerary, start, length, code, step, index):
     """Re-decide every step of the boxes (sorted by decreasing ``length``);
     writes the first failure of box ``index[i]`` into ``code`` and ``step``.
 
-    The coefficients of every (box, step) are computed first, in one pass over
-    the itinerary entries laid out step-major (at step n the boxes still
+    The itinerary entries are laid out step-major (at step n the boxes still
     running are a prefix, so their entries are one contiguous slice); the
-    loop over steps then only carries the state ``(v, s)``.
+    coefficients of a block of steps are computed in one pass, then the loop
+    over the block's steps only carries the state ``(v, s)``.
     """
     m = len(e0)
     counts = np.bincount(length, minlength=int(length[0]) + 1)
     still = m - np.cumsum(counts)[:-1]  # boxes with length > n, n = 0 .. max - 1
     edges = np.concatenate([[0], np.cumsum(still)])
-    rank = np.concatenate([np.arange(a) for a in still])  # step-major entries
-    n_of = np.repeat(np.arange(len(still)), still)
-    k = itinerary[start[rank] + n_of]
-    kk = np.maximum(k, 0)
-    E0, A0, A10, B0 = _coefficients(e0[rank], kk)
-    E1, A1, A11, B1 = _coefficients(e1[rank], kk)
-    # over [e0, e1] each coefficient lies between its values at e0 and e1
-    Ec = np.stack([E0[0], E1[1]])
-    Ac = np.stack([np.maximum(A0[0], 0.0), A1[1]])  # A_k >= 1 where k >= 1 (the only use)
-    A1c = np.stack([A10[0], A11[1]])
-    Bc = np.stack([B0[0], B1[1]])
-    del E0, A0, A10, B0, E1, A1, A11, B1
     one = np.ones((2, m))
+    two = 2.0 * one
     T = np.stack([_div_pos(one, _point(u1))[0], _div_pos(one, _point(u0))[1]])  # 1/u decreases
     # ratio = (1+e)/(1-e) over the box: its value at e0 (lower) and e1 (upper)
-    ratio = [_div_pos(_add(one, _point(x)), _sub(one, _point(x))) for x in (e0, e1)]
-    R = np.stack([ratio[0][0], ratio[1][1]])
+    R = _over_box(*(_div_pos(_add(one, _point(x)), _sub(one, _point(x))) for x in (e0, e1)))
     V = np.zeros((2, m))
-    S = _sqrt(2.0 * one)
-    two = 2.0 * one
+    S = _sqrt(two)
     fail = np.zeros(m, dtype=np.int8)
     fstep = np.zeros(m, dtype=np.int64)
-    for n in range(len(still)):
-        a = int(still[n])
-        at = slice(edges[n], edges[n + 1])
-        kn = k[at]
-        t, v, s = T[:, :a], V[:, :a], S[:, :a]
-        tv = _sub(t, v)  # T - v
-        slide = _sub(tv, _mul_pos(R[:, :a], s))  # (2.4)
-        hit = _sub(tv, _mul_pos(Ac[:, at], s))  # T - t_k, t_k = v + A_k s
-        miss = _sub(tv, _mul_pos(A1c[:, at], s))  # T - t_{k+1}
-        sliding = kn == -1
-        ok_slide = np.where(sliding, slide[0] >= 0.0, slide[1] < 0.0)
-        ok_hit = (kn < 1) | (hit[0] >= 0.0)
-        ok_miss = sliding | (miss[1] < 0.0)
-        bad = ~(ok_slide & ok_hit & ok_miss)
-        if bad.any():
-            new_fail = np.where(~ok_slide, _SLIDE, np.where(~ok_hit, _IMPACT, _NOIMPACT))
-            first = (fail[:a] == 0) & bad
-            fail[:a][first] = new_fail[first]
-            fstep[:a][first] = n + 1
-        # the next state: v' = v - T + B_k s, s' = sqrt(2 + (e^k s)^2)
-        es = _mul_pos(Ec[:, at], s)
-        V[:, :a] = _add(_sub(v, t), _mul_pos(Bc[:, at], s))
-        S[:, :a] = _sqrt(_add(_mul_pos(es, es), two[:, :a]))
+    nsteps = len(still)
+    n0 = 0
+    while n0 < nsteps:  # blocks of steps of at most _ENTRIES entries (or one step)
+        n1 = int(np.searchsorted(edges, edges[n0] + _ENTRIES, side="right")) - 1
+        n1 = min(max(n1, n0 + 1), nsteps)
+        rank = np.concatenate([np.arange(still[j]) for j in range(n0, n1)])
+        k = itinerary[start[rank] + np.repeat(np.arange(n0, n1), still[n0:n1])]
+        kk = np.maximum(k, 0)
+        # over [e0, e1] each coefficient lies between its values at e0 and e1
+        E, A, A1, B = (_over_box(x, y) for x, y in zip(_coefficients(e0[rank], kk), _coefficients(e1[rank], kk)))
+        A = np.maximum(A, 0.0)  # A_k >= 1 where k >= 1, its only use
+        for n in range(n0, n1):
+            a = int(still[n])
+            at = slice(edges[n] - edges[n0], edges[n + 1] - edges[n0])
+            kn = k[at]
+            t, v, s = T[:, :a], V[:, :a], S[:, :a]
+            tv = _sub(t, v)  # T - v
+            slide = _sub(tv, _mul_pos(R[:, :a], s))  # (2.4)
+            hit = _sub(tv, _mul_pos(A[:, at], s))  # T - t_k, t_k = v + A_k s
+            miss = _sub(tv, _mul_pos(A1[:, at], s))  # T - t_{k+1}
+            sliding = kn == -1
+            ok_slide = np.where(sliding, slide[0] >= 0.0, slide[1] < 0.0)
+            ok_hit = (kn < 1) | (hit[0] >= 0.0)
+            ok_miss = sliding | (miss[1] < 0.0)
+            bad = ~(ok_slide & ok_hit & ok_miss)
+            if bad.any():
+                new_fail = np.where(~ok_slide, _SLIDE, np.where(~ok_hit, _IMPACT, _NOIMPACT))
+                first = (fail[:a] == 0) & bad
+                fail[:a][first] = new_fail[first]
+                fstep[:a][first] = n + 1
+            # the next state: v' = v - T + B_k s, s' = sqrt(2 + (e^k s)^2)
+            es = _mul_pos(E[:, at], s)
+            V[:, :a] = _add(_sub(v, t), _mul_pos(B[:, at], s))
+            S[:, :a] = _sqrt(_add(_mul_pos(es, es), two[:, :a]))
+        n0 = n1
     failed = fail != 0
     code[index[failed]] = fail[failed]
     step[index[failed]] = fstep[failed]
