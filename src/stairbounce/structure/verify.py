@@ -59,9 +59,8 @@ then moved one float outward with ``np.nextafter`` (down for a lower bound, up
 for an upper): the exact result of the operation on the float operands lies
 within half an ulp of the rounded one, hence between the rounded value's two
 neighbours.  Sums and differences take the matching bounds
-(``[a - b] = [a_lo - b_hi, a_hi - b_lo]``), products of intervals of
-unknown sign the least and largest of the four bound products, products of
-non-negative intervals the bound products, quotients by positive intervals the
+(``[a - b] = [a_lo - b_hi, a_hi - b_lo]``), products of non-negative
+intervals the bound products, doubling is exact, quotients by positive intervals the
 least and largest of the four bound quotients, and ``sqrt`` (increasing) the
 roots of the bounds.  By induction over the operations every interval contains
 the exact value of its expression at every point of the box, and an exact value
