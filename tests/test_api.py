@@ -193,7 +193,7 @@ def test_plot_orbit_diagram_needs_only_the_dataset(plt):
 
 
 def test_plot_box_dimension_needs_only_the_result(plt):
-    r = sb.perimeter_dimension(resolution=64, max_iter=100)
+    r = sb.perimeter_dimension(method="boxes", resolution=64, max_iter=100)
     fig = sb.plot.plot_box_dimension(r)
     image_ax, counts_ax = fig.axes[:2]
     assert image_ax.get_xlim() == pytest.approx(r.e)

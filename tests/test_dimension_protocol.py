@@ -30,7 +30,7 @@ def test_api_cli_and_study_give_one_answer(name, capsys):
     (e, u), _ = DIMENSION_WINDOWS[name]
     study = load_border_dimension()[name]
     uncertainty = sb.perimeter_dimension(e=e, u=u, method="uncertainty")
-    boxes = sb.perimeter_dimension(e=e, u=u)
+    boxes = sb.perimeter_dimension(e=e, u=u, method="boxes")
     with pytest.raises(SystemExit) as exc:
         main(["dimension", "--e", f"{e[0]}:{e[1]}", "--u", f"{u[0]}:{u[1]}"])
     out = capsys.readouterr().out
