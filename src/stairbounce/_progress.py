@@ -14,6 +14,7 @@ import os
 import threading
 import time
 from contextlib import contextmanager
+from typing import Any
 
 # seconds between two lines when the output is not a terminal
 DEFAULT_INTERVAL = 10.0
@@ -49,7 +50,7 @@ class LineProgress:
 
     def __init__(self, stream, interval: float, unit: str = "", prefix: str = "stairbounce: "):
         self.stream, self.interval, self.unit, self.prefix = stream, interval, unit, prefix
-        self.tasks: dict[int, dict] = {}
+        self.tasks: dict[int, dict[str, Any]] = {}
         self.lines = 0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -76,7 +77,8 @@ class LineProgress:
 
     def line(self) -> str:
         """The line for the latest task's state now."""
-        t = self.tasks[max(self.tasks)] if self.tasks else dict(description="working", total=None, completed=0)
+        t: dict[str, Any] = (self.tasks[max(self.tasks)] if self.tasks
+                             else dict(description="working", total=None, completed=0))
         elapsed = time.monotonic() - self._t0
         done, total = t["completed"], t["total"]
         unit = f" {self.unit}" if self.unit else ""
@@ -116,16 +118,23 @@ class LineProgress:
         return False
 
 
+def _has_widgets() -> bool:
+    """rich draws a bar in a notebook only with ipywidgets; without it, lines."""
+    import importlib.util
+
+    return importlib.util.find_spec("ipywidgets") is not None
+
+
 def make_display(description, total=None, unit="", console=None):
     """``(bar, task)``, not started (``bar.start()``, ``bar.stop()``): a
     transient rich bar on ``console`` (default stderr) when it is a terminal
-    or a Jupyter cell, else a :class:`LineProgress` on its stream (one line
+    or a Jupyter cell with ipywidgets, else a :class:`LineProgress` on its stream (one line
     every :func:`log_interval` seconds)."""
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     console = console or Console(stderr=True)
-    if console.is_terminal or console.is_jupyter:
+    if console.is_terminal or (console.is_jupyter and _has_widgets()):
         bar = Progress(
             TextColumn("[bold]{task.description}"), BarColumn(),
             TextColumn("{task.completed}/{task.total}" + (f" {unit}" if unit else "")),
@@ -152,8 +161,8 @@ def progress_bar(description="working", unit=""):
     :func:`border_points`, :func:`word_table`, :func:`window_regions`,
     :func:`perimeter_dimension`, :func:`motion_scan`, :func:`scan_to_zarr`,
     ...): a progress bar with the time left in a terminal or a Jupyter
-    notebook (rich, as the command line draws it), and one line every 10 s on
-    stderr anywhere else (a log, ``nohup``; the interval is
+    notebook with ipywidgets (rich, as the command line draws it), and one
+    line every 10 s on stderr anywhere else (a log, ``nohup``; the interval is
     ``$STAIRBOUNCE_PROGRESS_INTERVAL`` seconds).  The callback takes the
     function's ``(done, total)``; a total of 0 shows as 0/1.
 

@@ -809,10 +809,17 @@ def _seed_grid(e, u, resolution):
     resolution = _DEFAULT_RESOLUTION if resolution is None else check_count("resolution", resolution, 2, 8192)
     n_e = resolution if ew[2] is None else ew[2]
     n_u = resolution if uw[2] is None else uw[2]
-    es = ew[0] + (np.arange(n_e) + 0.5) * (ew[1] - ew[0]) / n_e
-    us = uw[0] + (np.arange(n_u) + 0.5) * (uw[1] - uw[0]) / n_u
+    es, us = _grid(ew, uw, n_e, n_u)
     te, tu = _check_window(e, u)
     return te, tu, es, us, ((ew[1] - ew[0]) / n_e, (uw[1] - uw[0]) / n_u)
+
+
+def _grid(e, u, n_e, n_u=None):
+    """The pixel centres of ``n_e`` x ``n_u`` (default ``n_e``) seed pixels of the window."""
+    n_u = n_e if n_u is None else n_u
+    es = e[0] + (np.arange(n_e) + 0.5) * (e[1] - e[0]) / n_e
+    us = u[0] + (np.arange(n_u) + 0.5) * (u[1] - u[0]) / n_u
+    return es, us
 
 
 def _label_grid(es, us, max_iter, y0, v0):
