@@ -94,6 +94,26 @@ def test_window_regions_takes_the_seed_counts_from_the_windows_never_ignoring_th
         sb.word_region((2,), e=(0.1, 0.2, 1))
 
 
+def test_functions_without_pixels_refuse_a_count_instead_of_ignoring_it():
+    from stairbounce import dimension
+
+    classify = dimension.sliding_classifier(max_iter=50)
+    for call in (lambda: sb.trace_border(0.05, 0.93, window=((0.04, 0.065, 5), (0.92, 0.945))),
+                 lambda: dimension.uncertainty_dimension(classify, ((0.15, 0.2, 5), (0.6, 0.65)), n_points=200),
+                 lambda: dimension.slicing_dimension(classify, ((0.15, 0.2), (0.6, 0.65, 5)), n_lines=2)):
+        with pytest.raises(ValueError, match="window must be"):
+            call()
+
+
+def test_the_inline_explorer_takes_counts_in_the_window_but_not_twice():
+    from stairbounce.explorer import inline
+
+    with pytest.raises(ValueError, match="width = 300 and the window's pixel count 50: give the pixels once"):
+        inline(e=(0.0, 1.0, 50), width=300)
+    with pytest.raises(ValueError, match=r"u must be a tuple \(u_min, u_max\) or \(u_min, u_max, n_u\)"):
+        inline(u=(0.0,))
+
+
 def test_regions_take_the_image_edges_of_a_scan_window():
     # e = 1 and u = 0 are image edges, as in scan: the margins are traced just inside
     r = no_warning(lambda: sb.word_region((1,), e=(0.5, 1.0), u=(0.0, 0.2), resolution=16))
@@ -221,6 +241,8 @@ def test_words_regions_with_the_default_window_is_not_refused(tmp_path, capsys):
                             capsys)
     assert code == 0, err
     assert out.exists() and "words" in stdout
+    code, _, err = run(["words", "--regions", "--size", "1x12", "--out", str(tmp_path / "x.geojson")], capsys)
+    assert code == 2 and "--size with --regions must be 2 to 8192 pixels a side" in err
 
 
 def test_a_zoom_without_size_gets_square_pixels_and_the_default_view_its_grid(tmp_path, capsys):

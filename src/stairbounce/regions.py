@@ -1479,7 +1479,14 @@ def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-
         raise ValueError(f"search must be in (0, 1], got {search}")
     if window is None:
         window = ((max(0.0, e - 0.5), min(1.0 - 1e-9, e + 0.5)), (max(1e-3, u - 0.5), u + 0.5))
-    we, wu = _check_window(*window)
+    try:
+        we, wu = window
+    except (TypeError, ValueError):
+        raise ValueError(f"window must be ((e_min, e_max), (u_min, u_max)), got {window!r}") from None
+    if _v.window("e", we)[2] is not None or _v.window("u", wu)[2] is not None:
+        raise ValueError(f"window must be ((e_min, e_max), (u_min, u_max)): trace_border follows one "
+                         f"arc and takes no pixel count, got {window!r}")
+    we, wu = _check_window(we, wu)
     if not (we[0] <= e <= we[1] and wu[0] <= u <= wu[1]):
         raise ValueError(f"(e, u) = ({e}, {u}) must lie in the window {window}")
     y0, v0 = float(y0), float(v0)

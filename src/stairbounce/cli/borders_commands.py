@@ -244,6 +244,9 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, None, 150, force,
                      outputs=False)
     check_outputs(force, out=out)
+    if not (2 <= ew[2] <= 8192 and 2 <= uw[2] <= 8192):
+        raise CLIError(f"--size with --regions must be 2 to 8192 pixels a side (the seed scan), got "
+                       f"{ew[2]}x{uw[2]}")
     # the seed scan is the --size grid of the window (its edges, as a scan's);
     # e = 1 and u = 0 are traced just inside (stairbounce.word_region)
     regs = with_row_progress(description="words traced", rows=1, run=lambda p: rg.window_regions(
