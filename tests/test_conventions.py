@@ -123,6 +123,9 @@ def test_regions_take_the_image_edges_of_a_scan_window():
     es = np.linspace(0.5, 1.0, 200001)
     exact = np.trapezoid(np.minimum(0.2, np.sqrt(0.5) * (1 - es) / (1 + es)), es)
     assert r.area == pytest.approx(exact, rel=1e-6)
+    # a seed pixel centre the traced window would leave out is refused, not traced wrongly
+    with pytest.raises(ValueError, match="seed pixel centres beyond"):
+        sb.word_region((1,), e=(0.5, 1.0), u=(0.0, 1e-8), resolution=8)
 
 
 def test_a_word_given_as_text_is_the_word_and_an_absent_word_says_so():

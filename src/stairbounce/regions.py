@@ -811,6 +811,10 @@ def _seed_grid(e, u, resolution):
     n_u = resolution if uw[2] is None else uw[2]
     es, us = _grid(ew, uw, n_e, n_u)
     te, tu = _check_window(e, u)
+    if es[-1] > te[1] or us[0] < tu[0]:
+        raise ValueError(f"the window e = [{ew[0]}, {ew[1]}], u = [{uw[0]}, {uw[1]}] has seed pixel centres "
+                         f"beyond e = {_E_TOP!r} or below u = {_U_BOTTOM:g}, where the margins are not "
+                         "traced: narrow the window away from e = 1 and u = 0")
     return te, tu, es, us, ((ew[1] - ew[0]) / n_e, (uw[1] - uw[0]) / n_u)
 
 
