@@ -235,7 +235,7 @@ def test_explorer_inline_builds_renders_and_agrees_with_the_scan():
 @pytest.mark.parametrize(
     "kwargs, words",
     [({"e": (0.5, 0.2)}, "e window must satisfy"), ({"width": 10**5}, "pixel budget"), ({"color": "hue"}, "color must be one of"),
-     ({"u": 3}, "pairs")],
+     ({"u": 3}, r"u must be a tuple \(u_min, u_max\) or \(u_min, u_max, n_u\)")],
 )
 def test_explorer_inline_refuses_bad_views(kwargs, words):
     pytest.importorskip("panel")
