@@ -771,10 +771,13 @@ _U_BOTTOM = 1e-9
 def _check_window(e, u):
     """The windows ``e``, ``u`` (each ``(lo, hi)`` or ``(lo, hi, n)``, image
     edges within [0, 1] and [0, 1e150] as in :func:`stairbounce.scan`) ->
-    the traced window ``(e_lo, e_hi), (u_lo, u_hi)``, e = 1 and u = 0 moved
-    inside the domain (``_E_TOP``, ``_U_BOTTOM``)."""
+    the traced window ``(e_lo, e_hi), (u_lo, u_hi)``, e = 1 and u below the
+    valid range (0) moved inside the domain (``_E_TOP``, ``_U_BOTTOM``)."""
     (e_lo, e_hi, _), (u_lo, u_hi, _) = _image_window(e, u)
-    return (e_lo, min(e_hi, _E_TOP)), (max(u_lo, _U_BOTTOM), u_hi)
+    # only the edges outside the map's domain move: every window valid before
+    # (e_max < 1, u_min >= 1e-150) is traced as it was
+    return ((e_lo, _E_TOP if e_hi >= 1.0 else e_hi),
+            (max(u_lo, _U_BOTTOM) if u_lo < _v.U_MIN else u_lo, u_hi))
 
 
 def _image_window(e, u):
