@@ -46,7 +46,7 @@ FITS = {"auto": None, "1-64 px": (1, 64), "4-32 px": (4, 32)}
 def measure(name, resolution, max_iter, which="sliding"):
     w = WINDOWS[name]
     t = time.perf_counter()
-    base = perimeter_dimension(e=w["e"], u=w["u"], resolution=resolution, max_iter=max_iter,
+    base = perimeter_dimension(e=w["e"], u=w["u"], method="boxes", resolution=resolution, max_iter=max_iter,
                                which=which, fit_range=(1, 64) if resolution >= 128 else None)
     seconds = time.perf_counter() - t
     rows = {}

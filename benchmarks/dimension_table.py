@@ -68,7 +68,7 @@ def timed(call):
 def common(window, args):
     (e, u) = window
     out = []
-    res, dt = timed(lambda: perimeter_dimension(e=e, u=u, resolution=args.resolution, max_iter=1000,
+    res, dt = timed(lambda: perimeter_dimension(e=e, u=u, method="boxes", resolution=args.resolution, max_iter=1000,
                                                 fit_range=(4, args.resolution // 32)))
     out.append(record(f"boxes {args.resolution} px, 4..{args.resolution // 32} px", res, dt,
                       pixels=args.resolution))

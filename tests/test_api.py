@@ -193,7 +193,7 @@ def test_plot_orbit_diagram_needs_only_the_dataset(plt):
 
 
 def test_plot_box_dimension_needs_only_the_result(plt):
-    r = sb.perimeter_dimension(resolution=64, max_iter=100)
+    r = sb.perimeter_dimension(method="boxes", resolution=64, max_iter=100)
     fig = sb.plot.plot_box_dimension(r)
     image_ax, counts_ax = fig.axes[:2]
     assert image_ax.get_xlim() == pytest.approx(r.e)
@@ -235,7 +235,7 @@ def test_explorer_inline_builds_renders_and_agrees_with_the_scan():
 @pytest.mark.parametrize(
     "kwargs, words",
     [({"e": (0.5, 0.2)}, "e window must satisfy"), ({"width": 10**5}, "pixel budget"), ({"color": "hue"}, "color must be one of"),
-     ({"u": 3}, "pairs")],
+     ({"u": 3}, r"u must be a tuple \(u_min, u_max\) or \(u_min, u_max, n_u\)")],
 )
 def test_explorer_inline_refuses_bad_views(kwargs, words):
     pytest.importorskip("panel")

@@ -445,7 +445,7 @@ class read_only:
         (dict(tile=0), "tile must be an integer >= 1"),
         (dict(tile=2.5), "tile must be an integer >= 1"),
         (dict(e=(0.5, 0.2, 10)), "e_min must be < e_max"),
-        (dict(e=(0.0, 1.0)), r"e must be a tuple \(e_min, e_max, n_e\)"),
+        (dict(e=(0.0, 1.0, 5, 5)), r"e must be a tuple \(e_min, e_max\) or \(e_min, e_max, n_e\)"),
         (dict(u=(0.1, 1.0, 0)), "n_u must be an integer >= 1"),
         (dict(max_iter=0), "max_iter must be an integer >= 1"),
         (dict(y0=-1.0), "y0"),

@@ -41,7 +41,7 @@ def disk(n, radius=0.35):
 def test_scan_prints_the_api_result(capsys):
     code, out, err = run([*FIG7, "--method", "boxes", "--resolution", "128", "--max-iter", "300", "--fit-range", "1:32"], capsys)
     assert code == 0, err
-    ref = perimeter_dimension(e=(0.155, 0.2138), u=(0.6, 0.658), resolution=128, max_iter=300, fit_range=(1, 32))
+    ref = perimeter_dimension(e=(0.155, 0.2138), u=(0.6, 0.658), method="boxes", resolution=128, max_iter=300, fit_range=(1, 32))
     assert number(r"D = ([\d.]+)", out) == pytest.approx(ref.dimension, abs=5e-5)
     lo, hi = re.search(r"95% CI = \[([\d.]+), ([\d.]+)\]", out).groups()
     assert (float(lo), float(hi)) == pytest.approx(ref.ci, abs=5e-5)

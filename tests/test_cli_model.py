@@ -31,11 +31,11 @@ def test_word_prints_word_period_impacts(capsys):
 
 
 def test_word_says_when_nothing_slides(capsys):
-    code, out, _ = run(["word", "--e", "0.4", "--u", "0.33", "--max-steps", "50"], capsys)
+    code, out, _ = run(["word", "--e", "0.4", "--u", "0.33", "--max-iter", "50"], capsys)
     assert code == 0
     assert "no periodic sliding solution found within 50 steps" in out
     # above the Corollary 2.1 curve (1.006 at e = 0.1) it is proven, not searched
-    code, out, _ = run(["word", "--e", "0.1", "--u", "1.2", "--max-steps", "50"], capsys)
+    code, out, _ = run(["word", "--e", "0.1", "--u", "1.2", "--max-iter", "50"], capsys)
     assert code == 0
     assert "impossible (Corollary 2.1: u >= 1.00623 at e = 0.1)" in out
 
@@ -81,7 +81,7 @@ def test_trajectory_writes_figure_and_animation(tmp_path, capsys):
         (["word", "--e", "nan", "--u", "0.5"], "e must be finite"),
         (["word", "--e", "x", "--u", "0.5"], "--e"),
         (["word", "--u", "0.5"], "--e"),
-        (["word", "--e", "0.1", "--u", "0.5", "--max-steps", "0"], "max_steps must be an integer >= 1"),
+        (["word", "--e", "0.1", "--u", "0.5", "--max-iter", "0"], "max_iter must be an integer >= 1"),
         (["map", "--e", "0.1", "--u", "0.5", "--y0", "-2"], "must be >= 0"),
         (["map", "--e", "0.1", "--u", "0.5", "--steps", "-1"], "steps must be an integer >= 0"),
         (["trajectory", "--e", "0.1", "--u", "0.5", "--steps", "0"], "--steps must be an integer >= 1"),

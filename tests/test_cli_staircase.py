@@ -317,7 +317,7 @@ def test_orbit_diagram_speed_axes_in_metres(tmp_path, capsys, monkeypatch):
                         "--out", str(out), "--png", str(tmp_path / "od.png")], capsys)
     assert code == 0, err
     ds = xr.load_dataset(out)
-    np.testing.assert_allclose(ds.speed.values, np.linspace(0.5, 2.0, 40), rtol=1e-12)
+    np.testing.assert_allclose(ds.speed.values, sb.pixel_centres(0.5, 2.0, 40), rtol=1e-12)
     ax = saved[0].axes[0]
     assert ax.get_xlabel() == "U (horizontal speed, m/s)"
     assert ax.get_ylabel() == "height at the edge (m)"

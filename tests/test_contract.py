@@ -47,8 +47,8 @@ SPECS = [
       "steps": (COUNT, [-1, 10**12, 2**63])}),
     (sb.no_sliding_bound, dict(e=0.5), {"e": (REAL, [1.0, -1.0])}),
     (sb.tongue, dict(n=2, e=0.5), {"n": (COUNT, [0]), "e": (REAL, [1.0])}),
-    (sb.sliding_word, dict(e=0.05, u=0.93, max_steps=100),
-     {"e": (REAL, [1.0]), "u": (REAL, [0.0]), "max_steps": (COUNT, [0])}),
+    (sb.sliding_word, dict(e=0.05, u=0.93, max_iter=100),
+     {"e": (REAL, [1.0]), "u": (REAL, [0.0]), "max_iter": (COUNT, [0])}),
     (sb.trajectory, dict(e=0.05, u=0.93, y0=1.0, v0=0.0, steps=3, max_listed=5),
      {"e": (REAL, [1.0]), "u": (REAL, [0.0]), "y0": (REAL, [-1.0]), "v0": (REAL, [1.7e308]),
       "steps": (COUNT, [-1, 10**12]), "max_listed": (COUNT, [0])}),
@@ -180,12 +180,12 @@ def test_the_reports_cases():
         (lambda: atlas.tile_slices(10**12, 3), "n"),
         (lambda: fractal.box_counts(np.eye(4), offsets=10**9), "offsets"),
         (lambda: fractal.slope_fit(np.arange(5.0), np.arange(5.0), tol=None), "tol"),
-        (lambda: sb.sliding_word(0.05, 0.93, max_steps=2**64), "max_steps"),
+        (lambda: sb.sliding_word(0.05, 0.93, max_iter=2**64), "max_iter"),
         (lambda: sb.impact_times(1, 0, 0.5, 10**12), "k"),
         (lambda: plane.scan_coords([0.1], [1e-200]), "u"),
         (lambda: plane.scan(u=(0, 1e-160, 4)), "u"),
         (lambda: plane.scan(e=(0, 1, 4), u=(0, 1, 4), progress="notcallable"), "progress"),
-        (lambda: fractal.perimeter_dimension(resolution=16, progress="notcallable"), "progress"),
+        (lambda: fractal.perimeter_dimension(method="boxes", resolution=16, progress="notcallable"), "progress"),
     ]:
         with pytest.raises(ValueError) as exc:
             call()
@@ -226,7 +226,7 @@ def test_memory_of_the_dimension_and_orbit_commands_is_checked_first(capsys, mon
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(_validate, "available_memory", lambda: 10 * 2**30)
     with pytest.raises(ValueError, match=r"^resolution = 20000 needs about 11\.2 GiB"):
-        fractal.perimeter_dimension(resolution=20000, progress=lambda done, total: None)
+        fractal.perimeter_dimension(method="boxes", resolution=20000, progress=lambda done, total: None)
     for argv in (["dimension", "--method", "boxes", "--resolution", "40000", "--max-iter", "1"],
                  ["orbit-diagram", "--e", "0.1", "--u", "0.3:1", "--n", "100", "--keep", "100000000",
                   "--png", "x.png"]):

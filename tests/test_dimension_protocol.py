@@ -2,9 +2,10 @@
 the dimension study's shipped best estimate of the border's dimension in the
 paper's Fig. 6 and Fig. 7 windows.
 
-The CLI's default is the API's uncertainty protocol (the same call, the same
-number); the API's own default method, box counting of a 512 px scan, is a
-different protocol and says so (its scales in pixels and in window units).
+The CLI's default is the API's default, the uncertainty protocol (the same
+call, the same number; issue 37 made them one); box counting of a 512 px
+scan (``method="boxes"``) is a different protocol and says so (its scales in
+pixels and in window units).
 All three state intervals that cover the drift of the local slope across
 their scales, and those intervals must overlap: the same set, one answer.
 """
@@ -29,8 +30,8 @@ def overlap(a, b):
 def test_api_cli_and_study_give_one_answer(name, capsys):
     (e, u), _ = DIMENSION_WINDOWS[name]
     study = load_border_dimension()[name]
-    uncertainty = sb.perimeter_dimension(e=e, u=u, method="uncertainty")
-    boxes = sb.perimeter_dimension(e=e, u=u)
+    uncertainty = sb.perimeter_dimension(e=e, u=u)     # the default method
+    boxes = sb.perimeter_dimension(e=e, u=u, method="boxes")
     with pytest.raises(SystemExit) as exc:
         main(["dimension", "--e", f"{e[0]}:{e[1]}", "--u", f"{u[0]}:{u[1]}"])
     out = capsys.readouterr().out

@@ -255,7 +255,7 @@ def test_map_agrees_with_sliding_word_at_pixel_centres():
     rng = np.random.default_rng(7)
     for i, j in rng.integers(0, 40, size=(60, 2)):
         e, u = float(ds.e[j]), float(ds.u[i])
-        w = sliding_word(e, u, max_steps=300)
+        w = sliding_word(e, u, max_iter=300)
         assert (w is None) == (ds.status.values[i, j] == 1)
         if w is not None:
             assert ds.word_length.values[i, j] == len(w)

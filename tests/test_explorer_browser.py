@@ -202,8 +202,8 @@ def test_tap_shows_the_word_of_the_point(server, page):
     e = float(page.locator(".sb-e").inner_text())
     u = float(page.locator(".sb-u").inner_text())
     assert (e, u) == (es[j], us[i])  # the tapped pixel's centre, where its colour was computed
-    assert ds["word_length"].values[i, j] == len(sliding_word(e, u, max_steps=max_iter))
-    w = sliding_word(e, u, max_steps=max_iter)
+    assert ds["word_length"].values[i, j] == len(sliding_word(e, u, max_iter=max_iter))
+    w = sliding_word(e, u, max_iter=max_iter)
     assert w is not None
     assert word_el.inner_text() == w.format()
     assert _query(page)["point"] == f"{e!r},{u!r}"

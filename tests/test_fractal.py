@@ -362,7 +362,7 @@ def test_replicates_figs_6_and_7_of_campos_et_al(window, paper):
     # of the sliding region on a 500 px picture of the window, boxes of 1 to
     # 64 px (the powers of two up to an eighth of the picture; the paper does
     # not give its range): D within 0.08 of the paper's value, r > 0.99.
-    est = perimeter_dimension(**window, resolution=500, max_iter=1000, fit_range=(1, 64))
+    est = perimeter_dimension(**window, method="boxes", resolution=500, max_iter=1000, fit_range=(1, 64))
     assert abs(est.dimension - paper) < 0.08, est.summary()
     assert est.r > 0.99
     # the report's criterion (issue 24): the paper's number inside our interval,
@@ -375,12 +375,12 @@ def test_replicates_figs_6_and_7_of_campos_et_al(window, paper):
 def test_perimeter_dimension_measures_the_border_of_the_scanned_region():
     from stairbounce.plane import scan
 
-    est = perimeter_dimension(**FIG7, resolution=96, max_iter=300, fit_range=(1, 16))
+    est = perimeter_dimension(**FIG7, method="boxes", resolution=96, max_iter=300, fit_range=(1, 16))
     ds = scan(e=(*FIG7["e"], 96), u=(*FIG7["u"], 96), max_iter=300)
     region = ds["status"].transpose("u", "e").values == 0
     assert est.border.tolist() == boundary(region).tolist()
     assert est.region_fraction == pytest.approx(region.mean())
-    words = perimeter_dimension(**FIG7, resolution=96, max_iter=300, which="words", fit_range=(1, 16))
+    words = perimeter_dimension(**FIG7, method="boxes", resolution=96, max_iter=300, which="words", fit_range=(1, 16))
     # every border of the sliding region is also a border between word lengths
     assert (est.border <= words.border).all()
 
@@ -396,7 +396,7 @@ def test_perimeter_dimension_measures_the_border_of_the_scanned_region():
     ],
 )
 def test_perimeter_dimension_rejects_bad_windows(kwargs, message):
-    kwargs = {"resolution": 32, "max_iter": 50, **kwargs}
+    kwargs = {"method": "boxes", "resolution": 32, "max_iter": 50, **kwargs}
     with pytest.raises(ValueError, match=message):
         perimeter_dimension(**kwargs)
 
@@ -409,7 +409,7 @@ def test_plot_box_dimension_draws_border_and_fitted_line():
 
     from stairbounce.plot import plot_box_dimension
 
-    est = perimeter_dimension(**FIG7, resolution=64, max_iter=200, fit_range=(1, 16))
+    est = perimeter_dimension(**FIG7, method="boxes", resolution=64, max_iter=200, fit_range=(1, 16))
     fig = plot_box_dimension(est)
     img_ax, log_ax = fig.axes[:2]
     assert img_ax.images[0].get_array().shape == (64, 64)

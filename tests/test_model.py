@@ -251,7 +251,7 @@ def test_theorem_3_1_inside_the_tongue(n, e):
     for u in [lo + (hi - lo) * f for f in (1e-6, 0.25, 0.5, 0.75)] + [hi * (1 - 1e-12)]:
         if u <= 0:
             continue
-        w = sb.sliding_word(e, u, max_steps=50)
+        w = sb.sliding_word(e, u, max_iter=50)
         assert w is not None and len(w) == 1 and w.period == n, (n, e, u, w)
         assert w.letters == (n,)
 
@@ -261,7 +261,7 @@ def test_theorem_3_1_just_outside_the_tongue(n, e):
     lo, hi = sb.tongue(n, e)
     outside = [hi * (1 + 1e-6)] + ([lo * (1 - 1e-6)] if lo > 0 else [])
     for u in outside:
-        w = sb.sliding_word(e, u, max_steps=200)
+        w = sb.sliding_word(e, u, max_iter=200)
         assert w is None or w.letters != (n,), (n, e, u, w)
 
 
@@ -325,7 +325,7 @@ def test_map_is_finite_and_lands_above_the_edge(y, v, e, u):
         (lambda: sb.tongue(1.5, 0.1), "n must be an integer >= 1"),
         (lambda: sb.iterate(1, 0, 0.1, 0.5, -1), "steps must be an integer >= 0"),
         (lambda: sb.impact_times(1, 0, 0.1, -1), "k must be an integer >= 0"),
-        (lambda: sb.sliding_word(0.1, 0.5, max_steps=0), "max_steps must be an integer >= 1"),
+        (lambda: sb.sliding_word(0.1, 0.5, max_iter=0), "max_iter must be an integer >= 1"),
         (lambda: sb.no_sliding_bound(2.0), r"e .*\[0, 1\)"),
         (lambda: sb.poincare_map("a", 0, 0.1, 0.5), "y must be a real number"),
     ],

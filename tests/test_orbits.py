@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from stairbounce import SLIDING, poincare_map, tongue
+from stairbounce import SLIDING, pixel_centres, poincare_map, tongue
 from stairbounce.cli import main
 from stairbounce.orbits import orbit_density, orbit_diagram
 
@@ -407,7 +407,7 @@ def test_cli_u_swept_writes_png_and_netcdf(tmp_path, capsys):
     assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
     assert "120 values of u x 30 iterates" in out
     with xr.open_dataset(nc) as ds:
-        ref = orbit_diagram(0.001, np.linspace(0.3, 1.6, 120), transient=300, keep=30)
+        ref = orbit_diagram(0.001, pixel_centres(0.3, 1.6, 120), transient=300, keep=30)
         xr.testing.assert_identical(ds.load(), ref)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fig8.nc", "fig8.png"]  # no temp files
 
@@ -423,7 +423,7 @@ def test_cli_e_swept_writes_csv(tmp_path, capsys):
     table = pd.read_csv(csv)
     assert list(table.columns[:2]) == ["e", "iterate"]
     assert len(table) == 25 * 8
-    ref = orbit_diagram(np.linspace(0, 0.5, 25), 0.6, transient=40, keep=8)
+    ref = orbit_diagram(pixel_centres(0, 0.5, 25), 0.6, transient=40, keep=8)
     np.testing.assert_array_equal(table["y"].values, ref.y.values.ravel())
     np.testing.assert_array_equal(table["impacts"].values, ref.impacts.values.ravel())
 
@@ -448,7 +448,7 @@ def test_cli_slices_behind_a_progress_bar_give_the_same_result(monkeypatch):
         (["--e", "0.1", "--u", "a:b"], "--u must be a range"),
         (["--e", "x", "--u", "0.3:1"], "--e must be a number"),
         (["--e", "0.5:1.5", "--u", "0.7"], "e (restitution coefficient) must be in [0, 1)"),
-        (["--e", "0.1", "--u", "0:1"], "u (horizontal speed)"),
+        (["--e", "0.1", "--u", "-1:1"], "u (horizontal speed)"),
         (["--e", "0.1", "--u", "0.3:1", "--n", "1"], "--n must be an integer >= 2"),
         (["--e", "0.1", "--u", "0.3:1", "--keep", "0"], "keep"),
         (["--e", "0.1", "--u", "0.3:1", "--transient", "-5"], "transient"),

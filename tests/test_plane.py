@@ -159,7 +159,7 @@ def test_every_pixel_agrees_with_sliding_word():
     ds = scan_coords(es, us, max_iter=400)
     for i, u in enumerate(us):
         for j, e in enumerate(es):
-            w = sliding_word(e, u, max_steps=400)
+            w = sliding_word(e, u, max_iter=400)
             got = {k: int(ds[k].values[i, j]) for k in FIELDS}
             if w is None:
                 assert got == dict.fromkeys(FIELDS, 0) | {"status": 1}, (e, u)
@@ -522,7 +522,8 @@ def test_save_refuses_bad_paths(tmp_path):
         ({"e": (0.5, 0.5, 10)}, "e_min must be < e_max"),
         ({"e": (0.0, 0.5, 0)}, "n_e must be an integer >= 1"),
         ({"e": (0.0, 0.5, 2.5)}, "n_e must be an integer"),
-        ({"e": (0.0, 0.5)}, r"e must be a tuple \(e_min, e_max, n_e\)"),
+        ({"e": (0.0,)}, r"e must be a tuple \(e_min, e_max\) or \(e_min, e_max, n_e\)"),
+        ({"e": (0.0, 0.5, 3, 4)}, r"e must be a tuple \(e_min, e_max\) or \(e_min, e_max, n_e\)"),
         ({"e": ("a", 0.5, 3)}, "e_min must be a real number"),
         ({"u": (-1.0, 1.0, 10)}, r"u window must lie in \[0, inf\)"),
         ({"u": (1.0, 0.5, 10)}, "u_min must be < u_max"),

@@ -25,7 +25,7 @@ def cor21(e):
 @pytest.mark.parametrize("factor", [1.001, 1.3, 3.0])
 def test_above_the_curve_is_impossible_and_nothing_slides(e, factor):
     u = factor * cor21(e)
-    a = sb.sliding_answer(e, u, max_steps=400)
+    a = sb.sliding_answer(e, u, max_iter=400)
     assert a.verdict == "impossible" and a.word is None and not a.found
     assert a.bound == pytest.approx(cor21(e), rel=1e-15)
     assert f"impossible (Corollary 2.1: u >= {cor21(e):.6g}" in a.text()
@@ -42,12 +42,12 @@ def test_below_the_curve_found_or_not_found():
     # e = 0.4, u = 0.33: above tongue 1 (0.303), below the curve (0.335); the
     # orbit does not slide within 100 steps (reference too): not found, not "impossible"
     assert sb.tongue(1, 0.4)[1] < 0.33 < cor21(0.4)
-    a = sb.sliding_answer(0.4, 0.33, max_steps=100)
+    a = sb.sliding_answer(0.4, 0.33, max_iter=100)
     assert naive.word(0.4, 0.33, 100) is None
     assert a.verdict == "not found" and "no periodic sliding solution found within 100 steps" in a.text()
     assert "Corollary 2.1 does not exclude it" in a.text()
     # on the curve itself (equality may slide): never called impossible
-    assert sb.sliding_answer(0.5, cor21(0.5), max_steps=10).verdict != "impossible"
+    assert sb.sliding_answer(0.5, cor21(0.5), max_iter=10).verdict != "impossible"
     # e = 0: plastic, every speed slides, the bound is infinite
     a = sb.sliding_answer(0.0, 5.0)
     assert a.verdict == "found" and a.bound == math.inf
@@ -65,8 +65,8 @@ def test_speed_bound_in_metres_per_second_and_short_repr():
     assert sb.sliding_answer(0.7, 1.5).speed_bound is None
     long = sb.sliding_answer(0.0806666, 0.6533333, 500)
     assert len(long.word) > 10 and "\n" not in repr(long) and len(repr(long)) < 120
-    with pytest.raises(ValueError, match="max_steps"):
-        sb.sliding_answer(0.5, 0.5, max_steps=0)
+    with pytest.raises(ValueError, match="max_iter"):
+        sb.sliding_answer(0.5, 0.5, max_iter=0)
 
 
 def run(args, capsys):
@@ -82,7 +82,7 @@ def test_word_command_says_impossible_with_the_speed(capsys):
     assert code == 0
     assert "impossible (Corollary 2.1: u >= 0.126773 at e = 0.7); sliding needs U < 0.2696 m/s" in out
     assert "found within" not in out
-    code, out, _ = run(["word", "--e", "0.4", "--u", "0.33", "--max-steps", "100"], capsys)
+    code, out, _ = run(["word", "--e", "0.4", "--u", "0.33", "--max-iter", "100"], capsys)
     assert code == 0 and "no periodic sliding solution found within 100 steps" in out and "needs u < 0.33541" in out
     code, out, _ = run(["word", "--e", "0.3", "--u", "0.2"], capsys)
     assert "period:  1 step\n" in out

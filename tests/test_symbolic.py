@@ -27,9 +27,12 @@ def test_word_rejects_impossible_letters(bad):
         sb.Word(bad)
 
 
-def test_parse_word_rejects_missing_tail():
-    with pytest.raises(ValueError, match="word must look like"):
-        sb.parse_word("(2, 0, 3)")
+def test_parse_word_reads_the_letters_without_the_tail_and_rejects_other_text():
+    # the letters alone, as Word keeps them, are the same word (issue 37)
+    assert sb.parse_word("(2, 0, 3)") == sb.parse_word("(2, 0, 3, 0^inf)") == sb.Word((2, 0, 3))
+    for bad in ("(2, 0, 3", "2, 0, 3", "(0^inf)", "(2, x)", "()"):
+        with pytest.raises(ValueError, match="word must look like"):
+            sb.parse_word(bad)
 
 
 def test_word_from_impacts_follows_the_convention():
@@ -49,7 +52,7 @@ def test_sliding_word_agrees_with_impact_by_impact_loop():
     found = 0
     for _ in range(400):
         e, u = rng.uniform(0, 0.6), rng.uniform(0.05, 1.5)
-        w = sb.sliding_word(e, u, max_steps=300)
+        w = sb.sliding_word(e, u, max_iter=300)
         ref = naive.word(e, u, max_steps=300)
         assert (w.letters if w else None) == ref, (e, u)
         found += w is not None
@@ -61,7 +64,7 @@ def test_known_words_from_the_paper_plane():
     assert sb.sliding_word(0.1, 0.5).letters == (1,)
     assert sb.sliding_word(0.1, 0.75).letters == (2,)
     # above Corollary 2.1 nothing slides
-    assert sb.sliding_word(0.1, 1.01, max_steps=5000) is None
+    assert sb.sliding_word(0.1, 1.01, max_iter=5000) is None
     # e = 0: the ball sticks wherever it lands; from (1, 0) it lands on the first
     # step iff sqrt(2) <= 1/u, i.e. the n = 1 tongue u <= 1/sqrt(2)
     assert sb.sliding_word(0.0, 0.7).letters == (1,)

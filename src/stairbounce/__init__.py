@@ -91,6 +91,7 @@ from .regions import (
     word_region,
     write_regions,
 )
+from ._progress import progress_bar
 from .symbolic import SlidingAnswer, Word, parse_word, sliding_answer, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, physical_speed, time_scale
@@ -171,6 +172,7 @@ __all__ = [
     "physical_speed",
     "pixel_centres",
     "poincare_map",
+    "progress_bar",
     "prunable",
     "random_points",
     "save",

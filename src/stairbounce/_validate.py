@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 import numbers
 import os
+import warnings
 from typing import Any, TypeAlias
 
 import numpy as np
@@ -79,6 +80,34 @@ def count(name, n, minimum, maximum=None):
     if n > _INT64_MAX:  # nothing that counts (numpy, numba) goes further
         raise ValueError(f"{name} must be {rule} and below 2**63, got {_show(n)}")
     return n
+
+
+def window(name, spec):
+    """A window along ``name`` as every function taking one accepts it:
+    ``(lo, hi)`` or ``(lo, hi, n)`` (image edges, and the pixel count along
+    that axis) -> ``(lo, hi, n)`` with ``n`` None when not given.  Only the
+    form is checked here; each caller checks the bounds and the count."""
+    if isinstance(spec, (str, bytes)) or not hasattr(spec, "__len__") or len(spec) not in (2, 3):
+        raise ValueError(f"{name} must be a tuple ({name}_min, {name}_max) or ({name}_min, {name}_max, "
+                         f"n_{name}), got {_show(spec)}")
+    lo, hi, *n = spec
+    return lo, hi, (n[0] if n else None)
+
+
+def renamed(old, old_value, new, new_value, default, stacklevel=3):
+    """The value of a keyword renamed from ``old`` to ``new`` (default
+    ``default``): ``old_value`` (None when not given) is still taken, with a
+    DeprecationWarning; given together with a ``new_value`` other than the
+    default, it is refused (never one of them silently dropped)."""
+    if old_value is None:
+        return new_value
+    warnings.warn(f"{old}= is deprecated: use {new}= (the step limit is max_iter everywhere, "
+                  "docs/design.md)" if new == "max_iter" else f"{old}= is deprecated: use {new}=",
+                  DeprecationWarning, stacklevel=stacklevel)
+    if new_value != default:
+        raise ValueError(f"{old} is the deprecated name of {new}: give {new} only, got both "
+                         f"{new} = {_show(new_value)} and {old} = {_show(old_value)}")
+    return old_value
 
 
 def among(name, values, allowed):

@@ -520,7 +520,7 @@ def scan_to_zarr(
     """
     import xarray as xr
 
-    from .plane import pixel_centres, scan
+    from .plane import _windows, pixel_centres, scan
 
     path = _check_path(path)
     tile = check_count("tile", tile, 1)
@@ -529,7 +529,7 @@ def scan_to_zarr(
     _check_client(client)
     # one pixel through the public scan: validates everything as scan does and
     # gives its variables and attributes, whatever scan records
-    (e_lo, e_hi, n_e), (u_lo, u_hi, n_u) = _triple("e", e), _triple("u", u)
+    (e_lo, e_hi, n_e), (u_lo, u_hi, n_u) = _windows(e, u)
     # a window of speeds in m/s (Staircase.speed(lo, hi, n)): the store records the
     # staircase (its attributes, checked on resume) and the coordinate speed
     stairs = staircase_of(u)
@@ -622,14 +622,6 @@ def _open_read_only(path, attrs, tile, es, us, rows, cols, verify, progress, rea
     if progress is not None:
         progress(done.size, done.size)
     return xr.open_zarr(str(path), consolidated=False)
-
-
-def _triple(name, spec):
-    try:
-        lo, hi, n = spec
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a tuple ({name}_min, {name}_max, n_{name}), got {spec!r}") from None
-    return lo, hi, n
 
 
 def _connect(address):

@@ -951,8 +951,7 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, outcom
         es, us, period, max_iter = _grid_input(e)
         attrs = {k: e.attrs[k] for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u") if k in e.attrs}
     else:
-        e_min, e_max, n_e = plane._window("e", e, 0.0, 1.0, "[0, 1]")
-        u_min, u_max, n_u = plane._window("u", u, 0.0, math.inf, "[0, inf)")
+        (e_min, e_max, n_e), (u_min, u_max, n_u) = plane._windows(e, u)
         max_iter = _check_max_iter(max_iter)
         ds = plane.scan(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=max_iter,
                         progress=progress)
@@ -1013,8 +1012,7 @@ def _scan_input(e, u, max_iter, progress):
     if isinstance(e, xr.Dataset):
         _grid_input(e)  # checked here, once
         return e
-    e_min, e_max, n_e = plane._window("e", e, 0.0, 1.0, "[0, 1]")
-    u_min, u_max, n_u = plane._window("u", u, 0.0, math.inf, "[0, inf)")
+    (e_min, e_max, n_e), (u_min, u_max, n_u) = plane._windows(e, u)
     max_iter = _check_max_iter(max_iter)
     return plane.scan(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=max_iter,
                       progress=progress)

@@ -1313,6 +1313,20 @@ def verdict_tally(results):
     return ", ".join(f"{n} {v}" for v, n in counts.items())
 
 
+def rows_with_verdict(results, verdict="differs", width=160):
+    """One line per row of ``results`` with that ``verdict``: ``"fig6: QUANTITY
+    (paper P; here M): WHY"``, cut at ``width`` characters (the report has
+    it whole), so a summary names what it counts."""
+    lines = []
+    for r in results:
+        for x in r.rows:
+            if x.verdict == verdict:
+                here = x.measured.split(". ")[0]
+                line = f"{r.name}: {x.quantity} (paper {x.paper}; here {here})" + (f": {x.why}" if x.why else "")
+                lines.append(line if len(line) <= width else line[: width - 3] + "...")
+    return lines
+
+
 def _jsonable(x):
     if isinstance(x, np.generic):
         return x.item()

@@ -899,17 +899,17 @@ def motion_scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), steps=1000, transient=1000
 
     Parameters
     ----------
-    e, u : (lo, hi, n), default (0, 1, 500) and (0, 1.5, 350), as in
-        :func:`stairbounce.plane.scan` (the paper's Fig. 4 grid).
+    e, u : (lo, hi, n) or (lo, hi), default (0, 1, 500) and (0, 1.5, 350), as in
+        :func:`stairbounce.plane.scan` (the paper's Fig. 4 grid; a count left
+        out makes square pixels).
     steps : int >= 2, default 1000; transient : int >= 0, default 1000
     y0, v0 : float, default 1.0, 0.0
     progress : callable ``progress(rows_done, rows_total)``, optional
         Rows are then computed in about 50 blocks (same values).
     """
-    from .plane import _window, pixel_centres
+    from .plane import _windows, pixel_centres
 
-    e_min, e_max, n_e = _window("e", e, 0.0, 1.0, "[0, 1]")
-    u_min, u_max, n_u = _window("u", u, 0.0, math.inf, "[0, inf)")
+    (e_min, e_max, n_e), (u_min, u_max, n_u) = _windows(e, u)
     es = pixel_centres(e_min, e_max, n_e)
     us = pixel_centres(u_min, u_max, n_u)
     if progress is None:

@@ -808,19 +808,57 @@ def _chunking(npix, threads, unit_min=_UNIT_MIN):
 # --------------------------------------------------------------------------- #
 
 
+# Pixels along the longer side of a window given without pixel counts
+# (square pixels; docs/design.md, "Conventions for windows and limits")
+DEFAULT_SIDE = 500
+
+
 def _window(name, spec, lo_min, hi_max, lo_text):
-    try:
-        lo, hi, n = spec
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a tuple ({name}_min, {name}_max, n_{name}), got {spec!r}") from None
+    """One window ``(lo, hi)`` or ``(lo, hi, n)`` -> ``(lo, hi, n)``, ``n`` None
+    when not given (:func:`_windows` fills it in)."""
+    lo, hi, n = _v.window(name, spec)
     lo = _finite(f"{name}_min", lo)
     hi = _finite(f"{name}_max", hi)
-    n = check_count(f"n_{name}", n, 1)
+    if n is not None:
+        n = check_count(f"n_{name}", n, 1)
     if lo < lo_min or hi > hi_max:
         raise ValueError(f"{name} window must lie in {lo_text}, got [{lo}, {hi}]")
     if not lo < hi:
         raise ValueError(f"{name}_min must be < {name}_max, got {name}_min = {lo}, {name}_max = {hi}")
     return lo, hi, n
+
+
+def _windows(e, u, side=DEFAULT_SIDE):
+    """The scan windows ``e``, ``u`` (each ``(lo, hi)`` or ``(lo, hi, n)``,
+    image edges) checked, as two triples: a count not given makes square
+    pixels (:func:`square_counts`)."""
+    ew = _window("e", e, 0.0, 1.0, "[0, 1]")
+    uw = _window("u", u, 0.0, math.inf, "[0, inf)")
+    n_e, n_u = square_counts(ew, uw, side)
+    return (ew[0], ew[1], n_e), (uw[0], uw[1], n_u)
+
+
+def square_counts(e, u, side=DEFAULT_SIDE):
+    """square_counts(e, u, side=500) -> (n_e, n_u)
+
+    Pixel counts of the windows ``e = (lo, hi[, n])`` and ``u`` where a count
+    is not given: square pixels, ``side`` pixels along the longer side when
+    neither is given, else the given count's pixel size (at least 1 pixel).
+    """
+    n_e = e[2] if len(e) > 2 else None
+    n_u = u[2] if len(u) > 2 else None
+    we, wu = e[1] - e[0], u[1] - u[0]
+    if n_e is None and n_u is None:
+        pixel = max(we, wu) / side
+    elif n_e is None or n_u is None:
+        pixel = we / n_e if n_e is not None else wu / n_u
+    else:
+        return n_e, n_u
+
+    def count(width):
+        return max(1, int(round(width / pixel)))
+
+    return (count(we) if n_e is None else n_e), (count(wu) if n_u is None else n_u)
 
 
 def _coords(name, values):
@@ -1189,10 +1227,15 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
 
     Parameters
     ----------
-    e : (e_min, e_max, n_e), default (0, 1, 500)
-        Image edges along e, within [0, 1] (pixel centres lie inside, < 1).
-    u : (u_min, u_max, n_u), default (0, 1.5, 350)
+    e : (e_min, e_max, n_e) or (e_min, e_max), default (0, 1, 500)
+        Image edges along e, within [0, 1] (pixel centres lie inside, < 1),
+        and the pixels along e.
+    u : (u_min, u_max, n_u) or (u_min, u_max), default (0, 1.5, 350)
         Image edges along u, u_min >= 0 (pixel centres lie inside, > 0).
+        A count left out makes square pixels: 500 along the longer side of
+        the window when both are left out, else the other axis's pixel size
+        (:func:`square_counts`; the window convention of every function,
+        docs/design.md).
     max_iter : int >= 1, default 1000
         Steps allowed for the transient and for the period, each.
     y0, v0 : float, default 1.0, 0.0
@@ -1217,8 +1260,7 @@ def scan(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, y0=1.0, v0=0.0, *,
 
     Reference: Section 3 of the paper (the scheme behind Figures 4 and 5).
     """
-    e_min, e_max, n_e = _window("e", e, 0.0, 1.0, "[0, 1]")
-    u_min, u_max, n_u = _window("u", u, 0.0, math.inf, "[0, inf)")
+    (e_min, e_max, n_e), (u_min, u_max, n_u) = _windows(e, u)
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
     # the outputs and the pixel centres (estimate_bytes counts both): the

@@ -27,6 +27,7 @@ points themselves are fixed by the margins' signs).
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -745,30 +746,86 @@ class Region:
     def corners(self):
         return [c for comp in self.components for c in comp.corners]
 
+    @property
+    def found(self) -> bool:
+        """Whether the word was found in the window (at least one component traced)."""
+        return bool(self.components)
+
     def __repr__(self):
+        if not self.found and self.complete:
+            return (f"Region({self.word.format(ascii=True)}: not found in the window "
+                    f"e = [{self.e[0]:g}, {self.e[1]:g}], u = [{self.u[0]:g}, {self.u[1]:g}])")
         return (f"Region({self.word.format(ascii=True)}: area {self.area:.6e} +- "
                 f"{self.area_error:.1e} in {len(self.components)} components"
                 f"{'' if self.complete else ', INCOMPLETE'})")
 
 
+# The margins need e < 1 and u > 0: a window's edges e = 1 and u = 0 (image
+# edges, allowed as in stairbounce.scan, whose pixel centres lie inside) are
+# traced at these instead (as the explorer and word_table's traced columns do)
+_E_TOP = 1.0 - 1e-12
+_DEFAULT_RESOLUTION = 256
+_U_BOTTOM = 1e-9
+
+
 def _check_window(e, u):
-    try:
-        e_lo, e_hi = (float(_v.real("e_min", e[0])), float(_v.real("e_max", e[1])))
-        u_lo, u_hi = (float(_v.real("u_min", u[0])), float(_v.real("u_max", u[1])))
-    except (TypeError, IndexError, KeyError):
-        raise ValueError(f"e and u must be (min, max) pairs, got e={e!r}, u={u!r}") from None
-    if not 0.0 <= e_lo < e_hi < 1.0:
-        raise ValueError(f"e window must satisfy 0 <= e_min < e_max < 1, got [{e_lo}, {e_hi}]")
-    if not (_v.U_MIN <= u_lo < u_hi <= _v.U_MAX):
-        raise ValueError(f"u window must satisfy {_v.U_MIN:g} <= u_min < u_max <= {_v.U_MAX:g}, "
-                         f"got [{u_lo}, {u_hi}]")
-    return (e_lo, e_hi), (u_lo, u_hi)
+    """The windows ``e``, ``u`` (each ``(lo, hi)`` or ``(lo, hi, n)``, image
+    edges within [0, 1] and [0, 1e150] as in :func:`stairbounce.scan`) ->
+    the traced window ``(e_lo, e_hi), (u_lo, u_hi)``, e = 1 and u below the
+    valid range (0) moved inside the domain (``_E_TOP``, ``_U_BOTTOM``)."""
+    (e_lo, e_hi, _), (u_lo, u_hi, _) = _image_window(e, u)
+    # only the edges outside the map's domain move: every window valid before
+    # (e_max < 1, u_min >= 1e-150) is traced as it was
+    return ((e_lo, _E_TOP if e_hi >= 1.0 else e_hi),
+            (max(u_lo, _U_BOTTOM) if u_lo < _v.U_MIN else u_lo, u_hi))
 
 
-def _grid(e, u, resolution):
-    n = resolution
-    es = e[0] + (np.arange(n) + 0.5) * (e[1] - e[0]) / n
-    us = u[0] + (np.arange(n) + 0.5) * (u[1] - u[0]) / n
+def _image_window(e, u):
+    """``e``, ``u`` as checked triples ``(lo, hi, n or None)`` of image edges."""
+    e_lo, e_hi, n_e = _v.window("e", e)
+    u_lo, u_hi, n_u = _v.window("u", u)
+    e_lo, e_hi = float(_v.real("e_min", e_lo)), float(_v.real("e_max", e_hi))
+    u_lo, u_hi = float(_v.real("u_min", u_lo)), float(_v.real("u_max", u_hi))
+    if not 0.0 <= e_lo < e_hi <= 1.0:
+        raise ValueError(f"e window must satisfy 0 <= e_min < e_max <= 1 (image edges), got [{e_lo}, {e_hi}]")
+    if not (0.0 <= u_lo < u_hi <= _v.U_MAX) or u_hi <= _U_BOTTOM:
+        raise ValueError(f"u window must satisfy 0 <= u_min < u_max <= {_v.U_MAX:g} (image edges) and "
+                         f"u_max > {_U_BOTTOM:g}, got [{u_lo}, {u_hi}]")
+    if e_lo >= _E_TOP:
+        raise ValueError(f"e window must have e_min < {_E_TOP!r} (the margins need e < 1), got [{e_lo}, {e_hi}]")
+    n_e = None if n_e is None else check_count("n_e", n_e, 2, 8192)
+    n_u = None if n_u is None else check_count("n_u", n_u, 2, 8192)
+    return (e_lo, e_hi, n_e), (u_lo, u_hi, n_u)
+
+
+def _seed_grid(e, u, resolution):
+    """The traced window and the seed scan's pixel centres of :func:`word_region`
+    and :func:`window_regions`: ``(e, u, es, us)``.  The seed pixels are the
+    windows' own counts ``(lo, hi, n)``, or ``resolution`` along each axis
+    (default 256) for ``(lo, hi)``; a count given both ways is refused, never
+    ignored."""
+    ew, uw = _image_window(e, u)
+    given = [w[2] for w in (ew, uw) if w[2] is not None]
+    if given and resolution is not None:
+        raise ValueError(f"resolution = {resolution!r} and the pixel counts of e = {tuple(e)!r}, u = "
+                         f"{tuple(u)!r}: give the seed pixels once, as (lo, hi, n) windows or as resolution")
+    resolution = _DEFAULT_RESOLUTION if resolution is None else check_count("resolution", resolution, 2, 8192)
+    n_e = resolution if ew[2] is None else ew[2]
+    n_u = resolution if uw[2] is None else uw[2]
+    es, us = _grid(ew, uw, n_e, n_u)
+    te, tu = _check_window(e, u)
+    if es[-1] > te[1] or us[0] < tu[0]:
+        raise ValueError(f"the window e = [{ew[0]}, {ew[1]}], u = [{uw[0]}, {uw[1]}] has seed pixel centres "
+                         f"beyond e = {_E_TOP!r} or below u = {_U_BOTTOM:g}, where the margins are not "
+                         "traced: narrow the window away from e = 1 and u = 0")
+    return te, tu, es, us, ((ew[1] - ew[0]) / n_e, (uw[1] - uw[0]) / n_u)
+
+
+def _grid(e, u, n_e, n_u=None):
+    """The pixel centres of ``n_e`` x ``n_u`` (default ``n_e``) seed pixels of the window."""
+    n_u = n_e if n_u is None else n_u
+    es = e[0] + (np.arange(n_e) + 0.5) * (e[1] - e[0]) / n_e
+    us = u[0] + (np.arange(n_u) + 0.5) * (u[1] - u[0]) / n_u
     return es, us
 
 
@@ -992,9 +1049,9 @@ def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=())
     return comps, failures
 
 
-def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=256, max_iter=1000,
+def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=None, max_iter=1000,
                 y0=1.0, v0=0.0):
-    """word_region(word, e=(0, 1), u=(0.05, 1.5), *, resolution=256, max_iter=1000) -> Region
+    """word_region(word, e=(0, 1), u=(0.05, 1.5), *, resolution=None, max_iter=1000) -> Region
 
     The region of the parameter plane where the periodic sliding solution
     through (1, 0) has the word ``word``, as closed polygons of traced arcs.
@@ -1015,13 +1072,21 @@ def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=256, max
     perimeter times 32 ulps), or one whose walk stalls, is not traced and the
     region is marked ``complete=False`` (docs/guide/regions.md).
 
+    A word the seed scan does not see in the window gives a region with no
+    component whose ``found`` is False (its repr says "not found"), and a
+    :class:`UserWarning` saying so.
+
     Parameters
     ----------
-    word : Word, str such as ``"(2, 0, 1, 0^inf)"``, or letters such as ``(2, 0, 1)``
-    e, u : (min, max)
-        The window (0 <= e_min < e_max < 1).
-    resolution : int >= 2, default 256
-        Pixels per side of the seeding scan.
+    word : Word, str such as ``"(2, 0, 1, 0^inf)"`` or ``"(2, 0, 1)"``, or letters such as ``(2, 0, 1)``
+    e, u : (min, max) or (min, max, n)
+        The window's edges, as in :func:`stairbounce.scan` (0 <= e_min <
+        e_max <= 1, 0 <= u_min < u_max; the edges e = 1 and u = 0, where the
+        margins are not defined, are traced at 1 - 1e-12 and 1e-9), and the
+        seed scan's pixels along that axis.
+    resolution : int >= 2, default 256 (for windows given as (min, max))
+        Pixels per side of the seeding scan, for windows given without
+        counts; giving both is refused.
     max_iter : int, default 1000
         Only matters for the seeding scan's labels (steps per pixel).
 
@@ -1029,17 +1094,21 @@ def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=256, max
     -------
     Region
         ``area``, ``area_error``, ``components`` (each with ``area``,
-        ``boundary`` arcs, ``holes``, ``corners``, ``kinds``, ``polygon()``).
+        ``boundary`` arcs, ``holes``, ``corners``, ``kinds``, ``polygon()``),
+        ``found``.
     """
     w = _as_word(word)
-    e, u = _check_window(e, u)
-    resolution = check_count("resolution", resolution, 2, 8192)
+    e, u, es, us, _ = _seed_grid(e, u, resolution)
     max_iter = check_count("max_iter", max_iter, 1)
     ks = itinerary_of_word(w)
-    es, us = _grid(e, u, resolution)
     h1, h2, _ = _label_grid(es, us, max(max_iter, ks.size), float(y0), float(v0))
     a, b = _hash_itinerary(ks, ks.size)
     mask = (h1 == a) & (h2 == b)
+    if not mask.any():
+        warnings.warn(f"word {w.format(ascii=True)} not found in the window e = [{e[0]:g}, {e[1]:g}], "
+                      f"u = [{u[0]:g}, {u[1]:g}] (no pixel of the {es.size} x {us.size} seed scan has it): "
+                      "its region is empty or narrower than a seed pixel; raise resolution to look closer",
+                      UserWarning, stacklevel=2)
     comps, failures = _trace_word(ks, w, e, u, es, us, mask, float(y0), float(v0))
     return Region(w, e, u, comps, complete=failures == 0, failures=failures)
 
@@ -1202,12 +1271,14 @@ def _corner_seeds(regs, known, e, u, pixel, y0, v0, max_iter):
     return {k: v for k, v in new.items() if v[1]}
 
 
-def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, points=None, progress=None,
+def window_regions(e, u, *, resolution=None, max_iter=1000, y0=1.0, v0=0.0, points=None, progress=None,
                    from_corners=False):
-    """window_regions(e, u, *, resolution=256, max_iter=1000, points=None, from_corners=False) -> list[Region]
+    """window_regions(e, u, *, resolution=None, max_iter=1000, points=None, from_corners=False) -> list[Region]
 
     Every word's region in a window (the words seen by a scan of
-    ``resolution`` x ``resolution`` pixel centres, and, with ``points`` (a
+    ``resolution`` x ``resolution`` pixel centres, or of the windows' own
+    counts ``e=(lo, hi, n_e)``, ``u=(lo, hi, n_u)``, as :func:`word_region`
+    takes them, and, with ``points`` (a
     :func:`stairbounce.border_points` Dataset, e.g. of a finer scan), the
     words on either side of those border points, each traced from there),
     largest area first; see :func:`word_region` for the method.
@@ -1246,7 +1317,7 @@ def window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, point
             progress(done, total)
 
 
-def iter_window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, points=None,
+def iter_window_regions(e, u, *, resolution=None, max_iter=1000, y0=1.0, v0=0.0, points=None,
                         from_corners=False):
     """iter_window_regions(e, u, ...) -> generator of (done, total), returning list[Region]
 
@@ -1256,14 +1327,12 @@ def iter_window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, 
     regions, largest area first.  For callers that share a worker between
     words (the explorer's scheduler).
     """
-    e, u = _check_window(e, u)
-    resolution = check_count("resolution", resolution, 2, 8192)
+    e, u, es, us, pixel = _seed_grid(e, u, resolution)
     max_iter = check_count("max_iter", max_iter, 1)
     from_corners = _v.flag("from_corners", from_corners)
     y0, v0 = float(y0), float(v0)
     if points is not None and not all(k in getattr(points, "variables", ()) for k in ("e", "u", "width", "axis")):
         raise ValueError("points must be a Dataset from border_points (variables e, u, width, axis)")
-    es, us = _grid(e, u, resolution)
     h1, h2, steps = _label_grid(es, us, max_iter, y0, v0)
     keys, first = np.unique(np.stack([h1.ravel(), h2.ravel()], 1), axis=0, return_index=True)
     seeds = _point_seeds(points, e, u, y0, v0, max_iter) if points is not None else {}
@@ -1295,7 +1364,6 @@ def iter_window_regions(e, u, *, resolution=256, max_iter=1000, y0=1.0, v0=0.0, 
 
     fresh = yield from trace(todo, seeds)
     known = set(todo)
-    pixel = ((e[1] - e[0]) / resolution, (u[1] - u[0]) / resolution)
     for _ in range(_CORNER_ROUNDS if from_corners else 0):
         seeds = _corner_seeds(fresh, known, e, u, pixel, y0, v0, max_iter)
         if not seeds:
@@ -1418,7 +1486,14 @@ def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-
         raise ValueError(f"search must be in (0, 1], got {search}")
     if window is None:
         window = ((max(0.0, e - 0.5), min(1.0 - 1e-9, e + 0.5)), (max(1e-3, u - 0.5), u + 0.5))
-    we, wu = _check_window(*window)
+    try:
+        we, wu = window
+    except (TypeError, ValueError):
+        raise ValueError(f"window must be ((e_min, e_max), (u_min, u_max)), got {window!r}") from None
+    if _v.window("e", we)[2] is not None or _v.window("u", wu)[2] is not None:
+        raise ValueError(f"window must be ((e_min, e_max), (u_min, u_max)): trace_border follows one "
+                         f"arc and takes no pixel count, got {window!r}")
+    we, wu = _check_window(we, wu)
     if not (we[0] <= e <= we[1] and wu[0] <= u <= wu[1]):
         raise ValueError(f"(e, u) = ({e}, {u}) must lie in the window {window}")
     y0, v0 = float(y0), float(v0)

@@ -12,11 +12,13 @@ from __future__ import annotations
 import math
 import re
 import sys
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
+from . import _validate as _v
 from .model import SLIDING, _constants, _step, check_count, check_e, check_u, no_sliding_bound
 
 __all__ = ["SlidingAnswer", "Word", "sliding_answer", "sliding_word", "parse_word"]
@@ -82,14 +84,16 @@ class Word:
 
 def parse_word(text: str) -> Word:
     """Read a word written as in the paper, ``(2, 0, 3, 1, 0^inf)`` (or with the
-    infinity sign)."""
+    infinity sign), or its letters alone, ``(2, 0, 3, 1)`` (the tail left out,
+    as :class:`Word` keeps them); both give the same :class:`Word`."""
     if not isinstance(text, str):
         raise ValueError(f"word must be a string like (2, 0, 3, 1, 0^inf), got {text!r}")
     if len(text) > _MAX_WORD_TEXT:
         raise ValueError(f"word must be at most {_MAX_WORD_TEXT} characters long, got {len(text)}")
-    m = re.fullmatch(r"\s*\(\s*((?:\d+\s*,\s*)+)0\^(?:inf|\u221e)\s*\)\s*", text)
+    m = (re.fullmatch(r"\s*\(\s*((?:\d+\s*,\s*)+)0\^(?:inf|\u221e)\s*\)\s*", text)
+         or re.fullmatch(r"\s*\(\s*(\d+(?:\s*,\s*\d+)*)\s*,?\s*\)\s*", text))
     if not m:
-        raise ValueError(f"word must look like (2, 0, 3, 1, 0^inf), got {text!r}")
+        raise ValueError(f"word must look like (2, 0, 3, 1, 0^inf) or (2, 0, 3, 1), got {text!r}")
     letters = [a.strip() for a in m.group(1).split(",") if a.strip()]
     if any(len(a) > 18 for a in letters):  # int64, as the scan stores them
         raise ValueError(f"word letters must be below 10^18, got {text[:60]!r}...")
@@ -139,8 +143,8 @@ def word_from_impacts(impacts) -> Word:
     raise ValueError("impacts must end with a sliding step (SLIDING)")
 
 
-def sliding_word(e, u, max_steps=1000):
-    """sliding_word(e, u, max_steps=1000) -> Word | None
+def sliding_word(e, u, max_iter=1000, *, max_steps=None):
+    """sliding_word(e, u, max_iter=1000) -> Word | None
 
     The periodic sliding solution through ``(1, 0)``, as a word.
 
@@ -153,22 +157,23 @@ def sliding_word(e, u, max_steps=1000):
     ----------
     e : float in [0, 1)
     u : float > 0
-    max_steps : int >= 1, default 1000
-        Steps to iterate before giving up.
+    max_iter : int >= 1, default 1000
+        Steps to iterate before giving up (``max_steps``, its old name, is
+        still read, with a DeprecationWarning).
 
     Returns
     -------
     Word or None
-        ``None`` when the orbit does not slide within ``max_steps`` steps.
+        ``None`` when the orbit does not slide within ``max_iter`` steps.
     """
     e = check_e(e)
     T, ratio = _constants(e, check_u(u))
-    max_steps = check_count("max_steps", max_steps, 1)
+    max_iter = check_count("max_iter", _v.renamed("max_steps", max_steps, "max_iter", max_iter, 1000), 1)
     # blocks of _BLOCK steps: memory grows with the period found, not with
-    # max_steps, and Ctrl-C is seen between blocks
-    block = np.empty(min(max_steps, _BLOCK), dtype=np.int64)
+    # max_iter, and Ctrl-C is seen between blocks
+    block = np.empty(min(max_iter, _BLOCK), dtype=np.int64)
     done = []
-    y, v, left = 1.0, 0.0, max_steps
+    y, v, left = 1.0, 0.0, max_iter
     while left > 0:
         m = min(left, block.size)
         n, y, v = _impacts_until_slide(y, v, e, T, ratio, m, block)
@@ -187,7 +192,7 @@ class SlidingAnswer:
     ``verdict`` is ``"found"`` (``word`` is its word), ``"impossible"``
     (proven by Corollary 2.1: ``u`` lies above ``bound``, so the orbit of
     ``(1, 0)`` never slides again; nothing was iterated) or ``"not found"``
-    (below the bound, but the orbit did not slide within ``max_steps``
+    (below the bound, but the orbit did not slide within ``max_iter``
     steps: not a proof).  ``bound`` is the Corollary 2.1 speed
     ``(1-e)/(2 sqrt(2e))`` below which sliding is possible (``inf`` at
     ``e = 0``); ``speed_bound`` is the same in m/s when ``u`` was given as a
@@ -196,7 +201,7 @@ class SlidingAnswer:
 
     e: float
     u: float
-    max_steps: int
+    max_iter: int
     verdict: str
     word: Word | None
     bound: float
@@ -206,6 +211,12 @@ class SlidingAnswer:
     def found(self) -> bool:
         return self.word is not None
 
+    @property
+    def max_steps(self) -> int:
+        """The old name of ``max_iter`` (deprecated)."""
+        warnings.warn("SlidingAnswer.max_steps is deprecated: use max_iter", DeprecationWarning, stacklevel=2)
+        return self.max_iter
+
     def text(self, ascii: bool = False) -> str:
         """One sentence: the word, or the proof, or the search that failed."""
         if self.word is not None:
@@ -214,7 +225,7 @@ class SlidingAnswer:
                 else f"sliding needs u < {self.bound:.6g}")
         if self.verdict == "impossible":
             return f"impossible (Corollary 2.1: u >= {self.bound:.6g} at e = {self.e:g}); {need}"
-        return (f"no periodic sliding solution found within {self.max_steps} steps (the orbit of "
+        return (f"no periodic sliding solution found within {self.max_iter} steps (the orbit of "
                 f"(1, 0) does not slide; "
                 f"Corollary 2.1 does not exclude it: {need})")
 
@@ -225,16 +236,17 @@ class SlidingAnswer:
         return f"SlidingAnswer(e={self.e:g}, u={self.u:g}: {text})"
 
 
-def sliding_answer(e, u, max_steps=1000):
-    """sliding_answer(e, u, max_steps=1000) -> SlidingAnswer
+def sliding_answer(e, u, max_iter=1000, *, max_steps=None):
+    """sliding_answer(e, u, max_iter=1000) -> SlidingAnswer
 
     :func:`sliding_word`, with what the paper proves when there is no word.
 
     Above the Corollary 2.1 curve (by the rounding margin of
     :func:`stairbounce.prunable`, the test a scan prunes on) no solution
     slides: the verdict is ``"impossible"`` and nothing is iterated.
-    Otherwise the orbit of ``(1, 0)`` is iterated for up to ``max_steps``
-    steps: ``"found"`` with its word, or ``"not found"``.  Given a
+    Otherwise the orbit of ``(1, 0)`` is iterated for up to ``max_iter``
+    steps: ``"found"`` with its word, or ``"not found"`` (``max_steps``, the
+    old name of ``max_iter``, is still read, with a DeprecationWarning).  Given a
     :class:`stairbounce.Speed` (``staircase.speed(U)``), the answer also
     carries the bound in m/s, ``speed_bound``: the speed below which sliding
     becomes possible.
@@ -252,13 +264,13 @@ def sliding_answer(e, u, max_steps=1000):
     e = check_e(e)
     stairs = staircase_of(u)
     u_value = check_u(u)
-    max_steps = check_count("max_steps", max_steps, 1)
+    max_iter = check_count("max_iter", _v.renamed("max_steps", max_steps, "max_iter", max_iter, 1000), 1)
     bound = no_sliding_bound(e)
     speed_bound = None
     if stairs is not None and math.isfinite(bound):
         speed_bound = bound * stairs.speed_unit
     if bool(prunable(e, u_value)):
-        return SlidingAnswer(e, u_value, max_steps, "impossible", None, bound, speed_bound)
-    w = sliding_word(e, u_value, max_steps)
-    return SlidingAnswer(e, u_value, max_steps, "found" if w is not None else "not found", w, bound,
+        return SlidingAnswer(e, u_value, max_iter, "impossible", None, bound, speed_bound)
+    w = sliding_word(e, u_value, max_iter)
+    return SlidingAnswer(e, u_value, max_iter, "found" if w is not None else "not found", w, bound,
                          speed_bound)

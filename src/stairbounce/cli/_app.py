@@ -17,7 +17,13 @@ import typer
 app = typer.Typer(
     name="stairbounce",
     help="A ball bouncing down a staircase: Poincare map, sliding solutions, "
-    "the fractal of periodic sliding solutions in the (e, u) plane.",
+    "the fractal of periodic sliding solutions in the (e, u) plane.  "
+    "A window MIN:MAX of e, u or --speed means the same in every command: the edges "
+    "of the interval, cut into equal cells (pixels, or the --n values of orbit-diagram) "
+    "sampled at their centres, so MIN and MAX themselves are never used (e = 1 and "
+    "u = 0 may be edges).  Without --size, pixels are square: 500 along the longer "
+    "side of the window (the default window keeps the paper's 500x350 grid).  The "
+    "step limit is --max-iter everywhere.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
@@ -139,6 +145,39 @@ def parse_size(text: str) -> tuple[int, int]:
     return w, h
 
 
+def renamed_option(old: str, old_value, new: str, new_value, default):
+    """The value of an option renamed from ``old`` to ``new``: ``old_value``
+    (None when not given) is still taken, with a one-line warning on stderr;
+    both given (the new one not at its default) is an error."""
+    if old_value is None:
+        return new_value
+    typer.echo(f"stairbounce: warning: {old} is deprecated: use {new}", err=True)
+    if new_value != default:
+        raise CLIError(f"{old} is the deprecated name of {new}: give {new} only")
+    return old_value
+
+
+# the default window of scan, borders and words (the paper's Fig. 4) and its grid
+DEFAULT_E, DEFAULT_U, DEFAULT_SIZE = "0:1", "0:1.5", (500, 350)
+SIZE_HELP = ("Pixels WIDTHxHEIGHT (along e x along u); default square pixels, 500 along the longer side "
+             "of the window (500x350, the paper's Fig. 4 grid, for the default window).")
+
+
+def window_size(size, e, u, default_window: bool) -> tuple[int, int]:
+    """``--size`` or, when not given, the pixel counts of the window
+    ``e = (lo, hi)``, ``u = (lo, hi)``: square pixels, 500 along the longer
+    side (:func:`stairbounce.plane.square_counts`); the default window
+    (``default_window``: neither --e, --u nor --speed given) keeps the paper's
+    500 x 350 grid."""
+    if size is not None:
+        return parse_size(size)
+    if default_window:
+        return DEFAULT_SIZE
+    from ..plane import square_counts
+
+    return square_counts(e, u)
+
+
 def plural(n: int, word: str, many: str | None = None) -> str:
     """``plural(1, "tile")`` -> "1 tile", ``plural(3, "tile")`` -> "3 tiles"."""
     return f"{n} {word if n == 1 else (many or word + 's')}"
@@ -148,24 +187,19 @@ def plural(n: int, word: str, many: str | None = None) -> str:
 def progress_bar(console, description, total, unit=""):
     """A transient progress bar on ``console`` (stderr): ``(bar, task)``.
 
-    When stderr is not a terminal nothing is drawn, not even the blank line
-    a stopped live display leaves behind; the calls on ``bar`` still work."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+    When stderr is not a terminal (a log, ``nohup``, a notebook's ``!``
+    command) no bar is drawn; one line is written every 10 s instead
+    (``$STAIRBOUNCE_PROGRESS_INTERVAL`` seconds; :mod:`stairbounce._progress`,
+    the same for every command).  The calls on ``bar`` work either way."""
+    from .._progress import progress_display
 
-    bar = Progress(
-        TextColumn("[bold]{task.description}"), BarColumn(),
-        TextColumn("{task.completed}/{task.total}" + (f" {unit}" if unit else "")),
-        TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=True,
-        disable=not console.is_terminal,
-    )
-    task = bar.add_task(description, total=total)
-    with bar:
+    with progress_display(description, total, unit, console) as (bar, task):
         yield bar, task
 
 
 def with_row_progress(run, description, rows):
-    """``run(progress)`` behind a progress bar over ``rows`` on stderr (drawn
-    only when stderr is a terminal): the in-memory scans, which call
+    """``run(progress)`` behind a progress bar over ``rows`` on stderr (lines
+    every 10 s when stderr is not a terminal): the in-memory scans, which call
     ``progress(done, total)`` after each block of rows."""
     from rich.console import Console
 

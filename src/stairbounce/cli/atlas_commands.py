@@ -47,7 +47,8 @@ def run_tiled_scan(out, e, u, max_iter=1000, y0=1.0, v0=0.0, tile=None, schedule
         raise CLIError(f"--scheduler must be an address such as tcp://HOST:8786, got {scheduler!r}")
 
     from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    from .._progress import make_display
 
     console = Console(stderr=True)
     counts = {}
@@ -58,12 +59,8 @@ def run_tiled_scan(out, e, u, max_iter=1000, y0=1.0, v0=0.0, tile=None, schedule
             warnings.filterwarnings("ignore", message="Port .* is already in use")
             if workers is not None:
                 cluster, client = _local_cluster(workers)
-            bar = Progress(
-                TextColumn("[bold]tiles"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                TimeElapsedColumn(), TimeRemainingColumn(), console=console, transient=True,
-                disable=not console.is_terminal,  # no blank line left on a redirected stderr
-            )
-            task = bar.add_task("tiles", total=None)
+            # a bar in a terminal, a line every 10 s elsewhere (as every command)
+            bar, task = make_display("tiles", None, "", console)
 
             def progress(done, total):
                 if not counts:  # the store is ready: bad input has been reported by now

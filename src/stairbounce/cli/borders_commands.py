@@ -15,15 +15,18 @@ from ._app import (
     app,
     check_dpi,
     check_outputs,
+    DEFAULT_E,
+    DEFAULT_U,
+    SIZE_HELP,
     parse_range,
-    parse_size,
     save_figure,
+    window_size,
     with_row_progress,
 )
 
 _DATA_SUFFIXES = (".nc", ".csv")
 _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
-E_HELP = "Window along e, MIN:MAX: the image edges, within [0, 1]."
+E_HELP = "Window along e, MIN:MAX: the image edges, within [0, 1]; default 0:1."
 U_HELP = "Window along u, MIN:MAX (normalised): the image edges, MIN >= 0. Or --speed with --step-height, --step-length."
 SPEED_HELP = "Window along the ball's horizontal speed in m/s, MIN:MAX (instead of --u)."
 
@@ -34,14 +37,15 @@ def _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, 
     caller checks its own outputs."""
     from .. import plane
 
+    default_window = e is None and u is None and speed is None
     if u is None and speed is None:
-        u = "0:1.5"
+        u = DEFAULT_U
     u, stairs = st.resolve_u_text(u, speed, step_height, step_length, g)
     if stairs is not None:
         typer.echo(f"speed {speed} m/s on {stairs.describe()}: u = {u}")
-    e_lo, e_hi = parse_range("e", e)
+    e_lo, e_hi = parse_range("e", e or DEFAULT_E)
     u_lo, u_hi = parse_range("u", u)
-    n_e, n_u = parse_size(size)
+    n_e, n_u = window_size(size, (e_lo, e_hi), (u_lo, u_hi), default_window)
     if max_iter < 1 or max_iter > 2**31 - 1:
         raise CLIError(f"--max-iter must be an integer in [1, 2**31 - 1], got {max_iter}")
     plane._window("e", (e_lo, e_hi, n_e), 0.0, 1.0, "[0, 1]")
@@ -86,13 +90,13 @@ def _figure(png, dpi, force, draw):
 
 @app.command("borders", short_help="Borders between pixels located to rounding, by event.")
 def borders_(
-    e: str = typer.Option("0:1", "--e", help=E_HELP),
+    e: str = typer.Option(None, "--e", help=E_HELP),
     u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5."),
     speed: str = st.speed_option(SPEED_HELP),
     step_height: float = st.step_height_option(),
     step_length: float = st.step_length_option(),
     g: float = st.g_option(),
-    size: str = typer.Option("500x350", "--size", help="Pixels WIDTHxHEIGHT (along e x along u)."),
+    size: str = typer.Option(None, "--size", help=SIZE_HELP),
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
     outcome: str = typer.Option("word", "--outcome", help="What the two sides differ in: word (every border) "
                                 "or sliding (the border of the sliding region, one point per crossing)."),
@@ -132,13 +136,13 @@ def borders_(
 
 @app.command("words", short_help="The distinct words of a window and N(p), or regions.")
 def words_(
-    e: str = typer.Option("0:1", "--e", help=E_HELP),
+    e: str = typer.Option(None, "--e", help=E_HELP),
     u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5."),
     speed: str = st.speed_option(SPEED_HELP),
     step_height: float = st.step_height_option(),
     step_length: float = st.step_length_option(),
     g: float = st.g_option(),
-    size: str = typer.Option("500x350", "--size", help="Pixels WIDTHxHEIGHT (along e x along u)."),
+    size: str = typer.Option(None, "--size", help=SIZE_HELP),
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
     top: int = typer.Option(10, "--top", help="Rows of the table to print (>= 0)."),
     out: Path = typer.Option(None, "--out", help="The word table: .nc (with N(p)) or .csv (one row per word)."),
@@ -146,8 +150,8 @@ def words_(
     dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     regions: bool = typer.Option(False, "--regions", help="Trace every word's region as polygons "
-                                 "(stairbounce.regions; seeded by a square scan of the larger side of "
-                                 "--size) and write them to --out .geojson or .svg."),
+                                 "(stairbounce.regions; seeded by a scan of the window at --size, 2 to "
+                                 "8192 pixels a side) and write them to --out .geojson or .svg."),
     from_corners: bool = typer.Option(False, "--from-corners", help="With --regions: also trace the "
                                       "regions smaller than a seed pixel found around the corners of "
                                       "their neighbours (several times slower)."),
@@ -240,9 +244,13 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, None, 150, force,
                      outputs=False)
     check_outputs(force, out=out)
-    res = max(ew[2], uw[2])
+    if not (2 <= ew[2] <= 8192 and 2 <= uw[2] <= 8192):
+        raise CLIError(f"--size with --regions must be 2 to 8192 pixels a side (the seed scan), got "
+                       f"{ew[2]}x{uw[2]}")
+    # the seed scan is the --size grid of the window (its edges, as a scan's);
+    # e = 1 and u = 0 are traced just inside (stairbounce.word_region)
     regs = with_row_progress(description="words traced", rows=1, run=lambda p: rg.window_regions(
-        ew[:2], uw[:2], resolution=res, max_iter=max_iter, progress=p, from_corners=from_corners))
+        ew, uw, max_iter=max_iter, progress=p, from_corners=from_corners))
     rg.write_regions(regs, out, overwrite=force)
     graph = rg.border_graph(regs)
     c = graph.counts()

@@ -80,10 +80,17 @@ def figures(
                    f"({', '.join(kept)}), merged by figure")
     if failed:
         typer.echo(f"failed: {', '.join(failed)} (see {out / 'report.md'})", err=True)
-    from ..figures import read_manifest, verdict_tally
+    from ..figures import read_manifest, rows_with_verdict, verdict_tally
 
     # the figures of the whole report (an earlier run's kept ones included)
-    typer.echo(f"verdicts: {verdict_tally(read_manifest(out))} (report.md states the criterion)")
+    recorded = read_manifest(out)
+    typer.echo(f"verdicts: {verdict_tally(recorded)} (report.md states the criterion)")
+    differs = rows_with_verdict(recorded, "differs")
+    if differs:
+        typer.echo(f"the {plural(len(differs), 'row')} that differ{'s' if len(differs) == 1 else ''} "
+                   "from the paper:")
+        for line in differs:
+            typer.echo(f"  {line}")
     if failed:
         raise typer.Exit(1)
 

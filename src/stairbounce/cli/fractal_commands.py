@@ -64,14 +64,11 @@ def _parse_eps(text):
     return np.logspace(np.log10(lo), np.log10(hi), n)
 
 
-def _bar(total_label):
+def _bar(label):
+    """``(bar, task)``: the commands' progress bar on stderr (lines off a terminal)."""
     from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    return Progress(
-        TextColumn(total_label), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-        TimeElapsedColumn(), console=Console(stderr=True), transient=True,
-    )
+    return progress_bar(Console(stderr=True), label, None)
 
 
 def _uncertainty_with_progress(kwargs, work):
@@ -79,8 +76,7 @@ def _uncertainty_with_progress(kwargs, work):
 
     if work < _PROGRESS_WORK:
         return perimeter_dimension(**kwargs)
-    with _bar("classifying") as bar:
-        task = bar.add_task("points", total=None)
+    with _bar("classifying") as (bar, task):
         return perimeter_dimension(
             **kwargs, progress=lambda done, total: bar.update(task, completed=done, total=total))
 
@@ -182,8 +178,7 @@ def _store_dimension(store, which, connectivity, fit_range, scheduler):
         else:
             typer.echo(f"{store}: {n} px is too small for a fit clear of the pixel scale; using the "
                        "automatic range (it may include the pixel scale)")
-    with _bar("counting tiles") as bar:
-        task = bar.add_task("tiles", total=None)
+    with _bar("counting tiles") as (bar, task):
         result = store_box_dimension(
             store, which=which, connectivity=connectivity, fit_range=fit_range, client=scheduler,
             progress=lambda done, total: bar.update(task, completed=done, total=total),
@@ -377,7 +372,7 @@ def dimension(
         ew, uw = parse_range("e", e), parse_range("u", u)
         def scan_boxes(mi):
             return _scan_with_progress(dict(
-                e=ew, u=uw, resolution=resolution, max_iter=mi, which=which,
+                e=ew, u=uw, method="boxes", resolution=resolution, max_iter=mi, which=which,
                 connectivity=connectivity, offsets=offsets, fit_range=fr,
             ))
 
@@ -422,8 +417,7 @@ def _plot_uncertainty(result, ew, uw, compare=()):
 
 
 def _with_bar(label, call):
-    with _bar(label) as bar:
-        task = bar.add_task("levels", total=None)
+    with _bar(label) as (bar, task):
         return call(lambda done, total: bar.update(task, completed=done, total=total))
 
 

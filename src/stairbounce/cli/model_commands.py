@@ -13,7 +13,8 @@ from ..model import SLIDING, iterate
 from ..symbolic import sliding_answer, terminal_can_print_infinity
 from ..trajectory import trajectory
 from . import _staircase as st
-from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, plural, progress_bar, save_figure
+from ._app import (FORCE_HELP, CLIError, app, check_dpi, check_outputs, plural, progress_bar, renamed_option,
+                   save_figure)
 
 E_HELP = "Restitution coefficient, in [0, 1)."
 U_HELP = "Horizontal speed in normalised units (u > 0); one step takes 1/u. Or --speed with --step-height, --step-length."
@@ -27,14 +28,17 @@ def word(
     step_height: float = st.step_height_option(),
     step_length: float = st.step_length_option(),
     g: float = st.g_option(),
-    max_steps: int = typer.Option(1000, "--max-steps", help="Steps to iterate before giving up (>= 1)."),
+    max_iter: int = typer.Option(1000, "--max-iter", help="Steps to iterate before giving up (>= 1)."),
+    max_steps: int = typer.Option(None, "--max-steps", hidden=True,
+                                  help="The old name of --max-iter (deprecated)."),
 ):
     """Print the word of the periodic sliding solution through (1, 0), its period and impacts."""
+    max_iter = renamed_option("--max-steps", max_steps, "--max-iter", max_iter, 1000)
     u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
     if stairs is not None:
         typer.echo(st.describe(u, stairs))
     answer = sliding_answer(e, u if stairs is None else stairs.speed(float(speed)),
-                            max_steps=max_steps)
+                            max_iter=max_iter)
     w = answer.word
     if w is None:
         # proven impossible above the Corollary 2.1 curve, else only not found

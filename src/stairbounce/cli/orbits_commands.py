@@ -34,10 +34,13 @@ _DATA_SUFFIXES = {".nc", ".csv", ".zarr"}
 
 
 def _parameter(name: str, text: str, n: int):
-    """``"0.1"`` -> (0.1, False); ``"0:0.5"`` -> (n evenly spaced values, True)."""
+    """``"0.1"`` -> (0.1, False); ``"0:0.5"`` -> (the centres of n equal cells
+    of [0, 0.5], True): a range is a window's edges, as in every command."""
     if ":" in text:
+        from ..plane import pixel_centres
+
         lo, hi = parse_range(name, text)
-        return np.linspace(lo, hi, n), True
+        return pixel_centres(lo, hi, n), True
     try:
         return float(text), False
     except ValueError:
@@ -91,13 +94,16 @@ def _write_data(ds, path: Path, overwrite=False) -> None:
 
 @app.command("orbit-diagram", short_help="Orbit diagram over e or u (Section 4, Figs 8, 9).")
 def orbit_diagram_(
-    e: str = typer.Option(..., "--e", help="Restitution coefficient in [0, 1): a number, or a range MIN:MAX to sweep."),
-    u: str = typer.Option(None, "--u", help="Horizontal speed u > 0: a number, or a range MIN:MAX to sweep."),
-    speed: str = st.speed_option("Horizontal speed in m/s, a number or a range MIN:MAX (instead of --u)."),
+    e: str = typer.Option(..., "--e", help="Restitution coefficient in [0, 1): a number, or a range MIN:MAX to sweep "
+                          "(edges, within [0, 1]: --n values at the centres of equal cells, as every window)."),
+    u: str = typer.Option(None, "--u", help="Horizontal speed u > 0: a number, or a range MIN:MAX to sweep (edges, "
+                          "MIN >= 0: --n values at the centres of equal cells, so u = 0 is never used)."),
+    speed: str = st.speed_option("Horizontal speed in m/s, a number or a range MIN:MAX (edges; instead of --u)."),
     step_height: float = st.step_height_option(),
     step_length: float = st.step_length_option(),
     g: float = st.g_option(),
-    n: int = typer.Option(3000, "--n", help="Number of values of the swept parameter (>= 2)."),
+    n: int = typer.Option(3000, "--n", help="Number of values of the swept parameter (>= 2): the centres of "
+                          "--n equal cells of its range."),
     transient: int = typer.Option(2000, "--transient", help="Iterates discarded at each value (>= 0)."),
     keep: int = typer.Option(200, "--keep", help="Iterates kept at each value (>= 1)."),
     y0: float = typer.Option(0.1, "--y0", help="Initial height above the step's floor (>= 0)."),

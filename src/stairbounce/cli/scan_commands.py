@@ -15,9 +15,12 @@ from ._app import (
     app,
     draw_scan,
     parse_overlays,
+    DEFAULT_E,
+    DEFAULT_U,
+    SIZE_HELP,
     parse_range,
-    parse_size,
     plural,
+    window_size,
     tile_for_workers,
     with_row_progress,
 )
@@ -38,8 +41,8 @@ _CLI_BYTES_PER_PIXEL = 140
 @app.command("scan", short_help="Scan the (e, u) plane for sliding solutions (Figs 3-5).")
 def scan_(
     e: str = typer.Option(
-        "0:1", "--e",
-        help="Window along e, MIN:MAX: the image edges, within [0, 1] (pixel centres lie inside, < 1).",
+        None, "--e",
+        help="Window along e, MIN:MAX: the image edges, within [0, 1] (pixel centres lie inside, < 1); default 0:1.",
     ),
     u: str = typer.Option(
         None, "--u",
@@ -51,7 +54,7 @@ def scan_(
     step_height: float = st.step_height_option(),
     step_length: float = st.step_length_option(),
     g: float = st.g_option(),
-    size: str = typer.Option("500x350", "--size", help="Pixels WIDTHxHEIGHT (along e x along u)."),
+    size: str = typer.Option(None, "--size", help=SIZE_HELP),
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
     y0: float = typer.Option(1.0, "--y0", help="Initial height at the edge (>= 0); (1, 0) is the paper's."),
     v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
@@ -74,21 +77,23 @@ def scan_(
     With no options: the paper's Figure 4 view, e in [0, 1] x u in [0, 1.5],
     500 x 350 pixels, max_iter 1000, written to scan.png.  The windows are
     image edges; pixels are sampled at their centres, so u = 0 is never used.
+    Any other window gets square pixels unless --size is given.
     A picture is written only to --png, or to scan.png when neither --out nor
     --png is given; existing files are replaced only with --force.
     """
     from .. import plane as sc
 
-    e_lo, e_hi = parse_range("e", e)
-    n_e, n_u = parse_size(size)
+    default_window = e is None and u is None and speed is None
+    e_lo, e_hi = parse_range("e", e or DEFAULT_E)
     stairs = None
     if u is None and (speed, step_height, step_length, g) == (None,) * 4:
-        u = "0:1.5"
+        u = DEFAULT_U
     else:
         u, stairs = st.resolve_u_text(u, speed, step_height, step_length, g)
         if stairs is not None and ":" not in speed:
             raise CLIError(f"--speed must be a range MIN:MAX in m/s for a scan, got {speed!r}")
     u_lo, u_hi = parse_range("u", u)
+    n_e, n_u = window_size(size, (e_lo, e_hi), (u_lo, u_hi), default_window)
     if max_iter < 1:
         raise CLIError(f"--max-iter must be an integer >= 1, got {max_iter}")
     if field not in FIELD_NAMES:

@@ -5,6 +5,7 @@ uncertainty exponent or slicing of the model's classification."""
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -45,13 +46,56 @@ _METHODS = ("boxes", "uncertainty", "slicing")
 
 
 def _check_window(name, window):
+    """``(min, max)`` or ``(min, max, n)`` -> ``((min, max), n or None)``."""
     try:
-        lo, hi = (float(v) for v in window)
+        lo, hi, n = _v.window(name, window)
+        lo, hi = float(lo), float(hi)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a window (min, max), got {window!r}") from None
+        raise ValueError(f"{name} must be a window (min, max) or (min, max, n), got {window!r}") from None
     if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
         raise ValueError(f"{name} must be a finite window (min, max) with min < max, got {window!r}")
-    return lo, hi
+    return (lo, hi), (None if n is None else check_count(f"n_{name}", n, 8))
+
+
+# the parameters of box counting alone, and their defaults (None: not given)
+_BOX_DEFAULTS = dict(resolution=512, connectivity=4, sizes=None, offsets=1, reduce="mean", tol=0.1, min_boxes=32)
+
+
+def _method_and_boxes(method, counts, boxes):
+    """The method (None: the uncertainty exponent, unless parameters of box
+    counting alone are given: then box counting, with a DeprecationWarning)
+    and the box parameters with their defaults; box parameters or pixel
+    counts given to another method are refused, never ignored."""
+    given = sorted(k for k, v in boxes.items() if v is not None)
+    if method is None:
+        if given:
+            warnings.warn(
+                f"perimeter_dimension: {', '.join(given)} given without method: measured by box "
+                "counting as before, but the default method is now the uncertainty exponent (as "
+                "on the command line); pass method='boxes' to keep box counting",
+                DeprecationWarning, stacklevel=3)
+            method = "boxes"
+        else:
+            method = "uncertainty"
+    if method not in _METHODS:
+        raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
+    n_e, n_u = counts
+    if method != "boxes":
+        if given or n_e is not None or n_u is not None:
+            what = ", ".join(given + [f"n_{a}" for a, n in zip("eu", counts) if n is not None])
+            raise ValueError(f"{what} are parameters of box counting (method='boxes'); method = "
+                             f"{method!r} classifies points and uses no pixels: leave them out")
+        return method, boxes
+    boxes = {k: (_BOX_DEFAULTS[k] if v is None else v) for k, v in boxes.items()}
+    if n_e is not None or n_u is not None:
+        if given and "resolution" in given:
+            raise ValueError(f"resolution = {boxes['resolution']!r} and the pixel counts of the windows: "
+                             "give the pixels once, as (min, max, n) windows or as resolution")
+        if n_e is None or n_u is None or n_e != n_u:
+            raise ValueError(f"box counting scans a square grid: give the same n along e and u, got "
+                             f"n_e = {n_e}, n_u = {n_u}")
+        boxes["resolution"] = n_e
+    return method, boxes
 
 
 _PERIMETER_BYTES_PER_PIXEL = 30
@@ -85,20 +129,20 @@ def _scan_window(e, u, resolution, max_iter, y0, v0, progress, band=64, prune=Tr
 def perimeter_dimension(
     e=(0.0, 0.333),
     u=(0.4, 0.733),
-    resolution=512,
+    resolution=None,
     max_iter=1000,
     which="sliding",
-    connectivity=4,
+    connectivity=None,
     sizes=None,
-    offsets=1,
-    reduce="mean",
+    offsets=None,
+    reduce=None,
     fit_range=None,
-    tol=0.1,
-    min_boxes=32,
+    tol=None,
+    min_boxes=None,
     y0=1.0,
     v0=0.0,
     progress=None,
-    method="boxes",
+    method=None,
     n_points=100_000,
     eps=None,
     seed=0,
@@ -106,13 +150,13 @@ def perimeter_dimension(
     n_lines=64,
     scales=(1e-10, 1e-2),
 ):
-    """perimeter_dimension(e=(0, 0.333), u=(0.4, 0.733), resolution=512, max_iter=1000, which="sliding", ..., method="boxes") -> PerimeterDimension, UncertaintyDimension or SlicingDimension
+    """perimeter_dimension(e=(0, 0.333), u=(0.4, 0.733), max_iter=1000, which="sliding", ..., method="uncertainty") -> UncertaintyDimension, PerimeterDimension or SlicingDimension
 
-    The box-counting dimension of the perimeter of the region of periodic
-    sliding solutions in a window of the ``(e, u)`` plane (Section 3,
-    Figs. 6 and 7).
+    The dimension of the perimeter of the region of periodic sliding
+    solutions in a window of the ``(e, u)`` plane (Section 3, Figs. 6 and 7),
+    by default the uncertainty exponent, as ``stairbounce dimension``.
 
-    Scans the window on ``resolution x resolution`` pixel centres
+    With ``method="boxes"``: scans the window on ``resolution x resolution`` pixel centres
     (:func:`stairbounce.plane.scan`; status 0: the orbit of ``(y0, v0)``
     slides again within ``max_iter`` steps), takes the border of the status-0
     region (:func:`boundary`, ``image_edge="ignore"``: the frame of the
@@ -121,11 +165,12 @@ def perimeter_dimension(
 
     Parameters
     ----------
-    e, u : (min, max)
+    e, u : (min, max) or (min, max, n)
         The window; default the paper's Fig. 6, ``[0, 0.333] x [0.4, 0.733]``.
-        Fig. 7 is ``e=(0.155, 0.2138), u=(0.6, 0.658)``.
+        Fig. 7 is ``e=(0.155, 0.2138), u=(0.6, 0.658)``.  ``n`` (the same
+        along both) is the pixel count of box counting, as ``resolution``.
     resolution : int >= 8, default 512
-        Pixels along each axis.
+        Pixels along each axis (box counting only).
     max_iter : int >= 1, default 1000
         Steps of the Poincare map before a pixel counts as non-sliding.
     which : "sliding" or "words", default "sliding"
@@ -146,14 +191,18 @@ def perimeter_dimension(
         Called after each band of rows of the scan (the scan then runs in
         bands of :func:`stairbounce.plane.scan_coords`, bit-identical to one
         call); for a progress bar.
-    method : "boxes" or "uncertainty", default "boxes"
-        ``"boxes"``: box counting on a scanned picture (everything above).
-        ``"uncertainty"``: the uncertainty exponent of random points of the
-        window (:func:`uncertainty_dimension` with
-        :func:`sliding_classifier`; no picture, so ``resolution``,
-        ``connectivity``, ``sizes``, ``offsets``, ``reduce``, ``tol`` and
-        ``min_boxes`` are not used, and ``fit_range`` is ``(eps_min, eps_max)``
-        in window units); returns an :class:`UncertaintyDimension`.
+    method : "uncertainty", "boxes" or "slicing", default "uncertainty"
+        ``"uncertainty"`` (the default, as on the command line): the
+        uncertainty exponent of random points of the window
+        (:func:`uncertainty_dimension` with :func:`sliding_classifier`; no
+        picture, so ``resolution``, ``connectivity``, ``sizes``, ``offsets``,
+        ``reduce``, ``tol``, ``min_boxes`` and pixel counts are refused, and
+        ``fit_range`` is ``(eps_min, eps_max)`` in window units); returns an
+        :class:`UncertaintyDimension`.
+        ``"boxes"``: box counting on a scanned picture (everything above);
+        returns a :class:`PerimeterDimension`.  Box parameters given without
+        ``method`` (the spelling of the old default) still select box
+        counting, with a DeprecationWarning.
         ``"slicing"``: crossings of the border along ``n_lines`` random lines
         refined from ``scales[1]`` down to ``scales[0]`` of the window
         (:func:`stairbounce.dimension.slicing.slicing_dimension`; ``fit_range``
@@ -170,13 +219,16 @@ def perimeter_dimension(
 
     The paper reports 1.324 (Fig. 6) and 1.403 (Fig. 7) with r > 0.99.
     """
-    e = _check_window("e", e)
-    u = _check_window("u", u)
+    e, n_e = _check_window("e", e)
+    u, n_u = _check_window("u", u)
     max_iter = check_count("max_iter", max_iter, 1)
     if which not in _WHICH:
         raise ValueError(f"which must be one of {_WHICH}, got {which!r}")
-    if method not in _METHODS:
-        raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
+    method, boxes = _method_and_boxes(method, (n_e, n_u), dict(
+        resolution=resolution, connectivity=connectivity, sizes=sizes, offsets=offsets, reduce=reduce,
+        tol=tol, min_boxes=min_boxes))
+    resolution, connectivity, sizes, offsets, reduce, tol, min_boxes = (
+        boxes[k] for k in ("resolution", "connectivity", "sizes", "offsets", "reduce", "tol", "min_boxes"))
     what = "sliding region" if which == "sliding" else "word-length regions"
     if method == "slicing":
         from .slicing import slicing_dimension

@@ -57,9 +57,10 @@ def inline(e=(0.0, 1.0), u=(0.0, 1.5), width=400, height=400, max_iter=1000, col
 
     Parameters
     ----------
-    e, u : (lo, hi), default the paper's Fig. 4 window
+    e, u : (lo, hi) or (lo, hi, n), default the paper's Fig. 4 window
         The window of the (e, u) plane, ``0 <= e_lo < e_hi <= 1``,
-        ``0 <= u_lo < u_hi``.
+        ``0 <= u_lo < u_hi``; ``n``: the pixels along that axis (as
+        ``width`` or ``height``; giving both is refused).
     width, height : int, default 400
         Pixels along e and along u.
     max_iter : int, default 1000
@@ -73,10 +74,14 @@ def inline(e=(0.0, 1.0), u=(0.0, 1.5), width=400, height=400, max_iter=1000, col
     """
     from .app import Explorer
 
-    try:
-        (e_lo, e_hi), (u_lo, u_hi) = e, u
-    except (TypeError, ValueError):
-        raise ValueError(f"e and u must be pairs (lo, hi), got e={e!r}, u={u!r}") from None
+    from .. import _validate as _v
+
+    (e_lo, e_hi, n_e), (u_lo, u_hi, n_u) = _v.window("e", e), _v.window("u", u)
+    for n, name, given, default in ((n_e, "width", width, 400), (n_u, "height", height, 400)):
+        if n is not None and given != default:
+            raise ValueError(f"{name} = {given!r} and the window's pixel count {n!r}: give the pixels once")
+    width = width if n_e is None else n_e
+    height = height if n_u is None else n_u
     if color not in COLOR_VARS:
         raise ValueError(f"color must be one of {', '.join(COLOR_VARS)}, got {color!r}")
     view = View(float(e_lo), float(e_hi), float(u_lo), float(u_hi), width, height,

@@ -1009,7 +1009,7 @@ def point_details(e: float, u: float, max_iter: int, steps: int | None = None,
     points and slides.
     """
     e, u = check_e(e), check_u(u)
-    answer = sliding_answer(e, u, max_steps=max_iter)
+    answer = sliding_answer(e, u, max_iter=max_iter)
     w = answer.word
     mo, section = _point_motion(e, u, max_iter) if w is None else (None, None)
     if steps is None:
