@@ -662,8 +662,8 @@ class Cascade:
                 f"law={self.law.kind})")
 
 
-def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None):
-    """cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None) -> Cascade
+def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None, law_k=None):
+    """cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None, law_k=None) -> Cascade
 
     Every member of a family of words that exists on a line of the (e, u)
     plane, each located exactly, with the family's scaling law and
@@ -700,6 +700,11 @@ def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None):
         Steps iterated to name the words just outside each edge (the search
         itself follows each member's own word, its period).
     limit_steps : int >= 1, optional
+    law_k : (k_lo, k_hi), optional
+        The members the law is fitted on (all of them in that range); by
+        default the last 8 members not cut by the range.  A cascade that
+        ends at a finite k (its members' edges cross) shrinks faster near its
+        end than its law says: ``law_k`` leaves those members out.
     """
     pat = _parse_pattern(pattern)
     axis, name, lo, hi, fixed = _line_args(e, u)
@@ -707,6 +712,12 @@ def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None):
     max_iter = check_count("max_iter", max_iter, 1, 2**31 - 1)
     if limit_steps is not None:
         limit_steps = check_count("limit_steps", limit_steps, 1, 10**7)
+    if law_k is not None:
+        if not isinstance(law_k, (tuple, list)) or len(law_k) != 2:
+            raise ValueError(f"law_k must be a pair (k_lo, k_hi) of integers >= 1, got {law_k!r}")
+        law_k = (check_count("law_k[0]", law_k[0], 1), check_count("law_k[1]", law_k[1], 1))
+        if law_k[1] - law_k[0] < 3:
+            raise ValueError(f"law_k must span at least 4 members (k_hi >= k_lo + 3), got {law_k!r}")
     per_k = max(1, sum(pat.block))
     _v.check_memory(f"k_max = {k_max}", 8 * (len(pat.prefix) + len(pat.suffix) + per_k * k_max + 1) * 4)
 
@@ -738,16 +749,21 @@ def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None):
             break
         row = {"k": k, "word": w.format(ascii=True), "period": w.period, "impacts": w.impacts}
         for side, end in (("lo", ba), ("hi", bb)):
-            at_range = (end == lo and side == "lo") or (end == hi and side == "hi")
-            if x == end or (at_range and _side(end, fixed, axis, ref, p)[0] == 0):
+            if x == end:  # the member reaches the bracket's end: its edge is there
                 xin = end
-                row.update({side: end, f"{side}_out": end, f"{side}_kind": "range",
-                            f"{side}_step": 0, f"{side}_index": 0,
-                            f"{side}_neighbour": "(range end)"})
-                continue
-            xin, xout, j, kind, index, _, _ = _edge(x, end, fixed, axis, ref)
-            row.update({side: xin, f"{side}_out": xout, f"{side}_kind": kind, f"{side}_step": j,
-                        f"{side}_index": index if kind == "edge" else 0,
+                xout = float(np.nextafter(end, -np.inf if side == "lo" else np.inf))
+                if not lo <= xout <= hi:
+                    row.update({side: end, f"{side}_out": end, f"{side}_kind": "range",
+                                f"{side}_step": 0, f"{side}_index": 0,
+                                f"{side}_neighbour": "(range end)"})
+                    continue
+                j, kc, ko, _, _ = _first_difference(xin, xout, fixed, axis, p)
+                kind, index = _event_of(kc, ko)
+                kind = KINDS[kind]
+            else:
+                xin, xout, j, kind, index, _, _ = _edge(x, end, fixed, axis, ref)
+            row.update({side: xin, f"{side}_out": xout, f"{side}_kind": kind, f"{side}_step": int(j),
+                        f"{side}_index": int(index) if kind == "edge" else 0,
                         f"{side}_neighbour": _neighbour(xout, fixed, axis, max_iter)})
         row["width"] = row["hi"] - row["lo"]
         rows.append(row)
@@ -762,10 +778,20 @@ def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None):
     members = pd.DataFrame(rows, columns=cols)
     # the law on the members not cut by the range
     whole = members[(members.lo_kind != "range") & (members.hi_kind != "range") & (members.k >= 1)]
+    # local ratio and exponent of the widths, between consecutive members not cut by the range
+    prev_k = whole.k.shift(1)
+    ok = (whole.k - prev_k) == 1
+    ratio = whole.width / whole.width.shift(1)
+    members["local_ratio"] = ratio.where(ok)
+    members["local_exponent"] = (-np.log(ratio) / np.log(whole.k / prev_k)).where(ok)
+    tail = 8
+    if law_k is not None:
+        whole = whole[(whole.k >= law_k[0]) & (whole.k <= law_k[1])]
+        tail = max(4, len(whole))
     ahead = len(members) < 2 or bool(members["lo"].iloc[-1] > members["lo"].iloc[0])
     facing = "hi" if ahead else "lo"  # the edge that faces the accumulation point
     law = cascade_law(whole.k.values.astype(float), whole.width.values.astype(float),
-                      whole[facing].values.astype(float))
+                      whole[facing].values.astype(float), tail=tail)
     enclosure = None
     if len(members):
         n = limit_steps or max(200, 4 * int(members.period.iloc[-1]))
