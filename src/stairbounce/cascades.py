@@ -782,8 +782,10 @@ def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None, law_k=
     prev_k = whole.k.shift(1)
     ok = (whole.k - prev_k) == 1
     ratio = whole.width / whole.width.shift(1)
-    members["local_ratio"] = ratio.where(ok)
-    members["local_exponent"] = (-np.log(ratio) / np.log(whole.k / prev_k)).where(ok)
+    with np.errstate(divide="ignore", invalid="ignore"):  # a member one float wide has width 0
+        members["local_ratio"] = ratio.where(ok)
+        members["local_exponent"] = (-np.log(ratio) / np.log(whole.k / prev_k)).where(ok)
+    whole = whole[whole.width > 0]
     tail = 8
     if law_k is not None:
         whole = whole[(whole.k >= law_k[0]) & (whole.k <= law_k[1])]
