@@ -299,3 +299,35 @@ def test_cli_bad_input_is_one_line_and_status_2(args, capsys):
     code, out, err = _run(["cascade", *args], capsys)
     assert code == 2
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+# --------------------------------------------------------------------------- #
+# Families found, and the member count against e                              #
+# --------------------------------------------------------------------------- #
+
+
+def test_cascades_finds_the_families_by_block_attachment():
+    df = sb.cascades(e=E, u=(0.6795, 0.6925), samples=400, k_max=30)
+    found = dict(zip(df.pattern, df.members))
+    seen = dict(zip(df.pattern, df.seen))
+    # every member on this piece of the line (k = 2..23), though 400 samples see fewer
+    ones = sb.cascade("(1^k, 0^inf)", e=E, u=(0.6795, 0.6925), k_max=30).members
+    assert ones.k.tolist() == list(range(2, 24))
+    assert found.get("(1^k, 0^inf)") == 22 and seen["(1^k, 0^inf)"] < 22
+    assert found.get("((1, 0)^k, 1, 1, 0^inf)") == 31  # k = 0..30: stops at k_max
+    assert df.seen.le(df.members).all() and df.members.ge(4).all()
+    row = df.set_index("pattern").loc["((1, 0)^k, 1, 1, 0^inf)"]
+    assert row.law == "algebraic" and row.limit_lo < row.limit_hi
+    # given words instead of samples: a family needs members among them
+    assert sb.cascades(e=E, u=U_RANGE, words=["(1, 0^inf)", "(2, 0^inf)"]).empty
+    with pytest.raises(ValueError, match="samples"):
+        sb.cascades(e=E, u=U_RANGE, samples=1)
+
+
+@pytest.mark.parametrize("e, n", [(0.0101, 49), (0.01004, 50), (0.0501, 10), (0.125, 4)])
+def test_member_count_follows_the_measured_law_where_it_differs_from_one_over_2e(e, n):
+    # measured (docs/guide/cascades.md): member k of (1^k, 0^inf) exists up to
+    # e_k ~ 1/(2k - 1/2), so about floor(1/(2e) + 1/4) members; at these e that law
+    # and floor(1/(2e)) disagree (except at 0.125, where e_4 = 0.1333 > 1/8)
+    c = sb.cascade("(1^k, 0^inf)", e=e, u=(0.3, 0.7071), k_max=200)
+    assert c.last == n == math.floor(1 / (2 * e) + 0.25)

@@ -76,7 +76,7 @@ from .plane import (
 )
 from .plane import scan as _scan_function
 from .borders import bifurcations, border_points, itinerary, word_table
-from .cascades import Cascade, CascadeLaw, cascade, cascade_law
+from .cascades import Cascade, CascadeLaw, cascade, cascade_law, cascades
 from .regions import (
     BorderArc,
     BorderGraph,
@@ -203,6 +203,7 @@ __all__ = [
     "CascadeLaw",
     "cascade",
     "cascade_law",
+    "cascades",
 ]
 
 # heavy submodules, imported on first use (PEP 562)

@@ -52,7 +52,7 @@ from .borders import KINDS, _event_of, _first_difference, _shrink_secant, _trial
 from .model import SLIDING, check_count, check_e, check_u, no_sliding_bound
 from .symbolic import Word, sliding_word
 
-__all__ = ["Cascade", "CascadeLaw", "cascade", "cascade_law"]
+__all__ = ["Cascade", "CascadeLaw", "cascade", "cascade_law", "cascades"]
 
 # longest pattern text read, and most letters a member may have (memory and time
 # grow with them; a million letters is far beyond any cascade on a line)
@@ -831,3 +831,126 @@ def _why_not(k, w, out, a, b, f, axis, ref, name):
     return (f"{text} has no float on the line: the search ends on adjacent floats {name} = {a:.17g} "
             f"and {b:.17g} (spacing {ulp:.2g}), whose orbits leave its impact numbers at steps "
             f"{ja} and {jb} on opposite sides (its interval is empty or narrower than the spacing)")
+
+
+# --------------------------------------------------------------------------- #
+# Families found                                                              #
+# --------------------------------------------------------------------------- #
+
+
+def _primitive(block) -> bool:
+    """Whether ``block`` is no power of a shorter block."""
+    b = len(block)
+    return not any(b % d == 0 and block == block[:d] * (b // d) for d in range(1, b))
+
+
+def _attachments(letters, block_max):
+    """The decompositions ``P + X^m + S`` of one word with ``m >= 2``, ``X``
+    primitive with a jump, each run taken once (from its first letter)."""
+    out = []
+    n = len(letters)
+    for b in range(1, block_max + 1):
+        i = 0
+        while i + 2 * b <= n:
+            x = letters[i:i + b]
+            m = 1
+            while letters[i + m * b:i + (m + 1) * b] == x:
+                m += 1
+            if m >= 2 and _primitive(x) and any(x):
+                out.append(((letters[:i], x, letters[i + m * b:]), m))
+                i += m * b
+            else:
+                i += 1
+    return out
+
+
+def _pattern_text(prefix, block, suffix, var="k"):
+    body = f"{block[0]}^{var}" if len(block) == 1 else "(" + ", ".join(map(str, block)) + f")^{var}"
+    return "(" + ", ".join([*map(str, prefix), body, *map(str, suffix), "0^inf"]) + ")"
+
+
+def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_max=100, max_iter=1000):
+    """cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_max=100, max_iter=1000) -> pandas.DataFrame
+
+    The families of words on a line of the plane, found by block attachment and
+    then located exactly with :func:`cascade`.
+
+    The words seen on the line (``sliding_word`` at ``samples`` evenly spaced
+    points, or ``words``: texts or :class:`stairbounce.Word`, e.g. a
+    :func:`stairbounce.word_table`'s ``text``) are split every way as
+    ``P + X^m + S`` with a primitive block ``X`` of at most ``block_max``
+    letters repeated ``m >= 2`` times; each ``(P, X, S)`` is a candidate
+    family ``(P, X^k, S, 0^inf)``, kept when at least ``min_members`` of the
+    words seen are members (any k, two of them with k >= 2).  Each is then
+    passed to :func:`cascade` on the line; families with fewer than
+    ``min_members`` members found, or with the same members as one listed
+    before, are left out.  Returns one row per family, most members first: ``pattern``,
+    ``seen`` (members among the words seen), ``members`` (found exactly),
+    ``k_first``, ``k_last``, ``stop``, ``law`` (kind), ``exponent`` and
+    ``exponent_lo``/``exponent_hi``, ``ratio`` and ``ratio_lo``/``ratio_hi``
+    (:func:`cascade_law` on the last 8 members), ``limit_lo``/``limit_hi``
+    (the proven enclosure of the accumulation point) and ``limit_name``.
+    The candidates depend on the words seen (a sampled line); the members
+    listed do not.
+
+    Parameters
+    ----------
+    e, u : float, or (lo, hi)
+        The line, as in :func:`cascade`.
+    samples : int >= 2, default 2000
+    words : iterable of str or Word, optional
+    min_members : int >= 2, default 4
+    block_max : int >= 1, default 4
+    k_max, max_iter : as in :func:`cascade`.
+    """
+    import pandas as pd
+
+    from .symbolic import parse_word
+
+    axis, name, lo, hi, fixed = _line_args(e, u)
+    samples = check_count("samples", samples, 2, 10**6)
+    min_members = check_count("min_members", min_members, 2)
+    block_max = check_count("block_max", block_max, 1, 64)
+    line = (lo, hi)
+    if words is None:
+        seen = set()
+        for x in np.linspace(lo, hi, samples):
+            w = sliding_word(*((float(x), fixed) if axis == 0 else (fixed, float(x))), max_iter)
+            if w is not None:
+                seen.add(w.letters)
+    else:
+        seen = {(w if isinstance(w, Word) else parse_word(w)).letters for w in words}
+    families: dict = {}
+    for letters in seen:
+        for key, _ in _attachments(letters, block_max):
+            families.setdefault(key, None)
+    rows, done = [], set()
+    cands = []
+    for (p, x, s) in families:
+        pat = _Pattern("", "k", p, x, s)
+        ks = [k for k in range(0, 2 + max(len(w) for w in seen) // len(x)) if pat.letters(k) in seen]
+        n_seen = len(ks)
+        # the attachment itself (k >= 2) seen at least twice: k = 0, 1 alone are other words
+        if n_seen >= min_members and sum(k >= 2 for k in ks) >= 2:
+            cands.append((n_seen, p, x, s))
+    cands.sort(key=lambda c: (-c[0], len(c[2]), len(c[1]) + len(c[3])))
+    for n_seen, p, x, s in cands:
+        text = _pattern_text(p, x, s)
+        c = cascade(text, **({"e": line, "u": fixed} if axis == 0 else {"e": fixed, "u": line}),
+                    k_max=k_max, max_iter=max_iter)
+        key = frozenset(c.members.word)
+        if len(key) < min_members or key in done:
+            continue
+        done.add(key)
+        law, enc = c.law, c.limit_enclosure
+        rows.append({"pattern": text, "seen": n_seen, "members": len(c.members),
+                     "k_first": int(c.members.k.iloc[0]), "k_last": int(c.members.k.iloc[-1]),
+                     "stop": c.stop, "law": law.kind, "exponent": law.exponent,
+                     "exponent_lo": law.exponent_interval[0], "exponent_hi": law.exponent_interval[1],
+                     "ratio": law.ratio, "ratio_lo": law.ratio_interval[0], "ratio_hi": law.ratio_interval[1],
+                     "limit_lo": enc[0] if enc else math.nan, "limit_hi": enc[1] if enc else math.nan,
+                     "limit_name": c.limit_name})
+    cols = ["pattern", "seen", "members", "k_first", "k_last", "stop", "law", "exponent", "exponent_lo",
+            "exponent_hi", "ratio", "ratio_lo", "ratio_hi", "limit_lo", "limit_hi", "limit_name"]
+    out = pd.DataFrame(rows, columns=cols)
+    return out.sort_values(["members", "seen"], ascending=False, kind="stable").reset_index(drop=True)
