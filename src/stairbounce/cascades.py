@@ -43,6 +43,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -613,7 +614,7 @@ class Cascade:
     axis: str
     fixed: float
     range: tuple[float, float]
-    members: object
+    members: Any
     stop: str
     law: CascadeLaw
     limit_enclosure: tuple[float, float, int] | None
@@ -771,7 +772,7 @@ def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None, law_k=
     else:
         stop = f"k_max = {k_max} reached"
 
-    import pandas as pd
+    import pandas as pd  # type: ignore[import-untyped]  # (xarray's dependency; no stubs here)
 
     cols = ["k", "word", "period", "impacts", "lo", "hi", "width", "lo_kind", "lo_step", "lo_index",
             "hi_kind", "hi_step", "hi_index", "lo_neighbour", "hi_neighbour", "lo_out", "hi_out"]
