@@ -145,6 +145,10 @@ def test_the_accumulation_point_is_enclosed_and_named(ones):
     m = ones.members.set_index("k")
     c = [k * (u1 - m.lo[k]) for k in (8, 12, 16)]
     assert max(c) / min(c) < 1.15
+    # the positions' own law, though the family ends: algebraic, exponent ~1, limit near u_1
+    law = ones.law
+    assert law.approach_kind == "algebraic" and 0.95 < law.approach < 1.05
+    assert abs(law.limit - u1) < 1e-5 and lo <= law.limit <= hi
 
 
 def test_the_law_of_an_adjacent_family_is_algebraic_with_its_limit_in_the_enclosure():
@@ -226,6 +230,7 @@ def test_the_law_detector_finds_a_geometric_cascade():
     assert law.kind == "geometric"
     assert law.ratio_interval[0] - 1e-9 <= 1 / lam <= law.ratio_interval[1] + 1e-9
     assert abs(law.limit) < 1e-9 and law.approach == pytest.approx(1 / lam, rel=1e-6)
+    assert law.approach_kind == "geometric"
 
 
 def test_the_law_detector_finds_an_algebraic_cascade():
@@ -239,6 +244,7 @@ def test_the_law_detector_finds_an_algebraic_cascade():
     assert law.kind == "algebraic"
     assert 1.85 < law.exponent_interval[0] <= law.exponent_interval[1] < 2.05
     assert abs(law.limit) < 1e-3 and law.approach == pytest.approx(1.0, abs=0.1)
+    assert law.approach_kind == "algebraic"
 
 
 def test_the_law_detector_can_say_undecided():

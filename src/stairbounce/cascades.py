@@ -359,10 +359,11 @@ class CascadeLaw:
     ``residual_algebraic`` are the RMS residuals of the two straight-line fits
     (log w against k, log w against log k) on the members ``ks_used``.
     ``limit`` (with ``limit_interval``) is the extrapolated accumulation point
-    of the positions, by the law decided (three-point fits, Aitken's for the
-    geometric law); ``approach`` is the position law's local parameter there
-    (the ratio of successive gaps, or the exponent beta of ``a_k = L + C
-    k^-beta``), with ``approach_interval``.  All numerical.
+    of the positions, by their own law ``approach_kind`` (decided by the same
+    criterion on the gaps between consecutive positions; three-point fits,
+    Aitken's for the geometric law); ``approach`` is that law's local
+    parameter there (the ratio of successive gaps, or the exponent beta of
+    ``a_k = L + C k^-beta``), with ``approach_interval``.  All numerical.
     """
 
     kind: str
@@ -378,6 +379,7 @@ class CascadeLaw:
     limit_interval: tuple[float, float] = (math.nan, math.nan)
     approach: float = math.nan
     approach_interval: tuple[float, float] = (math.nan, math.nan)
+    approach_kind: str = "undecided"
 
     @property
     def criterion(self) -> str:
@@ -477,8 +479,9 @@ def cascade_law(k, widths, positions=None, *, tail=8, threshold=3.0):
     ``positions`` (an edge of each member), the limit is extrapolated from
     each triple of consecutive members with the law decided (Aitken's
     delta-squared for geometric, ``a_k = L + C k^-beta`` through the three
-    points for algebraic); ``limit`` is the last triple's, ``limit_interval``
-    the range over the last ``tail`` triples.  Numerical, not proven; checked
+    points for algebraic), the positions' law decided by the same criterion
+    on their gaps (``approach_kind``); ``limit`` is the last triple's,
+    ``limit_interval`` the range over the last ``tail`` triples.  Numerical, not proven; checked
     on maps whose laws are known in closed form (tests/test_cascades.py).
 
     Parameters
@@ -531,15 +534,32 @@ def cascade_law(k, widths, positions=None, *, tail=8, threshold=3.0):
     else:
         kind = "undecided"
     law = CascadeLaw(kind, ratio, r_int, exponent, g_int, res_g, res_a, threshold, used)
-    if pos is None or kind == "undecided":
+    if pos is None:
         return law
-    lims, pars = _limits(kind, ks, pos)
+    # the positions' own law, decided the same way on the gaps between consecutive members
+    # (a family that ends at finite k can shrink faster than any law while its members'
+    # positions still approach the limit by one)
+    pt_, kt_ = pos[sel], kt
+    ok = np.diff(kt_) == 1
+    gaps = np.abs(np.diff(pt_))[ok]
+    kmid = (kt_[:-1] + 0.5)[ok]
+    if gaps.size < 3 or not np.all(gaps > 0):
+        return law
+    (_, _), dg = _line_fit(kmid, np.log(gaps))
+    (_, _), da = _line_fit(np.log(kmid), np.log(gaps))
+    if max(dg, floor) * threshold < max(da, floor):
+        approach_kind = "geometric"
+    elif max(da, floor) * threshold < max(dg, floor):
+        approach_kind = "algebraic"
+    else:
+        return law
+    lims, pars = _limits(approach_kind, ks, pos)
     if lims.size == 0:
         return law
     lt, pt = lims[-tail:], pars[-tail:]
     return CascadeLaw(kind, ratio, r_int, exponent, g_int, res_g, res_a, threshold, used,
                       float(lt[-1]), (float(lt.min()), float(lt.max())),
-                      float(pt[-1]), (float(pt.min()), float(pt.max())))
+                      float(pt[-1]), (float(pt.min()), float(pt.max())), approach_kind)
 
 
 # --------------------------------------------------------------------------- #
@@ -647,8 +667,10 @@ class Cascade:
         lines.append(f"law of the widths: {self.law.text()}")
         if math.isfinite(self.law.limit):
             a, b = self.law.limit_interval
+            par = "ratio" if self.law.approach_kind == "geometric" else "exponent"
             lines.append(f"accumulation (extrapolated): {self.axis} = {self.law.limit:.12g} in "
-                         f"[{a:.12g}, {b:.12g}]; approach parameter {self.law.approach:.4g} in "
+                         f"[{a:.12g}, {b:.12g}]; positions approach it {self.law.approach_kind}ally, "
+                         f"{par} {self.law.approach:.4g} in "
                          f"[{self.law.approach_interval[0]:.4g}, {self.law.approach_interval[1]:.4g}]")
         if self.limit_enclosure is not None:
             a, b, n = self.limit_enclosure
