@@ -33,7 +33,7 @@ def _line(e: str, u: str):
     return fixed, parse_range("u", u)
 
 
-@app.command("cascade", short_help="A family of words (one block ^k): its members, exactly, and its law.")
+@app.command("cascade", short_help="Members of a family of words, exactly, and its law.")
 def cascade_(
     pattern: str = typer.Argument(..., help='The family, e.g. "(1^k, 0^inf)" or "((1, 0)^k, 1, 1, 0^inf)".'),
     e: str = typer.Option("0.02", "--e", help=E_HELP),
