@@ -76,6 +76,7 @@ from .plane import (
 )
 from .plane import scan as _scan_function
 from .borders import bifurcations, border_points, itinerary, word_table
+from .cascades import Cascade, CascadeLaw, cascade, cascade_law, cascades
 from .regions import (
     BorderArc,
     BorderGraph,
@@ -200,6 +201,11 @@ __all__ = [
     "uncertainty_dimension",
     "uncertainty_dimension_from_counts",
     "word_table",
+    "Cascade",
+    "CascadeLaw",
+    "cascade",
+    "cascade_law",
+    "cascades",
 ]
 
 # heavy submodules, imported on first use (PEP 562)

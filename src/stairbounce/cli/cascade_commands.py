@@ -1,0 +1,72 @@
+"""``stairbounce cascade``: a family of words with one block raised to a free
+exponent, its members located exactly on a line of the plane, and its law
+(:mod:`stairbounce.cascades`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ._app import FORCE_HELP, CLIError, app, check_outputs, parse_range
+
+E_HELP = "Restitution coefficient: a number (the line e = const) or a range MIN:MAX (a line u = const)."
+U_HELP = "Horizontal speed (normalised): a range MIN:MAX (the line e = const) or a number."
+
+
+def _line(e: str, u: str):
+    """``--e``/``--u`` as (number, range) in either order; CLIError otherwise."""
+    e_range, u_range = ":" in e, ":" in u
+    if e_range == u_range:
+        raise CLIError(f"give one of --e and --u as a range MIN:MAX and the other as a number, "
+                       f"got --e {e!r} --u {u!r}")
+    if e_range:
+        try:
+            fixed = float(u)
+        except ValueError:
+            raise CLIError(f"--u must be a number, got {u!r}") from None
+        return parse_range("e", e), fixed
+    try:
+        fixed = float(e)
+    except ValueError:
+        raise CLIError(f"--e must be a number, got {e!r}") from None
+    return fixed, parse_range("u", u)
+
+
+@app.command("cascade", short_help="Members of a family of words, exactly, and its law.")
+def cascade_(
+    pattern: str = typer.Argument(..., help='The family, e.g. "(1^k, 0^inf)" or "((1, 0)^k, 1, 1, 0^inf)".'),
+    e: str = typer.Option("0.02", "--e", help=E_HELP),
+    u: str = typer.Option("0.6:0.75", "--u", help=U_HELP),
+    k_max: int = typer.Option(100, "--k-max", help="Largest exponent tried (1..1000000)."),
+    law_k: str = typer.Option(None, "--law-k", help="Members the law is fitted on, KLO:KHI (default: the last 8)."),
+    max_iter: int = typer.Option(1000, "--max-iter", help="Steps to name the words just outside each edge (>= 1)."),
+    rows: int = typer.Option(60, "--rows", help="Members printed (all go to --out)."),
+    out: Path = typer.Option(None, "--out", help="The members as .csv (one row per member)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
+):
+    """Every member of the family that exists on the line, each interval's edges located
+    to rounding and labelled by their event, where the members accumulate, why the
+    next member does not exist, and the law of the widths (geometric or algebraic)."""
+    from .._io import atomic_path
+    from ..cascades import cascade
+
+    ev, uv = _line(e, u)
+    k_range = None
+    if law_k is not None:
+        parts = law_k.split(":")
+        if len(parts) != 2 or not all(p.strip().isdigit() for p in parts):
+            raise CLIError(f"--law-k must be KLO:KHI (integers), got {law_k!r}")
+        k_range = (int(parts[0]), int(parts[1]))
+    if rows < 0:
+        raise CLIError(f"--rows must be >= 0, got {rows}")
+    if out is not None:
+        if out.suffix.lower() != ".csv":
+            raise CLIError(f"--out must end in .csv, got {str(out)!r}")
+        check_outputs(force, out=out)
+    c = cascade(pattern, e=ev, u=uv, k_max=k_max, max_iter=max_iter, law_k=k_range)
+    typer.echo(c.text(max_rows=rows))
+    if out is not None:
+        with atomic_path(out, overwrite=force) as tmp:
+            c.members.to_csv(tmp, index=False)
+        typer.echo(f"wrote {out}")
