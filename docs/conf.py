@@ -119,10 +119,10 @@ sb_gallery_scale = float(os.environ.get("SB_GALLERY_SCALE", "0.25"))
 sb_gallery_max_iter = int(os.environ.get("SB_GALLERY_MAX_ITER", "300"))
 
 
-# The user guide's toctree (guide/index.md) says "*", so that a new page slots in by
-# existing; a glob sorts by name, so the pages that exist are listed first in
-# reading order and the glob keeps only for pages not named here.
-# Every page is named here (tests/test_docs.py checks it), so that none slots in last.
+# The user guide's toctree (guide/index.md) says "*", so that a new page appears by
+# existing; a glob sorts by name, so the pages named here are listed first in reading
+# order and the glob keeps only a page not named here, last.  tests/test_docs.py
+# fails while a page is missing here, so that none stays last ("Regions" once did).
 GUIDE_ORDER = ["model", "staircase", "scans", "paper", "dimension", "dimension-study", "borders",
                "regions", "orbits", "motion", "explorer", "dask", "cli", "cluster", "explorer-server",
                "robustness", "numerics", "speed"]
@@ -138,7 +138,7 @@ def _order_guide(app, docname, source):
     source[0] = source[0].replace("\n*\n", "\n" + "\n".join(lines) + "\n", 1)
 
 
-_SIGNATURE_LINE = re.compile(r"^(?P<name>\w+)\(.*\)(?:\s*->\s*(?P<returns>.+))?$")
+_SIGNATURE_LINE = re.compile(r"^(?P<name>\w+)\(.*?\)(?:\s*->\s*(?P<returns>.+))?$")
 
 
 def _docstring_signature(app, what, name, obj, options, lines):

@@ -118,8 +118,9 @@ def test_html_site_builds_without_warnings(site):
     grid = gallery[gallery.index('class="sb-gallery-grid'):]
     toc = gallery[gallery.index('class="page-toc'):]
     for name in FIGURES:
-        assert f'href="#gallery-{name}"' in grid, name
-        assert f'href="#gallery-{name}"' in toc, name
+        anchor = "gallery-" + name.replace("_", "-")  # (docutils' make_id)
+        assert f'href="#{anchor}"' in grid and f'id="{anchor}"' in gallery, name
+        assert f'href="#{anchor}"' in toc, name
     # the gallery shows the code that makes each figure, and no verdicts (they
     # live in the report of `stairbounce figures`, made at full size)
     shown = re.sub(r"<[^>]+>", "", gallery)  # the code as a reader sees it (highlighting removed)
