@@ -10,9 +10,15 @@ is added).  The package is imported from ``src/`` so that the pages document
 this checkout, whatever is installed (the kernels get it through PYTHONPATH).
 """
 
+import inspect
 import os
+import re
 import sys
 from pathlib import Path
+
+import sphinx.ext.autosummary
+from sphinx.errors import PycodeError
+from sphinx.pycode import ModuleAnalyzer
 
 HERE = Path(__file__).resolve().parent
 SRC = HERE.parent / "src"
@@ -35,10 +41,13 @@ version = release
 extensions = [
     "myst_nb",  # MyST Markdown (it includes myst_parser) and executed notebooks
     "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",  # the summary table at the top of each API page
     "sphinx.ext.napoleon",
     "sphinx.ext.doctest",
     "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",  # [source] links: the highlighted module beside each entry
     "sb_gallery",
+    "sb_mathjax",  # MathJax served by the site itself: the maths typesets offline
 ]
 
 root_doc = "index"
@@ -59,8 +68,17 @@ nb_execution_show_tb = True
 nb_merge_streams = True
 
 autodoc_member_order = "bysource"
-autodoc_typehints = "none"  # the docstrings state the types in words
+# The signature shown is the function's own, with the type hints the package ships
+# (py.typed); a docstring's first line, which restates the signature for help() in a
+# terminal, is not shown twice: _docstring_signature keeps only what it adds (the
+# names of the returned values).  The docstrings state the other types in words.
+autodoc_docstring_signature = False
+autodoc_typehints = "signature"
+autodoc_typehints_format = "short"
+python_maximum_signature_line_length = 88  # longer signatures: one parameter a line
 autodoc_default_options = {"members": False}
+# the tables only: every entry is written out on its topic's page (docs/api/)
+autosummary_generate = False
 napoleon_numpy_docstring = True
 napoleon_google_docstring = False
 napoleon_use_rtype = False
@@ -78,15 +96,22 @@ html_theme_options = {
     "navigation_with_keys": False,
     "header_links_before_dropdown": 6,
     "show_toc_level": 2,
-    # no right-hand column: the article takes its width, so that code lines of
-    # up to 100 characters fit beside the navigation on a 1280 px screen
-    "secondary_sidebar_items": [],
+    # the right-hand column: "On this page" (the page's sections, and on the API
+    # pages each function) and the link to the page's source
+    "secondary_sidebar_items": ["page-toc", "sourcelink"],
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
     "pygments_light_style": "default",
     "pygments_dark_style": "github-dark",
 }
-html_sidebars = {"index": [], "gallery": [], "api": []}
+# no left column on the pages that have no sub-pages to list (it would be an empty
+# "Section Navigation"); the user guide's and the API's pages list their siblings
+html_sidebars = {"index": [], "getting-started": [], "tutorial": [], "gallery": []}
+
+# maths: MathJax 3 from the django-static-mathjax wheel (the MathJax team's own
+# build, the [docs] extra), copied into the site by _ext/sb_mathjax.py: no CDN
+mathjax_path = "mathjax/tex-chtml.js"
+mathjax3_config = {"chtml": {"displayAlign": "center"}}
 
 # gallery: the paper's figures made by stairbounce.figures at build time,
 # small so that the whole build stays quick (see _ext/sb_gallery.py)
@@ -94,12 +119,13 @@ sb_gallery_scale = float(os.environ.get("SB_GALLERY_SCALE", "0.25"))
 sb_gallery_max_iter = int(os.environ.get("SB_GALLERY_MAX_ITER", "300"))
 
 
-# The user guide's toctree (guide/index.md) says "*", so that a new page slots in by
-# existing; a glob sorts by name, so the pages that exist are listed first in
-# reading order and the glob keeps only for pages not named here.
-GUIDE_ORDER = ["model", "scans", "paper", "dimension", "dimension-study", "borders", "orbits",
-               "motion", "explorer", "dask", "cli", "cluster", "explorer-server", "robustness",
-               "numerics", "speed"]
+# The user guide's toctree (guide/index.md) says "*", so that a new page appears by
+# existing; a glob sorts by name, so the pages named here are listed first in reading
+# order and the glob keeps only a page not named here, last.  tests/test_docs.py
+# fails while a page is missing here, so that none stays last ("Regions" once did).
+GUIDE_ORDER = ["model", "staircase", "scans", "paper", "dimension", "dimension-study", "borders",
+               "regions", "orbits", "motion", "explorer", "dask", "cli", "cluster", "explorer-server",
+               "robustness", "numerics", "speed"]
 
 
 def _order_guide(app, docname, source):
@@ -112,5 +138,56 @@ def _order_guide(app, docname, source):
     source[0] = source[0].replace("\n*\n", "\n" + "\n".join(lines) + "\n", 1)
 
 
+_SIGNATURE_LINE = re.compile(r"^(?P<name>\w+)\(.*?\)(?:\s*->\s*(?P<returns>.+))?$")
+
+
+def _docstring_signature(app, what, name, obj, options, lines):
+    """Drop a docstring's first line when it restates the signature (shown above it);
+    what it says of the returned values stays, as "Returns ..." (only where the
+    docstring has no Returns section)."""
+    if not callable(obj) or not lines:  # (sb.scan, a callable module, counts as data)
+        return
+    m = _SIGNATURE_LINE.match(lines[0].strip())
+    if not m or m.group("name") != name.rsplit(".", 1)[-1]:
+        return
+    rest = lines[1:]
+    while rest and not rest[0].strip():
+        rest = rest[1:]
+    returns = m.group("returns")
+    if returns and not any(line.strip() in ("Returns", "Yields") for line in rest):
+        rest = [*rest, "", f"Returns ``{returns.strip()}``."]
+    lines[:] = rest
+
+
+def _data_docstring(app, what, name, obj, options, lines):
+    """A constant re-exported by the package (``sb.SLIDING``, ``sb.__version__``) has
+    its docstring where it is defined (a string right below it, or ``#:``), not the
+    docstring of its type (int's, str's), which autodoc would show."""
+    if callable(obj) or lines != (inspect.getdoc(type(obj)) or "").splitlines():
+        return
+    short = name.rsplit(".", 1)[-1]
+    for modname in sorted(m for m in sys.modules if m.startswith("stairbounce.")):
+        if getattr(sys.modules[modname], short, _MISSING) is not obj:
+            continue
+        try:
+            docs = ModuleAnalyzer.for_module(modname).find_attr_docs()
+        except PycodeError:
+            continue
+        if ("", short) in docs:
+            lines[:] = [line for line in docs[("", short)] if line.strip()]
+            return
+    lines[:] = []
+
+
+_MISSING = object()
+
+# autosummary's table gives each name its docstring's first sentence, ended at a period
+# followed by a space: "(Prop. 2.3)" and "eq. (2.2)" are abbreviations, not ends
+sphinx.ext.autosummary.WELL_KNOWN_ABBREVIATIONS += ("Prop.", "Props.", "eq.", "Eq.", "Fig.",
+                                                   "Figs.", "Sec.", "Thm.", "Cor.", "cf.")
+
+
 def setup(app):
     app.connect("source-read", _order_guide)
+    app.connect("autodoc-process-docstring", _docstring_signature)
+    app.connect("autodoc-process-docstring", _data_docstring)

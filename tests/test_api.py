@@ -16,12 +16,13 @@ import pytest
 import stairbounce as sb
 from stairbounce import plane
 
-API_PAGE = Path(__file__).resolve().parents[1] / "docs" / "api.md"
+API_PAGES = sorted((Path(__file__).resolve().parents[1] / "docs" / "api").glob("*.md"))
 _DIRECTIVE = re.compile(r"^\.\. auto(?:function|class|data):: (stairbounce(?:\.plot)?)\.(\w+)\s*$", re.M)
 
 
 def _documented(module):
-    return [name for mod, name in _DIRECTIVE.findall(API_PAGE.read_text()) if mod == module]
+    """The names that have an entry on the API pages (docs/api/*.md), page by page."""
+    return [name for page in API_PAGES for mod, name in _DIRECTIVE.findall(page.read_text()) if mod == module]
 
 
 def _run(code):
@@ -39,6 +40,23 @@ def test_all_is_exactly_the_documented_api():
 
 def test_plot_all_is_exactly_the_documented_plot_api():
     assert sorted(sb.plot.__all__) == sorted(_documented("stairbounce.plot"))
+
+
+_TABLE = re.compile(r"^\.\. autosummary::\n((?:   .*\n|\n)*)", re.M)
+
+
+@pytest.mark.parametrize("page", API_PAGES, ids=lambda p: p.name)
+def test_each_api_page_opens_with_a_table_of_its_entries(page):
+    text = page.read_text()
+    entries = [name for _, name in _DIRECTIVE.findall(text)]
+    tables = _TABLE.findall(text)
+    listed = [line.strip() for table in tables for line in table.splitlines()
+              if line.strip() and not line.strip().startswith(":")]
+    if page.name == "index.md":  # the topics' list, and the version
+        assert entries == ["__version__"] and not listed
+        return
+    assert tables and text.index(".. autosummary::") < text.index(".. auto", text.index(".. autosummary::") + 1)
+    assert listed == entries, page.name
 
 
 @pytest.mark.parametrize("name", sb.__all__)

@@ -3,7 +3,8 @@
 Each recipe of :data:`stairbounce.figures.FIGURES` runs at a reduced scale
 (``sb_gallery_scale`` times its pixel counts, ``sb_gallery_max_iter``) into the
 build's own scratch folder (beside its doctrees, never the source tree).  The
-page shows every image at the width of the page with the recipe's caption and
+page opens with a grid of thumbnails, each a link to its figure's section, and
+shows every image at the width of the page with the recipe's caption and
 the code that makes it: the command, the Python call, and the recipe's own
 source.  It shows no verdicts: at a reduced scale the comparisons with the
 paper's numbers mean little, and the report of ``stairbounce figures`` (full
@@ -62,18 +63,29 @@ class GalleryDirective(SphinxDirective):
             f"Made by stairbounce {app.config.release} while this page was built, with every "
             f"pixel count of the paper's grids times {settings.scale:g} and max_iter = "
             f"{settings.max_iter}; the command stairbounce figures makes them full size."))]
+        # a grid of thumbnails, each a link to its figure's section below
+        grid = nodes.container(classes=["sb-gallery-grid"])
+        section_nodes.append(grid)
         for res in results:
             if res.error:
                 logger.warning(f"[sb-gallery] recipe {res.name} failed: {res.error}",
                                location=(self.env.docname, self.lineno))
                 continue
-            sec = nodes.section(ids=[nodes.make_id(f"gallery-{res.name}")])
+            section_id = nodes.make_id(f"gallery-{res.name}")
+            sec = nodes.section(ids=[section_id])
             sec += nodes.title(text=f"{res.name}: {res.title}")
-            for name in res.files:
+            for i, name in enumerate(res.files):
                 # "/..." is relative to the source folder in Sphinx
                 uri = "/" + os.path.relpath(out / name, self.env.srcdir).replace(os.sep, "/")
                 self.env.note_dependency(str(out / name))
                 sec += nodes.image(uri=uri, alt=f"{res.name}: {res.title}", width="100%")
+                if i == 0:
+                    thumb = nodes.paragraph(classes=["sb-gallery-thumb"])
+                    link = nodes.reference("", "", internal=True, refid=section_id)
+                    link += nodes.image(uri=uri, alt=f"{res.name} (thumbnail)")
+                    link += nodes.inline(text=f"{res.name}: {res.title}")
+                    thumb += link
+                    grid += thumb
             if res.caption:
                 sec += nodes.paragraph(text=res.caption)
             sec += nodes.paragraph(text="Full size, on the command line and in Python:")
