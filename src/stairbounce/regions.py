@@ -720,7 +720,10 @@ def _as_word(word) -> Word:
     elif isinstance(word, str):
         w = parse_word(word)
     elif isinstance(word, (tuple, list, np.ndarray)):
-        w = Word(tuple(word))
+        try:
+            w = Word(tuple(word))
+        except ValueError as exc:  # the letters' own message, named after the parameter
+            raise ValueError(f"word: {exc}") from None
     else:  # bytes are not letters (report round 3, R6), None is not a word
         raise ValueError(f"word must be a Word, a string such as '(2, 0, 1, 0^inf)' or a tuple of "
                          f"letters such as (2, 0, 1), got {_v._show(word)}")
@@ -855,6 +858,9 @@ def _check_centres(es):
 
 
 def _check_window(e, u):
+    for name, w in (("e", e), ("u", u)):
+        if isinstance(w, (str, bytes)):  # b"01" would be the window (48, 49)
+            raise ValueError(f"{name} must be a (min, max) pair of numbers, got {_v._show(w)}")
     try:
         e_lo, e_hi = (float(_v.real("e_min", e[0])), float(_v.real("e_max", e[1])))
         u_lo, u_hi = (float(_v.real("u_min", u[0])), float(_v.real("u_max", u[1])))
