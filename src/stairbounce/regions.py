@@ -268,10 +268,11 @@ class _Margins:
         g = np.empty(self.m)
         ge = np.empty(self.m)
         gu = np.empty(self.m)
-        if not (0.0 <= x[0] < 1.0 and _v.U_MIN <= x[1] <= _v.U_MAX):
+        if not (x[0] < 1.0 and x[1] > 0.0):
             # a Newton or continuation step out of the parameter domain (u <= 0 next to
             # a window at u = 1e-150: T = 1/u divided by zero, report round 3, R6): no
-            # margins there, as where the itinerary leaves the domain
+            # margins there, as where the itinerary leaves the domain (e an ulp below
+            # 0, beside a window side at e = 0, is evaluated: the walk follows that side)
             g.fill(math.nan)
             ge.fill(math.nan)
             gu.fill(math.nan)
@@ -1121,13 +1122,16 @@ def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=256, max
     its row (or column) is bisected to rounding and the boundary of that
     component walked by pseudo-arclength continuation, corner to corner, until
     it closes.  Areas are the shoelace sum of the dense curve plus the cubic
-    Hermite correction of every chord (the tangents are known), with an error
-    estimate from the same sum on every other point.
+    Hermite correction of every chord (the tangents are known), on
+    coordinates relative to the curve's first point, with an error estimate
+    from the same sum on every other point plus rounding (the points'
+    distance from the exact curves times the arcs' lengths, and the sum's).
 
     What it can miss: a component (or hole) that contains no pixel centre of
     the scan, i.e. narrower than a pixel everywhere.  Raise ``resolution`` to
-    find smaller ones.  A component narrower than rounding (its area below its
-    perimeter times 32 ulps), or one whose walk stalls, is not traced and the
+    find smaller ones.  A component narrower than rounding (its area below the
+    rounding of its points, about its perimeter times 32 ulps along the
+    dynamics' borders), or one whose walk stalls, is not traced and the
     region is marked ``complete=False`` (docs/guide/regions.md).
 
     Parameters
