@@ -772,6 +772,8 @@ for w in (1e-6, 1e-8, 1e-10, 1e-12):
 
 _R3B_API = """
 import math
+import resource
+resource.setrlimit(resource.RLIMIT_AS, (6 << 30, 6 << 30))  # a defect fails fast, not the machine
 import numpy as np
 import stairbounce as sb
 nan, inf = math.nan, math.inf
