@@ -753,6 +753,148 @@ def part_dask(t, work, args):
     t.case("dask", "resumed on a new scheduler", r.returncode == 0 and same, f"exit {r.returncode} {why}")
 
 
+# --------------------------------------------------------------------------- #
+# Round 3, part B (issue 38, report reliability-round3.md): R2, R4, R6, R7,   #
+# R8, R12, R13 -- region areas, border graphs, the regions API's inputs,      #
+# zero-copy arrays, traced points in the window                               #
+# --------------------------------------------------------------------------- #
+
+_R3B_AREAS = """
+from fractions import Fraction
+import stairbounce as sb
+for w in (1e-6, 1e-8, 1e-10, 1e-12):
+    e, u = (0.05, 0.05 + w), (0.93, 0.93 + w)
+    (r,) = sb.window_regions(e, u, resolution=8)
+    exact = float((Fraction(e[1]) - Fraction(e[0])) * (Fraction(u[1]) - Fraction(u[0])))
+    ok = abs(r.area - exact) <= r.area_error <= 1e-12 * exact and r.complete
+    print("AREA", w, "OK" if ok else f"WRONG {r.area!r} {r.area_error!r} for {exact!r}")
+"""
+
+_R3B_API = """
+import math
+import resource
+resource.setrlimit(resource.RLIMIT_AS, (6 << 30, 6 << 30))  # a defect fails fast, not the machine
+import numpy as np
+import stairbounce as sb
+nan, inf = math.nan, math.inf
+W = dict(e=(0.1, 0.2), u=(0.9, 1.0), resolution=4, max_iter=50)
+calls = {
+    "y0": [lambda b: sb.word_region((2,), y0=b, **W), lambda b: sb.window_regions(y0=b, **W),
+           lambda b: sb.trace_border(0.05, 0.93, y0=b, search=1e-2)],
+    "v0": [lambda b: sb.word_region((2,), v0=b, **W), lambda b: sb.window_regions(v0=b, **W),
+           lambda b: sb.trace_border(0.05, 0.93, v0=b, search=1e-2)],
+    "max_iter": [lambda b: sb.word_region((2,), **{**W, "max_iter": b}),
+                 lambda b: sb.window_regions(**{**W, "max_iter": b}),
+                 lambda b: sb.trace_border(0.05, 0.93, max_iter=b, search=1e-2)],
+    "max_points": [lambda b: sb.trace_border(0.05, 0.93, max_points=b, search=1e-2)],
+    "word": [lambda b: sb.word_region(b, **W)],
+    "regions": [sb.border_graph, sb.regions_geojson],
+    "window": [lambda b: sb.trace_border(0.05, 0.93, window=b)],
+    "progress": [lambda b: sb.window_regions(progress=b, **W)],
+    "e": [lambda b: sb.word_region((2,), **{**W, "e": b}), lambda b: sb.window_regions(**{**W, "e": b})],
+    "u": [lambda b: sb.word_region((2,), **{**W, "u": b}), lambda b: sb.window_regions(**{**W, "u": b})],
+}
+bad = {
+    "y0": [nan, inf, -1.0, 1e308, "1", None, True], "v0": [nan, 1e200, -inf, "0", b"0"],
+    "max_iter": [0, 10**12, 2**31, 1.5, "10"], "max_points": [0, -1, 1, 1.5, None],
+    "word": [None, b"(1, 0^inf)", (10**12,), (0,), 3], "regions": [None, ["x"], 3, "x", [None]],
+    "window": ["x", 3, ((0.0, 0.1),), ((0.0, 1e-17), (0.9, 1.0))], "progress": [3, "x"],
+    "e": [(0.0, 1e-17), (0.0, 1e-16), (1e-20, 0.5), (0.0, 4e-16), b"01", (nan, 0.5)],
+    "u": [(0.0, 1.0), b"01", (1e-160, 1e-150), ("0.9", 1.0)],
+}
+for name, fns in calls.items():
+    for f in fns:
+        for b in bad[name]:
+            try:
+                f(b)
+                print("ACCEPTED", name, repr(b)[:40])
+            except ValueError as exc:
+                names = {"e": ("e", "e_min", "e_max"), "u": ("u", "u_min", "u_max")}.get(name, (name,))
+                good = any(str(exc).startswith(n) or f" {n} " in str(exc) or f"{n}=" in str(exc) for n in names)
+                print("REFUSED" if good else "UNNAMED", name, repr(b)[:40], str(exc)[:80])
+            except Exception as exc:
+                print("RAISED", type(exc).__name__, name, repr(b)[:40], str(exc)[:80])
+for u in [(1e-150, 2e-150), (1e-150, 1e-149)]:
+    try:
+        sb.word_region((1,), e=(0.1, 0.5), u=u, resolution=8, max_iter=200)
+        sb.window_regions((0.1, 0.9), u, resolution=8, max_iter=100)
+        print("TINY_U OK")
+    except Exception as exc:
+        print("TINY_U", type(exc).__name__, exc)
+r = sb.Region(sb.parse_word("(1, 0^inf)"), (0.1, 0.2), (0.5, 0.6), [], complete=False)
+try:
+    g = sb.border_graph([r])
+    print("GRAPH OK" if not g.edges and g.regions == [r] else "GRAPH WRONG")
+except Exception as exc:
+    print("GRAPH", type(exc).__name__, exc)
+arc = sb.trace_border(0.11621641932342214, 0.6082261165329619, search=0.0727393874649528)
+print("TRACE", "OK" if arc.e.min() >= 0.0 else f"OUTSIDE e = {arc.e.min()!r}")
+"""
+
+_R3B_ZERO_COPY = {
+    "orbit_diagram": "sb.orbit_diagram(0.5, big, transient=1, keep=2)",
+    "bifurcations": "sb.bifurcations(0.5, big)",
+    "tongue_mask": "sb.tongue_mask(np.broadcast_to(0.5, (10**6,)), np.broadcast_to(0.7, (10**6, 1)), 5)",
+    "scan_coords": "sb.scan_coords(big, big)",
+    "motion_coords": "sb.motion_coords(big, big)",
+    "label_boundary": "sb.label_boundary(np.broadcast_to(np.int32(1), (10**6, 10**6)))",
+    "boundary": "sb.boundary(np.broadcast_to(True, (10**6, 10**6)))",
+    "box_dimension": "sb.box_dimension(np.broadcast_to(True, (10**6, 10**6)))",
+    "slope_fit": "sb.slope_fit(big, big)",
+    "linear_region": "sb.linear_region(big, big)",
+}
+
+
+def part_round3b(t, work, args):
+    """Round 3, part B: R2 (areas of windows inside one word, 1e-6 to 1e-12 wide,
+    against the exact area, within the stated error), R4 (border_graph of a
+    region without components; ``words --regions`` on the report's deep window:
+    exit 0, readable counts), R6/R7 (bad y0, v0, max_iter, max_points, word,
+    regions, window, progress and e/u windows of the regions API: ValueError
+    naming the parameter; u windows near 1e-150 answer), R8 (ten array
+    functions on terabyte zero-copy views under a 6 GB address limit: refused
+    by the memory estimate), R12 (``words --regions --png``: one line, exit 2),
+    R13 (the report's trace_border stays at e >= 0)."""
+    r = _py(_R3B_AREAS, work)
+    for line in [x for x in r.stdout.splitlines() if x.startswith("AREA")] or [f"AREA none {r.stderr[-200:]}"]:
+        t.case("round3b", f"R2 window of {line.split()[1]} inside one word: exact area within its error",
+               line.endswith("OK"), line)
+    r = _py(_R3B_API, work)
+    lines = r.stdout.splitlines()
+    bad = [x for x in lines if x.startswith(("ACCEPTED", "RAISED", "UNNAMED"))]
+    refused = [x for x in lines if x.startswith("REFUSED")]
+    t.case("round3b", f"R6/R7 regions API: {len(refused)} bad inputs refused by name", refused and not bad
+           and r.returncode == 0, "; ".join(bad[:4]) or r.stderr[-300:])
+    for key, name in (("TINY_U", "R6 u windows at 1e-150 answer"), ("GRAPH", "R4 border_graph without components"),
+                      ("TRACE", "R13 trace_border stays in its window")):
+        line = next((x for x in lines if x.startswith(key)), f"{key} missing")
+        t.case("round3b", name, line.endswith("OK"), line)
+    for name, call in _R3B_ZERO_COPY.items():
+        code = f"""
+import resource
+resource.setrlimit(resource.RLIMIT_AS, (6 << 30, 6 << 30))
+import numpy as np, stairbounce as sb
+big = np.broadcast_to(0.5, (10**12,))
+try:
+    {call}
+    print("RAN")
+except ValueError as exc:
+    print("REFUSED" if "memory" in str(exc) else exc)
+"""
+        r = _py(code, work, timeout=90)
+        t.case("round3b", f"R8 {name} of a zero-copy view", "REFUSED" in r.stdout, (r.stdout + r.stderr)[-200:])
+    d = Path(tempfile.mkdtemp(dir=work))
+    deep = ["words", "--regions", "--e", "0.07314063608855005:0.0731406360889329",
+            "--u", "0.3284352212536019:0.32843522125424923", "--size", "21x21", "--out", "deep.geojson"]
+    r = sb(deep, d)
+    t.case("round3b", "R4 words --regions on the report's deep window", r.returncode == 0 and "{" not in r.stdout
+           and "arcs by kind:" in r.stdout and (d / "deep.geojson").exists(), f"exit {r.returncode}: {r.stderr[-200:]}")
+    r = sb(["words", "--regions", "--e", "0.1:0.2", "--u", "0.5:0.6", "--size", "4x4", "--out", "r.geojson",
+            "--png", "r.png"], d)
+    t.case("round3b", "R12 words --regions --png refused", r.returncode == 2 and one_line(r.stderr)
+           and not (d / "r.geojson").exists() and not (d / "r.png").exists(), f"exit {r.returncode}: {r.stderr[-200:]}")
+
+
 PARTS = {
     "overwrite": part_overwrite,
     "unwritable": part_unwritable,
@@ -768,6 +910,7 @@ PARTS = {
     "host": part_host,
     "numeric": part_numeric,
     "dask": part_dask,
+    "round3b": part_round3b,
 }
 
 

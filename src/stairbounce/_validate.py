@@ -204,9 +204,21 @@ def check_array_memory(what, values, bytes_per_element):
     (e.g. ``"e of 3000000000 points"``; ``{n}`` is replaced by the element
     count).  Returns the element count."""
     arrays = values if isinstance(values, tuple) else (values,)
-    n = max((a.size for a in arrays if isinstance(a, np.ndarray)), default=0)
-    check_memory(what.format(n=n), n * bytes_per_element)
+    n = max((_size(a) for a in arrays), default=0)
+    if n:
+        check_memory(what.format(n=n), n * bytes_per_element)
     return n
+
+
+def _size(a):
+    """Elements of an array-like that holds them already (numpy arrays and their
+    zero-copy views, xarray objects); 0 for lists and scalars (materialised)."""
+    if isinstance(a, np.ndarray):
+        return a.size
+    size, shape = getattr(a, "size", None), getattr(a, "shape", None)
+    if isinstance(size, numbers.Integral) and isinstance(shape, tuple):
+        return int(size)
+    return 0
 
 
 def real_array(name, value):
@@ -214,9 +226,12 @@ def real_array(name, value):
 
     Elements must be real numbers as for :func:`real` (numeric numpy arrays
     pass as they are); strings, bools, None and complex numbers are refused.
-    Finiteness and ranges are left to the caller.
+    Finiteness and ranges are left to the caller.  An array is estimated
+    before its float copy is made (a zero-copy view holds no memory until
+    then; report round 3, R8): the callers estimate their outputs after.
     """
     if isinstance(value, np.ndarray):
+        check_array_memory(f"{name} of {{n}} values", value, 8)
         if value.dtype.kind not in "iuf":
             raise ValueError(f"{name} must hold real numbers, got an array of {value.dtype}")
         return value.astype(np.float64)

@@ -862,6 +862,7 @@ def square_counts(e, u, side=DEFAULT_SIDE):
 
 
 def _coords(name, values):
+    _v.check_array_memory(f"{name} of {{n}} values", values, 8)  # the float copy, before it is made
     a = np.asarray(values, dtype=np.float64)
     if a.ndim != 1 or a.size == 0:
         raise ValueError(f"{name} values must be a non-empty 1-D array, got shape {a.shape}")
@@ -869,6 +870,7 @@ def _coords(name, values):
 
 
 def _point_coords(name, values):
+    _v.check_array_memory(f"{name} of {{n}} values", values, 8)  # the float copy, before it is made
     try:
         a = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError):
@@ -1306,7 +1308,14 @@ def tongue_mask(e, u, n_max):
     :func:`stairbounce.tongue`).  ``e`` and ``u`` broadcast against each other.
     """
     n_max = check_count("n_max", n_max, 1)
-    e, u = np.broadcast_arrays(_coords_any("e", e), _coords_any("u", u))
+    e, u = _coords_any("e", e), _coords_any("u", u)
+    try:
+        shape = np.broadcast_shapes(e.shape, u.shape)
+    except ValueError:
+        raise ValueError(f"e and u must broadcast against each other, got shapes {e.shape} and {u.shape}") from None
+    # the broadcast is a view; n, its tests and the float temporaries are not (about 6 floats a point)
+    _v.check_memory(f"tongue_mask of {math.prod(shape)} points", 48 * math.prod(shape))
+    e, u = np.broadcast_arrays(e, u)
     # u lies in at most one tongue: the last n with sqrt((n-1)/2) < u (the upper
     # bound grows with n), so one test per point, whatever n_max (report D12)
     n = np.minimum(np.maximum(np.ceil(2.0 * u * u), 1.0), n_max)

@@ -31,7 +31,7 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit, prange
+from numba import get_num_threads, njit, prange
 
 from . import _validate as _v
 from .model import (
@@ -43,6 +43,7 @@ from .model import (
     _step,
     check_count,
     check_e,
+    check_state,
     check_u,
 )
 from .symbolic import Word, parse_word, word_from_impacts
@@ -268,6 +269,16 @@ class _Margins:
         g = np.empty(self.m)
         ge = np.empty(self.m)
         gu = np.empty(self.m)
+        if not (x[0] < 1.0 and x[1] > 0.0):
+            # a Newton or continuation step out of the parameter domain (u <= 0 next to
+            # a window at u = 1e-150: T = 1/u divided by zero, report round 3, R6): no
+            # margins there, as where the itinerary leaves the domain (e an ulp below
+            # 0, beside a window side at e = 0, is evaluated: the walk follows that side)
+            g.fill(math.nan)
+            ge.fill(math.nan)
+            gu.fill(math.nan)
+            self.evals += 1
+            return g, ge, gu
         _margins(x[0], x[1], self.y0, self.v0, self.ks, self.n, self.win, g, ge, gu)
         self.evals += 1
         return g, ge, gu
@@ -392,6 +403,20 @@ def _corner_on_arc(F, a, b, x, y):
     return x, gx
 
 
+def _into_window(F, x, g):
+    """``x`` (margins ``g``) moved onto the window where rounding left it just
+    outside: a point located where several margins vanish at once (a corner on
+    e = 0, where the margins of many steps meet) is accepted with every other
+    margin >= -its rounding, the window's too (report round 3, R13: e =
+    -2.7e-17).  The window's sides are exact lines, so the point is clipped to
+    them and its margins evaluated again; unchanged inside."""
+    w = F.win
+    c = np.array([min(max(x[0], w[0]), w[1]), min(max(x[1], w[2]), w[3])])
+    if c[0] == x[0] and c[1] == x[1]:
+        return x, g
+    return c, F(c)
+
+
 @dataclass
 class _Arc:
     slot: int
@@ -447,7 +472,7 @@ def _follow(F, a, x, g, sign, scale, *, others, stop_at=None, max_points=20000, 
             # closed when the start lies on the chord x -> y
             dx, dy = y[0] - x[0], y[1] - x[1]
             L2 = dx * dx + dy * dy
-            tau = ((stop_at[0] - x[0]) * dx + (stop_at[1] - x[1]) * dy) / L2
+            tau = ((stop_at[0] - x[0]) * dx + (stop_at[1] - x[1]) * dy) / L2 if L2 > 0.0 else math.nan
             if 0.0 < tau <= 1.0 and abs((stop_at[0] - x[0]) * dy - (stop_at[1] - x[1]) * dx) <= \
                     1e-6 * L2 and len(arc.pts) > 2:
                 arc.pts.append(np.array(stop_at, float))
@@ -511,6 +536,7 @@ def _locate_corner(F, a, x, gx, y, gy, neg, others):
             rest = others[others != b]
             tol = np.maximum(_noise(gc, xc)[rest], 1e3 * _EPS * max(abs(xc[0]), abs(xc[1]), 1.0))
             if np.all(gc[0][rest] >= -tol) and math.hypot(xc[0] - x[0], xc[1] - x[1]) <= 1.5 * step:
+                xc, gc = _into_window(F, xc, gc)
                 return xc, b, gc
     return None
 
@@ -607,25 +633,63 @@ def _hermite_area(p0, p1, t0, t1):
     return total
 
 
-def _arc_area(pts, tans, stride=1):
+def _arc_area(pts, tans, stride=1, origin=(0.0, 0.0)):
     """Shoelace contribution of an arc plus the Hermite correction of its chords,
-    on every ``stride``-th point (the ends always kept)."""
+    on every ``stride``-th point (the ends always kept), on coordinates relative
+    to ``origin`` (a point near the curve: on absolute coordinates each product
+    rounds by about 1e-17, more than the whole area of a region below 1e-13;
+    report round 3, R2).  Returns (area, sum of the magnitudes of its terms)."""
     idx = list(range(0, len(pts), stride))
     if idx[-1] != len(pts) - 1:
         idx.append(len(pts) - 1)
-    P = np.asarray(pts, dtype=float)[idx]
+    P = np.asarray(pts, dtype=float)[idx] - np.asarray(origin, dtype=float)
     Tg = np.asarray(tans, dtype=float)[idx]
     p, q = P[:-1], P[1:]
-    return float(np.sum(0.5 * (p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]) + _hermite_area(p, q, Tg[:-1], Tg[1:])))
+    shoe = 0.5 * (p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1])
+    herm = _hermite_area(p, q, Tg[:-1], Tg[1:])
+    size = 0.5 * (np.abs(p[:, 0] * q[:, 1]) + np.abs(q[:, 0] * p[:, 1])) + np.abs(herm)
+    return float(np.sum(shoe + herm)), float(np.sum(size))
 
 
-def _curve_area(arcs):
+def _position_rounding(arc, win, nsteps):
+    """How far the points of ``arc`` may lie from the exact curve: for a side of
+    the window (a margin ``e - e_lo`` etc., exact) the largest distance of a
+    point from that line, computed; for a margin of the dynamics
+    ``_ROUND_ULPS`` ulps of the position (the margins' zeros are exact to about
+    an ulp of the position, ``_noise``; numerical, not proven)."""
+    P = np.asarray(arc.pts, dtype=float)
+    side = arc.slot - 2 * nsteps
+    if win is not None and 0 <= side < 4:
+        return float(np.abs(P[:, side // 2] - win[side]).max())
+    return _ROUND_ULPS * _EPS * float(np.abs(P).max())
+
+
+def _curve_area(arcs, F=None):
     """Signed area of a closed curve of arcs and an error estimate: the Hermite
     area on every point against every other point (the error is O(h^4),
-    Richardson's factor 15)."""
-    fine = sum(_arc_area(a.pts, a.tans) for a in arcs)
-    coarse = sum(_arc_area(a.pts, a.tans, 2) for a in arcs)
-    return fine, abs(fine - coarse) / 15.0
+    Richardson's factor 15), plus rounding: the points' distance from the
+    exact curve times the arcs' lengths (:func:`_position_rounding`) and the
+    floating-point sum's own rounding.  Coordinates are taken relative to the
+    curve's first point, so a region of any size keeps its digits (the area
+    of a closed curve does not depend on the origin).  Returns (area, error,
+    the rounding part of the error)."""
+    origin = np.array(arcs[0].pts[0], dtype=float)
+    fine = coarse = size = moved = 0.0
+    npts = 0
+    win, nsteps = (F.win, F.n) if F is not None else (None, 0)
+    for a in arcs:
+        A, S = _arc_area(a.pts, a.tans, 1, origin)
+        fine += A
+        size += S
+        coarse += _arc_area(a.pts, a.tans, 2, origin)[0]
+        P = np.asarray(a.pts, dtype=float)
+        length = float(np.hypot(*np.diff(P, axis=0).T).sum())
+        moved += length * _position_rounding(a, win, nsteps)
+        npts += len(a.pts)
+    # pairwise sums (numpy) and the products and differences before them: a few
+    # roundings of each term, plus log2 of their number
+    rounding = moved + (8.0 + math.log2(max(npts, 2))) * _EPS * size
+    return fine, abs(fine - coarse) / 15.0 + rounding, rounding
 
 
 # --------------------------------------------------------------------------- #
@@ -654,10 +718,20 @@ def itinerary_of_word(word) -> np.ndarray:
 
 def _as_word(word) -> Word:
     if isinstance(word, Word):
-        return word
-    if isinstance(word, str):
-        return parse_word(word)
-    return Word(tuple(word))
+        w = word
+    elif isinstance(word, str):
+        w = parse_word(word)
+    elif isinstance(word, (tuple, list, np.ndarray)):
+        try:
+            w = Word(tuple(word))
+        except ValueError as exc:  # the letters' own message, named after the parameter
+            raise ValueError(f"word: {exc}") from None
+    else:  # bytes are not letters (report round 3, R6), None is not a word
+        raise ValueError(f"word must be a Word, a string such as '(2, 0, 1, 0^inf)' or a tuple of "
+                         f"letters such as (2, 0, 1), got {_v._show(word)}")
+    # one step per letter's unit (its period): refused before a list of that length
+    _check_steps("word", w.period, f"a word of period {w.period}")
+    return w
 
 
 @dataclass(frozen=True)
@@ -760,6 +834,39 @@ class Region:
                 f"{'' if self.complete else ', INCOMPLETE'})")
 
 
+_MAX_STEPS = 2**31 - 1  # as every max_iter of the package (borders, plane)
+
+
+def _check_steps(name, steps, what):
+    """``steps`` (an itinerary's length: a max_iter or a word's period) within
+    ``[1, 2**31 - 1]`` and within memory: a buffer of that many int64 per
+    thread of the seed scan, and the margins (two per step, with their two
+    derivatives) of the walks."""
+    if steps > _MAX_STEPS:
+        raise ValueError(f"{name} must have at most {_MAX_STEPS} (2**31 - 1) steps, got {what}")
+    _v.check_memory(what, 8 * steps * (get_num_threads() + 1) + 48 * steps)
+    return steps
+
+
+def _check_run(y0, v0, max_iter):
+    """The start and the step limit of word_region, window_regions and
+    trace_border, checked as :func:`stairbounce.itinerary` checks them
+    (:func:`stairbounce.model.check_state`: ``0 <= y0 <= 1e300``, ``|v0| <=
+    1e150``; ``1 <= max_iter <= 2**31 - 1``, its buffers within memory)."""
+    y0, v0 = check_state(y0, v0, "y0", "v0")
+    max_iter = check_count("max_iter", max_iter, 1, _MAX_STEPS)
+    _check_steps("max_iter", max_iter, f"max_iter = {max_iter}")
+    return y0, v0, max_iter
+
+
+def _check_centres(es):
+    """The seed scan's pixel centres along e: none in (0, 2^-53), where e is
+    lost to rounding (as :func:`stairbounce.scan` refuses them)."""
+    tiny = es[_v.e_too_small(es)]
+    if tiny.size:
+        raise ValueError(f"{_v.E_TINY_RULE}, got a window whose pixel centres include e = {tiny[0]:.3g}")
+
+
 # The margins need e < 1 and u > 0: a window's edges e = 1 and u = 0 (image
 # edges, allowed as in stairbounce.scan, whose pixel centres lie inside) are
 # traced at these instead (as the explorer and word_table's traced columns do)
@@ -774,6 +881,8 @@ def _check_window(e, u):
     the traced window ``(e_lo, e_hi), (u_lo, u_hi)``, e = 1 and u below the
     valid range (0) moved inside the domain (``_E_TOP``, ``_U_BOTTOM``)."""
     (e_lo, e_hi, _), (u_lo, u_hi, _) = _image_window(e, u)
+    if _v.e_too_small(e_lo) or _v.e_too_small(e_hi):
+        raise ValueError(f"{_v.E_TINY_RULE}, got the e window [{e_lo}, {e_hi}]")
     # only the edges outside the map's domain move: every window valid before
     # (e_max < 1, u_min >= 1e-150) is traced as it was
     return ((e_lo, _E_TOP if e_hi >= 1.0 else e_hi),
@@ -906,6 +1015,9 @@ def _to_arcs(F, curve, word_text):
     for i, arc in enumerate(curve):
         kind, step = F.event(arc.slot)
         P = np.array(arc.pts)
+        # in the window: a point rounding left an ulp outside is put on its side (R13)
+        P[:, 0] = np.clip(P[:, 0], F.win[0], F.win[1])
+        P[:, 1] = np.clip(P[:, 1], F.win[2], F.win[3])
         out.append(BorderArc(P[:, 0].copy(), P[:, 1].copy(), kind, step, inside=word_text,
                              ends=("corner", "corner") if arc.end == "corner" else ("closed", "closed")))
         out[-1]._tans = arc.tans
@@ -967,22 +1079,23 @@ def _new_curve(F, x, slot, curves, scale):
     if _on_curves(x, slot, curves, 1e-9 * scale):
         return None
     curve = _walk(F, slot, x, scale)
-    if curve is None or _below_rounding(curve):
+    if curve is None or _below_rounding(curve, F):
         return False
     curves.append(curve)
     return curve
 
 
-def _below_rounding(curve):
-    """Whether a closed curve encloses less than its perimeter times the rounding
-    of its points (``_ROUND_ULPS`` ulps): a sliver of no width to rounding (the
-    k-th and (k+1)-th impacts of a step coinciding, ``2 e^k s`` below an ulp),
-    whose traced area would be rounding noise."""
-    P = _closed(curve)
-    perimeter = float(np.hypot(*np.diff(P, axis=0).T).sum())
-    ulp = _ROUND_ULPS * _EPS * float(np.abs(P).max())
-    curve[0].area = _curve_area(curve)  # kept for the region's area
-    return abs(curve[0].area[0]) <= perimeter * ulp
+def _below_rounding(curve, F=None):
+    """Whether a closed curve encloses no more than the rounding of its points
+    allows to tell from nothing (:func:`_curve_area`'s rounding part: the
+    points' distance from the exact curves, ``_ROUND_ULPS`` ulps along the
+    dynamics' margins, times the perimeter): a sliver of no width to rounding
+    (the k-th and (k+1)-th impacts of a step coinciding, ``2 e^k s`` below an
+    ulp), whose traced area would be rounding noise.  The window's sides are
+    exact, so a region bounded by them alone is kept at any size."""
+    A, err, rounding = _curve_area(curve, F)
+    curve[0].area = (A, err)  # kept for the region's area
+    return abs(A) <= rounding
 
 
 def _trace_word(ks, word, e, u, es, us, mask, y0, v0, max_failures=20, seeds=()):
@@ -1063,13 +1176,16 @@ def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=None, ma
     its row (or column) is bisected to rounding and the boundary of that
     component walked by pseudo-arclength continuation, corner to corner, until
     it closes.  Areas are the shoelace sum of the dense curve plus the cubic
-    Hermite correction of every chord (the tangents are known), with an error
-    estimate from the same sum on every other point.
+    Hermite correction of every chord (the tangents are known), on
+    coordinates relative to the curve's first point, with an error estimate
+    from the same sum on every other point plus rounding (the points'
+    distance from the exact curves times the arcs' lengths, and the sum's).
 
     What it can miss: a component (or hole) that contains no pixel centre of
     the scan, i.e. narrower than a pixel everywhere.  Raise ``resolution`` to
-    find smaller ones.  A component narrower than rounding (its area below its
-    perimeter times 32 ulps), or one whose walk stalls, is not traced and the
+    find smaller ones.  A component narrower than rounding (its area below the
+    rounding of its points, about its perimeter times 32 ulps along the
+    dynamics' borders), or one whose walk stalls, is not traced and the
     region is marked ``complete=False`` (docs/guide/regions.md).
 
     A word the seed scan does not see in the window gives a region with no
@@ -1100,8 +1216,10 @@ def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=None, ma
     w = _as_word(word)
     e, u, es, us, _ = _seed_grid(e, u, resolution)
     max_iter = check_count("max_iter", max_iter, 1)
+    y0, v0, max_iter = _check_run(y0, v0, max_iter)
     ks = itinerary_of_word(w)
-    h1, h2, _ = _label_grid(es, us, max(max_iter, ks.size), float(y0), float(v0))
+    _check_centres(es)
+    h1, h2, _ = _label_grid(es, us, max(max_iter, ks.size), y0, v0)
     a, b = _hash_itinerary(ks, ks.size)
     mask = (h1 == a) & (h2 == b)
     if not mask.any():
@@ -1109,7 +1227,7 @@ def word_region(word, e=(0.0, 1.0 - 1e-9), u=(0.05, 1.5), *, resolution=None, ma
                       f"u = [{u[0]:g}, {u[1]:g}] (no pixel of the {es.size} x {us.size} seed scan has it): "
                       "its region is empty or narrower than a seed pixel; raise resolution to look closer",
                       UserWarning, stacklevel=2)
-    comps, failures = _trace_word(ks, w, e, u, es, us, mask, float(y0), float(v0))
+    comps, failures = _trace_word(ks, w, e, u, es, us, mask, y0, v0)
     return Region(w, e, u, comps, complete=failures == 0, failures=failures)
 
 
@@ -1306,6 +1424,8 @@ def window_regions(e, u, *, resolution=None, max_iter=1000, y0=1.0, v0=0.0, poin
     within a quarter pixel of it; and a further component of a word already
     traced (only words not yet traced are seeded from corners).
     """
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(done, total), got {_v._show(progress)}")
     gen = iter_window_regions(e, u, resolution=resolution, max_iter=max_iter, y0=y0, v0=v0,
                               points=points, from_corners=from_corners)
     while True:
@@ -1330,9 +1450,10 @@ def iter_window_regions(e, u, *, resolution=None, max_iter=1000, y0=1.0, v0=0.0,
     e, u, es, us, pixel = _seed_grid(e, u, resolution)
     max_iter = check_count("max_iter", max_iter, 1)
     from_corners = _v.flag("from_corners", from_corners)
-    y0, v0 = float(y0), float(v0)
+    y0, v0, max_iter = _check_run(y0, v0, max_iter)
     if points is not None and not all(k in getattr(points, "variables", ()) for k in ("e", "u", "width", "axis")):
         raise ValueError("points must be a Dataset from border_points (variables e, u, width, axis)")
+    _check_centres(es)
     h1, h2, steps = _label_grid(es, us, max_iter, y0, v0)
     keys, first = np.unique(np.stack([h1.ravel(), h2.ravel()], 1), axis=0, return_index=True)
     seeds = _point_seeds(points, e, u, y0, v0, max_iter) if points is not None else {}
@@ -1484,8 +1605,12 @@ def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-
     search = _v.real("search", search)
     if not 0.0 < search <= 1.0:
         raise ValueError(f"search must be in (0, 1], got {search}")
+    y0, v0, max_iter = _check_run(y0, v0, max_iter)
+    max_points = check_count("max_points", max_points, 2)
     if window is None:
         window = ((max(0.0, e - 0.5), min(1.0 - 1e-9, e + 0.5)), (max(1e-3, u - 0.5), u + 0.5))
+    if isinstance(window, (str, bytes)):
+        raise ValueError(f"window must be ((e_min, e_max), (u_min, u_max)), got {_v._show(window)}")
     try:
         we, wu = window
     except (TypeError, ValueError):
@@ -1496,7 +1621,6 @@ def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-
     we, wu = _check_window(we, wu)
     if not (we[0] <= e <= we[1] and wu[0] <= u <= wu[1]):
         raise ValueError(f"(e, u) = ({e}, {u}) must lie in the window {window}")
-    y0, v0 = float(y0), float(v0)
     buf = np.empty(max_iter, dtype=np.int64)
     p = np.array([e, u])
     kp, sp = _outcome(e, u, y0, v0, max_iter, buf)
@@ -1570,7 +1694,8 @@ def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-
                 x = mid
             else:
                 y = mid
-        return np.asarray(y, float), F(y)
+        y = np.asarray(y, float)
+        return _into_window(F, y, F(y))
 
     allc = np.arange(F.m)
     others = allc[allc != slot]
@@ -1579,6 +1704,10 @@ def trace_border(e, u, *, window=None, max_iter=1000, y0=1.0, v0=0.0, search=1e-
                       junction=junction) for sgn in (-1, 1)]
     back, fwd = halves
     P = np.array(back.pts[::-1] + fwd.pts[1:])
+    # rounding may leave a point an ulp outside the window (e = -2.7e-17 next to a
+    # corner on e = 0, report round 3, R13): the window's sides are exact lines
+    P[:, 0] = np.clip(P[:, 0], we[0], we[1])
+    P[:, 1] = np.clip(P[:, 1], wu[0], wu[1])
 
     def end(h):
         if h.end == "corner":
@@ -1760,6 +1889,21 @@ def _corners_on_arcs(arcs, xy, corners, margins, tol, scale, bins=64):
     return out
 
 
+def _region_list(name, regions):
+    """``regions`` (a Region or an iterable of them) as a list, or ValueError."""
+    if isinstance(regions, Region):
+        return [regions]
+    if isinstance(regions, (str, bytes)) or not hasattr(regions, "__iter__"):
+        raise ValueError(f"{name} must be a list of Region (from window_regions or word_region), "
+                         f"got {_v._show(regions)}")
+    regions = list(regions)
+    for i, r in enumerate(regions):
+        if not isinstance(r, Region):
+            raise ValueError(f"{name}[{i}] must be a Region (from window_regions or word_region), "
+                             f"got {_v._show(r)}")
+    return regions
+
+
 def border_graph(regions):
     """border_graph(regions) -> BorderGraph
 
@@ -1776,9 +1920,11 @@ def border_graph(regions):
     arc's chords (within their sagitta) and the arc's margin vanishes there to
     rounding (or within the merging distance, times its gradient).
     """
-    regions = list(regions)
-    if not regions:
-        return BorderGraph([], [], [])
+    regions = _region_list("regions", regions)
+    if not any(r.components for r in regions):
+        # nothing traced (a word seen by the seed scan whose walk failed, in a deep
+        # window): a graph without nodes or edges (report round 3, R4)
+        return BorderGraph([], [], regions)
     e, u = regions[0].e, regions[0].u
     scale = max(e[1] - e[0], u[1] - u[0])
     tol = 1e-11 * scale
@@ -1862,7 +2008,7 @@ def regions_geojson(regions) -> dict:
     ``area_error``, ``kinds`` (arcs by kind) and ``corners``.
     """
     feats = []
-    for r in ([regions] if isinstance(regions, Region) else regions):
+    for r in _region_list("regions", regions):
         for ci, comp in enumerate(r.components):
             rings = []
             for h in [None] + list(range(len(comp.holes))):
@@ -1886,7 +2032,7 @@ def regions_svg(regions, size=800) -> str:
     arc coloured by its kind (graze blue, edge green, chatter red, window
     grey), e to the right and u upwards.
     """
-    regions = [regions] if isinstance(regions, Region) else list(regions)
+    regions = _region_list("regions", regions)
     size = check_count("size", size, 16, 100000)
     if not regions:
         return f'<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{size}"/>\n'

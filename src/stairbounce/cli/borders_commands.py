@@ -164,6 +164,8 @@ def words_(
         raise CLIError(f"--top must be >= 0, got {top}")
     if from_corners and not regions:
         raise CLIError("--from-corners goes with --regions")
+    if regions and png is not None:
+        raise CLIError("--png does not go with --regions: draw the traced regions with --out FILE.svg")
     if regions:
         return _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners)
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force)
@@ -251,11 +253,16 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
     # e = 1 and u = 0 are traced just inside (stairbounce.word_region)
     regs = with_row_progress(description="words traced", rows=1, run=lambda p: rg.window_regions(
         ew, uw, max_iter=max_iter, progress=p, from_corners=from_corners))
+    graph = rg.border_graph(regs)  # before the file: nothing is written when it fails
     rg.write_regions(regs, out, overwrite=force)
-    graph = rg.border_graph(regs)
     c = graph.counts()
+    arcs = ", ".join(f"{k} {n}" for k, n in sorted(c["arcs"].items())) or "none"
+    incomplete = [r.word.format(ascii=True) for r in regs if not r.complete]
     typer.echo(f"wrote {out}")
     typer.echo(f"{c['words']} words in {c['components']} components, {len(graph.nodes)} corners, "
-               f"arcs by kind {c['arcs']}; area traced {sum(r.area for r in regs):.6g} of "
+               f"arcs by kind: {arcs}; area traced {sum(r.area for r in regs):.6g} of "
                f"{(ew[1] - ew[0]) * (uw[1] - uw[0]):.6g}; "
-               f"{sum(not r.complete for r in regs)} words incomplete")
+               f"{len(incomplete)} words incomplete" + (" (a walk gave up; their traced components, "
+                                                         "if any, are in the file):" if incomplete else ""))
+    for text in incomplete:
+        typer.echo(f"  {text}")

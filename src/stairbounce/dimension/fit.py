@@ -40,6 +40,8 @@ class SlopeFit:
 
 
 def _check_xy(x, y):
+    # the float copies and the fit's temporaries, before a zero-copy view is copied
+    _v.check_array_memory("x and y of {n} points", (x, y), 64)
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     if x.ndim != 1 or x.shape != y.shape:
