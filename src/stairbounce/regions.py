@@ -720,7 +720,12 @@ def _as_word(word) -> Word:
     if isinstance(word, Word):
         w = word
     elif isinstance(word, str):
-        w = parse_word(word)
+        try:
+            w = parse_word(word)
+        except ValueError as exc:  # the parser's message, named after the parameter
+            if str(exc).startswith("word"):
+                raise
+            raise ValueError(f"word: {exc}") from None
     elif isinstance(word, (tuple, list, np.ndarray)):
         try:
             w = Word(tuple(word))
@@ -897,9 +902,11 @@ def _image_window(e, u):
     u_lo, u_hi = float(_v.real("u_min", u_lo)), float(_v.real("u_max", u_hi))
     if not 0.0 <= e_lo < e_hi <= 1.0:
         raise ValueError(f"e window must satisfy 0 <= e_min < e_max <= 1 (image edges), got [{e_lo}, {e_hi}]")
-    if not (0.0 <= u_lo < u_hi <= _v.U_MAX) or u_hi <= _U_BOTTOM:
-        raise ValueError(f"u window must satisfy 0 <= u_min < u_max <= {_v.U_MAX:g} (image edges) and "
-                         f"u_max > {_U_BOTTOM:g}, got [{u_lo}, {u_hi}]")
+    # u_min below the valid range (the edge u = 0) is traced from _U_BOTTOM, so
+    # u_max must lie above it; a window inside [1e-150, 1e-9] is traced as given
+    if not (0.0 <= u_lo < u_hi <= _v.U_MAX) or (u_lo < _v.U_MIN and u_hi <= _U_BOTTOM):
+        raise ValueError(f"u window must satisfy 0 <= u_min < u_max <= {_v.U_MAX:g} (image edges), and "
+                         f"u_max > {_U_BOTTOM:g} when u_min < {_v.U_MIN:g}, got [{u_lo}, {u_hi}]")
     if e_lo >= _E_TOP:
         raise ValueError(f"e window must have e_min < {_E_TOP!r} (the margins need e < 1), got [{e_lo}, {e_hi}]")
     n_e = None if n_e is None else check_count("n_e", n_e, 2, 8192)
