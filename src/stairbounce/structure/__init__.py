@@ -1,0 +1,4 @@
+"""The exact structure of the (e, u) plane: borders, regions and their certification.
+
+One module per concept (issue 36, item 9); the certifier lives here first.
+"""

@@ -1,0 +1,83 @@
+"""The certificate of one parameter box: what is proven over it, and its evidence.
+
+A box ``B = [e0, e1] x [u0, u1]`` of the (e, u) plane (a point when ``e0 == e1``
+and ``u0 == u1``).  Because a slide resets the state exactly to the edge state
+``(1, 0)``, "the periodic sliding solution through (1, 0) has word W at every
+point of B" is a finite list of sign decisions over B; a certificate lists them.
+
+Decisions, per step of the Poincare map from ``(y, v)`` (``s = sqrt(v^2 + 2y)``,
+``T = 1/u``, ``ratio = (1+e)/(1-e)``), each a *margin* ``m`` whose sign is the
+decision (``m >= 0``: the event happens; equality counts as happening, the
+convention of the map, docs/design.md):
+
+* ``"slide"``:  ``m = T - (v + ratio * s)``; ``m >= 0``: the impacts accumulate
+  before the edge (Prop. 2.1, test (2.4)); the step's impact number is SLIDING.
+* ``"impact"`` number j (j = 1, 2, ...): ``m = T - t_j`` with ``t_1 = v + s``,
+  ``t_{j+1} = t_j + 2 e^j s`` (eq. (2.2)); ``m >= 0``: the j-th impact is on the
+  step.  A step with impact number k (0 <= k) has the slide decision < 0, the
+  impact decisions 1..k >= 0 and the impact decision k+1 < 0.
+
+A decision is *proven* when the enclosure ``[lo, hi]`` of its margin over the
+whole box has ``lo >= 0`` (happens everywhere) or ``hi < 0`` (nowhere).
+
+The itinerary is the list of impact numbers of the decided steps, in order
+(0: flies over, k >= 1: k impacts, -1 = SLIDING: the step ends in a slide).
+
+Array form (what atlases store and what the batch checker reads), for N boxes:
+``e0, e1, u0, u1`` (float64, N), ``status`` (int8, N: index into STATUSES),
+``max_iter`` (int), ``itinerary`` (int64, flat: all boxes' itineraries one
+after the other) and ``offsets`` (int64, N + 1: box i's itinerary is
+``itinerary[offsets[i]:offsets[i+1]]``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+STATUSES = ("word", "no_sliding", "no_slide_within", "undecided")
+"""What a certificate states about its box (index = the status code in arrays).
+
+* ``word``: every point of the box has the periodic sliding solution through
+  (1, 0) with ``word``: the itinerary ends with the slide (-1), and every
+  decision on the way is proven.
+* ``no_sliding``: no sliding solution at any point of the box (Corollary 2.1
+  over the whole box: ``u0 > (1 - e0) / (2 sqrt(2 e0))``, enclosed).
+* ``no_slide_within``: proven that the orbit of (1, 0) does not slide in the
+  first ``max_iter`` steps anywhere in the box (a finite claim): the itinerary
+  has ``max_iter`` entries, none -1.
+* ``undecided``: ``reason`` says which decision could not be proven at
+  ``step`` (1-based): ``"chatter"`` (the slide test), ``"graze"`` (the first
+  impact, margin of impact 1), ``"edge"`` (a later impact), or another reason
+  (documented where it is produced).
+"""
+
+REASONS = ("graze", "edge", "chatter")
+"""The border events (the labels of ``sb.border_points``) an undecided box can stop at."""
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """What is proven over one box of the (e, u) plane, with the evidence.
+
+    ``margins`` has one row ``(lo, hi)`` per decision taken, in order, and
+    ``decisions`` names each (``"slide"`` or ``"impact j"``), so that a reader
+    sees every sign that was decided and by how much.
+    """
+
+    e: tuple[float, float]
+    u: tuple[float, float]
+    max_iter: int
+    status: str
+    word: object | None = None  # stairbounce.Word when status == "word"
+    reason: str | None = None  # when status == "undecided"
+    step: int | None = None  # the undecided step (1-based)
+    itinerary: tuple[int, ...] = ()
+    decisions: tuple[str, ...] = ()
+    margins: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+
+    @property
+    def proven(self) -> bool:
+        """Whether the certificate states a theorem (every status but ``undecided``)."""
+        return self.status != "undecided"
