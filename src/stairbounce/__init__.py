@@ -91,6 +91,7 @@ from .regions import (
     word_region,
     write_regions,
 )
+from .structure import Certificate, CertifiedAtlas, certify, certify_box
 from .symbolic import SlidingAnswer, Word, parse_word, sliding_answer, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, physical_speed, time_scale
@@ -118,6 +119,10 @@ __all__ = [
     "word_region",
     "write_regions",
     "Accumulation",
+    "Certificate",
+    "CertifiedAtlas",
+    "certify",
+    "certify_box",
     "BoxDimension",
     "Flight",
     "Impact",
