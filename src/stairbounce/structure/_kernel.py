@@ -74,43 +74,43 @@ def _float(typingctx, b):
     return types.float64(b), codegen
 
 
-@njit(cache=True)
-def _dn(x):
-    """``np.nextafter(x, -inf)`` by the bits (the call to libm's cost 8 times
-    more; tests/test_certify.py compares the two)."""
-    if x > 0.0:
-        return _float(_bits(x) - 1)
-    if x < 0.0:
-        return x if x == -np.inf else _float(_bits(x) + 1)
-    if x == 0.0:
-        return -5e-324
-    return x
-
-
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _up(x):
-    """``np.nextafter(x, inf)`` by the bits."""
-    if x < 0.0:
-        return _float(_bits(x) - 1)
-    if x > 0.0:
-        return x if x == np.inf else _float(_bits(x) + 1)
-    if x == 0.0:
-        return 5e-324
-    return x
+    """``np.nextafter(x, inf)`` by the bits, without a branch (the call to libm's
+    cost 8 times more; tests/test_certify.py compares the two).
+
+    ``x + 0.0`` turns -0 into +0; the bits of a float >= 0 count up with it,
+    those of a float < 0 count down.  ``+inf`` and ``-inf`` step to NaN (no
+    bound, which no decision reads as one), NaN stays NaN.
+    """
+    x = x + 0.0
+    return _float(_bits(x) + (1 if x >= 0.0 else -1))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _dn(x):
+    """``np.nextafter(x, -inf)``: ``-up(-x)``."""
+    return -_up(-x)
+
+
+@njit(cache=True, inline="always")
 def _add(a0, a1, b0, b1):
     return _dn(a0 + b0), _up(a1 + b1)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sub(a0, a1, b0, b1):
     return _dn(a0 - b1), _up(a1 - b0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mul(a0, a1, b0, b1):
+    # the usual signs first: both >= 0 (e, s, T, the ratio, w), or a scale k >= 0
+    if a0 >= 0.0:
+        if b0 >= 0.0:
+            return _dn(a0 * b0), _up(a1 * b1)
+        if a0 == a1:
+            return _dn(a0 * b0), _up(a0 * b1)
     p = a0 * b0
     q = a0 * b1
     r = a1 * b0
@@ -119,7 +119,7 @@ def _mul(a0, a1, b0, b1):
             _up(np.maximum(np.maximum(p, q), np.maximum(r, s))))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _div(a0, a1, b0, b1):
     """``a / b`` for ``b`` not containing 0 (else the whole line)."""
     if not (b0 > 0.0 or b1 < 0.0):
@@ -132,7 +132,7 @@ def _div(a0, a1, b0, b1):
             _up(np.maximum(np.maximum(p, q), np.maximum(r, s))))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sqr(a0, a1):
     """``a^2`` (the square, not ``a * a``: its lower bound is >= 0)."""
     p = a0 * a0
@@ -144,7 +144,7 @@ def _sqr(a0, a1):
     return 0.0, _up(np.maximum(p, q))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sqrt(a0, a1):
     """``sqrt(a)`` of an exact value known to be >= 0 (bounds below 0 clamped)."""
     return np.maximum(_dn(math.sqrt(np.maximum(a0, 0.0))), 0.0), _up(math.sqrt(np.maximum(a1, 0.0)))
@@ -375,11 +375,12 @@ def _edge(lo, width, hi, i, level):
 
 
 @njit(cache=True)
-def _any_slides(E0, E1, U0, U1, max_iter):
-    """Whether the float map slides from (1, 0) within max_iter steps at a
-    corner or the centre of the box (numerical: the reason "nonsliding")."""
-    for p in range(5):
-        if p == 4:
+def _any_slides(E0, E1, U0, U1, max_iter, points):
+    """Whether the float map slides from (1, 0) within max_iter steps at the
+    centre of the box (``points = 1``) or at its centre or a corner
+    (``points = 5``) (numerical: the reason "nonsliding")."""
+    for p in range(points):
+        if p == 0:  # the centre first: on a border box it is the likeliest to slide
             e = 0.5 * (E0 + E1)
             u = 0.5 * (U0 + U1)
         else:
@@ -394,11 +395,12 @@ def _any_slides(E0, E1, U0, U1, max_iter):
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _certify_level(win, level, ii, jj, max_iter, cap, mv, ns_check, status, reason, step, nsteps, halt):
+def _certify_level(win, level, ii, jj, max_iter, cap, mv, ns_points, status, reason, step, nsteps, halt):
     """Certify the boxes ``(ii[b], jj[b])`` of one level of the window's
     quadtree (``win = (e_lo, e_hi, u_lo, u_hi)``), in parallel; a box left
-    undecided gets the reason "nonsliding" when ``ns_check`` and no corner
-    nor the centre slides (:func:`_any_slides`)."""
+    undecided gets the reason "nonsliding" when ``ns_points > 0`` and the
+    float map slides at none of its first ``ns_points`` points (the centre,
+    then the corners: :func:`_any_slides`)."""
     n = ii.shape[0]
     ew = win[1] - win[0]
     uw = win[3] - win[2]
@@ -417,7 +419,8 @@ def _certify_level(win, level, ii, jj, max_iter, cap, mv, ns_check, status, reas
                 st, rs, sp, ni = UNDECIDED, RANGE, 0, 0
             else:
                 st, rs, sp, ni, nd = _certify_box(E0, E1, U0, U1, max_iter, cap, mv, itin, False, dec, marg)
-            if st == UNDECIDED and ns_check and rs != RANGE and rs != IMPACTS and not _any_slides(E0, E1, U0, U1, max_iter):
+            if (st == UNDECIDED and ns_points > 0 and rs != RANGE and rs != IMPACTS
+                    and not _any_slides(E0, E1, U0, U1, max_iter, ns_points)):
                 rs = NONSLIDING
             status[b] = st
             reason[b] = rs

@@ -207,7 +207,9 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     corners nor centre the float map slides within ``max_iter`` steps stops
     with the reason ``"nonsliding"`` (numerical: the enclosures of a long
     non-sliding orbit widen, and splitting cannot help there), so the atlas
-    tells the undecided area of a border from that of non-sliding motion.  A
+    tells the undecided area of a border from that of non-sliding motion; an
+    undecided box of the last level is "nonsliding" when its centre does not
+    slide (the pixel of a scan with 2^depth pixels a side).  A
     box touching ``e = 1`` or ``u = 0`` is undecided (reason ``"range"``).
 
     Every box is computed from its integer position in the window's quadtree
@@ -291,7 +293,10 @@ def _run_tile(win, depth, start, gi, gj, max_iter, mv, tick):
         step = np.empty(n, np.int64)
         nsteps = np.empty(n, np.int64)
         if n:
-            run_kernel(K._certify_level, win, level, ii, jj, max_iter, K.IMPACT_CAP, mv, level >= ns_level,
+            # the leaves' reason by their centre alone (the pixel of a scan at 2^depth); coarser
+            # boxes stop as "nonsliding" only when neither the centre nor a corner slides
+            ns_points = 0 if level < ns_level else (1 if level == depth else 5)
+            run_kernel(K._certify_level, win, level, ii, jj, max_iter, K.IMPACT_CAP, mv, ns_points,
                        status, reason, step, nsteps)
         final = (status != K.UNDECIDED) | (reason == K.NONSLIDING) | (reason == _RANGE) | (level == depth)
         out.append((np.full(int(final.sum()), level, np.int8), ii[final], jj[final], status[final],
