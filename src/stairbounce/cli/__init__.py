@@ -28,6 +28,7 @@ from . import atlas_commands  # noqa: F401  (registers render; scan --tile calls
 from . import motion_commands  # noqa: F401  (registers motion; scan --field k_mean calls into it)
 from . import cache_commands  # noqa: F401  (registers cache info|clear)
 from . import borders_commands  # noqa: F401  (registers borders, words)
+from . import certify_commands  # noqa: F401  (registers certify)
 from ._app import CLIError, INTERRUPTED, app
 
 __all__ = ["app", "main"]

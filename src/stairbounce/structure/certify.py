@@ -607,8 +607,11 @@ class CertifiedAtlas:
         ds.attrs = {k: (list(v) if isinstance(v, tuple) else v) for k, v in ds.attrs.items()}
         with atomic_path(path, overwrite=overwrite) as tmp:
             if s.endswith(".zarr"):
-                for k in ("word", "reason"):  # ASCII; Zarr v3 has no specified unicode type
-                    ds[k] = ds[k].astype("S")
+                # Zarr v3 specifies no string type: each text column as codes into a list kept in attrs
+                for k in ("word", "reason"):
+                    names, codes = np.unique(ds[k].values, return_inverse=True)
+                    ds = ds.drop_vars(k).assign({f"{k}_code": ("box", codes.astype(np.int32))})
+                    ds.attrs[f"{k}_names"] = [str(x) for x in names]
                 ds.to_zarr(tmp, mode="w", consolidated=False)
             else:
                 enc = {k: {"zlib": True, "complevel": 4} for k in ds.data_vars if ds[k].dtype.kind != "U"}
@@ -633,6 +636,10 @@ class CertifiedAtlas:
         if ds.attrs.get("kind") != "stairbounce certified atlas":
             raise ValueError(f"{path} is not a certified atlas written by stairbounce")
         for k in ("word", "reason"):
+            if f"{k}_code" in ds:  # a Zarr store (save)
+                names = np.array(list(ds.attrs.pop(f"{k}_names")) or [""], dtype=str)
+                ds[k] = ("box", names[ds[f"{k}_code"].values])
+                ds = ds.drop_vars(f"{k}_code")
             ds[k] = ds[k].astype(str)
         for k in ("e_range", "u_range"):
             ds.attrs[k] = [float(x) for x in np.atleast_1d(ds.attrs[k])]
