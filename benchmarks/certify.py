@@ -15,7 +15,10 @@ For each window and depth (max_iter 1000):
   the pixels of a ``sb.scan`` of the window at 2^depth x 2^depth (pixel centres,
   max_iter 1000) inside it whose orbit of (1, 0) slides within max_iter (status
   0).  The boxes of the last level are exactly those pixels.  A box proven
-  ``no_sliding`` or ``no_slide_within`` holds no sliding pixel (checked).
+  ``no_sliding`` or ``no_slide_within`` holds no sliding pixel (checked).  Past
+  depth 12 (the scan would not fit in memory) the share is that of a grid of
+  at most 4 x 4 points inside each undecided box (its centre for a box of the
+  last level: its pixel).
 
 Timings are the best of ``--repeat`` runs after a warm-up at a small depth.
 The machine is shared: ``uptime`` is printed before and after.
@@ -71,8 +74,44 @@ def _run(e, u, depth, threads=None, form="mean-value", repeat=1):
     return dt, a, n_eval
 
 
+def _sampled_shares(a, depth, max_iter):
+    """Past depth 12 (a 2^depth scan would not fit): the share of sliding points among the
+    centres of a g x g grid of sub-boxes of each undecided box (g = min(2^(depth - level), 4);
+    a box of the last level is its centre, its pixel)."""
+    b = a.boxes
+    und = np.flatnonzero(b["status"].values == K.UNDECIDED)
+    lv = b["level"].values.astype(np.int64)[und]
+    g = np.minimum(np.left_shift(1, depth - lv), 4)
+    es, us, owner = [], [], []
+    for k, gk in zip(und, g):
+        t = (np.arange(gk) + 0.5) / gk
+        E = b["e0"].values[k] + (b["e1"].values[k] - b["e0"].values[k]) * t
+        U = b["u0"].values[k] + (b["u1"].values[k] - b["u0"].values[k]) * t
+        EE, UU = np.meshgrid(E, U)
+        es.append(EE.ravel())
+        us.append(UU.ravel())
+        owner.append(np.full(EE.size, k))
+    share = np.zeros(b.sizes["box"])
+    if und.size:
+        e, u, own = np.concatenate(es), np.concatenate(us), np.concatenate(owner)
+        ok = (u > 0) & (e < 1)
+        slid = np.zeros(e.size)
+        slid[ok] = sb.scan_points(e[ok], u[ok], max_iter=max_iter)["status"].values == 0
+        share[und] = np.bincount(own, weights=slid, minlength=share.size)[und] / (g * g)
+    return share
+
+
 def sliding_area(a, depth, max_iter=1000):
     """The proven-word area plus the scan-sliding share of every undecided box (fractions of the window)."""
+    if depth > 12:
+        share = _sampled_shares(a, depth, max_iter)
+        b = a.boxes
+        (e0, e1), (u0, u1) = a.window
+        area = (b["e1"].values - b["e0"].values) * (b["u1"].values - b["u0"].values) / ((e1 - e0) * (u1 - u0))
+        st = b["status"].values
+        word = float(area[st == K.WORD].sum())
+        sliding = word + float((area * share)[st == K.UNDECIDED].sum())
+        return word, sliding, -1, -1, float("nan")
     (e0, e1), (u0, u1) = a.window
     n = 1 << depth
     ds = sb.scan(e=(e0, e1, n), u=(u0, u1, n), max_iter=max_iter)

@@ -328,3 +328,50 @@ def test_the_paper_plane_edges_are_undecided_by_range():
     ds = a.boxes
     edge = (ds["e1"].values == 1.0) | (ds["u0"].values == 0.0)
     assert (ds["reason"].values[edge] == "range").all()
+
+
+# ---- the command line -------------------------------------------------------
+
+
+def _cli(args, capsys):
+    from stairbounce.cli import main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(args)
+    out = capsys.readouterr()
+    return exit_.value.code, out.out, out.err
+
+
+def test_cli_certify_prints_the_summary_and_writes(tmp_path, capsys):
+    out = tmp_path / "a.nc"
+    code, text, err = _cli(["certify", "--e", "0.16:0.19", "--u", "0.6:0.63", "--depth", "5",
+                            "--out", str(out), "--top", "3"], capsys)
+    assert code == 0, err
+    atlas = sb.CertifiedAtlas.load(out)
+    f = atlas.fraction()
+    assert f"word {100 * f['word']:.2f}%" in text
+    assert f"proven words: {len(atlas.words())}" in text
+    assert atlas.words()["word"][0] in text
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--e", "0.3:0.2"], "--e"),
+    (["--depth", "40"], "--depth"),
+    (["--max-iter", "0"], "--max-iter"),
+    (["--out", "x.txt"], "--out"),
+    (["--e", "0.5:1.5"], "e must be a pair"),
+])
+def test_cli_certify_refuses_bad_input_with_status_2(args, message, capsys):
+    code, text, err = _cli(["certify", *args], capsys)
+    assert code == 2 and message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_cli_verify_needs_the_checker(tmp_path, capsys):
+    try:
+        import stairbounce.structure.verify  # noqa: F401
+    except ImportError:
+        code, text, err = _cli(["certify", "--verify", str(tmp_path / "a.nc")], capsys)
+        assert code == 2 and "not available" in err
+    else:  # the checker is there: a missing file is still one line and status 2
+        code, text, err = _cli(["certify", "--verify", str(tmp_path / "missing.nc")], capsys)
+        assert code == 2

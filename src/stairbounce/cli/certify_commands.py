@@ -90,7 +90,7 @@ def _picture(atlas, png: Path, dpi: int, force: bool) -> None:
     save_figure(fig, png, dpi, force)
 
 
-@app.command("certify", short_help="Prove words over boxes of the (e, u) plane: a certified atlas.")
+@app.command("certify", short_help="A certified atlas: words proven over boxes.")
 def certify_(
     e: str = typer.Option("0.155:0.2138", "--e", help="Window along e, LO:HI, within [0, 1]. Default: Fig. 7's."),
     u: str = typer.Option("0.6:0.658", "--u", help="Window along u, LO:HI (normalised), LO >= 0. Default: Fig. 7's."),
