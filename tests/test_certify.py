@@ -328,6 +328,9 @@ def test_the_paper_plane_edges_are_undecided_by_range():
     ds = a.boxes
     edge = (ds["e1"].values == 1.0) | (ds["u0"].values == 0.0)
     assert (ds["reason"].values[edge] == "range").all()
+    # split to the last level: a strip one box wide along the two edges
+    assert (ds["level"].values[edge] == 4).all()
+    assert r["range"] == pytest.approx((2 * 16 - 1) / 256)
 
 
 # ---- the command line -------------------------------------------------------

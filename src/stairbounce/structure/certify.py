@@ -31,8 +31,7 @@ bounces are shorter than the enclosures), ``nonsliding`` (numerical, atlases
 only: the float map does not slide within max_iter at the box's corners and
 centre, so the box is taken for non-sliding motion and not split further) and
 ``range`` (atlases only: the box touches ``e = 1`` or ``u = 0``, outside the
-model's range)."""
-_RANGE = K.RANGE
+model's range; it is split down to the last level like a border)."""
 
 FORMS = ("mean-value", "naive")
 # levels (counted up from the deepest) at which an undecided box may stop as
@@ -210,7 +209,8 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     tells the undecided area of a border from that of non-sliding motion; an
     undecided box of the last level is "nonsliding" when its centre does not
     slide (the pixel of a scan with 2^depth pixels a side).  A
-    box touching ``e = 1`` or ``u = 0`` is undecided (reason ``"range"``).
+    box touching ``e = 1`` or ``u = 0`` is undecided (reason ``"range"``) and
+    split down to the last level, so only a strip one box wide stays so.
 
     Every box is computed from its integer position in the window's quadtree
     alone, in parallel (numba ``prange`` over the boxes of a level): any number
@@ -298,7 +298,7 @@ def _run_tile(win, depth, start, gi, gj, max_iter, mv, tick):
             ns_points = 0 if level < ns_level else (1 if level == depth else 5)
             run_kernel(K._certify_level, win, level, ii, jj, max_iter, K.IMPACT_CAP, mv, ns_points,
                        status, reason, step, nsteps)
-        final = (status != K.UNDECIDED) | (reason == K.NONSLIDING) | (reason == _RANGE) | (level == depth)
+        final = (status != K.UNDECIDED) | (reason == K.NONSLIDING) | (level == depth)
         out.append((np.full(int(final.sum()), level, np.int8), ii[final], jj[final], status[final],
                     reason[final], step[final], nsteps[final]))
         split = ~final
