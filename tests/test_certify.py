@@ -138,6 +138,16 @@ def test_the_certificate_lists_every_decision_of_its_itinerary():
     assert c.margins.shape == (len(c.decisions), 2)
 
 
+def test_a_certificate_round_trips_through_json():
+    import json
+
+    c = sb.certify_box(e=(0.18, 0.1801), u=(0.62, 0.6201))
+    back = sb.Certificate.from_dict(json.loads(json.dumps(c.to_dict())))
+    assert (back.e, back.u, back.status, back.word, back.itinerary, back.decisions) == \
+        (c.e, c.u, c.status, c.word, c.itinerary, c.decisions)
+    np.testing.assert_array_equal(back.margins, c.margins)
+
+
 def test_no_slide_within_is_a_finite_claim():
     # a non-sliding point below the Corollary 2.1 curve, followed for a few steps
     rng = np.random.default_rng(2)
