@@ -388,3 +388,20 @@ def test_cli_verify_needs_the_checker(tmp_path, capsys):
     else:  # the checker is there: a missing file is still one line and status 2
         code, text, err = _cli(["certify", "--verify", str(tmp_path / "missing.nc")], capsys)
         assert code == 2
+
+
+def test_long_itineraries_are_stored_whole():
+    # itineraries longer than the level kernel keeps (no_slide_within: max_iter entries)
+    rng = np.random.default_rng(2)
+    while True:
+        e, u = rng.uniform(*FIG7["e"]), rng.uniform(*FIG7["u"])
+        if u < sb.no_sliding_bound(e) and sb.sliding_word(e, u, 2000) is None:
+            break
+    a = sb.certify(e=(e, e + 1e-9), u=(u, u + 1e-9), depth=3, max_iter=40)
+    ds = a.boxes
+    o = ds["offsets"].values
+    long_ = np.flatnonzero(ds["status"].values == K.NO_SLIDE_WITHIN)
+    assert long_.size and (np.diff(o)[long_] == 40).all()
+    for c in a.certificates():
+        b = np.flatnonzero((ds["e0"].values == c.e[0]) & (ds["u0"].values == c.u[0]))[0]
+        assert c.itinerary == tuple(ds["itinerary"].values[o[b]:o[b + 1]])

@@ -395,12 +395,14 @@ def _any_slides(E0, E1, U0, U1, max_iter, points):
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _certify_level(win, level, ii, jj, max_iter, cap, mv, ns_points, status, reason, step, nsteps, halt):
+def _certify_level(win, level, ii, jj, max_iter, cap, mv, ns_points, status, reason, step, nsteps, kept, halt):
     """Certify the boxes ``(ii[b], jj[b])`` of one level of the window's
     quadtree (``win = (e_lo, e_hi, u_lo, u_hi)``), in parallel; a box left
     undecided gets the reason "nonsliding" when ``ns_points > 0`` and the
     float map slides at none of its first ``ns_points`` points (the centre,
-    then the corners: :func:`_any_slides`)."""
+    then the corners: :func:`_any_slides`).  The itinerary of a box whose
+    itinerary fits ``kept``'s rows is kept there (the rest is computed again
+    by :func:`_itineraries`)."""
     n = ii.shape[0]
     ew = win[1] - win[0]
     uw = win[3] - win[2]
@@ -426,6 +428,9 @@ def _certify_level(win, level, ii, jj, max_iter, cap, mv, ns_points, status, rea
             reason[b] = rs
             step[b] = sp
             nsteps[b] = ni
+            if ni <= kept.shape[1]:
+                for k in range(ni):
+                    kept[b, k] = itin[k]
 
 
 @njit(cache=True, parallel=True, nogil=True)

@@ -40,6 +40,10 @@ _NONSLIDING_LEVELS = 4
 # the quadtree starts from 2^_START_LEVEL boxes a side (tiles up to that many)
 _START_LEVEL = 3
 _MAX_DEPTH = 26
+# itinerary entries kept per box by the level kernel (int16: impact numbers <= IMPACT_CAP);
+# longer itineraries are computed again at the end (64 bytes a box of a level, about
+# twice what the rest of a level holds)
+_KEPT = 32
 
 
 # --------------------------------------------------------------------------- #
@@ -269,11 +273,11 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
             gi, gj = np.meshgrid(np.arange(ti * per_tile, (ti + 1) * per_tile),
                                  np.arange(tj * per_tile, (tj + 1) * per_tile))
             parts += _run_tile(win, depth, start, gi.ravel(), gj.ravel(), max_iter, mv, tick)
-    cols = [np.concatenate([p[k] for p in parts]) for k in range(7)]
-    level, ii, jj, status, reason, step, nsteps = cols
+    cols = [np.concatenate([p[k] for p in parts]) for k in range(8)]
+    level, ii, jj = cols[:3]
     order = np.lexsort((ii, jj, level))
-    level, ii, jj, status, reason, step, nsteps = (c[order] for c in cols)
-    ds = _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step, nsteps)
+    level, ii, jj, status, reason, step, nsteps, kept = (c[order] for c in cols)
+    ds = _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step, nsteps, kept)
     return CertifiedAtlas(ds, seconds=time.perf_counter() - t0)
 
 
@@ -292,15 +296,16 @@ def _run_tile(win, depth, start, gi, gj, max_iter, mv, tick):
         reason = np.empty(n, np.int8)
         step = np.empty(n, np.int64)
         nsteps = np.empty(n, np.int64)
+        kept = np.empty((n, _KEPT), np.int16)
         if n:
             # the leaves' reason by their centre alone (the pixel of a scan at 2^depth); coarser
             # boxes stop as "nonsliding" only when neither the centre nor a corner slides
             ns_points = 0 if level < ns_level else (1 if level == depth else 5)
             run_kernel(K._certify_level, win, level, ii, jj, max_iter, K.IMPACT_CAP, mv, ns_points,
-                       status, reason, step, nsteps)
+                       status, reason, step, nsteps, kept)
         final = (status != K.UNDECIDED) | (reason == K.NONSLIDING) | (level == depth)
         out.append((np.full(int(final.sum()), level, np.int8), ii[final], jj[final], status[final],
-                    reason[final], step[final], nsteps[final]))
+                    reason[final], step[final], nsteps[final], kept[final]))
         split = ~final
         i2 = 2 * ii[split]
         j2 = 2 * jj[split]
@@ -310,8 +315,9 @@ def _run_tile(win, depth, start, gi, gj, max_iter, mv, tick):
     return out
 
 
-def _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step, nsteps):
-    """The atlas's table: one row per box, with the array form of certificate.py."""
+def _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step, nsteps, kept):
+    """The atlas's table: one row per box, with the array form of certificate.py
+    (the itineraries from ``kept`` where they fit, else computed again)."""
     import xarray as xr
 
     from .._interrupt import run_kernel
@@ -326,14 +332,21 @@ def _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step
     offsets = np.zeros(level.size + 1, np.int64)
     np.cumsum(lengths, out=offsets[1:])
     itinerary = np.empty(int(offsets[-1]), np.int64)
-    sel = np.flatnonzero(proven_path)
+    short = proven_path & (lengths <= _KEPT)
+    if short.any():
+        rows = kept[short]
+        cols_ = np.arange(_KEPT)
+        itinerary[np.repeat(offsets[:-1][short], lengths[short]) + _ranks(lengths[short])] = \
+            rows[cols_[None, :] < lengths[short][:, None]]
+    sel = np.flatnonzero(proven_path & ~short)
     if sel.size:
         sub_off = np.zeros(sel.size + 1, np.int64)
         np.cumsum(lengths[sel], out=sub_off[1:])
         buf = np.empty(int(sub_off[-1]), np.int64)
         run_kernel(K._itineraries, win, level[sel].astype(np.int64), ii[sel], jj[sel], max_iter, K.IMPACT_CAP, mv,
                    sub_off, buf)
-        itinerary[:] = buf  # proven boxes are the only ones with entries, in the same order
+        for k, b in enumerate(sel):
+            itinerary[offsets[b]:offsets[b + 1]] = buf[sub_off[k]:sub_off[k + 1]]
     words = np.full(level.size, "", dtype=object)
     seen = {}
     for b in np.flatnonzero(status == K.WORD):
@@ -364,6 +377,12 @@ def _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step
         },
     )
     return ds
+
+
+def _ranks(lengths):
+    """``0, 1, .., n0-1, 0, 1, .., n1-1, ...`` for ``lengths = (n0, n1, ...)``."""
+    starts = np.repeat(np.cumsum(lengths) - lengths, lengths)
+    return np.arange(int(lengths.sum())) - starts
 
 
 def _area(ds):
