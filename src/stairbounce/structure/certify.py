@@ -686,8 +686,8 @@ class CertifiedAtlas:
             if not idx.size:
                 continue
             geom = unary_union([shp_box(cols[0][b], cols[1][b], cols[2][b], cols[3][b]) for b in idx])
-            props = {"status": "word" if sel is not None and name not in STATUSES else name,
-                     "word": name if name not in STATUSES else None, "boxes": int(idx.size),
+            props = {"status": name if name in STATUSES else "word",
+                     "word": None if name in STATUSES else name, "boxes": int(idx.size),
                      "area": float(area[idx].sum())}
             features.append({"type": "Feature", "geometry": mapping(geom), "properties": props})
         (e_lo, e_hi), (u_lo, u_hi) = self.window
