@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 
 CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "dimension", "atlas",
-        "atlas_boxes", "nonsliding", "borders", "regions", "_io", "_interrupt", "_cache"]
+        "atlas_boxes", "nonsliding", "borders", "regions", "_io", "_interrupt", "_cache", "structure",
+        "structure.certify"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

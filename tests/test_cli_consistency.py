@@ -87,7 +87,8 @@ def test_help_summaries_are_whole_sentences(capsys, monkeypatch):
     assert code == 0
     rows = out.split("Commands:")[1].strip().splitlines()
     commands = ("figures", "dimension", "word", "map", "trajectory", "orbit-diagram", "motion",
-                "scan", "explore", "render", "borders", "words", "itinerary", "cache", "cascade")
+                "scan", "explore", "render", "borders", "words", "itinerary", "cache", "cascade",
+                "certify")
     assert sorted(r.split()[0] for r in rows) == sorted(commands)  # one line each
     for r in rows:
         assert r.endswith(".") and not r.endswith("...") and not r.endswith(("Prop.", "Fig.")), r

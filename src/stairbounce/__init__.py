@@ -93,6 +93,7 @@ from .regions import (
     write_regions,
 )
 from ._progress import progress_bar
+from .structure import Certificate, CertifiedAtlas, certify, certify_box
 from .symbolic import SlidingAnswer, Word, parse_word, sliding_answer, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, physical_speed, time_scale
@@ -120,6 +121,10 @@ __all__ = [
     "word_region",
     "write_regions",
     "Accumulation",
+    "Certificate",
+    "CertifiedAtlas",
+    "certify",
+    "certify_box",
     "BoxDimension",
     "Flight",
     "Impact",

@@ -29,6 +29,7 @@ from . import motion_commands  # noqa: F401  (registers motion; scan --field k_m
 from . import cache_commands  # noqa: F401  (registers cache info|clear)
 from . import borders_commands  # noqa: F401  (registers borders, words)
 from . import cascade_commands  # noqa: F401  (registers cascade)
+from . import certify_commands  # noqa: F401  (registers certify)
 from ._app import CLIError, INTERRUPTED, app
 
 __all__ = ["app", "main"]

@@ -2,3 +2,8 @@
 
 One module per concept (issue 36, item 9); the certifier lives here first.
 """
+
+from .certificate import Certificate
+from .certify import CertifiedAtlas, certify, certify_box
+
+__all__ = ["Certificate", "CertifiedAtlas", "certify", "certify_box"]

@@ -81,3 +81,29 @@ class Certificate:
     def proven(self) -> bool:
         """Whether the certificate states a theorem (every status but ``undecided``)."""
         return self.status != "undecided"
+
+    def to_dict(self) -> dict:
+        """The certificate as plain JSON types (floats written exactly by ``json``'s repr)."""
+        return {
+            "e": [float(self.e[0]), float(self.e[1])], "u": [float(self.u[0]), float(self.u[1])],
+            "max_iter": int(self.max_iter), "status": self.status,
+            "word": None if self.word is None else [int(a) for a in self.word.letters],
+            "reason": self.reason, "step": self.step,
+            "itinerary": [int(k) for k in self.itinerary], "decisions": list(self.decisions),
+            "margins": [[float(lo), float(hi)] for lo, hi in np.asarray(self.margins).reshape(-1, 2)],
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Certificate:
+        """The certificate of :meth:`to_dict` (nothing is re-checked: see the checker)."""
+        from ..symbolic import Word
+
+        return cls(
+            e=(float(d["e"][0]), float(d["e"][1])), u=(float(d["u"][0]), float(d["u"][1])),
+            max_iter=int(d["max_iter"]), status=str(d["status"]),
+            word=None if d.get("word") is None else Word(tuple(d["word"])),
+            reason=d.get("reason"), step=d.get("step"),
+            itinerary=tuple(int(k) for k in d.get("itinerary", ())),
+            decisions=tuple(d.get("decisions", ())),
+            margins=np.array(d.get("margins", []), dtype=np.float64).reshape(-1, 2),
+        )

@@ -1,0 +1,181 @@
+"""Certified atlases (issue 36): throughput and proven fractions, against baselines in the same process.
+
+    python benchmarks/certify.py [--windows fig7,fig5e,fig6,paper] [--depths 10,14] [--repeat 1]
+
+For each window and depth (max_iter 1000):
+
+* ``sb.certify`` with every thread (numba's default), its boxes per second
+  (boxes evaluated, every level, per second of wall time), against the same
+  call with one thread (the ratio is the parallel speed-up) and with the naive
+  interval form (the gain of the mean-value form: proven area, time);
+* the proven fractions by status, the undecided area by reason, the number of
+  proven words;
+* "the sliding area" and the share of it proven.  The sliding area is the
+  proven-word area plus, for every undecided box, its area times the share of
+  the pixels of a ``sb.scan`` of the window at 2^depth x 2^depth (pixel centres,
+  max_iter 1000) inside it whose orbit of (1, 0) slides within max_iter (status
+  0).  The boxes of the last level are exactly those pixels.  A box proven
+  ``no_sliding`` or ``no_slide_within`` holds no sliding pixel (checked).  Past
+  depth 12 (the scan would not fit in memory) the share is that of a grid of
+  at most 4 x 4 points inside each undecided box (its centre for a box of the
+  last level: its pixel).
+
+Timings are the best of ``--repeat`` runs after a warm-up at a small depth.
+The machine is shared: ``uptime`` is printed before and after.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numba
+import numpy as np
+
+import stairbounce as sb
+from stairbounce.structure import _kernel as K
+
+WINDOWS = {
+    "fig7": ((0.155, 0.2138), (0.6, 0.658)),
+    "fig5e": ((0.04, 0.065), (0.92, 0.945)),
+    "fig6": ((0.0, 0.333), (0.4, 0.733)),
+    "paper": ((0.0, 1.0), (0.0, 1.5)),
+}
+
+
+def _uptime():
+    with open("/proc/loadavg") as f:
+        return f.read().split()[:3]
+
+
+def _run(e, u, depth, threads=None, form="mean-value", repeat=1):
+    evaluated = []
+    best = None
+    old = numba.get_num_threads()
+    try:
+        if threads:
+            numba.set_num_threads(threads)
+        for _ in range(repeat):
+            t = time.perf_counter()
+            a = sb.certify(e=e, u=u, depth=depth, form=form)
+            dt = time.perf_counter() - t
+            if best is None or dt < best[0]:
+                best = (dt, a)
+    finally:
+        numba.set_num_threads(old)
+    dt, a = best
+    # boxes evaluated: the final boxes plus every split parent (a quarter of the children)
+    lv = a.boxes["level"].values.astype(np.int64)
+    start = int(lv.min()) if lv.size else 0
+    n_final = lv.size
+    n_eval = n_final + (n_final - (1 << start) ** 2) // 3
+    evaluated.append(n_eval)
+    return dt, a, n_eval
+
+
+def _sampled_shares(a, depth, max_iter):
+    """Past depth 12 (a 2^depth scan would not fit): the share of sliding points among the
+    centres of a g x g grid of sub-boxes of each undecided box (g = min(2^(depth - level), 4);
+    a box of the last level is its centre, its pixel)."""
+    b = a.boxes
+    und = np.flatnonzero(b["status"].values == K.UNDECIDED)
+    lv = b["level"].values.astype(np.int64)[und]
+    g = np.minimum(np.left_shift(1, depth - lv), 4)
+    es, us, owner = [], [], []
+    for k, gk in zip(und, g):
+        t = (np.arange(gk) + 0.5) / gk
+        E = b["e0"].values[k] + (b["e1"].values[k] - b["e0"].values[k]) * t
+        U = b["u0"].values[k] + (b["u1"].values[k] - b["u0"].values[k]) * t
+        EE, UU = np.meshgrid(E, U)
+        es.append(EE.ravel())
+        us.append(UU.ravel())
+        owner.append(np.full(EE.size, k))
+    share = np.zeros(b.sizes["box"])
+    if und.size:
+        e, u, own = np.concatenate(es), np.concatenate(us), np.concatenate(owner)
+        ok = (u > 0) & (e < 1)
+        slid = np.zeros(e.size)
+        slid[ok] = sb.scan_points(e[ok], u[ok], max_iter=max_iter)["status"].values == 0
+        share[und] = np.bincount(own, weights=slid, minlength=share.size)[und] / (g * g)
+    return share
+
+
+def sliding_area(a, depth, max_iter=1000):
+    """The proven-word area plus the scan-sliding share of every undecided box (fractions of the window)."""
+    if depth > 12:
+        share = _sampled_shares(a, depth, max_iter)
+        b = a.boxes
+        (e0, e1), (u0, u1) = a.window
+        area = (b["e1"].values - b["e0"].values) * (b["u1"].values - b["u0"].values) / ((e1 - e0) * (u1 - u0))
+        st = b["status"].values
+        word = float(area[st == K.WORD].sum())
+        sliding = word + float((area * share)[st == K.UNDECIDED].sum())
+        return word, sliding, -1, -1, float("nan")
+    (e0, e1), (u0, u1) = a.window
+    n = 1 << depth
+    ds = sb.scan(e=(e0, e1, n), u=(u0, u1, n), max_iter=max_iter)
+    slid = (ds["status"].values == 0).astype(np.int64)  # [u, e]
+    sat = np.zeros((n + 1, n + 1), np.int64)
+    sat[1:, 1:] = slid.cumsum(0).cumsum(1)
+    b = a.boxes
+    lv = b["level"].values.astype(np.int64)
+    f = np.left_shift(1, depth - lv)
+    i0, j0 = b["i"].values * f, b["j"].values * f
+    i1, j1 = i0 + f, j0 + f
+    count = sat[j1, i1] - sat[j0, i1] - sat[j1, i0] + sat[j0, i0]
+    share = count / (f * f)
+    area = (b["e1"].values - b["e0"].values) * (b["u1"].values - b["u0"].values) / ((e1 - e0) * (u1 - u0))
+    st = b["status"].values
+    word = float(area[st == K.WORD].sum())
+    und = st == K.UNDECIDED
+    sliding = word + float((area * share)[und].sum())
+    bad = int(count[(st == K.NO_SLIDING) | (st == K.NO_SLIDE_WITHIN)].sum())
+    # the proven word boxes' pixels that the scan calls non-sliding (rounding at a border, or none)
+    word_not = int((f * f - count)[st == K.WORD].sum())
+    return word, sliding, bad, word_not, float(slid.mean())
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("--windows", default="fig7")
+    p.add_argument("--depths", default="10")
+    p.add_argument("--repeat", type=int, default=1)
+    p.add_argument("--no-baselines", action="store_true")
+    args = p.parse_args()
+    print(f"numba threads {numba.get_num_threads()}, cpus {os.cpu_count()}, load before {_uptime()}")
+    sb.certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=5)  # compile / load the kernels
+    sb.certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=5, form="naive")
+    for name in args.windows.split(","):
+        e, u = WINDOWS[name]
+        for depth in map(int, args.depths.split(",")):
+            dt, a, n_eval = _run(e, u, depth, repeat=args.repeat)
+            f = a.fraction()
+            r = a.fraction("reason")
+            words = a.words()
+            w, sliding, bad, word_not, scan_share = sliding_area(a, depth)
+            print(f"\n{name} e={e} u={u} depth {depth}: {dt:.2f} s, {n_eval} boxes evaluated, "
+                  f"{n_eval / dt:,.0f} boxes/s, {a.boxes.sizes['box']} final boxes")
+            print("  status  " + ", ".join(f"{k} {100 * v:.2f}%" for k, v in f.items()))
+            print("  undecided by reason  " + ", ".join(f"{k} {100 * v:.2f}%" for k, v in r.items() if v))
+            print(f"  proven words {len(words)}; by period {words.attrs['by_period']}")
+            print(f"  sliding area {100 * sliding:.2f}% of the window (scan: {100 * scan_share:.2f}% of pixels); "
+                  f"proven {100 * w / sliding:.1f}% of it; scan pixels sliding inside proven non-sliding "
+                  f"boxes: {bad}; scan pixels not sliding inside proven word boxes: {word_not}")
+            if args.no_baselines:
+                continue
+            dt1, a1, _ = _run(e, u, depth, threads=1)
+            same = a1.boxes.drop_attrs().identical(a.boxes.drop_attrs())
+            print(f"  one thread: {dt1:.2f} s ({n_eval / dt1:,.0f} boxes/s): x{dt1 / dt:.2f} for "
+                  f"{numba.get_num_threads()} threads; same boxes: {same}")
+            dtn, an, n_n = _run(e, u, depth, form="naive")
+            fn = an.fraction()
+            wn, _, _, _, _ = sliding_area(an, depth)
+            print(f"  naive form: {dtn:.2f} s ({n_n} boxes, {n_n / dtn:,.0f} boxes/s); word {100 * fn['word']:.2f}%, "
+                  f"undecided {100 * fn['undecided']:.2f}%, {len(an.words())} words; proven "
+                  f"{100 * wn / sliding:.1f}% of the sliding area (mean-value: {100 * w / sliding:.1f}%)")
+    print(f"\nload after {_uptime()}")
+
+
+if __name__ == "__main__":
+    main()

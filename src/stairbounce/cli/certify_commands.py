@@ -1,0 +1,161 @@
+"""``stairbounce certify``: a certified atlas of a window of the (e, u) plane
+(:func:`stairbounce.certify`), its summary, files and picture; ``--verify FILE``
+re-checks a saved atlas with the independent checker."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, save_figure, with_row_progress
+
+_OUT_SUFFIXES = (".nc", ".zarr", ".geojson")
+_FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def _verify(path: Path) -> None:
+    try:
+        from ..structure.verify import verify_file
+    except ImportError:
+        raise CLIError("--verify is not available: this stairbounce has no independent checker "
+                       "(stairbounce.structure.verify)") from None
+    n_checked, n_rejected = verify_file(path)
+    typer.echo(f"{path}: {n_checked} certificates checked, {n_rejected} rejected")
+    if n_rejected:
+        raise typer.Exit(1)
+
+
+def _picture(atlas, png: Path, dpi: int, force: bool) -> None:
+    """Proven boxes coloured by their word's period, no_sliding grey, undecided by reason."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    from ..structure import _kernel as K
+    from ..symbolic import parse_word
+
+    b = atlas.boxes
+    n = 1 << min(atlas.depth, 11)
+    shift = atlas.depth - min(atlas.depth, 11)
+    img = np.zeros((n, n), np.float64)
+    lv = b["level"].values.astype(np.int64)
+    st = b["status"].values
+    reasons = list(atlas.fraction("reason"))
+    periods = {w: parse_word(w).period for w in np.unique(b["word"].values[st == K.WORD])}
+    # codes: 1 no_sliding, 2 no_slide_within, 3.. undecided by reason, 10+ words by period (log)
+    pmax = max(periods.values(), default=1)
+    for k in range(b.sizes["box"]):
+        L = lv[k]
+        if L <= atlas.depth - shift:
+            f = 1 << (atlas.depth - shift - L)
+            i0, j0 = int(b["i"].values[k]) * f, int(b["j"].values[k]) * f
+            i1, j1 = i0 + f, j0 + f
+        else:  # finer than a pixel: paint its pixel
+            g = L - (atlas.depth - shift)
+            i0, j0 = int(b["i"].values[k]) >> g, int(b["j"].values[k]) >> g
+            i1, j1 = i0 + 1, j0 + 1
+        if st[k] == K.WORD:
+            code = 10 + 10 * np.log(periods[b["word"].values[k]]) / np.log(max(pmax, 2))
+        elif st[k] == K.UNDECIDED:
+            code = 3 + reasons.index(str(b["reason"].values[k]))
+        else:
+            code = st[k]
+        img[j0:j1, i0:i1] = code
+    # reasons (graze, edge, chatter, impacts, nonsliding, range): warm colours, white for
+    # the non-sliding motion; words: viridis without its yellow end
+    fixed = ["#808080", "#505050", "#ff69b4", "#ff8c00", "#dc143c", "#8b4513", "#ffffff", "#000000"]
+    words_cm = plt.get_cmap("viridis", 64)
+    colours = ["#000000"] + fixed + ["#000000"] + [words_cm(0.8 * i / 63) for i in range(64)]
+    levels = np.concatenate([[0, 1, 2], 3 + np.arange(len(reasons)), [9], 10 + np.arange(64) * 10 / 63])
+    idx = np.searchsorted(levels, img, side="right") - 1
+    fig, ax = plt.subplots(figsize=(8, 6.5))
+    (e0, e1), (u0, u1) = atlas.window
+    ax.imshow(idx, origin="lower", extent=(e0, e1, u0, u1), aspect="auto", interpolation="nearest",
+              cmap=ListedColormap(colours), vmin=-0.5, vmax=len(colours) - 0.5)
+    handles = [Patch(color=fixed[0], label="no sliding (Cor. 2.1)"), Patch(color=fixed[1], label="no slide within max_iter")]
+    handles += [Patch(color=fixed[2 + i], label=f"undecided: {r}") for i, r in enumerate(reasons)
+                if atlas.fraction("reason")[r] > 0]
+    handles += [Patch(color=words_cm(0.0), label="proven word, short period"),
+                Patch(color=words_cm(0.8), label=f"proven word, period {pmax}")]
+    ax.legend(handles=handles, fontsize=7, loc="upper right")
+    ax.set_xlabel("e")
+    ax.set_ylabel("u")
+    ax.set_title(f"certified atlas, depth {atlas.depth}")
+    fig.tight_layout()
+    save_figure(fig, png, dpi, force)
+
+
+@app.command("certify", short_help="A certified atlas: words proven over boxes.")
+def certify_(
+    e: str = typer.Option("0.155:0.2138", "--e", help="Window along e, LO:HI, within [0, 1]. Default: Fig. 7's."),
+    u: str = typer.Option("0.6:0.658", "--u", help="Window along u, LO:HI (normalised), LO >= 0. Default: Fig. 7's."),
+    depth: int = typer.Option(10, "--depth", help="The smallest boxes are window/2^DEPTH a side (0-26)."),
+    max_iter: int = typer.Option(1000, "--max-iter", help="Steps followed before 'no slide within' (>= 1)."),
+    out: Path = typer.Option(None, "--out", help="The atlas: .nc or .zarr (every box, its itinerary), "
+                             ".geojson (proven boxes merged per word)."),
+    png: Path = typer.Option(None, "--png", help="Picture (.png, .pdf or .svg): proven words by period, "
+                             "undecided boxes by reason."),
+    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
+    top: int = typer.Option(10, "--top", help="Proven words listed in the summary (largest proven area first)."),
+    verify: Path = typer.Option(None, "--verify", help="Instead: re-check the certificates of a saved atlas "
+                                "(.nc or .zarr) with the independent checker."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
+):
+    """Cover a window of the (e, u) plane with boxes on which interval arithmetic proves
+    the periodic sliding solution's word, or no sliding (Corollary 2.1), or leaves the
+    box undecided with its reason; print the proven area by status, the proven words and
+    the undecided area by reason."""
+    import time
+
+    from ..structure.certify import certify
+
+    if verify is not None:
+        _verify(verify)
+        return
+    e_lo, e_hi = parse_range("e", e)
+    u_lo, u_hi = parse_range("u", u)
+    if out is not None and out.suffix.lower() not in _OUT_SUFFIXES:
+        raise CLIError(f"--out must end in .nc, .zarr or .geojson, got {str(out)!r}")
+    if png is not None and png.suffix.lower() not in _FIGURE_SUFFIXES:
+        raise CLIError(f"--png must end in .png, .pdf or .svg, got {str(png)!r}")
+    if top < 0:
+        raise CLIError(f"--top must be >= 0, got {top}")
+    check_dpi(dpi)
+    check_outputs(force, out=out, png=png)
+    t0 = time.perf_counter()
+    try:
+        atlas = with_row_progress(description="certify levels", rows=1,
+                                  run=lambda p: certify(e=(e_lo, e_hi), u=(u_lo, u_hi), depth=depth,
+                                                        max_iter=max_iter, progress=p))
+    except ValueError as exc:  # the library names its parameters; the options carry the same names
+        raise CLIError(f"--{str(exc).replace('_', '-')}" if str(exc).split()[0] in ("depth", "max_iter")
+                       else str(exc)) from None
+    seconds = time.perf_counter() - t0
+    if out is not None:
+        atlas.save(out, overwrite=force)
+        typer.echo(f"wrote {out}")
+    if png is not None:
+        _picture(atlas, png, dpi, force)
+        typer.echo(f"wrote {png}")
+    f = atlas.fraction()
+    r = atlas.fraction("reason")
+    words = atlas.words()
+    n_box = atlas.boxes.sizes["box"]
+    typer.echo(f"e in [{e_lo:g}, {e_hi:g}], u in [{u_lo:g}, {u_hi:g}], depth {depth} (boxes down to "
+               f"window/{1 << depth}), max_iter {max_iter}: {n_box} boxes in {seconds:.2f} s")
+    typer.echo("proven: " + ", ".join(f"{k} {100 * f[k]:.2f}%" for k in ("word", "no_sliding", "no_slide_within"))
+               + " of the window's area")
+    typer.echo(f"undecided {100 * f['undecided']:.2f}%: "
+               + ", ".join(f"{k} {100 * v:.2f}%" for k, v in r.items() if v > 0)
+               + ("  (nonsliding: numerical, the float map does not slide there)" if r.get("nonsliding") else ""))
+    by = ", ".join(f"{p}: {c}" for p, c in words.attrs["by_period"].items())
+    typer.echo(f"proven words: {len(words)} (a proven lower bound on the window's words; by period {by})")
+    (a, b), (c, d) = atlas.window
+    for row in words.head(top).itertuples():
+        typer.echo(f"  {row.word:<32} period {row.period:>4}  area >= {100 * row.area / ((b - a) * (d - c)):.3f}% "
+                   f"({row.boxes} boxes)")

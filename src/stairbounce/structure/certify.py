@@ -1,0 +1,702 @@
+"""Proven, not only computed: certified boxes of the (e, u) plane (issue 36).
+
+:func:`certify_box` states what is proven over one box of parameters,
+:func:`certify` covers a window with an adaptive quadtree of such boxes and
+returns a :class:`CertifiedAtlas`.  The decisions are taken with outward-rounded
+float64 intervals along the itinerary of the edge state ``(1, 0)``
+(:mod:`stairbounce.structure._kernel`; the argument for rigour is in
+docs/design.md, "Certified boxes").
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .. import _validate as _v
+from ..model import check_count
+from ..symbolic import Word, word_from_impacts
+from . import _kernel as K
+from .certificate import STATUSES, Certificate
+
+__all__ = ["certify_box", "certify", "CertifiedAtlas", "UNDECIDED_REASONS"]
+
+UNDECIDED_REASONS = K.REASON_CODES
+"""Why a box is undecided: the three border events (``graze``: the first
+impact, ``edge``: a later impact, ``chatter``: the slide test (2.4)), then
+``impacts`` (a step proven to have more than ``IMPACT_CAP`` impacts, whose
+bounces are shorter than the enclosures), ``nonsliding`` (numerical, atlases
+only: the float map does not slide within max_iter at the box's corners and
+centre, so the box is taken for non-sliding motion and not split further) and
+``range`` (atlases only: the box touches ``e = 1`` or ``u = 0``, outside the
+model's range; it is split down to the last level like a border)."""
+
+FORMS = ("mean-value", "naive")
+# levels (counted up from the deepest) at which an undecided box may stop as
+# "nonsliding" (benchmarks/certify.py measured the choice)
+_NONSLIDING_LEVELS = 4
+# the quadtree starts from 2^_START_LEVEL boxes a side (tiles up to that many)
+_START_LEVEL = 3
+_MAX_DEPTH = 26
+# itinerary entries kept per box by the level kernel (int16: impact numbers <= IMPACT_CAP);
+# longer itineraries are computed again at the end (64 bytes a box of a level, about
+# twice what the rest of a level holds)
+_KEPT = 32
+
+
+# --------------------------------------------------------------------------- #
+# Validation                                                                  #
+# --------------------------------------------------------------------------- #
+
+
+def _pair(name, value):
+    if isinstance(value, (str, bytes)) or not isinstance(value, (tuple, list, np.ndarray)) or len(value) != 2:
+        raise ValueError(f"{name} must be a pair ({name}0, {name}1) of real numbers, got {_v._show(value)}")
+    return _v.real(f"{name}0", value[0]), _v.real(f"{name}1", value[1])
+
+
+def _check_e(e, window=False):
+    """``(e0, e1)`` with ``0 <= e0 <= e1 < 1`` (``e1 <= 1`` for a window), each 0 or >= 2^-53."""
+    e0, e1 = _pair("e", e)
+    top = "<= 1" if window else "< 1"
+    rule = f"e must be a pair (e0, e1) with 0 <= e0 {'<' if window else '<='} e1 {top}"
+    if not (0.0 <= e0 and (e1 <= 1.0 if window else e1 < 1.0)):
+        raise ValueError(f"{rule} (restitution coefficients), got ({e0}, {e1})")
+    if not (e0 < e1 if window else e0 <= e1):
+        raise ValueError(f"{rule}: {'an empty' if e0 == e1 else 'a reversed'} range, got ({e0}, {e1})")
+    for x in (e0, e1):
+        if _v.e_too_small(x):
+            raise ValueError(f"{_v.E_TINY_RULE}, got {x} in e = ({e0}, {e1})")
+    return e0, e1
+
+
+def _check_u(u, window=False):
+    """``(u0, u1)`` within ``[1e-150, 1e150]`` (``u0 = 0`` allowed for a window)."""
+    u0, u1 = _pair("u", u)
+    low = 0.0 if window else _v.U_MIN
+    rule = (f"u must be a pair (u0, u1) with {'0 <=' if window else f'{_v.U_MIN:g} <='} u0 "
+            f"{'<' if window else '<='} u1 <= {_v.U_MAX:g} (horizontal speeds, the valid numeric range)")
+    if not (u0 >= low and u1 <= _v.U_MAX and (u0 > 0.0 or window)):
+        raise ValueError(f"{rule}, got ({u0}, {u1})")
+    if window and 0.0 < u0 < _v.U_MIN:
+        raise ValueError(f"{rule}, got ({u0}, {u1})")
+    if not (u0 < u1 if window else u0 <= u1):
+        raise ValueError(f"{rule}: {'an empty' if u0 == u1 else 'a reversed'} range, got ({u0}, {u1})")
+    return u0, u1
+
+
+def _check_form(form):
+    if form not in FORMS:
+        raise ValueError(f"form must be one of {', '.join(FORMS)}, got {form!r}")
+    return form == "mean-value"
+
+
+def _itinerary_buffer(max_iter):
+    _v.check_memory(f"max_iter = {max_iter}", 8 * max_iter)
+    return np.empty(max_iter, np.int64)
+
+
+# --------------------------------------------------------------------------- #
+# One box                                                                     #
+# --------------------------------------------------------------------------- #
+
+
+def _decision_name(code):
+    return "slide" if code == 0 else f"impact {code}"
+
+
+def _run_box(e0, e1, u0, u1, max_iter, mv, itin):
+    """Certify one box twice: once to size the record, once recording it."""
+    dummy_d = np.empty(0, np.int64)
+    dummy_m = np.empty((0, 2))
+    st, rs, sp, ni, nd = K._certify_box(e0, e1, u0, u1, max_iter, K.IMPACT_CAP, mv, itin, False, dummy_d, dummy_m)
+    dec = np.empty(nd, np.int64)
+    marg = np.empty((nd, 2))
+    again = K._certify_box(e0, e1, u0, u1, max_iter, K.IMPACT_CAP, mv, itin, True, dec, marg)
+    assert again == (st, rs, sp, ni, nd)  # the same computation, the same answer
+    return st, rs, sp, itin[:ni].copy(), dec, marg
+
+
+def _certificate(e0, e1, u0, u1, max_iter, st, rs, sp, itin, dec, marg):
+    status = STATUSES[st]
+    return Certificate(
+        e=(e0, e1), u=(u0, u1), max_iter=max_iter, status=status,
+        word=word_from_impacts(itin) if status == "word" else None,
+        reason=UNDECIDED_REASONS[rs] if status == "undecided" else None,
+        step=int(sp) if status == "undecided" else None,
+        itinerary=tuple(int(k) for k in itin),
+        decisions=tuple(_decision_name(int(c)) for c in dec),
+        margins=marg,
+    )
+
+
+def certify_box(e, u, max_iter=1000, *, form="mean-value") -> Certificate:
+    """certify_box(e=(e0, e1), u=(u0, u1), max_iter=1000, *, form="mean-value") -> Certificate
+
+    What is proven over the box ``[e0, e1] x [u0, u1]`` of the (e, u) plane (a
+    point when ``e0 == e1`` and ``u0 == u1``), with the evidence.
+
+    Proven (docs/design.md, "Certified boxes"): the orbit of the edge state
+    ``(1, 0)`` is followed step by step, every decision of the Poincare map
+    (Prop. 2.3) taken as the sign of its margin enclosed over the whole box by
+    outward-rounded float64 interval arithmetic: the slide test (2.4)
+    ``T - (v + (1+e)/(1-e) s)``, the first impact ``T - (v + s)`` and the
+    later ones ``T - t_j`` with ``t_{j+1} = t_j + 2 e^j s`` (eq. 2.2).  A
+    decision is proven when its enclosure has ``lo >= 0`` (it happens, equality
+    included) or ``hi < 0``.  Because a slide resets the state exactly to
+    ``(1, 0)``, a proven itinerary ending in a slide proves the periodic sliding
+    solution's word at every point of the box.
+
+    ``status``: ``"word"`` (with ``word``), ``"no_sliding"`` (Corollary 2.1 over
+    the whole box, nothing iterated), ``"no_slide_within"`` (no slide in the
+    first ``max_iter`` steps anywhere in the box) or ``"undecided"`` (with
+    ``reason``, see :data:`UNDECIDED_REASONS`, and the ``step``).  The
+    certificate lists every decision taken and the enclosure of its margin
+    (:class:`stairbounce.Certificate`).
+
+    Parameters
+    ----------
+    e : pair (e0, e1), 0 <= e0 <= e1 < 1, each 0 or >= 2^-53
+    u : pair (u0, u1), 1e-150 <= u0 <= u1 <= 1e150
+    max_iter : int >= 1, default 1000
+        Steps followed before the claim ``no_slide_within``.
+    form : "mean-value" (default) or "naive"
+        The enclosures: naive intervals, or naive intersected with the
+        first-order (mean-value) form about the box's centre along the frozen
+        itinerary (tighter on small boxes; both rigorous).
+
+    >>> import stairbounce as sb
+    >>> c = sb.certify_box(e=(0.18, 0.1801), u=(0.62, 0.6201))
+    >>> c.status, str(c.word)
+    ('word', '(1, 1, 1, 2, 0^∞)')
+    """
+    e0, e1 = _check_e(e)
+    u0, u1 = _check_u(u)
+    max_iter = check_count("max_iter", max_iter, 1)
+    mv = _check_form(form)
+    st, rs, sp, itin, dec, marg = _run_box(e0, e1, u0, u1, max_iter, mv, _itinerary_buffer(max_iter))
+    return _certificate(e0, e1, u0, u1, max_iter, st, rs, sp, itin, dec, marg)
+
+
+# --------------------------------------------------------------------------- #
+# The atlas                                                                   #
+# --------------------------------------------------------------------------- #
+
+
+def _edges(lo, hi, level, i):
+    """Box edges as the kernel computes them (:func:`_kernel._edge`), vectorised."""
+    n = 1 << int(level) if np.ndim(level) == 0 else None
+    i = np.asarray(i, dtype=np.int64)
+    if n is None:
+        n = np.left_shift(np.int64(1), np.asarray(level, dtype=np.int64))
+    x = lo + (hi - lo) * (i.astype(np.float64) * (1.0 / n))
+    return np.where(i >= n, hi, x)
+
+
+def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress=None, *, tiles=1,
+            form="mean-value") -> CertifiedAtlas:
+    """certify(e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, progress=None, *, tiles=1, form="mean-value") -> CertifiedAtlas
+
+    Cover a window of the (e, u) plane with boxes, each certified
+    (:func:`certify_box`): an adaptive quadtree down to boxes of
+    window/2^depth.
+
+    The window is first cut into 8 x 8 boxes; a box proven ``word``,
+    ``no_sliding`` (Corollary 2.1 over the box, nothing iterated) or
+    ``no_slide_within`` stops, an undecided one is split into four until
+    ``depth``.  From ``depth - 4`` on, an undecided box at none of whose
+    corners nor centre the float map slides within ``max_iter`` steps stops
+    with the reason ``"nonsliding"`` (numerical: the enclosures of a long
+    non-sliding orbit widen, and splitting cannot help there), so the atlas
+    tells the undecided area of a border from that of non-sliding motion; an
+    undecided box of the last level is "nonsliding" when its centre does not
+    slide (the pixel of a scan with 2^depth pixels a side).  A
+    box touching ``e = 1`` or ``u = 0`` is undecided (reason ``"range"``) and
+    split down to the last level, so only a strip one box wide stays so.
+
+    Every box is computed from its integer position in the window's quadtree
+    alone, in parallel (numba ``prange`` over the boxes of a level): any number
+    of threads and any tiling give the same boxes.
+
+    Parameters
+    ----------
+    e : pair (lo, hi), 0 <= lo < hi <= 1
+    u : pair (lo, hi), 0 <= lo < hi <= 1e150
+    depth : int in [0, 26], default 10
+        The smallest boxes are window/2^depth a side.
+    max_iter : int >= 1, default 1000
+    progress : callable ``progress(done, total)``, optional
+        Called after each level of each tile.
+    tiles : 1, 2, 4 or 8 (at most 2^depth), default 1
+        Tiles a side, certified one after the other (the same boxes).
+    form : "mean-value" (default) or "naive"
+        The enclosures (:func:`certify_box`).
+
+    Returns
+    -------
+    CertifiedAtlas
+    """
+    e_lo, e_hi = _check_e(e, window=True)
+    u_lo, u_hi = _check_u(u, window=True)
+    depth = check_count("depth", depth, 0, _MAX_DEPTH)
+    max_iter = check_count("max_iter", max_iter, 1)
+    _itinerary_buffer(max_iter)
+    mv = _check_form(form)
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
+    start = min(_START_LEVEL, depth)
+    allowed = [t for t in (1, 2, 4, 8) if t <= 1 << start]
+    tiles = check_count("tiles", tiles, 1)
+    if tiles not in allowed:
+        raise ValueError(f"tiles must be one of {', '.join(map(str, allowed))} (a power of 2, at most 2^depth "
+                         f"and 8), got {tiles}")
+    win = np.array([e_lo, e_hi, u_lo, u_hi])
+    t0 = time.perf_counter()
+    per_tile = (1 << start) // tiles
+    levels = depth - start + 1
+    total = tiles * tiles * levels
+    done = [0]
+
+    def tick():
+        done[0] += 1
+        if progress is not None:
+            progress(done[0], total)
+
+    if progress is not None:
+        progress(0, total)
+    parts = []
+    for tj in range(tiles):
+        for ti in range(tiles):
+            # the tile's boxes of the start level, as one level-wide batch
+            gi, gj = np.meshgrid(np.arange(ti * per_tile, (ti + 1) * per_tile),
+                                 np.arange(tj * per_tile, (tj + 1) * per_tile))
+            parts += _run_tile(win, depth, start, gi.ravel(), gj.ravel(), max_iter, mv, tick)
+    cols = [np.concatenate([p[k] for p in parts]) for k in range(8)]
+    level, ii, jj = cols[:3]
+    order = np.lexsort((ii, jj, level))
+    level, ii, jj, status, reason, step, nsteps, kept = (c[order] for c in cols)
+    ds = _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step, nsteps, kept)
+    return CertifiedAtlas(ds, seconds=time.perf_counter() - t0)
+
+
+def _run_tile(win, depth, start, gi, gj, max_iter, mv, tick):
+    """The quadtree below a batch of boxes ``(gi, gj)`` of level ``start``: the final
+    boxes as arrays ``(level, i, j, status, reason, step, nsteps)``, one tuple per level."""
+    from .._interrupt import run_kernel
+
+    ii = gi.astype(np.int64)
+    jj = gj.astype(np.int64)
+    ns_level = max(0, depth - _NONSLIDING_LEVELS)
+    out = []
+    for level in range(start, depth + 1):
+        n = ii.size
+        status = np.empty(n, np.int8)
+        reason = np.empty(n, np.int8)
+        step = np.empty(n, np.int64)
+        nsteps = np.empty(n, np.int64)
+        kept = np.empty((n, _KEPT), np.int16)
+        if n:
+            # the leaves' reason by their centre alone (the pixel of a scan at 2^depth); coarser
+            # boxes stop as "nonsliding" only when neither the centre nor a corner slides
+            ns_points = 0 if level < ns_level else (1 if level == depth else 5)
+            run_kernel(K._certify_level, win, level, ii, jj, max_iter, K.IMPACT_CAP, mv, ns_points,
+                       status, reason, step, nsteps, kept)
+        final = (status != K.UNDECIDED) | (reason == K.NONSLIDING) | (level == depth)
+        out.append((np.full(int(final.sum()), level, np.int8), ii[final], jj[final], status[final],
+                    reason[final], step[final], nsteps[final], kept[final]))
+        split = ~final
+        i2 = 2 * ii[split]
+        j2 = 2 * jj[split]
+        ii = np.concatenate([i2, i2 + 1, i2, i2 + 1])
+        jj = np.concatenate([j2, j2, j2 + 1, j2 + 1])
+        tick()
+    return out
+
+
+def _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step, nsteps, kept):
+    """The atlas's table: one row per box, with the array form of certificate.py
+    (the itineraries from ``kept`` where they fit, else computed again)."""
+    import xarray as xr
+
+    from .._interrupt import run_kernel
+    from .._version import __version__
+
+    e0 = _edges(win[0], win[1], level, ii)
+    e1 = _edges(win[0], win[1], level, ii + 1)
+    u0 = _edges(win[2], win[3], level, jj)
+    u1 = _edges(win[2], win[3], level, jj + 1)
+    proven_path = (status == K.WORD) | (status == K.NO_SLIDE_WITHIN)
+    lengths = np.where(proven_path, nsteps, 0)
+    offsets = np.zeros(level.size + 1, np.int64)
+    np.cumsum(lengths, out=offsets[1:])
+    itinerary = np.empty(int(offsets[-1]), np.int64)
+    short = proven_path & (lengths <= _KEPT)
+    if short.any():
+        rows = kept[short]
+        cols_ = np.arange(_KEPT)
+        itinerary[np.repeat(offsets[:-1][short], lengths[short]) + _ranks(lengths[short])] = \
+            rows[cols_[None, :] < lengths[short][:, None]]
+    sel = np.flatnonzero(proven_path & ~short)
+    if sel.size:
+        sub_off = np.zeros(sel.size + 1, np.int64)
+        np.cumsum(lengths[sel], out=sub_off[1:])
+        buf = np.empty(int(sub_off[-1]), np.int64)
+        run_kernel(K._itineraries, win, level[sel].astype(np.int64), ii[sel], jj[sel], max_iter, K.IMPACT_CAP, mv,
+                   sub_off, buf)
+        for k, b in enumerate(sel):
+            itinerary[offsets[b]:offsets[b + 1]] = buf[sub_off[k]:sub_off[k + 1]]
+    words = np.full(level.size, "", dtype=object)
+    seen = {}
+    for b in np.flatnonzero(status == K.WORD):
+        key = itinerary[offsets[b]:offsets[b + 1]].tobytes()
+        w = seen.get(key)
+        if w is None:
+            w = seen[key] = word_from_impacts(itinerary[offsets[b]:offsets[b + 1]]).format(ascii=True)
+        words[b] = w
+    reasons = np.array([""] + list(UNDECIDED_REASONS), dtype=object)[np.where(status == K.UNDECIDED, reason + 1, 0)]
+    ds = xr.Dataset(
+        {
+            "e0": ("box", e0), "e1": ("box", e1), "u0": ("box", u0), "u1": ("box", u1),
+            "status": ("box", status.astype(np.int8)),
+            "word": ("box", words.astype(str)),
+            "reason": ("box", reasons.astype(str)),
+            "step": ("box", np.where(status == K.UNDECIDED, step, 0).astype(np.int64)),
+            "level": ("box", level.astype(np.int8)),
+            "i": ("box", ii.astype(np.int64)), "j": ("box", jj.astype(np.int64)),
+            "offsets": ("offset", offsets),
+            "itinerary": ("itinerary_step", itinerary),
+        },
+        attrs={
+            "e_range": [float(win[0]), float(win[1])], "u_range": [float(win[2]), float(win[3])],
+            "depth": int(depth), "max_iter": int(max_iter), "form": FORMS[0] if mv else FORMS[1],
+            "statuses": ",".join(STATUSES), "impact_cap": int(K.IMPACT_CAP),
+            "nonsliding_levels": int(_NONSLIDING_LEVELS), "stairbounce_version": __version__,
+            "kind": "stairbounce certified atlas",
+        },
+    )
+    return ds
+
+
+def _ranks(lengths):
+    """``0, 1, .., n0-1, 0, 1, .., n1-1, ...`` for ``lengths = (n0, n1, ...)``."""
+    starts = np.repeat(np.cumsum(lengths) - lengths, lengths)
+    return np.arange(int(lengths.sum())) - starts
+
+
+def _area(ds):
+    return (ds["e1"].values - ds["e0"].values) * (ds["u1"].values - ds["u0"].values)
+
+
+class CertifiedAtlas:
+    """A window of the (e, u) plane covered by certified boxes (:func:`certify`).
+
+    ``boxes`` is an ``xarray.Dataset`` with a ``box`` dimension: the box edges
+    ``e0, e1, u0, u1``, ``status`` (int8, an index into
+    :data:`stairbounce.structure.certificate.STATUSES`), ``word`` (ASCII, ``""``
+    unless proven), ``reason`` and ``step`` (undecided boxes), the box's place
+    in the quadtree ``level, i, j``, and the itineraries of the proven
+    (``word``, ``no_slide_within``) boxes in the array form of
+    :mod:`stairbounce.structure.certificate` (``itinerary``, ``offsets``; the
+    attribute ``max_iter``).  Areas are float sums (rounding of a relative
+    1e-16, not enclosed).
+    """
+
+    def __init__(self, boxes, seconds=None):
+        self.boxes = boxes
+        self.seconds = seconds
+
+    # -- what it says ------------------------------------------------------
+
+    @property
+    def window(self):
+        """``((e_lo, e_hi), (u_lo, u_hi))``."""
+        a = self.boxes.attrs
+        return tuple(a["e_range"]), tuple(a["u_range"])
+
+    @property
+    def max_iter(self) -> int:
+        return int(self.boxes.attrs["max_iter"])
+
+    @property
+    def depth(self) -> int:
+        return int(self.boxes.attrs["depth"])
+
+    def _window_area(self):
+        (a, b), (c, d) = self.window
+        return (b - a) * (d - c)
+
+    def to_dataframe(self):
+        """The boxes as a pandas DataFrame (status by name; the itineraries left out)."""
+        df = self.boxes.drop_vars(["offsets", "itinerary"]).to_dataframe()
+        df["status"] = np.array(STATUSES, dtype=object)[df["status"].to_numpy()]
+        return df
+
+    def fraction(self, by="status"):
+        """fraction(by="status") -> dict: the window's area share of each status, or
+        with ``by="reason"`` of each reason of the undecided boxes, or with
+        ``by="word"`` of each proven word."""
+        area = _area(self.boxes) / self._window_area()
+        if by == "status":
+            codes = self.boxes["status"].values
+            return {name: float(area[codes == k].sum()) for k, name in enumerate(STATUSES)}
+        if by == "reason":
+            rs = self.boxes["reason"].values
+            und = self.boxes["status"].values == K.UNDECIDED
+            return {r: float(area[und & (rs == r)].sum()) for r in UNDECIDED_REASONS}
+        if by == "word":
+            return self._word_areas(area)
+        raise ValueError(f"by must be one of status, reason, word, got {by!r}")
+
+    def _word_areas(self, area):
+        words = self.boxes["word"].values
+        sel = self.boxes["status"].values == K.WORD
+        if not sel.any():
+            return {}
+        names, inverse = np.unique(words[sel], return_inverse=True)
+        sums = np.bincount(inverse, weights=area[sel], minlength=names.size)
+        return {str(w): float(a) for w, a in sorted(zip(names, sums), key=lambda p: -p[1])}
+
+    def word_area_bounds(self, word):
+        """word_area_bounds(word) -> (lower, upper): proven bounds on the area of
+        the window's points with periodic sliding solution ``word`` (a
+        :class:`stairbounce.Word` or its text).
+
+        Lower: the area of the boxes proven to have it.  Upper: the window less
+        every box proven to be something else (another word, ``no_sliding``, or
+        ``no_slide_within`` when the word's period is at most ``max_iter``).
+        """
+        from ..symbolic import parse_word
+
+        w = word if isinstance(word, Word) else parse_word(word)
+        text = w.format(ascii=True)
+        area = _area(self.boxes)
+        st = self.boxes["status"].values
+        words = self.boxes["word"].values
+        mine = (st == K.WORD) & (words == text)
+        other = ((st == K.WORD) & ~mine) | (st == K.NO_SLIDING)
+        if w.period <= self.max_iter:
+            other |= st == K.NO_SLIDE_WITHIN
+        return float(area[mine].sum()), float(self._window_area() - area[other].sum())
+
+    def words(self):
+        """words() -> pandas.DataFrame: the proven words (a proven lower bound on
+        the number of distinct words in the window), largest proven area first,
+        with ``period``, ``length``, ``boxes`` and ``area`` (the proven lower
+        bound on the word's area); ``.attrs["by_period"]`` counts them by period."""
+        import pandas as pd
+
+        from ..symbolic import parse_word
+
+        area = _area(self.boxes)
+        words = self.boxes["word"].values
+        sel = self.boxes["status"].values == K.WORD
+        names, inverse, counts = np.unique(words[sel], return_inverse=True, return_counts=True)
+        sums = np.bincount(inverse, weights=area[sel], minlength=names.size)
+        parsed = [parse_word(str(n)) for n in names]
+        df = pd.DataFrame({
+            "word": [str(n) for n in names], "period": [w.period for w in parsed],
+            "length": [len(w) for w in parsed], "boxes": counts.astype(np.int64), "area": sums,
+        }).sort_values(["area", "word"], ascending=[False, True], ignore_index=True)
+        df.attrs["by_period"] = {int(p): int(c) for p, c in df["period"].value_counts().sort_index().items()}
+        return df
+
+    def certificates(self):
+        """certificates() -> iterator of Certificate: the proven boxes'
+        certificates, each decision and margin recomputed exactly as the atlas
+        computed it."""
+        ds = self.boxes
+        mv = ds.attrs["form"] == FORMS[0]
+        st = ds["status"].values
+        itin = _itinerary_buffer(self.max_iter)
+        cols = [ds[k].values for k in ("e0", "e1", "u0", "u1")]
+        for b in np.flatnonzero(st != K.UNDECIDED):
+            e0, e1, u0, u1 = (float(c[b]) for c in cols)
+            s, rs, sp, it, dec, marg = _run_box(e0, e1, u0, u1, self.max_iter, mv, itin)
+            yield _certificate(e0, e1, u0, u1, self.max_iter, s, rs, sp, it, dec, marg)
+
+    def border_box_counts(self):
+        """border_box_counts() -> pandas.DataFrame: for each scale s = window/2^k
+        (k = 0 .. depth) proven bounds on N(s), the number of s-boxes of the
+        window's grid that meet the border between classes (each word one class,
+        ``no_sliding`` and ``no_slide_within`` together "not sliding").
+
+        ``lower``: s-boxes holding proven boxes of two classes (a segment
+        between them, inside the s-box, crosses the border).  ``upper``:
+        s-boxes whose closure meets an undecided box, or holding two classes
+        (two proven boxes of different classes never touch, so every border
+        point lies in an undecided box).  ``slope_lo, slope_hi``: the bracket
+        on the finite-scale box-counting slope ``log2(N(s_k)/N(s_{k-1}))``
+        between this scale and the one before.
+        """
+        import pandas as pd
+
+        ds = self.boxes
+        level = ds["level"].values.astype(np.int64)
+        ii = ds["i"].values
+        jj = ds["j"].values
+        st = ds["status"].values
+        words = ds["word"].values
+        cls = np.full(st.size, -1, np.int64)  # -1: not sliding; -2: undecided
+        w = st == K.WORD
+        if w.any():
+            cls[w] = np.unique(words[w], return_inverse=True)[1]
+        cls[st == K.UNDECIDED] = -2
+        rows = []
+        for k in range(self.depth + 1):
+            n = 1 << k
+            fine = level >= k
+            sh = level[fine] - k
+            ci, cj = ii[fine] >> sh, jj[fine] >> sh
+            cc = cls[fine]
+            proven = cc != -2
+            code = ci[proven] * n + cj[proven]
+            pairs = np.unique(np.stack([code, cc[proven]]), axis=1) if code.size else np.zeros((2, 0), np.int64)
+            cells, cnt = np.unique(pairs[0], return_counts=True)
+            two = cells[cnt >= 2]
+            touched = [two]
+            und = ~proven
+            if und.any():
+                ui, uj, ush = ii[fine][und], jj[fine][und], sh[und]
+                m = (np.int64(1) << ush) - 1
+                ci_u, cj_u = ci[und], cj[und]
+                left, right = (ui & m) == 0, (ui & m) == m
+                down, up = (uj & m) == 0, (uj & m) == m
+                for di, dmask in ((-1, left), (0, None), (1, right)):
+                    for dj, emask in ((-1, down), (0, None), (1, up)):
+                        sel = np.ones(ci_u.size, bool)
+                        if dmask is not None:
+                            sel &= dmask
+                        if emask is not None:
+                            sel &= emask
+                        a, b = ci_u[sel] + di, cj_u[sel] + dj
+                        ok = (a >= 0) & (a < n) & (b >= 0) & (b < n)
+                        touched.append(a[ok] * n + b[ok])
+            coarse = (level < k) & (st == K.UNDECIDED)
+            for b in np.flatnonzero(coarse):
+                f = 1 << (k - level[b])
+                a0, a1 = max(ii[b] * f - 1, 0), min((ii[b] + 1) * f, n - 1)
+                b0, b1 = max(jj[b] * f - 1, 0), min((jj[b] + 1) * f, n - 1)
+                ga, gb = np.meshgrid(np.arange(a0, a1 + 1), np.arange(b0, b1 + 1))
+                touched.append((ga * n + gb).ravel())
+            upper = np.unique(np.concatenate(touched)).size
+            (e_lo, e_hi), (u_lo, u_hi) = self.window
+            rows.append({"k": k, "size_e": (e_hi - e_lo) / n, "size_u": (u_hi - u_lo) / n,
+                         "lower": int(two.size), "upper": int(upper)})
+        df = pd.DataFrame(rows)
+        lo = df["lower"].to_numpy(float)
+        hi = df["upper"].to_numpy(float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slope_lo = np.log2(lo[1:] / hi[:-1])
+            slope_hi = np.log2(hi[1:] / lo[:-1])
+        df["slope_lo"] = np.concatenate([[np.nan], slope_lo])
+        df["slope_hi"] = np.concatenate([[np.nan], slope_hi])
+        return df
+
+    def slope_bracket(self, k1, k2):
+        """slope_bracket(k1, k2) -> (lo, hi): proven bracket on the box-counting
+        slope ``log2(N(s_k2)/N(s_k1)) / (k2 - k1)`` between two scales."""
+        df = self.border_box_counts()
+        k1 = check_count("k1", k1, 0, self.depth)
+        k2 = check_count("k2", k2, k1 + 1, self.depth)
+        L, U = df["lower"].to_numpy(float), df["upper"].to_numpy(float)
+        with np.errstate(divide="ignore"):
+            return (float(np.log2(L[k2] / U[k1]) / (k2 - k1)), float(np.log2(U[k2] / L[k1]) / (k2 - k1)))
+
+    # -- files -------------------------------------------------------------
+
+    def save(self, path, overwrite=False):
+        """save(path, overwrite=False) -> None: write the atlas to ``.nc`` (netCDF4),
+        ``.zarr`` or ``.geojson`` (:meth:`geojson`), atomically
+        (:func:`stairbounce._io.atomic_path`)."""
+        import json
+
+        from .._io import atomic_path
+
+        s = str(path).rstrip("/")
+        if s.endswith(".geojson"):
+            text = json.dumps(self.geojson())
+            with atomic_path(path, overwrite=overwrite) as tmp:
+                tmp.write_text(text)
+            return
+        if not (s.endswith(".nc") or s.endswith(".zarr")):
+            raise ValueError(f"path must end in .nc, .zarr or .geojson, got {str(path)!r}")
+        ds = self.boxes.copy()
+        ds.attrs = {k: (list(v) if isinstance(v, tuple) else v) for k, v in ds.attrs.items()}
+        with atomic_path(path, overwrite=overwrite) as tmp:
+            if s.endswith(".zarr"):
+                # Zarr v3 specifies no string type: each text column as codes into a list kept in attrs
+                for k in ("word", "reason"):
+                    names, codes = np.unique(ds[k].values, return_inverse=True)
+                    ds = ds.drop_vars(k).assign({f"{k}_code": ("box", codes.astype(np.int32))})
+                    ds.attrs[f"{k}_names"] = [str(x) for x in names]
+                ds.to_zarr(tmp, mode="w", consolidated=False)
+            else:
+                enc = {k: {"zlib": True, "complevel": 4} for k in ds.data_vars if ds[k].dtype.kind != "U"}
+                ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=enc)
+
+    @classmethod
+    def load(cls, path):
+        """load(path) -> CertifiedAtlas: read an atlas written by :meth:`save` (.nc or .zarr)."""
+        import xarray as xr
+
+        s = str(path).rstrip("/")
+        try:
+            if s.endswith(".zarr"):
+                ds = xr.open_zarr(path, consolidated=False).load()
+            elif s.endswith(".nc"):
+                with xr.open_dataset(path, engine="netcdf4") as f:
+                    ds = f.load()
+            else:
+                raise ValueError(f"path must end in .nc or .zarr, got {str(path)!r}")
+        except (OSError, KeyError) as exc:
+            raise ValueError(f"cannot read a certified atlas from {path}: {exc}") from None
+        if ds.attrs.get("kind") != "stairbounce certified atlas":
+            raise ValueError(f"{path} is not a certified atlas written by stairbounce")
+        for k in ("word", "reason"):
+            if f"{k}_code" in ds:  # a Zarr store (save)
+                names = np.array(list(ds.attrs.pop(f"{k}_names")) or [""], dtype=str)
+                ds[k] = ("box", names[ds[f"{k}_code"].values])
+                ds = ds.drop_vars(f"{k}_code")
+            ds[k] = ds[k].astype(str)
+        for k in ("e_range", "u_range"):
+            ds.attrs[k] = [float(x) for x in np.atleast_1d(ds.attrs[k])]
+        return cls(ds)
+
+    def geojson(self):
+        """geojson() -> dict: a GeoJSON FeatureCollection in (e, u) coordinates:
+        the proven boxes merged per word (valid polygons, by shapely's union),
+        and those proven ``no_sliding`` and ``no_slide_within``, one feature each."""
+        from shapely.geometry import box as shp_box
+        from shapely.geometry import mapping
+        from shapely.ops import unary_union
+
+        ds = self.boxes
+        st = ds["status"].values
+        words = ds["word"].values
+        cols = [ds[k].values for k in ("e0", "u0", "e1", "u1")]
+        area = _area(ds)
+        groups = [(str(w), (st == K.WORD) & (words == w)) for w in np.unique(words[st == K.WORD])]
+        groups += [(name, st == code) for name, code in (("no_sliding", K.NO_SLIDING),
+                                                          ("no_slide_within", K.NO_SLIDE_WITHIN))]
+        features = []
+        for name, sel in groups:
+            idx = np.flatnonzero(sel)
+            if not idx.size:
+                continue
+            geom = unary_union([shp_box(cols[0][b], cols[1][b], cols[2][b], cols[3][b]) for b in idx])
+            props = {"status": name if name in STATUSES else "word",
+                     "word": None if name in STATUSES else name, "boxes": int(idx.size),
+                     "area": float(area[idx].sum())}
+            features.append({"type": "Feature", "geometry": mapping(geom), "properties": props})
+        (e_lo, e_hi), (u_lo, u_hi) = self.window
+        return {"type": "FeatureCollection", "features": features,
+                "properties": {"e": [e_lo, e_hi], "u": [u_lo, u_hi], "depth": self.depth,
+                               "max_iter": self.max_iter, "coordinates": "(e, u)"}}
+
+    def __repr__(self):
+        f = self.fraction()
+        n = self.boxes.sizes["box"]
+        parts = ", ".join(f"{k} {100 * v:.1f}%" for k, v in f.items())
+        return f"CertifiedAtlas({n} boxes, depth {self.depth}: {parts})"

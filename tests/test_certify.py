@@ -1,0 +1,407 @@
+"""Certified boxes (issue 36, items 1-3): sb.certify_box and sb.certify.
+
+What is proven over a box is checked against the paper's theorems (the
+Theorem 3.1 tongues, Corollary 2.1) and against the float map at random points
+inside every proven box; the outward rounding against numpy's nextafter."""
+
+import math
+
+import numba
+import numpy as np
+import pytest
+
+import stairbounce as sb
+from stairbounce.structure import _kernel as K
+from stairbounce.structure.certificate import STATUSES
+
+FIG7 = dict(e=(0.155, 0.2138), u=(0.6, 0.658))
+
+
+@pytest.fixture(scope="module")
+def atlas():
+    return sb.certify(depth=6, **FIG7)
+
+
+# ---- the outward rounding ---------------------------------------------------
+
+
+@numba.njit
+def _both(x):
+    return K._dn(x), K._up(x)
+
+
+def test_outward_steps_are_nextafter():
+    specials = [0.0, -0.0, 5e-324, -5e-324, 2.0**-1022, -(2.0**-1022), 1.0, -1.0, 1.5, -1.5,
+                1.7976931348623157e308, -1.7976931348623157e308]
+    rng = np.random.default_rng(3)
+    xs = specials + list(rng.standard_normal(500) * 10.0 ** rng.integers(-300, 300, 500))
+    for x in xs:
+        lo, hi = _both(x)
+        with np.errstate(over="ignore"):
+            assert lo == np.nextafter(x, -np.inf) and hi == np.nextafter(x, np.inf), x
+    # no bound past the largest float: NaN, which no decision reads as a bound
+    big = np.finfo(np.float64).max
+    assert _both(np.inf)[0] == big and math.isnan(_both(np.inf)[1])
+    assert math.isnan(_both(-np.inf)[0]) and _both(-np.inf)[1] == -big
+    assert all(math.isnan(x) for x in _both(np.nan))
+
+
+def test_numba_contracts_no_multiply_add_without_fastmath():
+    # the argument of docs/design.md counts one rounding per operation: a fused
+    # a*b+c would round once.  numba compiles with fastmath off (no "contract"
+    # flag), so LLVM keeps a*b+c as two operations even on a CPU with FMA; the
+    # same function with fastmath gets the fused instruction (the test can see it)
+    def f(a, b, c):
+        return a * b + c
+
+    plain = numba.njit(f)
+    fast = numba.njit(fastmath=True)(f)
+    plain(1.0, 2.0, 3.0)
+    fast(1.0, 2.0, 3.0)
+    asm_plain = "\n".join(plain.inspect_asm().values()).lower()
+    asm_fast = "\n".join(fast.inspect_asm().values()).lower()
+    assert "fma" not in asm_plain
+    import llvmlite.binding as ll
+
+    if "+fma" in ll.get_host_cpu_features().flatten():
+        assert "fma" in asm_fast
+    assert plain(0.1, 0.3, -0.03) == 0.1 * 0.3 - 0.03
+
+
+# ---- one box ----------------------------------------------------------------
+
+
+def _tip(n):
+    r = math.sqrt((n - 1) / n)
+    return (1 - r) / (1 + r)
+
+
+@pytest.mark.parametrize("n", range(1, 9))
+def test_a_box_inside_a_tongue_is_proven_its_word(n):
+    # Theorem 3.1: (n, 0^inf) exactly where sqrt((n-1)/2) < u <= sqrt(n/2) (1-e)/(1+e)
+    tip = 0.5 if n == 1 else _tip(n)
+    e0, e1 = 0.3 * tip, 0.31 * tip
+    lo, hi = math.sqrt((n - 1) / 2), math.sqrt(n / 2) * (1 - e1) / (1 + e1)
+    width = hi - lo
+    c = sb.certify_box(e=(e0, e1), u=(lo + 0.25 * width, hi - 0.25 * width))
+    assert c.status == "word" and c.word == sb.Word((n,))
+    assert c.itinerary == (0,) * (n - 1) + (-1,)
+    # points are boxes too
+    p = sb.certify_box(e=(e0, e0), u=(lo + 0.5 * width, lo + 0.5 * width))
+    assert p.status == "word" and p.word == sb.Word((n,))
+
+
+@pytest.mark.parametrize("n", range(1, 9))
+@pytest.mark.parametrize("h", [1e-3, 1e-7, 1e-12])
+def test_a_box_straddling_a_tongue_border_is_never_proven(n, h):
+    tip = 0.5 if n == 1 else _tip(n)
+    e = 0.3 * tip
+    hi = math.sqrt(n / 2) * (1 - e) / (1 + e)
+    for u in ([hi] if n == 1 else [hi, math.sqrt((n - 1) / 2)]):
+        c = sb.certify_box(e=(e, e + h * 1e-3), u=(u - h, u + h))
+        assert c.status == "undecided" and not c.proven
+        assert c.reason in ("graze", "edge", "chatter")
+
+
+def test_boxes_above_the_corollary_curve_are_no_sliding():
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        e0 = rng.uniform(0.01, 0.95)
+        e1 = e0 + rng.uniform(0, 0.04)
+        bound = sb.no_sliding_bound(e0)
+        u0 = bound * (1 + rng.uniform(1e-6, 1.0))
+        c = sb.certify_box(e=(e0, min(e1, 0.99)), u=(u0, u0 * 1.1))
+        assert c.status == "no_sliding" and c.decisions == () and c.proven
+    # on the curve itself (equality in (2.4) slides): not by Corollary 2.1
+    e = 0.2
+    u = sb.no_sliding_bound(e)
+    assert sb.certify_box(e=(e, e), u=(u * (1 - 1e-12), u * (1 - 1e-12))).status != "no_sliding"
+
+
+def test_the_certificate_lists_every_decision_of_its_itinerary():
+    c = sb.certify_box(e=(0.18, 0.1801), u=(0.62, 0.6201))
+    assert c.status == "word"
+    assert sb.sliding_word(0.18005, 0.62005) == c.word
+    rows = iter(zip(c.decisions, c.margins))
+    for k in c.itinerary:
+        name, (lo, hi) = next(rows)
+        assert name == "slide" and lo <= hi
+        if k == -1:
+            assert lo >= 0
+            break
+        assert hi < 0
+        for j in range(1, k + 2):
+            name, (lo, hi) = next(rows)
+            assert name == f"impact {j}"
+            assert (lo >= 0) if j <= k else (hi < 0)
+    assert next(rows, None) is None
+    assert c.margins.shape == (len(c.decisions), 2)
+
+
+def test_a_certificate_round_trips_through_json():
+    import json
+
+    c = sb.certify_box(e=(0.18, 0.1801), u=(0.62, 0.6201))
+    back = sb.Certificate.from_dict(json.loads(json.dumps(c.to_dict())))
+    assert (back.e, back.u, back.status, back.word, back.itinerary, back.decisions) == \
+        (c.e, c.u, c.status, c.word, c.itinerary, c.decisions)
+    np.testing.assert_array_equal(back.margins, c.margins)
+
+
+def test_no_slide_within_is_a_finite_claim():
+    # a non-sliding point below the Corollary 2.1 curve, followed for a few steps
+    rng = np.random.default_rng(2)
+    while True:
+        e, u = rng.uniform(*FIG7["e"]), rng.uniform(*FIG7["u"])
+        if u < sb.no_sliding_bound(e) and sb.sliding_word(e, u, 2000) is None:
+            break
+    c = sb.certify_box(e=(e, e), u=(u, u), max_iter=5)
+    assert c.status == "no_slide_within" and len(c.itinerary) == 5 and -1 not in c.itinerary
+
+
+def test_the_naive_form_proves_less_and_never_otherwise():
+    rng = np.random.default_rng(11)
+    more = 0
+    for _ in range(300):
+        e0 = rng.uniform(*FIG7["e"])
+        u0 = rng.uniform(*FIG7["u"])
+        h = 10.0 ** rng.uniform(-6, -3)
+        a = sb.certify_box(e=(e0, e0 + h), u=(u0, u0 + h))
+        b = sb.certify_box(e=(e0, e0 + h), u=(u0, u0 + h), form="naive")
+        if b.proven:
+            assert (a.status, a.word) == (b.status, b.word)
+        more += a.proven and not b.proven
+    assert more > 0
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(e=(0.3, 0.2), u=(0.5, 0.6)), "reversed"),
+    (dict(e=(0.2, 1.0), u=(0.5, 0.6)), "e must be a pair"),
+    (dict(e=(-0.1, 0.2), u=(0.5, 0.6)), "e must be a pair"),
+    (dict(e=(1e-20, 0.2), u=(0.5, 0.6)), "2\\^-53"),
+    (dict(e=(0.1, 0.2), u=(0.0, 0.6)), "u must be a pair"),
+    (dict(e=(0.1, 0.2), u=(0.6, 0.5)), "reversed"),
+    (dict(e=(0.1, float("nan")), u=(0.5, 0.6)), "e1 must be finite"),
+    (dict(e=(0.1, 0.2), u=(0.5, float("inf"))), "u1 must be finite"),
+    (dict(e=0.1, u=(0.5, 0.6)), "e must be a pair"),
+    (dict(e=("a", 0.2), u=(0.5, 0.6)), "e0 must be a real number"),
+    (dict(e=(0.1, 0.2), u=(0.5, 0.6, 0.7)), "u must be a pair"),
+    (dict(e=(0.1, 0.2), u=(0.5, 0.6), max_iter=0), "max_iter"),
+    (dict(e=(0.1, 0.2), u=(0.5, 0.6), form="exact"), "form"),
+])
+def test_bad_boxes_are_refused_by_name(kw, match):
+    with pytest.raises(ValueError, match=match):
+        sb.certify_box(**kw)
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(e=(0.2, 0.2), u=(0.5, 0.6)), "empty"),
+    (dict(e=(0.1, 0.2), u=(0.5, 0.5)), "empty"),
+    (dict(e=(0.1, 0.2), u=(0.5, 0.6), depth=-1), "depth"),
+    (dict(e=(0.1, 0.2), u=(0.5, 0.6), depth=40), "depth"),
+    (dict(e=(0.1, 0.2), u=(0.5, 0.6), depth=2, tiles=8), "tiles"),
+    (dict(e=(0.1, 0.2), u=(0.5, 0.6), tiles=3), "tiles"),
+    (dict(e=(0.1, 0.2), u=(0.5, 0.6), progress=3), "progress"),
+])
+def test_bad_windows_are_refused_by_name(kw, match):
+    with pytest.raises(ValueError, match=match):
+        sb.certify(**kw)
+
+
+# ---- the atlas --------------------------------------------------------------
+
+
+def test_every_proven_box_agrees_with_the_float_map_inside(atlas):
+    ds = atlas.boxes
+    st = ds["status"].values
+    proven = np.flatnonzero(st != K.UNDECIDED)
+    assert proven.size > 100
+    rng = np.random.default_rng(7)
+    picks = rng.choice(proven, 3000)
+    for b in picks:
+        e = rng.uniform(ds["e0"].values[b], ds["e1"].values[b])
+        u = rng.uniform(ds["u0"].values[b], ds["u1"].values[b])
+        w = sb.sliding_word(e, u, atlas.max_iter)
+        if st[b] == K.WORD:
+            assert w is not None and w.format(ascii=True) == ds["word"].values[b], (e, u)
+        else:
+            assert w is None, (e, u, STATUSES[st[b]])
+
+
+def test_the_boxes_tile_the_window(atlas):
+    ds = atlas.boxes
+    area = ((ds.e1 - ds.e0) * (ds.u1 - ds.u0)).sum().item()
+    (a, b), (c, d) = atlas.window
+    assert area == pytest.approx((b - a) * (d - c), rel=1e-12)
+    f = atlas.fraction()
+    assert set(f) == set(STATUSES) and sum(f.values()) == pytest.approx(1.0)
+    assert f["word"] > 0.4 and f["no_sliding"] > 0.1
+    r = atlas.fraction("reason")
+    assert sum(r.values()) == pytest.approx(f["undecided"])
+    assert r["nonsliding"] > 0  # the non-sliding motion is told apart from borders
+
+
+def test_threads_and_tiles_give_the_same_boxes():
+    kw = dict(e=(0.16, 0.19), u=(0.6, 0.63), depth=6)
+    threads = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = sb.certify(**kw).boxes
+        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+        two = sb.certify(**kw).boxes
+    finally:
+        numba.set_num_threads(threads)
+    tiled = sb.certify(tiles=4, **kw).boxes
+    one.attrs.pop("stairbounce_version")
+    for other in (two, tiled):
+        other.attrs.pop("stairbounce_version")
+        assert one.identical(other)
+
+
+def test_words_and_their_area_bounds(atlas):
+    words = atlas.words()
+    assert len(words) > 5 and (words["area"] > 0).all()
+    assert sum(words.attrs["by_period"].values()) == len(words)
+    top = words["word"][0]
+    lo, hi = atlas.word_area_bounds(top)
+    assert lo == pytest.approx(words["area"][0]) and lo <= hi <= lo + atlas.fraction()["undecided"] * 1
+    (a, b), (c, d) = atlas.window
+    assert hi <= (b - a) * (d - c)
+
+
+def test_border_box_counts_bracket(atlas):
+    df = atlas.border_box_counts()
+    assert list(df["k"]) == list(range(atlas.depth + 1))
+    assert (df["lower"] <= df["upper"]).all()
+    assert (df["upper"] <= 4.0 ** df["k"]).all()
+    # a cell of the finest scale holds one box: two classes only from coarser scales on
+    assert df["lower"].iloc[-1] == 0 and df["lower"].iloc[-3] > 0
+    lo, hi = atlas.slope_bracket(3, 6)
+    assert lo <= hi
+
+
+def test_certificates_of_the_atlas_restate_its_boxes(atlas):
+    ds = atlas.boxes
+    proven = np.flatnonzero(ds["status"].values != K.UNDECIDED)
+    certs = atlas.certificates()
+    for b, c in zip(proven[:200], certs):
+        assert c.e == (ds["e0"].values[b], ds["e1"].values[b])
+        assert STATUSES.index(c.status) == ds["status"].values[b]
+        o = ds["offsets"].values
+        assert c.itinerary == tuple(ds["itinerary"].values[o[b]:o[b + 1]])
+        if c.status == "word":
+            assert c.word.format(ascii=True) == ds["word"].values[b]
+
+
+@pytest.mark.parametrize("suffix", [".nc", ".zarr"])
+def test_save_and_load_round_trip(atlas, tmp_path, suffix):
+    path = tmp_path / f"atlas{suffix}"
+    atlas.save(path)
+    back = sb.CertifiedAtlas.load(path)
+    for k in atlas.boxes.variables:
+        np.testing.assert_array_equal(back.boxes[k].values, atlas.boxes[k].values)
+    assert back.window == atlas.window and back.max_iter == atlas.max_iter
+    assert back.fraction() == atlas.fraction()
+    with pytest.raises(ValueError, match="exists"):
+        atlas.save(path)
+    atlas.save(path, overwrite=True)
+
+
+def test_geojson_merges_the_proven_boxes_per_word(atlas, tmp_path):
+    shapely = pytest.importorskip("shapely")
+    from shapely.geometry import shape
+
+    gj = atlas.geojson()
+    words = atlas.fraction("word")
+    feats = {f["properties"]["word"]: f for f in gj["features"] if f["properties"]["word"]}
+    assert set(feats) == set(words)
+    (a, b), (c, d) = atlas.window
+    for w, f in feats.items():
+        g = shape(f["geometry"])
+        assert g.is_valid
+        assert g.area == pytest.approx(words[w] * (b - a) * (d - c), rel=1e-9)
+    atlas.save(tmp_path / "a.geojson")
+    assert (tmp_path / "a.geojson").stat().st_size > 0
+    assert shapely is not None
+
+
+def test_progress_reports_every_level():
+    calls = []
+    sb.certify(e=(0.16, 0.19), u=(0.6, 0.63), depth=4, progress=lambda d, t: calls.append((d, t)))
+    assert calls[0] == (0, 2) and calls[-1] == (2, 2)
+
+
+def test_the_paper_plane_edges_are_undecided_by_range():
+    a = sb.certify(e=(0.0, 1.0), u=(0.0, 1.5), depth=4)
+    r = a.fraction("reason")
+    assert r["range"] > 0
+    ds = a.boxes
+    edge = (ds["e1"].values == 1.0) | (ds["u0"].values == 0.0)
+    assert (ds["reason"].values[edge] == "range").all()
+    # split to the last level: a strip one box wide along the two edges
+    assert (ds["level"].values[edge] == 4).all()
+    assert r["range"] == pytest.approx((2 * 16 - 1) / 256)
+
+
+# ---- the command line -------------------------------------------------------
+
+
+def _cli(args, capsys):
+    from stairbounce.cli import main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(args)
+    out = capsys.readouterr()
+    return exit_.value.code, out.out, out.err
+
+
+def test_cli_certify_prints_the_summary_and_writes(tmp_path, capsys):
+    out = tmp_path / "a.nc"
+    code, text, err = _cli(["certify", "--e", "0.16:0.19", "--u", "0.6:0.63", "--depth", "5",
+                            "--out", str(out), "--top", "3"], capsys)
+    assert code == 0, err
+    atlas = sb.CertifiedAtlas.load(out)
+    f = atlas.fraction()
+    assert f"word {100 * f['word']:.2f}%" in text
+    assert f"proven words: {len(atlas.words())}" in text
+    assert atlas.words()["word"][0] in text
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--e", "0.3:0.2"], "--e"),
+    (["--depth", "40"], "--depth"),
+    (["--max-iter", "0"], "--max-iter"),
+    (["--out", "x.txt"], "--out"),
+    (["--e", "0.5:1.5"], "e must be a pair"),
+])
+def test_cli_certify_refuses_bad_input_with_status_2(args, message, capsys):
+    code, text, err = _cli(["certify", *args], capsys)
+    assert code == 2 and message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_cli_verify_needs_the_checker(tmp_path, capsys):
+    try:
+        import stairbounce.structure.verify  # noqa: F401
+    except ImportError:
+        code, text, err = _cli(["certify", "--verify", str(tmp_path / "a.nc")], capsys)
+        assert code == 2 and "not available" in err
+    else:  # the checker is there: a missing file is still one line and status 2
+        code, text, err = _cli(["certify", "--verify", str(tmp_path / "missing.nc")], capsys)
+        assert code == 2
+
+
+def test_long_itineraries_are_stored_whole():
+    # itineraries longer than the level kernel keeps (no_slide_within: max_iter entries)
+    rng = np.random.default_rng(2)
+    while True:
+        e, u = rng.uniform(*FIG7["e"]), rng.uniform(*FIG7["u"])
+        if u < sb.no_sliding_bound(e) and sb.sliding_word(e, u, 2000) is None:
+            break
+    a = sb.certify(e=(e, e + 1e-9), u=(u, u + 1e-9), depth=3, max_iter=40)
+    ds = a.boxes
+    o = ds["offsets"].values
+    long_ = np.flatnonzero(ds["status"].values == K.NO_SLIDE_WITHIN)
+    assert long_.size and (np.diff(o)[long_] == 40).all()
+    for c in a.certificates():
+        b = np.flatnonzero((ds["e0"].values == c.e[0]) & (ds["u0"].values == c.u[0]))[0]
+        assert c.itinerary == tuple(ds["itinerary"].values[o[b]:o[b + 1]])
