@@ -91,6 +91,9 @@ from .regions import (
     word_region,
     write_regions,
 )
+from .structure.labels import prove_labels
+from .structure.tubes import BorderTube, border_tube
+
 from .symbolic import SlidingAnswer, Word, parse_word, sliding_answer, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, physical_speed, time_scale
@@ -198,6 +201,9 @@ __all__ = [
     "uncertainty_dimension",
     "uncertainty_dimension_from_counts",
     "word_table",
+    "prove_labels",
+    "BorderTube",
+    "border_tube",
 ]
 
 # heavy submodules, imported on first use (PEP 562)
