@@ -120,8 +120,13 @@ def _check_ends(e_lo, u_lo, e_hi, u_hi, j, claimed_lo, claimed_hi):
         match = (last == claimed) | ((claimed == _FINITE) & (last >= 0))
         for i in np.flatnonzero(~(full & match) & ok):
             ok[i] = False
-            first[i] = filled[i] if filled[i] < j[i] else j[i] - 1  # beyond the event: stop
-            reason[i] = f"{side} end: the float map's itinerary leaves the label's at step {filled[i]}"
+            if filled[i] < j[i]:
+                first[i] = filled[i]
+                reason[i] = f"{side} end: the float map's orbit slides at step {filled[i]}, before the label's"
+            else:  # beyond the event: stop widening
+                first[i] = j[i] - 1
+                reason[i] = (f"{side} end: another border of step {j[i]} that close (the float map's "
+                             f"impact number there changes)")
         for i in np.flatnonzero((code != 0) & ok):
             ok[i] = False
             first[i] = step[i]
@@ -173,7 +178,7 @@ def prove_labels(points):
     -------
     xarray.Dataset
         ``points`` with ``proven`` (bool), ``proof_distance`` (``d``, NaN
-        where not proven), ``reason`` (``""`` where proven; else which end,
+        where not proven), ``tried_distance`` (the last ``d`` tried), ``reason`` (``""`` where proven; else which end,
         which check of ``structure.verify.CHECKS`` failed and at which step,
         e.g. ``"high end: slide undecided at step 37"``) and
         ``unproven_step`` (that step, 0 where proven).  The widening stops
@@ -198,6 +203,7 @@ def prove_labels(points):
     n = e.size
     proven = np.zeros(n, bool)
     dist = np.full(n, np.nan)
+    tried = np.full(n, np.nan)
     reason = np.full(n, "", dtype=object)
     first = np.zeros(n, np.int64)
     todo = np.arange(n)
@@ -218,6 +224,7 @@ def prove_labels(points):
         ok &= inside
         proven[todo[ok]] = True
         dist[todo[ok]] = d[ok]
+        tried[todo] = d
         reason[todo[~ok]] = why[~ok]
         first[todo[~ok]] = st[~ok]
         # a failure before the labelled step is a border of an earlier step (or
@@ -229,6 +236,7 @@ def prove_labels(points):
     out = points.assign(
         proven=(dim, proven, {"long_name": "label proven by intervals at both ends of the widened bracket"}),
         proof_distance=(dim, dist, {"long_name": "the bracket widened by this on each side (NaN: unproven)"}),
+        tried_distance=(dim, tried, {"long_name": "the last widening tried (= proof_distance where proven)"}),
         reason=(dim, reason, {"long_name": "why the label is not proven ('' where it is)"}),
         unproven_step=(dim, first, {"long_name": "the step not proven at the largest widening (0: proven)"}),
     )

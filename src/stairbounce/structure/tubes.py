@@ -66,6 +66,8 @@ from .verify import (
 __all__ = ["BorderTube", "border_tube"]
 
 _UNDECIDED_S = STATUSES.index("undecided")
+# pieces proven together (about 30 interval arrays of 3 x _CHUNK floats per step)
+_CHUNK = 1 << 14
 
 
 def _mul(a, b):
@@ -125,32 +127,6 @@ def _event_coef(e, index):
     return C, _div_pos(2.0 * N, om2)
 
 
-def _series(e, prefix):
-    """Along the prefix, at the floats ``e`` (exact): ``(H, dH_parts, s, dP)``
-    where ``H = sum B s`` (enclosed at each e), ``dH_parts`` the list of the
-    increasing factors ``(B', s, B, P')`` per step, ``s = s_{j-1}`` and
-    ``P' = (s_{j-1}^2)'``."""
-    n = e.size
-    S = _sqrt(2.0 * np.ones((2, n)))
-    P = 2.0 * np.ones((2, n))
-    dP = np.zeros((2, n))
-    H = np.zeros((2, n))
-    parts = []
-    cache = {}
-    for k in prefix:
-        k = int(k)
-        if k not in cache:
-            cache[k] = _coef(e, k)
-        E, dE, B, dB = cache[k]
-        H = _add(H, _mul_pos(B, S))
-        parts.append((dB, S, B, dP))
-        E2 = _mul_pos(E, E)
-        dP = _add(_mul_pos(_mul_pos(2.0 * E, dE), P), _mul_pos(E2, dP))
-        P = _add(2.0 * np.ones((2, n)), _mul_pos(E2, P))
-        S = _sqrt(P)
-    return H, parts, S, dP
-
-
 def _over(x, n):
     """An increasing function over ``[e_a, e_b]`` from its enclosures at the
     points laid out ``[e_a; e_m; e_b]`` (blocks of n)."""
@@ -165,16 +141,39 @@ def _deriv_term(dF, S, F, dP, n):
     return _add(_mul_pos(dFo, So), _mul_pos(Fo, ds))
 
 
-def _g(e, prefix, index):
-    """Enclosures of ``G`` at the floats ``e`` (layout ``[e_a; e_m; e_b]``,
-    blocks of ``n``) and of ``G`` and ``G'`` over each ``[e_a, e_b]``."""
-    n = e.size // 3
-    H, parts, S, dP = _series(e, prefix)
+def _g(e, prefix, index, derivative=True):
+    """Along the prefix, at the floats ``e`` (exact; with ``derivative``
+    laid out ``[e_a; e_m; e_b]`` in blocks of ``n``): ``(G, G over each
+    [e_a, e_b], G' over it, H, s)`` with ``H = sum B s`` the prefix's part
+    of ``G`` and ``s = s_{j-1}``.  ``(s^2)' = P'`` follows
+    ``P_{i+1} = 2 + E^2 P_i``, ``P'_{i+1} = 2 E E' P_i + E^2 P'_i``."""
+    m = e.size
+    n = m // 3
+    two = 2.0 * np.ones((2, m))
+    S = _sqrt(two)
+    P = two
+    dP = np.zeros((2, m))
+    H = np.zeros((2, m))
+    dG = np.zeros((2, n))
+    cache = {}
+    for k in prefix:
+        k = int(k)
+        if k not in cache:
+            cache[k] = _coef(e, k)
+        E, dE, B, dB = cache[k]
+        H = _add(H, _mul_pos(B, S))
+        if derivative:
+            dG = _add(dG, _deriv_term(dB, S, B, dP, n))
+            E2 = _mul_pos(E, E)
+            dP = _add(_mul_pos(_mul_pos(2.0 * E, dE), P), _mul_pos(E2, dP))
+        else:
+            E2 = _mul_pos(E, E)
+        P = _add(two, _mul_pos(E2, P))
+        S = _sqrt(P)
     C, dC = _event_coef(e, index)
     G = _add(H, _mul_pos(C, S))
-    dG = np.zeros((2, n))
-    for dB, Si, B, dPi in parts:
-        dG = _add(dG, _deriv_term(dB, Si, B, dPi, n))
+    if not derivative:
+        return G, None, None, H, S
     dG = _add(dG, _deriv_term(dC, S, C, dP, n))
     return G, _over(G, n), dG, H, S
 
@@ -252,11 +251,44 @@ class BorderTube:
             out |= inside & (np.abs(u - l) <= self.delta[p])
         return out
 
+    def bounds(self, e):
+        """bounds(e) -> (u_lo, u_hi): the arc's u proven to lie in
+        ``[u_lo, u_hi]`` at every real e' in ``[e, next float above e]``, for
+        floats e in a proven piece (NaN elsewhere).
+
+        ``u*(e') = j / G(e')`` with G increasing: ``u_lo = j / G(e+)`` and
+        ``u_hi = j / G(e)``, G enclosed at the two floats and the quotients
+        rounded outward.  The width is the arc's drop over one ulp of e plus
+        rounding: a tube of a few ulps, evaluated where it is asked for.
+        """
+        e = np.atleast_1d(np.asarray(e, float))
+        e_up = np.nextafter(e, np.inf)
+        inside = np.zeros(e.size, bool)
+        order = np.argsort(self.e_a)
+        ea, eb = self.e_a[order], self.e_b[order]
+        i = np.clip(np.searchsorted(ea, e, side="right") - 1, 0, ea.size - 1)
+        for shift in (0, 1):  # [e, e+] may end in the next piece
+            k = np.clip(i + shift, 0, ea.size - 1)
+            inside |= (ea[k] <= e) & (e_up <= eb[k]) & self.proven[order[k]]
+        lo = np.full(e.size, np.nan)
+        hi = np.full(e.size, np.nan)
+        if inside.any():
+            x, x_up = e[inside], e_up[inside]
+            G_lo = _g(x, self.prefix, self.index, derivative=False)[0][0]
+            G_hi = _g(x_up, self.prefix, self.index, derivative=False)[0][1]
+            lo[inside] = np.nextafter(self.step / G_hi, -np.inf)
+            hi[inside] = np.nextafter(self.step / G_lo, np.inf)
+        return lo, hi
+
     def verify(self):
         """Re-prove every piece as stored (a tampered piece is rejected):
         a bool per piece."""
-        return _prove(self.step, self.prefix, self.index, self.kind, self.e_a, self.e_b,
-                      self.u_a, self.u_b, self.delta)
+        ok = np.zeros(self.e_a.size, bool)
+        for c in range(0, ok.size, _CHUNK):
+            at = slice(c, c + _CHUNK)
+            ok[at] = _prove(self.step, self.prefix, self.index, self.kind, self.e_a[at], self.e_b[at],
+                            self.u_a[at], self.u_b[at], self.delta[at])
+        return ok
 
     def to_dataframe(self):
         """The pieces as a pandas DataFrame."""
@@ -300,7 +332,7 @@ def _prove(j, prefix, index, kind, e_a, e_b, u_a, u_b, delta_stated=None):
 
 def _u_star(j, prefix, index, e):
     """``j / G(e)`` in float (the midpoint of G's enclosure): a chord's ends."""
-    G = _g(np.concatenate([e, e, e]), prefix, index)[0][:, :e.size]
+    G = _g(e, prefix, index, derivative=False)[0]
     return j / (0.5 * (G[0] + G[1]))
 
 
@@ -386,7 +418,10 @@ def border_tube(arc, *, width=1e-12, window=None, max_pieces=200_000):
     while e_a.size:
         u_a = _u_star(j, prefix, index, e_a)
         u_b = _u_star(j, prefix, index, e_b)
-        ok, delta = _prove(j, prefix, index, arc.kind, e_a, e_b, u_a, u_b)
+        ok, delta = np.zeros(e_a.size, bool), np.zeros(e_a.size)
+        for c in range(0, e_a.size, _CHUNK):  # bounded memory
+            at = slice(c, c + _CHUNK)
+            ok[at], delta[at] = _prove(j, prefix, index, arc.kind, e_a[at], e_b[at], u_a[at], u_b[at])
         mid = 0.5 * (e_a + e_b)
         split = ~(ok & (delta <= target)) & (mid > e_a) & (mid < e_b)
         if n_done + e_a.size + int(split.sum()) > max_pieces:
