@@ -68,6 +68,7 @@ __all__ = ["BorderTube", "border_tube"]
 _UNDECIDED_S = STATUSES.index("undecided")
 # pieces proven together (about 30 interval arrays of 3 x _CHUNK floats per step)
 _CHUNK = 1 << 14
+_FAIL_DEPTH = 24
 
 
 def _mul(a, b):
@@ -415,6 +416,7 @@ def border_tube(arc, *, width=1e-12, window=None, max_pieces=200_000):
     e_a, e_b = cuts[:-1], cuts[1:]
     done = []
     n_done = 0
+    fails = np.zeros(e_a.size, np.int64)
     while e_a.size:
         u_a = _u_star(j, prefix, index, e_a)
         u_b = _u_star(j, prefix, index, e_b)
@@ -424,12 +426,18 @@ def border_tube(arc, *, width=1e-12, window=None, max_pieces=200_000):
             ok[at], delta[at] = _prove(j, prefix, index, arc.kind, e_a[at], e_b[at], u_a[at], u_b[at])
         mid = 0.5 * (e_a + e_b)
         split = ~(ok & (delta <= target)) & (mid > e_a) & (mid < e_b)
+        # a piece whose decisions fail is halved at most _FAIL_DEPTH times in
+        # a row (towards a corner, or where the decisions' margins shrink, as
+        # the bounces e^k do near e = 0); then it stays unproven
+        fails = np.where(ok, 0, fails + 1)
+        split &= fails <= _FAIL_DEPTH
         if n_done + e_a.size + int(split.sum()) > max_pieces:
             split[:] = False  # the budget is spent: these pieces are final
         keep = ~split
         done.append((e_a[keep], e_b[keep], u_a[keep], u_b[keep], delta[keep], ok[keep]))
         n_done += int(keep.sum())
         e_a, e_b = np.concatenate([e_a[split], mid[split]]), np.concatenate([mid[split], e_b[split]])
+        fails = np.concatenate([fails[split], fails[split]])
     cols = [np.concatenate(c) for c in zip(*done)]
     order = np.argsort(cols[0])
     ea, eb, ua, ub, dl, ok = (c[order] for c in cols)
