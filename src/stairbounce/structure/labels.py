@@ -103,12 +103,15 @@ def _check_ends(e_lo, u_lo, e_hi, u_hi, j, claimed_lo, claimed_hi):
     """Whether the labels are proven at the given ends: both point
     certificates (steps ``1..j``) re-verified, the same first ``j - 1``
     impact numbers, the claimed ones at step ``j``.  Returns ``(ok, reason,
-    step)``: the failing step where not ok (``j`` when only the labelled
-    step's own decision is undecided, so that a wider bracket may help)."""
+    step, final)``: the failing step where not ok, and whether a wider
+    bracket cannot help (a failure before step ``j``, or another border of
+    step ``j`` that close; only an undecided decision of step ``j`` itself
+    leaves room to widen)."""
     n = e_lo.size
     ok = np.ones(n, bool)
     reason = np.full(n, "", dtype=object)
     first = np.zeros(n, np.int64)
+    final = np.zeros(n, bool)
     its = []
     for side, pe, pu, claimed in (("low", e_lo, u_lo, claimed_lo), ("high", e_hi, u_hi, claimed_hi)):
         flat, off, filled = _itineraries(pe, pu, np.maximum(j, 1))
@@ -123,8 +126,9 @@ def _check_ends(e_lo, u_lo, e_hi, u_hi, j, claimed_lo, claimed_hi):
             if filled[i] < j[i]:
                 first[i] = filled[i]
                 reason[i] = f"{side} end: the float map's orbit slides at step {filled[i]}, before the label's"
-            else:  # beyond the event: stop widening
-                first[i] = j[i] - 1
+            else:  # a wider bracket holds that border too: stop widening
+                first[i] = j[i]
+                final[i] = True
                 reason[i] = (f"{side} end: another border of step {j[i]} that close (the float map's "
                              f"impact number there changes)")
         for i in np.flatnonzero((code != 0) & ok):
@@ -139,7 +143,7 @@ def _check_ends(e_lo, u_lo, e_hi, u_hi, j, claimed_lo, claimed_hi):
             diff = np.flatnonzero(a[:min(a.size, b.size)] != b[:min(a.size, b.size)])
             first[i] = int(diff[0]) + 1 if diff.size else min(a.size, b.size) + 1
             reason[i] = f"the ends' itineraries differ at step {first[i]}"
-    return ok, reason, first
+    return ok, reason, first, final
 
 
 def prove_labels(points):
@@ -219,7 +223,7 @@ def prove_labels(points):
         e_hi = np.where(along_e[todo], x_hi, e[todo])
         u_lo = np.where(along_e[todo], u[todo], x_lo)
         u_hi = np.where(along_e[todo], u[todo], x_hi)
-        ok, why, st = _check_ends(e_lo, u_lo, e_hi, u_hi, j[todo], k_lo[todo], k_hi[todo])
+        ok, why, st, final = _check_ends(e_lo, u_lo, e_hi, u_hi, j[todo], k_lo[todo], k_hi[todo])
         why[~inside] = "the widened bracket leaves the plane"
         ok &= inside
         proven[todo[ok]] = True
@@ -229,7 +233,7 @@ def prove_labels(points):
         first[todo[~ok]] = st[~ok]
         # a failure before the labelled step is a border of an earlier step (or
         # a decision within rounding) that close: a wider bracket holds it too
-        todo = todo[~ok & inside & (st >= j[todo])]
+        todo = todo[~ok & inside & (st >= j[todo]) & ~final]
     first[proven] = 0
     reason[proven] = ""
     dim = ("point",)
