@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 import stairbounce as sb
-from stairbounce.structure.labels import word_proofs  # noqa: F401  (the hook's helper)
 
 PREC = 300
 

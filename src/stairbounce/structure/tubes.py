@@ -293,10 +293,11 @@ class BorderTube:
 
     def to_dataframe(self):
         """The pieces as a pandas DataFrame."""
-        import pandas as pd
+        import xarray as xr
 
-        return pd.DataFrame({"e_a": self.e_a, "e_b": self.e_b, "u_a": self.u_a, "u_b": self.u_b,
-                             "delta": self.delta, "proven": self.proven})
+        cols = {"e_a": self.e_a, "e_b": self.e_b, "u_a": self.u_a, "u_b": self.u_b,
+                "delta": self.delta, "proven": self.proven}
+        return xr.Dataset({k: ("piece", v) for k, v in cols.items()}).to_dataframe()
 
 
 def _prove(j, prefix, index, kind, e_a, e_b, u_a, u_b, delta_stated=None):
