@@ -185,7 +185,17 @@ def test_tube_of_an_edge_arc_inside_a_window():
     assert tube.max_width <= 1e-6
     inside = tube.contains(arc.e, arc.u)
     assert inside.mean() > 0.9
+    # every traced point over a proven piece lies in its band
+    i = np.clip(np.searchsorted(tube.e_a, arc.e, side="right") - 1, 0, tube.e_a.size - 1)
+    over_proven = tube.proven[i] & (arc.e >= tube.e_a[i]) & (arc.e <= tube.e_b[i])
+    assert (inside | ~over_proven).all()
     assert tube.verify()[tube.proven].all()
+    # the per-float bounds hold the traced points to a few ulps of the arc's drop
+    lo, hi = tube.bounds(arc.e[over_proven])
+    ok = np.isfinite(lo)
+    assert ok.mean() > 0.9
+    slack = 64 * np.spacing(arc.u[over_proven][ok])
+    assert ((lo[ok] - slack <= arc.u[over_proven][ok]) & (arc.u[over_proven][ok] <= hi[ok] + slack)).all()
 
 
 def test_bad_input():
