@@ -206,3 +206,17 @@ def test_bad_input():
         sb.border_tube(arc, width=0.0)
     with pytest.raises(ValueError, match="max_pieces"):
         sb.border_tube(arc, max_pieces=0)
+
+
+def test_words_command_reports_the_proven_words_first(tmp_path, capsys):
+    from stairbounce.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["words", "--e", "0.30:0.36", "--u", "0.32:0.38", "--size", "24x24", "--top", "0", "--prove",
+              "--out", str(tmp_path / "w.csv")])
+    out = capsys.readouterr().out
+    assert exc.value.code == 0
+    lines = [line for line in out.strip().splitlines() if not line.startswith("wrote")]
+    tab = sb.word_table(e=(0.30, 0.36, 24), u=(0.32, 0.38, 24), prove=True)
+    assert lines[0].startswith(f"{tab.attrs['proven_distinct_words']} proven distinct words")
+    assert lines[1].startswith(f"{tab.sizes['word']} distinct words")
