@@ -94,6 +94,9 @@ from .regions import (
 )
 from ._progress import progress_bar
 from .structure import Certificate, CertifiedAtlas, certify, certify_box
+from .structure.labels import prove_labels
+from .structure.tubes import BorderTube, border_tube
+from .structure.verify import Verdict, verify
 from .symbolic import SlidingAnswer, Word, parse_word, sliding_answer, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, physical_speed, time_scale
@@ -211,6 +214,11 @@ __all__ = [
     "cascade",
     "cascade_law",
     "cascades",
+    "prove_labels",
+    "BorderTube",
+    "border_tube",
+    "Verdict",
+    "verify",
 ]
 
 # heavy submodules, imported on first use (PEP 562)

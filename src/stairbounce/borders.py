@@ -857,7 +857,7 @@ def _words(e, u, periods):
 
 
 def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, outcome="word",
-                  progress=None):
+                  progress=None, prove=False):
     """border_points(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, *, outcome="word", progress=None) -> xarray.Dataset
 
     Every border between neighbouring pixels of a scan, located to rounding and
@@ -933,7 +933,9 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, outcom
         on the border of the sliding region), ``sliding_pair`` (one pixel of
         the pair slides, the other does not: the pair crosses that border),
         ``i_e``, ``i_u`` (the pixel of the pair with the smaller indices).  ``.to_dataframe()``
-        gives the table as pandas.
+        gives the table as pandas.  With ``prove=True`` also ``proven``,
+        ``reason`` and ``unproven_step``: whether the label is proven by
+        intervals at both ends of the bracket (:func:`stairbounce.prove_labels`).
 
     Raises
     ------
@@ -961,8 +963,13 @@ def border_points(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, outcom
     a, b, axis = _pairs(period, n_u, n_e, sliding)
     found, out = _run_pairs(es, us, period, a, b, axis, max_iter, progress, sliding=sliding)
     pair = (period[a[found]] == 0) != (period[b[found]] == 0)
-    return _table(es, us, a[found], axis[found], out[found], max_iter,
-                  {**attrs, "outcome": outcome}, pair)
+    table = _table(es, us, a[found], axis[found], out[found], max_iter,
+                   {**attrs, "outcome": outcome}, pair)
+    if prove:  # issue 36, item 6 (stairbounce.structure.labels)
+        from .structure.labels import prove_labels
+
+        table = prove_labels(table)
+    return table
 
 
 def _table(es, us, a, axis, out, max_iter, attrs, pair=None):
@@ -1019,7 +1026,7 @@ def _scan_input(e, u, max_iter, progress):
 
 
 def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=None, progress=None,
-               regions=False):
+               regions=False, prove=False):
     """word_table(e=(e_min, e_max, n_e), u=(u_min, u_max, n_u), max_iter=1000, *, points=None, progress=None) -> xarray.Dataset
 
     The distinct words of the periodic sliding solutions in a window, one row each,
@@ -1047,7 +1054,12 @@ def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=No
         window.  With ``regions=True`` also ``traced_area``, ``traced_area_error``,
         ``components`` and ``complete`` per word, from
         :func:`stairbounce.window_regions` seeded at the larger side of the grid
-        (NaN / 0 for a word it did not see).
+        (NaN / 0 for a word it did not see).  With ``prove=True`` also
+        ``proven`` per word (its point certificate re-verified by the
+        independent checker at one of up to 8 of its pixel centres, which
+        ``e_proven``, ``u_proven`` give; :mod:`stairbounce.structure.labels`),
+        ``proven_words`` by ``p`` (a proven lower bound on N(p)) and the
+        attribute ``proven_distinct_words``.
 
     Raises
     ------
@@ -1132,6 +1144,17 @@ def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=No
                      attrs={"title": "words of the periodic sliding solutions in a window",
                             "pixels": E.size, "sliding_pixels": int(sliding.sum()),
                             "max_iter": max_iter, **attrs})
+    if prove:  # proven words (stairbounce.structure.labels)
+        from .structure.labels import word_proofs
+
+        proven, e_p, u_p = (a[rank] for a in word_proofs(E, U, ids, rows))
+        n_proven = np.array([int(np.sum(proven & (periods[rank] == p))) for p in p_values], np.int64)
+        tab = tab.assign(
+            proven=(dim, proven, {"long_name": "word proven at a pixel centre (point certificate)"}),
+            e_proven=(dim, e_p, {"long_name": "e of the pixel centre where it is proven"}),
+            u_proven=(dim, u_p, {"long_name": "u of the pixel centre where it is proven"}),
+            proven_words=(("p",), n_proven, {"long_name": "proven distinct words of period p (<= N(p))"}))
+        tab.attrs["proven_distinct_words"] = int(proven.sum())
     if regions:  # traced areas (stairbounce.regions)
         from .regions import traced_columns
 

@@ -155,6 +155,9 @@ def words_(
     from_corners: bool = typer.Option(False, "--from-corners", help="With --regions: also trace the "
                                       "regions smaller than a seed pixel found around the corners of "
                                       "their neighbours (several times slower)."),
+    prove: bool = typer.Option(False, "--prove", help="Prove each word by intervals at one of its "
+                               "pixel centres (stairbounce.structure.labels) and report the proven "
+                               "words, a proven lower bound on the distinct words, first."),
 ):
     """The distinct words of the periodic sliding solutions in a window: letters, period,
     pixels, area, a representative point, bounding box, border points by kind; and N(p)."""
@@ -172,7 +175,7 @@ def words_(
     ds = with_row_progress(description="scan rows", rows=1,
                            run=lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
     tab = with_row_progress(description="border pairs", rows=1,
-                            run=lambda p: borders.word_table(ds, progress=p))
+                            run=lambda p: borders.word_table(ds, progress=p, prove=prove))
     if out is not None:
         _write(tab, out, force, "word")
         typer.echo(f"wrote {out}")
@@ -185,6 +188,9 @@ def words_(
 
         _figure(png, dpi, force, draw)
         typer.echo(f"wrote {png}")
+    if prove:
+        typer.echo(f"{tab.attrs['proven_distinct_words']} proven distinct words (a proven lower bound; "
+                   f"each proven by intervals at a pixel centre)")
     typer.echo(f"{tab.sizes['word']} distinct words on {tab.attrs['sliding_pixels']} of "
                f"{tab.attrs['pixels']} pixels (max_iter {max_iter})")
     for i in range(min(top, tab.sizes["word"])):
