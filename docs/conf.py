@@ -124,7 +124,7 @@ sb_gallery_max_iter = int(os.environ.get("SB_GALLERY_MAX_ITER", "300"))
 # order and the glob keeps only a page not named here, last.  tests/test_docs.py
 # fails while a page is missing here, so that none stays last ("Regions" once did).
 GUIDE_ORDER = ["model", "staircase", "scans", "paper", "dimension", "dimension-study", "borders",
-               "regions", "orbits", "motion", "explorer", "dask", "cli", "cluster", "explorer-server",
+               "regions", "proven", "cascades", "orbits", "motion", "explorer", "dask", "cli", "cluster", "explorer-server",
                "robustness", "numerics", "speed"]
 
 
