@@ -9,6 +9,8 @@ starts", one writer per store, the cache's key), not from the code's output.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -189,3 +191,91 @@ def test_r1_pair_work_bounds_the_trials_the_kernel_counts():
     assert out[found, 9].max() <= TRIALS
     assert np.all(out[found, 10] <= TRIALS * pc)
     assert np.array_equal(borders.pair_work(period, a, b, max_iter)[found], TRIALS * pc + max_iter)
+
+
+# --------------------------------------------------------------------------- #
+# R3: a tile's checksum is bound to the tile and the store                    #
+# --------------------------------------------------------------------------- #
+
+R3_WINDOW = dict(e=(0.05, 0.95, 45), u=(0.1, 1.4, 38), max_iter=400)
+R3_OTHER = dict(e=(0.1, 0.6, 45), u=(0.3, 1.2, 38), max_iter=400)  # the same layout, other pixels
+R3_TILE = 16  # 3 x 3 tiles
+R3_VARS = ("status", "word_length", "jumps", "period", "impacts")
+
+
+def _copy_tile(src, src_ij, dst, dst_ij):
+    """A tile's five data chunks and its checksum chunk, copied as files."""
+    import shutil
+
+    for rel in [*R3_VARS, "tiles/crc"]:
+        a = Path(src, rel, "c", *map(str, src_ij))
+        b = Path(dst, rel, "c", *map(str, dst_ij))
+        shutil.copyfile(a, b)
+
+
+def _resume(path, window=R3_WINDOW):
+    """Resume a store; the warnings it gives."""
+    import warnings
+
+    from stairbounce.atlas import scan_to_zarr
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ds = scan_to_zarr(path, tile=R3_TILE, **window)
+    return ds, [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
+
+
+@pytest.mark.parametrize("source", ["another tile", "another store", "the same tile of a twin store"])
+def test_r3_a_tile_and_its_checksum_copied_from_elsewhere_fail_and_are_recomputed(tmp_path, source):
+    """The report's cases (tile (0,0) replaced by tile (1,1) of the same store,
+    or by tile (0,0) of another store of the same layout, data and checksum
+    both) passed resume as complete; the pixels then differed from the scan.
+    A variant: a twin store of the same window (the same bytes), its
+    checksum copied: the store's token still tells it apart."""
+    from stairbounce.atlas import scan_to_zarr
+
+    path = tmp_path / "a.zarr"
+    scan_to_zarr(path, tile=R3_TILE, **R3_WINDOW)
+    if source == "another tile":
+        _copy_tile(path, (1, 1), path, (0, 0))
+    else:
+        other = tmp_path / "other.zarr"
+        scan_to_zarr(other, tile=R3_TILE, **(R3_OTHER if source == "another store" else R3_WINDOW))
+        _copy_tile(other, (0, 0), path, (0, 0))
+    ds, warned = _resume(path)
+    assert any("no longer match their checksum" in w and "(0, 0)" in w for w in warned), warned
+    ref = plane.scan(**R3_WINDOW)
+    for k in R3_VARS:
+        assert np.array_equal(ds[k].values, ref[k].values), k
+
+
+def test_r3_a_store_of_before_keeps_resuming_and_its_checksums_are_bound_from_then_on(tmp_path):
+    """A store written before the fix (checksums of the bytes only, no
+    ``checksum`` attribute) resumes without recomputing its intact tiles;
+    its checksums are then rewritten bound, so a copied tile is found next time."""
+    import zarr
+
+    from stairbounce import atlas
+
+    path = tmp_path / "old.zarr"
+    atlas.scan_to_zarr(path, tile=R3_TILE, **R3_WINDOW)
+    g = zarr.open_group(str(path), mode="r+")
+    rec = g["tiles"]
+    del rec.attrs["checksum"]  # as written before
+    rows, cols = atlas.tile_slices(38, R3_TILE), atlas.tile_slices(45, R3_TILE)
+    for i, j in np.ndindex(3, 3):
+        rec["crc"][i, j] = atlas._checksum({k: g[k][rows[i], cols[j]] for k in R3_VARS})
+    calls = []
+    orig = atlas._run_tile
+    atlas._run_tile = lambda *a: calls.append(a) or orig(*a)
+    try:
+        ds, warned = _resume(path)
+    finally:
+        atlas._run_tile = orig
+    assert warned == [] and calls == []  # intact: nothing recomputed
+    assert zarr.open_group(str(path), mode="r")["tiles"].attrs["checksum"] == atlas.CHECKSUM
+    _copy_tile(path, (2, 1), path, (1, 2))
+    ds, warned = _resume(path)
+    assert any("(1, 2)" in w for w in warned), warned
+    ref = plane.scan(**R3_WINDOW)
+    assert all(np.array_equal(ds[k].values, ref[k].values) for k in R3_VARS)

@@ -114,6 +114,12 @@ def _tile_record(path):
     return zarr.open_group(str(path), mode="r")[TILES_GROUP]
 
 
+def _root_attrs(path):
+    import zarr
+
+    return dict(zarr.open_group(str(path), mode="r").attrs)
+
+
 class DamagedStoreError(ValueError):
     """A chunk of a store's tile record or coordinates cannot be read or does
     not match the store's window: running its scan again repairs it."""
@@ -182,9 +188,11 @@ def _check_same_store(path, token):
         )
 
 
-def _run_tile(path, token, owner, i, j, su, se, e_values, u_values, max_iter, y0, v0, prune, numba_threads):
+def _run_tile(path, token, owner, i, j, su, se, e_values, u_values, max_iter, y0, v0, prune, numba_threads,
+              identity=None):
     """Compute tile (i, j) and write it into its region of the store, then its
-    checksum, then mark it done.
+    checksum (bound to the tile and the store by ``identity``,
+    :func:`_identity`; None: a store of before issue 38), then mark it done.
 
     Runs in the calling process (local scans) or on a Dask worker; writes only
     while the store's lock holds ``owner``, the token of the scan that handed
@@ -212,7 +220,7 @@ def _run_tile(path, token, owner, i, j, su, se, e_values, u_values, max_iter, y0
     values = {name: var.values for name, var in ds.data_vars.items()}
     for name, a in values.items():
         arrays[name][su, se] = a
-    crc[i, j] = _checksum(values)
+    crc[i, j] = _checksum(values, _tile_seed(identity, i, j))
     # the store replaced while the data was written: no done flag into the new one
     _check_same_store(path, token)
     # only now: a tile killed above is recomputed on the next run
@@ -220,9 +228,37 @@ def _run_tile(path, token, owner, i, j, su, se, e_values, u_values, max_iter, y0
     return i, j
 
 
-def _checksum(values):
-    """CRC-32 of a tile's variables (by name, C order): checked on resume."""
-    c = 0
+CHECKSUM = "crc32, seeded with the tile's index and the store's identity"
+"""The ``checksum`` attribute of a tile record whose checksums are bound to
+their tile and store (issue 38, R3).  A store without it (written before)
+has checksums of the bytes only: resume verifies it so, then rewrites the
+checksums of its intact tiles bound and sets the attribute."""
+
+# the attributes of the store that its tiles' checksums are bound to, with its token
+_IDENTITY_KEYS = ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u", "max_iter", "y0", "v0")
+
+
+def _identity(root_attrs, record_attrs):
+    """The store's identity as its checksums are seeded with it: its window,
+    ``max_iter``, start and token (drawn when it was made); None for a store
+    whose checksums are of the bytes only (no :data:`CHECKSUM` attribute)."""
+    if record_attrs.get("checksum") != CHECKSUM:
+        return None
+    parts = [f"{k}={root_attrs.get(k)!r}" for k in _IDENTITY_KEYS]
+    return ";".join(parts + [f"token={record_attrs.get('token')}"])
+
+
+def _tile_seed(identity, i, j):
+    """What tile (i, j)'s checksum is seeded with (None: unseeded)."""
+    return None if identity is None else f"{identity};tile={int(i)},{int(j)}"
+
+
+def _checksum(values, seed=None):
+    """CRC-32 of a tile's variables (by name, C order), starting from the
+    CRC of ``seed`` (:func:`_tile_seed`: the tile's index and the store's
+    identity, so that a tile's data and checksum copied to another tile or
+    store do not match there): checked on resume."""
+    c = 0 if seed is None else zlib.crc32(seed.encode())
     for name in sorted(values):
         a = np.ascontiguousarray(values[name])
         c = zlib.crc32(f"{name}{a.dtype.str}{a.shape}".encode(), c)
@@ -329,7 +365,7 @@ def _create(path, template, encoding, shape_tiles, tile):
         with atomic_path(path) as tmp:
             template.to_zarr(tmp, mode="w", compute=False, encoding=encoding, consolidated=False)
             record = zarr.open_group(str(tmp), mode="r+").create_group(TILES_GROUP)
-            record.attrs.update(format=FORMAT, tile=tile, token=uuid.uuid4().hex)
+            record.attrs.update(format=FORMAT, tile=tile, token=uuid.uuid4().hex, checksum=CHECKSUM)
             record.zeros(name="done", shape=shape_tiles, chunks=(1, 1), dtype=bool)
             record.full(name="crc", shape=shape_tiles, chunks=(1, 1), dtype=np.int64, fill_value=-1)
     except PermissionError as exc:
@@ -338,27 +374,41 @@ def _create(path, template, encoding, shape_tiles, tile):
 
 def _verify(path, rows, cols, done, repair=True):
     """Tiles marked done whose data no longer matches their checksum (a chunk
-    deleted, truncated or garbled): unmarked (with ``repair``), so that they
-    are computed again.  Returns their indices."""
+    deleted, truncated or garbled, or copied with its checksum from another
+    tile or store): unmarked (with ``repair``), so that they are computed
+    again.  Returns their indices.  A store whose checksums are of the bytes
+    only (before issue 38) is verified so; with ``repair`` the checksums of
+    its intact tiles are then rewritten bound (:data:`CHECKSUM`)."""
     import zarr
 
     root = zarr.open_group(str(path), mode="r+" if repair else "r")
     record = root[TILES_GROUP]
     arrays = {name: arr for name, arr in root.arrays() if arr.ndim == 2}
     crc, _ = _read_record(record["crc"], -2)  # -2: no checksum, an unreadable chunk is damage
+    identity = _identity(dict(root.attrs), dict(record.attrs))
+    upgrade = repair and identity is None
+    if upgrade:
+        bound = _identity(dict(root.attrs), {**record.attrs, "checksum": CHECKSUM})
+        rewrite = {}
     damaged = []
     for i, j in zip(*np.nonzero(done)):
         try:
             values = {name: arr[rows[i], cols[j]] for name, arr in arrays.items()}
-            ok = _checksum(values) == int(crc[i, j])
+            ok = _checksum(values, _tile_seed(identity, i, j)) == int(crc[i, j])
         except Exception:  # noqa: BLE001 - any read error of a chunk is damage
             ok = False
         if not ok:
             damaged.append((int(i), int(j)))
+        elif upgrade:
+            rewrite[i, j] = _checksum(values, _tile_seed(bound, i, j))
     if repair:
         for i, j in damaged:
             record["done"][i, j] = False
             record["crc"][i, j] = -1
+    if upgrade:  # the checksums first: interrupted here, the old ones fail and their tiles are recomputed
+        for (i, j), c in rewrite.items():
+            record["crc"][i, j] = c
+        record.attrs["checksum"] = CHECKSUM
     return damaged
 
 
@@ -582,10 +632,12 @@ def scan_to_zarr(
             if progress is not None:
                 progress(total - len(todo), total)
 
-            token = _tile_record(path).attrs["token"]
+            record = _tile_record(path)
+            token = record.attrs["token"]
+            identity = _identity(_root_attrs(path), dict(record.attrs))
             args = [
                 (str(path), token, owner, i, j, rows[i], cols[j], es[cols[j]], us[rows[i]],
-                 a["max_iter"], a["y0"], a["v0"], bool(prune), numba_threads)
+                 a["max_iter"], a["y0"], a["v0"], bool(prune), numba_threads, identity)
                 for i, j in todo
             ]
             if client is None:
@@ -659,7 +711,7 @@ def _run_here(args, numba_threads, n_done, total, progress):
     import numba
     from concurrent.futures import ThreadPoolExecutor, as_completed
 
-    args = [arg[:-1] + (numba_threads or 1,) for arg in args]
+    args = [arg[:13] + (numba_threads or 1,) + arg[14:] for arg in args]  # arg[13]: numba_threads
     side_by_side = max(1, numba.get_num_threads() // (numba_threads or 1))
     if side_by_side == 1 or len(args) == 1:
         for arg in args:
