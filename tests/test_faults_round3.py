@@ -279,3 +279,172 @@ def test_r3_a_store_of_before_keeps_resuming_and_its_checksums_are_bound_from_th
     assert any("(1, 2)" in w for w in warned), warned
     ref = plane.scan(**R3_WINDOW)
     assert all(np.array_equal(ds[k].values, ref[k].values) for k in R3_VARS)
+
+
+# --------------------------------------------------------------------------- #
+# R9: a store whose array lost its metadata; R11: one writer per folder       #
+# --------------------------------------------------------------------------- #
+
+
+from .test_faults import run as _run_cli  # noqa: E402  (the CLI in process: exit status, out, err)
+from .test_faults_round2 import one_line_error as _one_line_error  # noqa: E402
+
+
+R3_SCAN = ["scan", "--e", "0.05:0.95", "--u", "0.1:1.4", "--size", "45x38", "--max-iter", "400"]
+
+
+@pytest.mark.parametrize("damage", ["status/zarr.json", "word_length/zarr.json", "tiles/done/zarr.json", "status"])
+def test_r9_a_store_whose_array_lost_its_metadata_is_one_line_everywhere(tmp_path, capsys, damage):
+    """Report R9: ``rm s.zarr/status/zarr.json`` gave a 57-line ``KeyError:
+    'status'`` traceback in ``render`` and in resume.  Now ``render``, resume
+    (CLI and API) and ``load`` refuse it in one line naming the store; the
+    variants: another array's metadata, the tile record's, a whole array gone."""
+    import shutil
+
+    from stairbounce.atlas import scan_to_zarr
+
+    path = tmp_path / "s.zarr"
+    scan_to_zarr(path, tile=R3_TILE, **R3_WINDOW)
+    target = path / damage
+    shutil.rmtree(target) if target.is_dir() else target.unlink()
+    code, _, err = _run_cli(["render", path, "--png", tmp_path / "s.png"], capsys)
+    assert code == 2 and _one_line_error(err) and str(path) in err, err
+    assert not (tmp_path / "s.png").exists()
+    code, _, err = _run_cli(R3_SCAN + ["--tile", R3_TILE, "--out", path], capsys)
+    assert code == 2 and _one_line_error(err) and str(path) in err, err
+    with pytest.raises(ValueError, match="s.zarr"):
+        scan_to_zarr(path, tile=R3_TILE, **R3_WINDOW)
+    if damage != "status":  # a whole variable gone is still a readable dataset for load
+        with pytest.raises(ValueError, match="lost its metadata"):
+            plane.load(path)
+
+
+def test_r9_a_saved_scan_whose_array_lost_its_metadata_is_refused_by_load(tmp_path, capsys):
+    path = tmp_path / "p.zarr"
+    plane.save(plane.scan(e=(0.1, 0.9, 20), u=(0.2, 1.2, 16), max_iter=100), path)
+    (path / "period" / "zarr.json").unlink()
+    with pytest.raises(ValueError, match=r"p\.zarr.*'period'"):
+        plane.load(path)
+    code, _, err = _run_cli(["render", path, "--png", tmp_path / "p.png", "--field", "status"], capsys)
+    assert code == 2 and _one_line_error(err), err
+
+
+@pytest.fixture
+def bind_alias(tmp_path):
+    """The folder of a store mounted under another name (root only)."""
+    import os
+    import subprocess
+
+    real = tmp_path / "d6" / "real.zarr"
+    other = tmp_path / "d6other" / "other.zarr"
+    real.mkdir(parents=True)
+    other.mkdir(parents=True)
+    if os.geteuid() != 0:
+        pytest.skip("a bind mount needs root")
+    r = subprocess.run(["mount", "--bind", str(real), str(other)], capture_output=True, text=True)
+    if r.returncode != 0:
+        pytest.skip(f"cannot bind-mount here: {r.stderr.strip()}")
+    yield real, other
+    subprocess.run(["umount", str(other)], capture_output=True)
+
+
+def test_r11_a_store_bind_mounted_under_another_name_has_one_writer(bind_alias, tmp_path, capsys):
+    """Report R11: the store folder bind-mounted under another name got a
+    second writer (the lock file beside each name differed).  Now the folder
+    is locked by its device and inode: a writer under either name refuses
+    the other, through the API and the command line."""
+    import os
+    import shutil
+
+    from stairbounce import _io
+    from stairbounce.atlas import scan_to_zarr
+
+    real, other = bind_alias
+    build = tmp_path / "build.zarr"
+    scan_to_zarr(build, tile=R3_TILE, **R3_WINDOW)
+    for item in build.iterdir():
+        (shutil.copytree if item.is_dir() else shutil.copyfile)(item, real / item.name)
+    assert os.stat(real).st_ino == os.stat(other).st_ino and (other / "tiles").is_dir()
+    with _io.store_lock(real):
+        with pytest.raises(_io.StoreLockedError, match="inode"):
+            scan_to_zarr(other, tile=R3_TILE, **R3_WINDOW)
+        assert _io.lock_holder(other) is not None
+        code, _, err = _run_cli(R3_SCAN + ["--tile", R3_TILE, "--out", other], capsys)
+        assert code == 2 and _one_line_error(err) and "another stairbounce process" in err, err
+        code, _, err = _run_cli(["scan", "--size", "16x16", "--max-iter", "20", "--out", other, "--force"], capsys)
+        assert code == 2 and _one_line_error(err), err
+    with _io.store_lock(other):  # the other way round
+        with pytest.raises(_io.StoreLockedError):
+            scan_to_zarr(real, tile=R3_TILE, **R3_WINDOW)
+    ds = scan_to_zarr(other, tile=R3_TILE, **R3_WINDOW)  # free again
+    assert np.array_equal(ds["period"].values, plane.scan(**R3_WINDOW)["period"].values)
+
+
+# --------------------------------------------------------------------------- #
+# R10: the figures' cache hits for every kind, and follows the code of each   #
+# --------------------------------------------------------------------------- #
+
+
+def _figures_cached(cache, kind, inputs, compute):
+    from stairbounce import figures as F
+
+    return F._cached(F.Settings(out=cache, cache_dir=cache), kind, dict(inputs), compute)
+
+
+BIF_INPUTS = {"e": 0.5, "u": [0.3, 1.0], "n": 40, "y0": 0.1, "v0": 0.0, "transient": 300, "keep": 50}
+
+
+def _bifurcations():
+    return borders.bifurcations(0.5, np.linspace(0.3, 1.0, 40), y0=0.1, v0=0.0, transient=300, keep=50)
+
+
+def test_r10_a_bifurcations_entry_is_used_the_second_time(tmp_path):
+    """Report R10 (d): a "bifurcations" entry never hit (its string variables
+    read back as ``<U``, the checksum was of ``object`` arrays): every run
+    recomputed it.  A variant: a dataset with a ``<U`` variable from the start."""
+    import xarray as xr
+
+    first = _figures_cached(tmp_path, "bifurcations", BIF_INPUTS, _bifurcations)
+    assert first.sizes["bifurcation"] > 0 and any(first[k].dtype == object for k in first.variables)
+    calls = []
+    again = _figures_cached(tmp_path, "bifurcations", BIF_INPUTS, lambda: calls.append(1) or _bifurcations())
+    assert calls == []
+    for k in first.variables:
+        assert np.array_equal(np.asarray(first[k].values, dtype=str if first[k].dtype == object else None),
+                              np.asarray(again[k].values, dtype=str if first[k].dtype == object else None)), k
+    texts = xr.Dataset({"w": ("i", np.array(["(1, 0^inf)", "(2, 0, 1, 0^inf)"]))})
+    _figures_cached(tmp_path, "scan", {"x": 1}, lambda: texts)
+    calls = []
+    _figures_cached(tmp_path, "scan", {"x": 1}, lambda: calls.append(1) or texts)
+    assert calls == []
+
+
+def test_r10_the_kernel_hash_covers_every_module_that_computes_a_cached_entry(monkeypatch, tmp_path):
+    """Report R10: the kernel hash left out borders.py, which computes the
+    bifurcation entries (a change of it would reuse stale entries once they
+    hit).  Every function whose result figures.py caches is in a hashed
+    module, and a change of borders.py makes a new entry."""
+    import re
+
+    from stairbounce import _cache, figures, nonsliding, orbits
+
+    kinds = set(re.findall(r'_cached\(\s*settings, "([a-z_]+)"', Path(figures.__file__).read_text()))
+    computed_by = {"scan": plane.scan, "orbits": orbits.orbit_diagram, "bifurcations": borders.bifurcations,
+                   "motion": nonsliding.motion_scan}
+    assert kinds == set(computed_by)  # a new cached kind: name the function that computes it here
+    hashed = {name for name, _ in _cache._kernel_sources()}
+    for fn in computed_by.values():
+        rel = Path(fn.__code__.co_filename).resolve().relative_to(Path(_cache.__file__).resolve().parent)
+        assert rel.as_posix() in hashed, rel
+    assert "regions.py" in hashed  # not listed: followed from the modules that import it
+    _figures_cached(tmp_path, "bifurcations", BIF_INPUTS, _bifurcations)
+    real = _cache._kernel_sources()
+    changed = [(n, t + b"\n# changed") if n == "borders.py" else (n, t) for n, t in real]
+    monkeypatch.setattr(_cache, "_kernel_sources", lambda: changed)
+    _cache.kernel_hash.cache_clear()
+    try:
+        calls = []
+        _figures_cached(tmp_path, "bifurcations", BIF_INPUTS, lambda: calls.append(1) or _bifurcations())
+        assert calls == [1]
+    finally:
+        _cache.kernel_hash.cache_clear()

@@ -42,7 +42,8 @@ returns; a second scan on the same path is refused with the holder's name.
 Every tile, wherever it runs, checks that the lock still holds the token of
 the scan that handed it out before it writes, so only the client holding the
 lock ever writes into the store.  The lock is that of the store a path leads
-to (symlinks resolved), and every tile also checks, before and after it
+to (symlinks resolved) and of its folder by device and inode (a bind mount
+of it under another name), and every tile also checks, before and after it
 writes, that the store at the path is still the one its scan opened (its
 token): a store replaced under a running scan stops it with an error.
 
@@ -76,7 +77,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _validate as _v
-from ._io import store_lock
+from ._io import lock_store_folder, store_lock
 from .model import check_count
 from .units import Staircase, staircase_of, with_speed
 
@@ -412,10 +413,14 @@ def _verify(path, rows, cols, done, repair=True):
     return damaged
 
 
-def _check_existing(path, attrs, tile):
-    """Refuse an existing store made for another scan; never mix two scans."""
+def _check_existing(path, attrs, tile, variables=()):
+    """Refuse an existing store made for another scan, or one whose arrays
+    lost their metadata or are missing (report round 3, R9); never mix two scans."""
     import zarr
 
+    from ._io import check_store_metadata
+
+    check_store_metadata(path, "a tiled scan store")
     try:
         root = zarr.open_group(str(path), mode="r")
         record = root[TILES_GROUP]
@@ -430,6 +435,9 @@ def _check_existing(path, attrs, tile):
         )
     if "crc" not in record or "done" not in record:
         raise ValueError(f"{path} is a damaged tile store (its tile record is incomplete): write to a new path")
+    missing = [name for name in variables if name not in root]
+    if missing:
+        raise ValueError(f"{path} is a damaged tile store (its array {missing[0]!r} is missing): write to a new path")
     differ = []
     if record.attrs.get("tile") != tile:
         differ.append(f"tile: store {record.attrs.get('tile')!r}, asked {tile!r}")
@@ -595,7 +603,8 @@ def scan_to_zarr(
     reason = _unwritable_reason(path.parent)
     if reason is not None and path.exists():
         # no lock can be taken here: a complete store opens read-only (report N9)
-        return _open_read_only(path, template.attrs, tile, es, us, rows, cols, verify, progress, reason)
+        return _open_read_only(path, template.attrs, tile, es, us, rows, cols, verify, progress, reason,
+                               list(template.data_vars))
     if reason is not None:
         raise ValueError(f"cannot write {path}: folder {path.parent} is not writable ({reason})")
 
@@ -605,10 +614,11 @@ def scan_to_zarr(
     try:
         with store_lock(path) as owner:
             if path.exists():
-                _check_existing(path, template.attrs, tile)
+                _check_existing(path, template.attrs, tile, list(template.data_vars))
                 _check_coords(path, es, us, repair=True)
             else:
                 _create(path, template, encoding, (len(rows), len(cols)), tile)
+                lock_store_folder(path, owner)  # its device and inode, whatever name it gets
 
             done, unreadable = _read_record(_tile_record(path)["done"], False)
             if unreadable:
@@ -651,12 +661,12 @@ def scan_to_zarr(
     return xr.open_zarr(str(path), consolidated=False)
 
 
-def _open_read_only(path, attrs, tile, es, us, rows, cols, verify, progress, reason):
+def _open_read_only(path, attrs, tile, es, us, rows, cols, verify, progress, reason, variables=()):
     """A store whose folder cannot be written (no lock can be taken there):
     opened read-only when it is this scan's, complete and intact, else refused."""
     import xarray as xr
 
-    _check_existing(path, attrs, tile)
+    _check_existing(path, attrs, tile, variables)
     _check_coords(path, es, us, repair=False)
     done = tiles_done(path)
     missing = int((~done).sum())
