@@ -448,3 +448,80 @@ def test_r10_the_kernel_hash_covers_every_module_that_computes_a_cached_entry(mo
         assert calls == [1]
     finally:
         _cache.kernel_hash.cache_clear()
+
+
+# --------------------------------------------------------------------------- #
+# R5: itinerary estimated up front, streamed by the command line              #
+# --------------------------------------------------------------------------- #
+
+NEAR_ONE = dict(e=0.9999999999999999, u=0.01768)  # the report's orbit: no slide for 2.5e8 steps and more
+
+
+def test_r5_itinerary_refuses_a_max_iter_over_the_memory_before_it_starts(monkeypatch):
+    """Report R5: ``itinerary(max_iter=2**31 - 1)`` near e = 1 grew to half the
+    machine's memory (checked block by block against what was left) before it
+    refused.  Now the estimate comes first, naming max_iter; nothing is
+    computed.  The variants: another available memory, the largest max_iter."""
+    from stairbounce import _validate
+
+    calls = []
+    orig = borders._itinerary_block
+    monkeypatch.setattr(borders, "_itinerary_block", lambda *a: calls.append(1) or orig(*a))
+    for avail, max_iter in [(64 << 20, 2_000_000), (1 << 30, 2**31 - 1)]:
+        monkeypatch.setattr(_validate, "available_memory", lambda avail=avail: avail)
+        with pytest.raises(ValueError, match=f"max_iter = {max_iter}.*memory"):
+            borders.itinerary(max_iter=max_iter, **NEAR_ONE)
+        assert calls == []
+    monkeypatch.setattr(_validate, "available_memory", lambda: 64 << 20)
+    assert borders.itinerary(0.02, 0.7, max_iter=100_000).sizes["step"] == 4  # a small one still runs
+
+
+def _itinerary_peak(tmp_path, max_iter):
+    """Peak resident memory (kB) of ``stairbounce itinerary --csv`` near e = 1
+    in a process of its own, and its CSV's data rows."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom stairbounce.cli import main\ntry:\n    main(sys.argv[1:])\n"
+            "except SystemExit as exc:\n    assert exc.code in (0, None), exc.code\n"
+            "sys.stderr.write('HWM ' + open('/proc/self/status').read().split('VmHWM:')[1].split()[0])")
+    out = tmp_path / f"it{max_iter}.csv"
+    with open(out, "w") as f:
+        r = subprocess.run([sys.executable, "-c", code, "itinerary", "--e", repr(NEAR_ONE["e"]), "--u",
+                            repr(NEAR_ONE["u"]), "--max-iter", str(max_iter), "--csv"], stdout=f,
+                           stderr=subprocess.PIPE, text=True, env={**__import__("os").environ, "PYTHONPATH": SRC})
+    assert r.returncode == 0, r.stderr
+    rows = sum(1 for _ in open(out)) - 1
+    return int(r.stderr.rsplit("HWM ", 1)[1]), rows
+
+
+SRC = str(Path(__file__).resolve().parents[1] / "src")
+
+
+def test_r5_the_itinerary_command_streams_its_rows(tmp_path):
+    """The command line writes the itinerary block by block: 400 000 steps
+    (the whole itinerary: 19 MB in blocks, as much again joined) cost its
+    process no more memory than 1000 steps, to a few MB."""
+    base, n0 = _itinerary_peak(tmp_path, 1000)
+    peak, n = _itinerary_peak(tmp_path, 400_000)
+    assert (n0, n) == (1000, 400_000)
+    assert peak - base < 12_000, (base, peak)  # kB
+
+
+def test_r5_issue37_the_itinerary_command_says_its_convention_and_the_word(capsys):
+    """Issue 37: the margins came without their sign convention and the word
+    they spell was not printed."""
+    from stairbounce.symbolic import sliding_word
+
+    from .test_faults import run
+
+    word = sliding_word(0.02, 0.7).format(ascii=True)
+    code, out, err = run(["itinerary", "--e", "0.02", "--u", "0.7"], capsys)
+    assert code == 0, err
+    assert ">= 0: the event happens on the step" in out and "accumulation point (>= 0: the step slides" in out
+    assert f"slides on step 4; the impact numbers spell the word {word}" in out
+    code, out, err = run(["itinerary", "--e", "0.02", "--u", "0.7", "--csv"], capsys)
+    assert code == 0 and len(out.strip().splitlines()) == 5  # the CSV alone on stdout
+    assert word in err and ">= 0: the event happens" in err
+    code, out, err = run(["itinerary", "--e", "0.3", "--u", "3", "--max-iter", "50"], capsys)
+    assert code == 0 and "no slide within 50 steps (no word)" in out

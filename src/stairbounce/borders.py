@@ -496,6 +496,34 @@ def _check_max_iter(max_iter):
     return max_iter
 
 
+_ITINERARY_NAMES = ("impacts", "y", "v", "contact", "next_impact", "accumulation")
+_ITINERARY_BYTES = 8 * (len(_ITINERARY_NAMES) + 2)  # per step, at the peak of itinerary()
+
+
+def _itinerary_args(e, u, max_iter, y0, v0):
+    """The arguments of :func:`itinerary`, checked (ValueError naming one)."""
+    e = check_e(e)
+    u = check_u(u)
+    max_iter = _check_max_iter(max_iter)
+    y0, v0 = check_state(y0, v0, "y0", "v0")
+    return e, u, max_iter, y0, v0
+
+
+def _itinerary_blocks(e, u, max_iter, y0, v0):
+    """The steps of :func:`itinerary` (checked arguments, :func:`_itinerary_args`)
+    in blocks of at most 65536: yields ``(block, slid)``, ``block`` a dict of
+    the columns of those steps, ``slid`` whether the last of them slides.
+    Memory: one block, whatever ``max_iter`` (the command line streams them)."""
+    T, ratio = _constants(e, u)
+    y, v, left, slid = y0, v0, max_iter, False
+    while left > 0 and not slid:
+        m = min(left, _BLOCK)
+        block = {k: np.empty(m, dtype=np.int64 if k == "impacts" else np.float64) for k in _ITINERARY_NAMES}
+        n, y, v, slid = _itinerary_block(y, v, e, T, ratio, m, *(block[k] for k in _ITINERARY_NAMES))
+        left -= n
+        yield {k: a[:n] for k, a in block.items()}, slid
+
+
 def itinerary(e, u, max_iter=1000, y0=1.0, v0=0.0):
     """itinerary(e, u, max_iter=1000, y0=1.0, v0=0.0) -> xarray.Dataset
 
@@ -533,26 +561,25 @@ def itinerary(e, u, max_iter=1000, y0=1.0, v0=0.0):
     Raises
     ------
     ValueError
-        A parameter out of its range (naming it).
+        A parameter out of its range (naming it), or a ``max_iter`` whose
+        itinerary could need more memory than is available (64 bytes a
+        step; checked before it starts).
     """
-    e = check_e(e)
-    u = check_u(u)
-    max_iter = _check_max_iter(max_iter)
-    y0, v0 = check_state(y0, v0, "y0", "v0")
-    T, ratio = _constants(e, u)
-    names = ("impacts", "y", "v", "contact", "next_impact", "accumulation")
-    parts = {k: [] for k in names}
-    y, v, left, slid = y0, v0, max_iter, False
-    while left > 0 and not slid:
-        m = min(left, _BLOCK)
-        _v.check_memory(f"an itinerary of {max_iter - left + m} steps", 48 * (max_iter - left + m))
-        block = {k: np.empty(m, dtype=np.int64 if k == "impacts" else np.float64) for k in names}
-        n, y, v, slid = _itinerary_block(y, v, e, T, ratio, m, *(block[k] for k in names))
-        for k in names:
-            parts[k].append(block[k][:n])
-        left -= n
-    data = {k: np.concatenate(parts[k]) for k in names}
+    e, u, max_iter, y0, v0 = _itinerary_args(e, u, max_iter, y0, v0)
+    # estimated before it starts (report round 3, R5: checked block by block against the
+    # memory left, it refused at half the machine): 6 columns, the step numbers, and one
+    # column at a time copied out of the blocks
+    _v.check_memory(f"max_iter = {max_iter}: an itinerary of up to {max_iter} steps", _ITINERARY_BYTES * max_iter)
+    parts = {k: [] for k in _ITINERARY_NAMES}
+    slid = False
+    for block, slid in _itinerary_blocks(e, u, max_iter, y0, v0):
+        for k in _ITINERARY_NAMES:
+            parts[k].append(block[k])
+    data = {}
+    for k in _ITINERARY_NAMES:
+        data[k] = np.concatenate(parts.pop(k))
     steps = np.arange(1, data["impacts"].size + 1, dtype=np.int64)
+    names = _ITINERARY_NAMES
     desc = {
         "impacts": "impact number of the step (0 flies over, k >= 1, -1 = SLIDING)",
         "y": "height above the step's floor entering the step",
