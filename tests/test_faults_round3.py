@@ -525,3 +525,65 @@ def test_r5_issue37_the_itinerary_command_says_its_convention_and_the_word(capsy
     assert word in err and ">= 0: the event happens" in err
     code, out, err = run(["itinerary", "--e", "0.3", "--u", "3", "--max-iter", "50"], capsys)
     assert code == 0 and "no slide within 50 steps (no word)" in out
+
+
+# --------------------------------------------------------------------------- #
+# Observation: a Dask scan without workers says so                            #
+# --------------------------------------------------------------------------- #
+
+
+@pytest.mark.filterwarnings("ignore:Port 8787 is already in use")
+def test_observation_a_tiled_scan_without_workers_says_so_and_goes_on_when_they_come(tmp_path, capsys, monkeypatch):
+    """Report (observations): when every Dask worker is gone the client waits
+    silently.  Now the command line says "waiting for workers: none
+    connected" after a while, and the scan goes on once a worker connects."""
+    import threading
+
+    distributed = pytest.importorskip("distributed")
+    from stairbounce import atlas
+
+    from .test_faults import run
+
+    monkeypatch.setattr(atlas, "WAIT_NOTE", 1.0, raising=False)
+    cluster = distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None)
+    note = getattr(atlas, "_cluster_note", lambda client, waited: None)
+    said = []
+    fallback = threading.Timer(20.0, lambda: cluster.scale(1))  # a silent client: a worker comes anyway
+    fallback.daemon = True
+    fallback.start()
+
+    def noted(client, waited):  # once it is said, a worker comes
+        text = note(client, waited)
+        if text is not None and not said:
+            said.append(text)
+            threading.Timer(0.5, lambda: cluster.scale(1)).start()
+        return text
+
+    monkeypatch.setattr(atlas, "_cluster_note", noted, raising=False)
+    try:
+        path = tmp_path / "s.zarr"
+        code, out, err = run(R3_SCAN + ["--tile", R3_TILE, "--out", path, "--scheduler", cluster.scheduler_address],
+                             capsys)
+    finally:
+        fallback.cancel()
+        cluster.close()
+    assert code in (0, None), err
+    assert "stairbounce: warning: waiting for workers: none connected" in err, err
+    assert f"wrote {path}" in out
+    assert np.array_equal(plane.load(path)["period"].values, plane.scan(**R3_WINDOW)["period"].values)
+
+
+def test_observation_a_scheduler_that_does_not_answer_is_said():
+    """The stopped scheduler (SIGSTOP) of the report: it does not answer."""
+    from types import SimpleNamespace
+
+    from stairbounce import atlas
+
+    def no_answer(callback_timeout=None):
+        raise TimeoutError("timed out")
+
+    client = SimpleNamespace(scheduler=SimpleNamespace(address="tcp://10.0.0.1:8786"), nthreads=no_answer)
+    note = atlas._cluster_note(client, 42.0)
+    assert "tcp://10.0.0.1:8786: it does not answer" in note and "42 s" in note
+    busy = SimpleNamespace(scheduler=SimpleNamespace(address="x"), nthreads=lambda callback_timeout=None: {"w": 1})
+    assert atlas._cluster_note(busy, 42.0) is None

@@ -69,6 +69,7 @@ import contextlib
 import math
 import os
 import threading
+import time
 import uuid
 import warnings
 import zlib
@@ -767,9 +768,22 @@ def _dask_each(client, fn, args, each, wait_cancelled=False) -> None:
     futures = []
     try:
         futures = [client.submit(fn, *a, pure=False) for a in args]
-        for future in as_completed(futures):
-            each(future.result())
-            future.release()
+        done = as_completed(futures)
+        last = noted = time.monotonic()
+        while not done.is_empty():
+            if done.has_ready():
+                future = next(done)
+                each(future.result())
+                future.release()
+                last = noted = time.monotonic()
+                continue
+            time.sleep(0.05)  # Ctrl-C is seen here at once
+            now = time.monotonic()
+            if now - noted >= WAIT_NOTE:  # no tile finished for a while: say why, if the cluster knows
+                note = _cluster_note(client, now - last)
+                noted = time.monotonic()
+                if note is not None:
+                    warnings.warn(note, RuntimeWarning, stacklevel=2)
     except (FutureCancelledError, CommClosedError) as exc:
         # the scheduler is gone (report N7: a 30-line traceback): what is
         # complete stays complete, the same call resumes
@@ -788,6 +802,28 @@ def _dask_each(client, fn, args, each, wait_cancelled=False) -> None:
                     from distributed import wait
 
                     wait(pending, timeout=5)
+
+
+WAIT_NOTE = 30.0
+"""Seconds without a finished tile after which a Dask scan asks its scheduler
+how many workers it has, and says so when none is connected or the scheduler
+does not answer (then again every as many seconds); report round 3: a scan
+whose workers were all killed, or whose scheduler was stopped, waited silently."""
+
+
+def _cluster_note(client, waited):
+    """What a Dask scan waits for, or None when workers are connected: the
+    scheduler asked for its workers, within 5 s."""
+    address = getattr(getattr(client, "scheduler", None), "address", "") or "?"
+    try:
+        workers = client.nthreads(callback_timeout=5)
+    except Exception:  # noqa: BLE001 - no answer: stopped, or gone (then the scan fails on its own)
+        return (f"waiting for the Dask scheduler {address}: it does not answer (no tile finished for "
+                f"{waited:.0f} s); Ctrl-C stops, the complete tiles are kept")
+    if not workers:
+        return (f"waiting for workers: none connected to the Dask scheduler {address} (no tile finished "
+                f"for {waited:.0f} s); start workers, or Ctrl-C stops and the complete tiles are kept")
+    return None
 
 
 def _run_on_dask(client, args, n_done, total, progress):
