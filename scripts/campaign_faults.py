@@ -706,6 +706,199 @@ except ValueError as exc:
         t.case("numeric", f"{name} of a broadcast view", "REFUSED" in r.stdout, (r.stdout + r.stderr)[-200:])
 
 
+# --------------------------------------------------------------------------- #
+# Round 3, part A (issue 38: R1, R3, R5, R9, R10, R11, the Dask observation)  #
+# --------------------------------------------------------------------------- #
+
+R3A_SCAN = ["scan", "--size", "48x48", "--tile", "16", "--max-iter", "300"]
+
+
+def _r3a_store(d, name="S.zarr", extra=()):
+    r = sb(R3A_SCAN + list(extra) + ["--out", name], d)
+    return r.returncode == 0, r.stderr[-300:]
+
+
+def _r3a_explorer_slices(t, work):
+    """R1: the report's link; each job's first slices (border points, traced
+    seed scan, a tap's word-table row) within the slice bound (timed: 1e8
+    potential map steps are under 0.1 s idle, a few tenths under load)."""
+    code = """
+import time
+from stairbounce.explorer import view as V
+small = V.View(0.1, 0.3, 0.4, 0.7, 16, 16, max_iter=50)  # compiled and loaded first: not timed
+for gen in (V.border_point_slices(small), V.trace_slices(small), V.word_row_slices(small, "(1, 0^inf)")):
+    for _ in gen:
+        pass
+v = V.View(0.1, 0.3, 0.4, 0.7, 70, 70, max_iter=1000000, overlays=("borders",))
+jobs = {"borders": V.border_point_slices(v), "traced": V.trace_slices(v), "word_row": V.word_row_slices(v, "(1, 0^inf)")}
+for name, gen in jobs.items():
+    worst = 0.0
+    for _ in range(3):
+        t0 = time.perf_counter()
+        try:
+            next(gen)
+        except StopIteration:
+            break
+        worst = max(worst, time.perf_counter() - t0)
+    gen.close()
+    print("SLICE", name, worst)
+"""
+    r = _py(code, work, timeout=300)
+    worst = {ln.split()[1]: float(ln.split()[2]) for ln in r.stdout.splitlines() if ln.startswith("SLICE")}
+    for name in ("borders", "traced", "word_row"):
+        t.case("round3a", f"R1 explorer {name}: slices of the report's link bounded",
+               name in worst and worst[name] < 2.0, f"{worst.get(name)} s; {r.stderr[-200:]}")
+
+
+def _r3a_tiles_copied(t, work):
+    """R3: a tile's data and checksum copied from another tile, or another store."""
+    for case in ("another tile", "another store"):
+        d = Path(tempfile.mkdtemp(dir=work))
+        ok, why = _r3a_store(d)
+        ok2, _ = _r3a_store(d, "O.zarr", ["--e", "0.2:0.7"]) if case == "another store" else (True, "")
+        src, ij = (d / "S.zarr", ("1", "1")) if case == "another tile" else (d / "O.zarr", ("0", "0"))
+        for rel in ("status", "word_length", "jumps", "period", "impacts", "tiles/crc"):
+            shutil.copyfile(src / rel / "c" / ij[0] / ij[1], d / "S.zarr" / rel / "c" / "0" / "0")
+        r = sb(R3A_SCAN + ["--out", "S.zarr"], d)
+        same, diff = _store_vs_scan(d / "S.zarr", 48, 300)
+        t.case("round3a", f"R3 tile and checksum from {case}: found and recomputed",
+               ok and ok2 and r.returncode == 0 and "no longer match" in r.stderr and same,
+               f"{why} exit {r.returncode} {r.stderr[-200:]} {diff}")
+
+
+def _r3a_itinerary(t, work):
+    """R5: refused up front by the API; the command streams; its convention and word (issue 37)."""
+    code = """
+import time, stairbounce as sb
+t0 = time.perf_counter()
+try:
+    sb.itinerary(0.9999999999999999, 0.01768, max_iter=2**31 - 1)
+    print("RAN")
+except ValueError as exc:
+    print("REFUSED" if "max_iter" in str(exc) else exc, time.perf_counter() - t0)
+"""
+    r = _py(code, work, timeout=120)
+    t.case("round3a", "R5 itinerary(max_iter=2**31-1) refused before it starts",
+           r.stdout.startswith("REFUSED") and float(r.stdout.split()[-1]) < 5, (r.stdout + r.stderr)[-200:])
+    peaks = {}
+    for n in (1000, 2000000):
+        code = ("import sys\nfrom stairbounce.cli import main\ntry:\n    main(sys.argv[1:])\nexcept SystemExit:\n    pass\n"
+                "sys.stderr.write('HWM ' + open('/proc/self/status').read().split('VmHWM:')[1].split()[0])")
+        r = subprocess.run([sys.executable, "-c", code, "itinerary", "--e", "0.9999999999999999", "--u", "0.01768",
+                            "--max-iter", str(n), "--csv"], cwd=work, stdout=subprocess.DEVNULL,
+                           stderr=subprocess.PIPE, text=True, timeout=600)
+        peaks[n] = int(r.stderr.rsplit("HWM ", 1)[1]) if "HWM " in r.stderr else None
+    t.case("round3a", "R5 itinerary --csv of 2e6 steps streams (peak RSS within 30 MB of 1000 steps)",
+           None not in peaks.values() and peaks[2000000] - peaks[1000] < 30_000, f"{peaks} kB")
+    r = sb(["itinerary", "--e", "0.02", "--u", "0.7"], work)
+    t.case("round3a", "R5/issue 37 itinerary says its convention and the word",
+           r.returncode == 0 and ">= 0: the event happens" in r.stdout and "spell the word (" in r.stdout,
+           r.stdout[-300:])
+
+
+def _r3a_metadata(t, work):
+    """R9: an array's or group's metadata deleted: render and resume in one line."""
+    for rel in ("status/zarr.json", "period/zarr.json", "tiles/done/zarr.json"):
+        d = Path(tempfile.mkdtemp(dir=work))
+        ok, why = _r3a_store(d)
+        (d / "S.zarr" / rel).unlink()
+        r1 = sb(["render", "S.zarr", "--png", "s.png"], d)
+        r2 = sb(R3A_SCAN + ["--out", "S.zarr"], d)
+        t.case("round3a", f"R9 {rel} deleted: render and resume one line",
+               ok and all(r.returncode == 2 and one_line(r.stderr) and "S.zarr" in r.stderr for r in (r1, r2))
+               and not (d / "s.png").exists(), f"{why} {r1.returncode} {r1.stderr[-150:]} {r2.returncode} {r2.stderr[-150:]}")
+
+
+def _r3a_cache(t, work):
+    """R10: a bifurcations entry hits the second time; the kernel hash covers borders.py."""
+    code = """
+import numpy as np
+from stairbounce import _cache, figures as F
+from stairbounce.borders import bifurcations
+s = F.Settings(out=".", cache_dir="cache")
+inputs = {"e": 0.5, "u": [0.3, 1.0], "n": 40, "y0": 0.1, "v0": 0.0, "transient": 300, "keep": 50}
+calls = []
+def compute():
+    calls.append(1)
+    return bifurcations(0.5, np.linspace(0.3, 1.0, 40), y0=0.1, v0=0.0, transient=300, keep=50)
+F._cached(s, "bifurcations", dict(inputs), compute)
+F._cached(s, "bifurcations", dict(inputs), compute)
+print("CALLS", len(calls), "BORDERS", "borders.py" in {n for n, _ in _cache._kernel_sources()})
+"""
+    r = _py(code, Path(tempfile.mkdtemp(dir=work)))
+    t.case("round3a", "R10 bifurcations entry used the second time", "CALLS 1" in r.stdout, (r.stdout + r.stderr)[-200:])
+    t.case("round3a", "R10 kernel hash covers borders.py", "BORDERS True" in r.stdout, (r.stdout + r.stderr)[-200:])
+
+
+def _r3a_bind_mount(t, work):
+    """R11: the store folder bind-mounted under another name: one writer."""
+    if os.geteuid() != 0:
+        t.skip("round3a", "R11 bind mount", "needs root")
+        return
+    d = Path(tempfile.mkdtemp(dir=work))
+    ok, why = _r3a_store(d)
+    (d / "other").mkdir()
+    alias = d / "other" / "O.zarr"
+    alias.mkdir()
+    if subprocess.run(["mount", "--bind", str(d / "S.zarr"), str(alias)], capture_output=True).returncode != 0:
+        t.skip("round3a", "R11 bind mount", "mount --bind failed")
+        return
+    holder = subprocess.Popen([sys.executable, "-c", "import sys, time\nfrom pathlib import Path\n"
+                               "from stairbounce._io import store_lock\nwith store_lock(sys.argv[1]):\n"
+                               "    Path('ready').write_text('1'); time.sleep(120)", str(d / "S.zarr")], cwd=d)
+    try:
+        for _ in range(300):
+            if (d / "ready").exists():
+                break
+            time.sleep(0.1)
+        r = sb(R3A_SCAN + ["--out", alias], d)
+        f = sb(["scan", "--size", "16x16", "--max-iter", "20", "--out", alias, "--force"], d)
+        t.case("round3a", "R11 a second writer under a bind-mounted name refused",
+               ok and r.returncode == 2 and one_line(r.stderr) and f.returncode == 2 and one_line(f.stderr),
+               f"{why} {r.returncode} {r.stderr[-200:]} {f.returncode} {f.stderr[-200:]}")
+    finally:
+        _stop(holder)
+        subprocess.run(["umount", str(alias)], capture_output=True)
+
+
+def _r3a_no_workers(t, work):
+    """Observation: a Dask scan whose scheduler has no worker says so; Ctrl-C ends it (exit 130)."""
+    dask_cli = str(Path(sys.executable).with_name("dask"))
+    if not os.path.exists(dask_cli):
+        t.skip("round3a", "no workers", "no dask command")
+        return
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    d = Path(tempfile.mkdtemp(dir=work))
+    sched = subprocess.Popen([dask_cli, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    p = None
+    try:
+        time.sleep(3)
+        p = subprocess.Popen(CLI + R3A_SCAN + ["--scheduler", f"tcp://127.0.0.1:{port}", "--out", "S.zarr"], cwd=d,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             preexec_fn=_default_sigint)
+        time.sleep(60)  # the note comes after 30 s without a finished tile
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=30)
+        t.case("round3a", "no workers: 'waiting for workers: none connected', then Ctrl-C exit 130",
+               "waiting for workers: none connected" in err and p.returncode == 130 and not traceback_in(err),
+               f"exit {p.returncode}: {err[-300:]}")
+    finally:
+        _stop(p)
+        _stop(sched)
+
+
+def part_round3a(t, work, args):
+    """Round 3, part A (issue 38): R1, R3, R5, R9, R10, R11 and the observation."""
+    for case in (_r3a_explorer_slices, _r3a_tiles_copied, _r3a_itinerary, _r3a_metadata, _r3a_cache,
+                 _r3a_bind_mount, _r3a_no_workers):
+        case(t, work)
+
+
 def part_dask(t, work, args):
     """N7: the scheduler killed mid-scan: one line, exit 2; the store resumes bit for bit."""
     dask_cli = str(Path(sys.executable).with_name("dask"))
@@ -909,6 +1102,7 @@ PARTS = {
     "cache": part_cache,
     "host": part_host,
     "numeric": part_numeric,
+    "round3a": part_round3a,
     "dask": part_dask,
     "round3b": part_round3b,
 }

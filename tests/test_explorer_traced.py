@@ -75,6 +75,9 @@ def test_traced_overlay_arcs_kinds_and_the_words_on_both_sides():
     the lower and upper side, and the word of the region it bounds is on one side
     of it all along."""
     regions, seen = _run(V.trace_slices(SMALL, 48))
+    seeds = [s for s in seen if s[1] is None]  # the seed scan's slices come first
+    assert seeds and seen[:len(seeds)] == seeds == [(0, None)] * len(seeds)
+    seen = seen[len(seeds):]
     assert seen[0] == (0, len(regions)) and seen[-1] == (len(regions), len(regions)) and len(seen) == len(regions) + 1
     ref = sb.window_regions(*V.trace_window(SMALL), resolution=48, max_iter=300)
     assert [r.word for r in regions] == [r.word for r in ref]
@@ -172,11 +175,14 @@ def test_traced_mode_schedules_a_trace_a_new_view_cancels_it_and_arcs_replace_po
     assert app.arc_src.data["xs"] == [] and app.border_src.data["e"] == []  # not computed yet
     assert "locating the border points" in app.status.object
     old = jobs[0]
-    sched.run_next()  # the border points
+    while not app.border_src.data["e"]:  # the border points: their grid's scan, the pairs (bounded slices)
+        assert "locating the border points" in app.status.object
+        sched.run_next()
     n_points = len(app.border_src.data["e"])
     assert n_points == V.view_border_points(app.view).sizes["point"] > 50
     assert "finding the words" in app.status.object
-    sched.run_next()  # the seed scan
+    while "finding the words" in app.status.object:  # the seed scan (bounded slices)
+        sched.run_next()
     assert "tracing borders: 0 of " in app.status.object and " words (48 x 48 seeds)" in app.status.object
     sched.run_next()  # one word
     assert app.arc_src.data["xs"] == [] and len(app.border_src.data["e"]) == n_points

@@ -17,7 +17,10 @@ Every file or store the package writes goes through :func:`atomic_path`:
 :func:`store_lock` is the exclusive lock of a store: a lock file created with
 ``O_EXCL`` beside it, holding the owner's host, pid and a token.  A lock whose
 owner is dead on this host is stale and is taken over; any other lock is a
-refusal naming the holder.
+refusal naming the holder.  The store folder itself is locked too, by its
+device and inode (``flock`` on the folder): every name of it (a bind mount, a
+symlink, a hard link) is the same inode, so a second writer is refused
+whatever name it uses (report round 3, R11).
 
 Nothing here imports more than the standard library.
 """
@@ -186,6 +189,43 @@ def is_our_output(path):
     tiles = _json(path / "tiles" / "zarr.json") or {}
     marker = tiles.get("attributes", {}).get("format", "") if isinstance(tiles, dict) else ""
     return isinstance(marker, str) and marker.startswith("stairbounce-atlas")
+
+
+def check_store_metadata(path, what="a scan"):
+    """check_store_metadata(path, what="a scan") -> None
+
+    Refuse a Zarr store folder whose arrays or groups have lost their
+    metadata: a sub-folder (not hidden) of the store or of one of its groups
+    without ``zarr.json`` (or format 2's ``.zarray``/``.zgroup``).  Zarr
+    and xarray skip such a folder silently, so its variable was missing
+    further on, a traceback (report round 3, R9: ``status/zarr.json``
+    deleted).  ``ValueError`` names the store and the array.  Every reader
+    of a store calls this first (:func:`stairbounce.plane.load`, ``render``,
+    :func:`stairbounce.atlas.scan_to_zarr` on resume).
+    """
+    root = Path(path)
+    if not root.is_dir():
+        return
+    todo = [root]
+    while todo:
+        folder = todo.pop()
+        try:
+            entries = sorted(os.scandir(folder), key=lambda d: d.name)
+        except OSError:
+            return  # unreadable: the reader says why
+        for d in entries:
+            if d.name.startswith(".") or not d.is_dir():
+                continue
+            sub = Path(d.path)
+            meta = _json(sub / "zarr.json")
+            if meta is None and not ((sub / ".zarray").exists() or (sub / ".zgroup").exists()):
+                name = sub.relative_to(root).as_posix()
+                raise ValueError(
+                    f"cannot read {path} as {what}: the store is damaged, its array {name!r} has lost "
+                    f"its metadata ({name}/zarr.json is missing or unreadable); write it again to a new path"
+                )
+            if isinstance(meta, dict) and meta.get("node_type") == "group":
+                todo.append(sub)  # an array's folder holds its chunks (c/...): not looked into
 
 
 # --------------------------------------------------------------------------- #
@@ -366,12 +406,77 @@ def _describe(info):
     )
 
 
+def _inode_lock(path):
+    """An open descriptor of the folder ``path`` holding an exclusive
+    ``flock`` on it (its device and inode, whatever its name), None where the
+    folder does not exist or cannot be locked (no ``flock`` here); raises
+    :class:`StoreLockedError` when another descriptor holds it."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not a POSIX system
+        return None
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:
+        return None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        st = os.fstat(fd)
+        os.close(fd)
+        raise StoreLockedError(
+            f"cannot write {path}: another stairbounce process writes this store (the folder of "
+            f"device {st.st_dev}, inode {st.st_ino}), under this name or another one (a bind "
+            "mount, symlink or hard link of it)"
+        ) from None
+    except OSError:  # a file system without flock: the lock file beside the store still holds
+        os.close(fd)
+        return None
+    return fd
+
+
+def _inode_held(path):
+    """Whether another descriptor holds the folder lock of the store ``path``."""
+    try:
+        fd = _inode_lock(path)
+    except StoreLockedError:
+        return True
+    if fd is not None:
+        os.close(fd)  # closing releases the flock taken just now
+    return False
+
+
+# the folder locks taken for each owner token of store_lock (lock_store_folder)
+_FOLDER_LOCKS: dict[str, list[int]] = {}
+
+
+def lock_store_folder(path, owner):
+    """Lock the folder of the store ``path`` by its device and inode for the
+    holder ``owner`` of its :func:`store_lock` (done on entering when the
+    store exists; a scan that creates it calls this once it is made); released
+    when the ``store_lock`` block is left."""
+    fd = _inode_lock(path)
+    if fd is not None:
+        _FOLDER_LOCKS.setdefault(owner, []).append(fd)
+
+
 def lock_holder(path):
     """lock_holder(path) -> dict or None
 
     The live holder of the lock of the store ``path`` (``pid``, ``hostname``,
-    ``since``, ``owner``, ``lock``), or None when it is free or stale.
+    ``since``, ``owner``, ``lock``), or None when it is free or stale.  The
+    folder held under another name (device and inode) counts as held.
     """
+    info = _named_holder(path)
+    if info is None and os.path.isdir(path) and _inode_held(path):
+        st = os.stat(path)
+        return {"pid": "?", "hostname": "?", "since": None, "owner": None,
+                "lock": f"the folder itself, device {st.st_dev}, inode {st.st_ino}, under another name"}
+    return info
+
+
+def _named_holder(path):
+    """The live holder of the lock file beside the store ``path`` (:func:`lock_holder`)."""
     lock = lock_file(path)
     info = _read_lock(lock)
     if info is None:
@@ -424,6 +529,9 @@ def store_lock(path):
     token; it is removed on leaving.  A lock left by a dead process of this
     host is taken over; a live one (or one of another host: whether it lives
     cannot be told from here) raises :class:`StoreLockedError` naming the holder.
+    An existing store's folder is locked too, by its device and inode
+    (:func:`lock_store_folder`): a writer under another name of the same
+    folder (a bind mount) is refused.
     """
     path = Path(path)
     lock = lock_file(path)
@@ -456,8 +564,12 @@ def store_lock(path):
     else:  # pragma: no cover - fifty takeovers lost in a row
         raise StoreLockedError(f"cannot write {path}: could not take its lock {lock}")
     try:
+        lock_store_folder(path, owner)
         yield owner
     finally:
+        for fd in _FOLDER_LOCKS.pop(owner, []):
+            with contextlib.suppress(OSError):
+                os.close(fd)
         if (_read_lock(lock) or {}).get("owner") == owner:
             with contextlib.suppress(OSError):
                 lock.unlink()

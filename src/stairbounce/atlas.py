@@ -42,7 +42,8 @@ returns; a second scan on the same path is refused with the holder's name.
 Every tile, wherever it runs, checks that the lock still holds the token of
 the scan that handed it out before it writes, so only the client holding the
 lock ever writes into the store.  The lock is that of the store a path leads
-to (symlinks resolved), and every tile also checks, before and after it
+to (symlinks resolved) and of its folder by device and inode (a bind mount
+of it under another name), and every tile also checks, before and after it
 writes, that the store at the path is still the one its scan opened (its
 token): a store replaced under a running scan stops it with an error.
 
@@ -68,6 +69,7 @@ import contextlib
 import math
 import os
 import threading
+import time
 import uuid
 import warnings
 import zlib
@@ -76,7 +78,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _validate as _v
-from ._io import store_lock
+from ._io import lock_store_folder, store_lock
 from .model import check_count
 from .units import Staircase, staircase_of, with_speed
 
@@ -112,6 +114,12 @@ def _tile_record(path):
     import zarr
 
     return zarr.open_group(str(path), mode="r")[TILES_GROUP]
+
+
+def _root_attrs(path):
+    import zarr
+
+    return dict(zarr.open_group(str(path), mode="r").attrs)
 
 
 class DamagedStoreError(ValueError):
@@ -182,9 +190,11 @@ def _check_same_store(path, token):
         )
 
 
-def _run_tile(path, token, owner, i, j, su, se, e_values, u_values, max_iter, y0, v0, prune, numba_threads):
+def _run_tile(path, token, owner, i, j, su, se, e_values, u_values, max_iter, y0, v0, prune, numba_threads,
+              identity=None):
     """Compute tile (i, j) and write it into its region of the store, then its
-    checksum, then mark it done.
+    checksum (bound to the tile and the store by ``identity``,
+    :func:`_identity`; None: a store of before issue 38), then mark it done.
 
     Runs in the calling process (local scans) or on a Dask worker; writes only
     while the store's lock holds ``owner``, the token of the scan that handed
@@ -212,7 +222,7 @@ def _run_tile(path, token, owner, i, j, su, se, e_values, u_values, max_iter, y0
     values = {name: var.values for name, var in ds.data_vars.items()}
     for name, a in values.items():
         arrays[name][su, se] = a
-    crc[i, j] = _checksum(values)
+    crc[i, j] = _checksum(values, _tile_seed(identity, i, j))
     # the store replaced while the data was written: no done flag into the new one
     _check_same_store(path, token)
     # only now: a tile killed above is recomputed on the next run
@@ -220,9 +230,37 @@ def _run_tile(path, token, owner, i, j, su, se, e_values, u_values, max_iter, y0
     return i, j
 
 
-def _checksum(values):
-    """CRC-32 of a tile's variables (by name, C order): checked on resume."""
-    c = 0
+CHECKSUM = "crc32, seeded with the tile's index and the store's identity"
+"""The ``checksum`` attribute of a tile record whose checksums are bound to
+their tile and store (issue 38, R3).  A store without it (written before)
+has checksums of the bytes only: resume verifies it so, then rewrites the
+checksums of its intact tiles bound and sets the attribute."""
+
+# the attributes of the store that its tiles' checksums are bound to, with its token
+_IDENTITY_KEYS = ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u", "max_iter", "y0", "v0")
+
+
+def _identity(root_attrs, record_attrs):
+    """The store's identity as its checksums are seeded with it: its window,
+    ``max_iter``, start and token (drawn when it was made); None for a store
+    whose checksums are of the bytes only (no :data:`CHECKSUM` attribute)."""
+    if record_attrs.get("checksum") != CHECKSUM:
+        return None
+    parts = [f"{k}={root_attrs.get(k)!r}" for k in _IDENTITY_KEYS]
+    return ";".join(parts + [f"token={record_attrs.get('token')}"])
+
+
+def _tile_seed(identity, i, j):
+    """What tile (i, j)'s checksum is seeded with (None: unseeded)."""
+    return None if identity is None else f"{identity};tile={int(i)},{int(j)}"
+
+
+def _checksum(values, seed=None):
+    """CRC-32 of a tile's variables (by name, C order), starting from the
+    CRC of ``seed`` (:func:`_tile_seed`: the tile's index and the store's
+    identity, so that a tile's data and checksum copied to another tile or
+    store do not match there): checked on resume."""
+    c = 0 if seed is None else zlib.crc32(seed.encode())
     for name in sorted(values):
         a = np.ascontiguousarray(values[name])
         c = zlib.crc32(f"{name}{a.dtype.str}{a.shape}".encode(), c)
@@ -329,7 +367,7 @@ def _create(path, template, encoding, shape_tiles, tile):
         with atomic_path(path) as tmp:
             template.to_zarr(tmp, mode="w", compute=False, encoding=encoding, consolidated=False)
             record = zarr.open_group(str(tmp), mode="r+").create_group(TILES_GROUP)
-            record.attrs.update(format=FORMAT, tile=tile, token=uuid.uuid4().hex)
+            record.attrs.update(format=FORMAT, tile=tile, token=uuid.uuid4().hex, checksum=CHECKSUM)
             record.zeros(name="done", shape=shape_tiles, chunks=(1, 1), dtype=bool)
             record.full(name="crc", shape=shape_tiles, chunks=(1, 1), dtype=np.int64, fill_value=-1)
     except PermissionError as exc:
@@ -338,34 +376,52 @@ def _create(path, template, encoding, shape_tiles, tile):
 
 def _verify(path, rows, cols, done, repair=True):
     """Tiles marked done whose data no longer matches their checksum (a chunk
-    deleted, truncated or garbled): unmarked (with ``repair``), so that they
-    are computed again.  Returns their indices."""
+    deleted, truncated or garbled, or copied with its checksum from another
+    tile or store): unmarked (with ``repair``), so that they are computed
+    again.  Returns their indices.  A store whose checksums are of the bytes
+    only (before issue 38) is verified so; with ``repair`` the checksums of
+    its intact tiles are then rewritten bound (:data:`CHECKSUM`)."""
     import zarr
 
     root = zarr.open_group(str(path), mode="r+" if repair else "r")
     record = root[TILES_GROUP]
     arrays = {name: arr for name, arr in root.arrays() if arr.ndim == 2}
     crc, _ = _read_record(record["crc"], -2)  # -2: no checksum, an unreadable chunk is damage
+    identity = _identity(dict(root.attrs), dict(record.attrs))
+    upgrade = repair and identity is None
+    if upgrade:
+        bound = _identity(dict(root.attrs), {**record.attrs, "checksum": CHECKSUM})
+        rewrite = {}
     damaged = []
     for i, j in zip(*np.nonzero(done)):
         try:
             values = {name: arr[rows[i], cols[j]] for name, arr in arrays.items()}
-            ok = _checksum(values) == int(crc[i, j])
+            ok = _checksum(values, _tile_seed(identity, i, j)) == int(crc[i, j])
         except Exception:  # noqa: BLE001 - any read error of a chunk is damage
             ok = False
         if not ok:
             damaged.append((int(i), int(j)))
+        elif upgrade:
+            rewrite[i, j] = _checksum(values, _tile_seed(bound, i, j))
     if repair:
         for i, j in damaged:
             record["done"][i, j] = False
             record["crc"][i, j] = -1
+    if upgrade:  # the checksums first: interrupted here, the old ones fail and their tiles are recomputed
+        for (i, j), c in rewrite.items():
+            record["crc"][i, j] = c
+        record.attrs["checksum"] = CHECKSUM
     return damaged
 
 
-def _check_existing(path, attrs, tile):
-    """Refuse an existing store made for another scan; never mix two scans."""
+def _check_existing(path, attrs, tile, variables=()):
+    """Refuse an existing store made for another scan, or one whose arrays
+    lost their metadata or are missing (report round 3, R9); never mix two scans."""
     import zarr
 
+    from ._io import check_store_metadata
+
+    check_store_metadata(path, "a tiled scan store")
     try:
         root = zarr.open_group(str(path), mode="r")
         record = root[TILES_GROUP]
@@ -380,6 +436,9 @@ def _check_existing(path, attrs, tile):
         )
     if "crc" not in record or "done" not in record:
         raise ValueError(f"{path} is a damaged tile store (its tile record is incomplete): write to a new path")
+    missing = [name for name in variables if name not in root]
+    if missing:
+        raise ValueError(f"{path} is a damaged tile store (its array {missing[0]!r} is missing): write to a new path")
     differ = []
     if record.attrs.get("tile") != tile:
         differ.append(f"tile: store {record.attrs.get('tile')!r}, asked {tile!r}")
@@ -545,7 +604,8 @@ def scan_to_zarr(
     reason = _unwritable_reason(path.parent)
     if reason is not None and path.exists():
         # no lock can be taken here: a complete store opens read-only (report N9)
-        return _open_read_only(path, template.attrs, tile, es, us, rows, cols, verify, progress, reason)
+        return _open_read_only(path, template.attrs, tile, es, us, rows, cols, verify, progress, reason,
+                               list(template.data_vars))
     if reason is not None:
         raise ValueError(f"cannot write {path}: folder {path.parent} is not writable ({reason})")
 
@@ -555,10 +615,11 @@ def scan_to_zarr(
     try:
         with store_lock(path) as owner:
             if path.exists():
-                _check_existing(path, template.attrs, tile)
+                _check_existing(path, template.attrs, tile, list(template.data_vars))
                 _check_coords(path, es, us, repair=True)
             else:
                 _create(path, template, encoding, (len(rows), len(cols)), tile)
+                lock_store_folder(path, owner)  # its device and inode, whatever name it gets
 
             done, unreadable = _read_record(_tile_record(path)["done"], False)
             if unreadable:
@@ -582,10 +643,12 @@ def scan_to_zarr(
             if progress is not None:
                 progress(total - len(todo), total)
 
-            token = _tile_record(path).attrs["token"]
+            record = _tile_record(path)
+            token = record.attrs["token"]
+            identity = _identity(_root_attrs(path), dict(record.attrs))
             args = [
                 (str(path), token, owner, i, j, rows[i], cols[j], es[cols[j]], us[rows[i]],
-                 a["max_iter"], a["y0"], a["v0"], bool(prune), numba_threads)
+                 a["max_iter"], a["y0"], a["v0"], bool(prune), numba_threads, identity)
                 for i, j in todo
             ]
             if client is None:
@@ -599,12 +662,12 @@ def scan_to_zarr(
     return xr.open_zarr(str(path), consolidated=False)
 
 
-def _open_read_only(path, attrs, tile, es, us, rows, cols, verify, progress, reason):
+def _open_read_only(path, attrs, tile, es, us, rows, cols, verify, progress, reason, variables=()):
     """A store whose folder cannot be written (no lock can be taken there):
     opened read-only when it is this scan's, complete and intact, else refused."""
     import xarray as xr
 
-    _check_existing(path, attrs, tile)
+    _check_existing(path, attrs, tile, variables)
     _check_coords(path, es, us, repair=False)
     done = tiles_done(path)
     missing = int((~done).sum())
@@ -651,7 +714,7 @@ def _run_here(args, numba_threads, n_done, total, progress):
     import numba
     from concurrent.futures import ThreadPoolExecutor, as_completed
 
-    args = [arg[:-1] + (numba_threads or 1,) for arg in args]
+    args = [arg[:13] + (numba_threads or 1,) + arg[14:] for arg in args]  # arg[13]: numba_threads
     side_by_side = max(1, numba.get_num_threads() // (numba_threads or 1))
     if side_by_side == 1 or len(args) == 1:
         for arg in args:
@@ -697,9 +760,22 @@ def _dask_each(client, fn, args, each, wait_cancelled=False) -> None:
     futures = []
     try:
         futures = [client.submit(fn, *a, pure=False) for a in args]
-        for future in as_completed(futures):
-            each(future.result())
-            future.release()
+        done = as_completed(futures)
+        last = noted = time.monotonic()
+        while not done.is_empty():
+            if done.has_ready():
+                future = next(done)
+                each(future.result())
+                future.release()
+                last = noted = time.monotonic()
+                continue
+            time.sleep(0.05)  # Ctrl-C is seen here at once
+            now = time.monotonic()
+            if now - noted >= WAIT_NOTE:  # no tile finished for a while: say why, if the cluster knows
+                note = _cluster_note(client, now - last)
+                noted = time.monotonic()
+                if note is not None:
+                    warnings.warn(note, RuntimeWarning, stacklevel=2)
     except (FutureCancelledError, CommClosedError) as exc:
         # the scheduler is gone (report N7: a 30-line traceback): what is
         # complete stays complete, the same call resumes
@@ -718,6 +794,28 @@ def _dask_each(client, fn, args, each, wait_cancelled=False) -> None:
                     from distributed import wait
 
                     wait(pending, timeout=5)
+
+
+WAIT_NOTE = 30.0
+"""Seconds without a finished tile after which a Dask scan asks its scheduler
+how many workers it has, and says so when none is connected or the scheduler
+does not answer (then again every as many seconds); report round 3: a scan
+whose workers were all killed, or whose scheduler was stopped, waited silently."""
+
+
+def _cluster_note(client, waited):
+    """What a Dask scan waits for, or None when workers are connected: the
+    scheduler asked for its workers, within 5 s."""
+    address = getattr(getattr(client, "scheduler", None), "address", "") or "?"
+    try:
+        workers = client.nthreads(callback_timeout=5)
+    except Exception:  # noqa: BLE001 - no answer: stopped, or gone (then the scan fails on its own)
+        return (f"waiting for the Dask scheduler {address}: it does not answer (no tile finished for "
+                f"{waited:.0f} s); Ctrl-C stops, the complete tiles are kept")
+    if not workers:
+        return (f"waiting for workers: none connected to the Dask scheduler {address} (no tile finished "
+                f"for {waited:.0f} s); start workers, or Ctrl-C stops and the complete tiles are kept")
+    return None
 
 
 def _run_on_dask(client, args, n_done, total, progress):

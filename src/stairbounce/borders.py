@@ -496,6 +496,34 @@ def _check_max_iter(max_iter):
     return max_iter
 
 
+_ITINERARY_NAMES = ("impacts", "y", "v", "contact", "next_impact", "accumulation")
+_ITINERARY_BYTES = 8 * (len(_ITINERARY_NAMES) + 2)  # per step, at the peak of itinerary()
+
+
+def _itinerary_args(e, u, max_iter, y0, v0):
+    """The arguments of :func:`itinerary`, checked (ValueError naming one)."""
+    e = check_e(e)
+    u = check_u(u)
+    max_iter = _check_max_iter(max_iter)
+    y0, v0 = check_state(y0, v0, "y0", "v0")
+    return e, u, max_iter, y0, v0
+
+
+def _itinerary_blocks(e, u, max_iter, y0, v0):
+    """The steps of :func:`itinerary` (checked arguments, :func:`_itinerary_args`)
+    in blocks of at most 65536: yields ``(block, slid)``, ``block`` a dict of
+    the columns of those steps, ``slid`` whether the last of them slides.
+    Memory: one block, whatever ``max_iter`` (the command line streams them)."""
+    T, ratio = _constants(e, u)
+    y, v, left, slid = y0, v0, max_iter, False
+    while left > 0 and not slid:
+        m = min(left, _BLOCK)
+        block = {k: np.empty(m, dtype=np.int64 if k == "impacts" else np.float64) for k in _ITINERARY_NAMES}
+        n, y, v, slid = _itinerary_block(y, v, e, T, ratio, m, *(block[k] for k in _ITINERARY_NAMES))
+        left -= n
+        yield {k: a[:n] for k, a in block.items()}, slid
+
+
 def itinerary(e, u, max_iter=1000, y0=1.0, v0=0.0):
     """itinerary(e, u, max_iter=1000, y0=1.0, v0=0.0) -> xarray.Dataset
 
@@ -533,26 +561,25 @@ def itinerary(e, u, max_iter=1000, y0=1.0, v0=0.0):
     Raises
     ------
     ValueError
-        A parameter out of its range (naming it).
+        A parameter out of its range (naming it), or a ``max_iter`` whose
+        itinerary could need more memory than is available (64 bytes a
+        step; checked before it starts).
     """
-    e = check_e(e)
-    u = check_u(u)
-    max_iter = _check_max_iter(max_iter)
-    y0, v0 = check_state(y0, v0, "y0", "v0")
-    T, ratio = _constants(e, u)
-    names = ("impacts", "y", "v", "contact", "next_impact", "accumulation")
-    parts = {k: [] for k in names}
-    y, v, left, slid = y0, v0, max_iter, False
-    while left > 0 and not slid:
-        m = min(left, _BLOCK)
-        _v.check_memory(f"an itinerary of {max_iter - left + m} steps", 48 * (max_iter - left + m))
-        block = {k: np.empty(m, dtype=np.int64 if k == "impacts" else np.float64) for k in names}
-        n, y, v, slid = _itinerary_block(y, v, e, T, ratio, m, *(block[k] for k in names))
-        for k in names:
-            parts[k].append(block[k][:n])
-        left -= n
-    data = {k: np.concatenate(parts[k]) for k in names}
+    e, u, max_iter, y0, v0 = _itinerary_args(e, u, max_iter, y0, v0)
+    # estimated before it starts (report round 3, R5: checked block by block against the
+    # memory left, it refused at half the machine): 6 columns, the step numbers, and one
+    # column at a time copied out of the blocks
+    _v.check_memory(f"max_iter = {max_iter}: an itinerary of up to {max_iter} steps", _ITINERARY_BYTES * max_iter)
+    parts = {k: [] for k in _ITINERARY_NAMES}
+    slid = False
+    for block, slid in _itinerary_blocks(e, u, max_iter, y0, v0):
+        for k in _ITINERARY_NAMES:
+            parts[k].append(block[k])
+    data = {}
+    for k in _ITINERARY_NAMES:
+        data[k] = np.concatenate(parts.pop(k))
     steps = np.arange(1, data["impacts"].size + 1, dtype=np.int64)
+    names = _ITINERARY_NAMES
     desc = {
         "impacts": "impact number of the step (0 flies over, k >= 1, -1 = SLIDING)",
         "y": "height above the step's floor entering the step",
@@ -1011,6 +1038,160 @@ def _table(es, us, a, axis, out, max_iter, attrs, pair=None):
                                    "max_iter": max_iter, "convention": _CONVENTION, **attrs})
 
 
+# --------------------------------------------------------------------------- #
+# The same answers in slices of bounded work (the explorer's shared worker)   #
+# --------------------------------------------------------------------------- #
+
+PAIR_TRIALS = 192
+"""Most trial points one pair of :func:`border_points` takes (``outcome="word"``):
+a bracket of two neighbouring pixel centres holds at most 2**55 floats (its
+ends differ by a factor 3 at most), so it is halved at most about 56 times;
+:func:`_shrink_secant` halves it at least every third trial (two slow secant
+steps force a bisection) and adds a trial when the separating step changes.
+Proven for the halvings; the resets are counted by the kernel (``out[:, 9]``)
+and stay far below (tests/test_faults_round3.py checks them)."""
+
+
+def pair_work(period, a, b, max_iter):
+    """pair_work(period, a, b, max_iter) -> int64 array
+
+    A bound on the map steps of each pair in :func:`_border_kernel`
+    (:func:`border_points`, word outcome): ``PAIR_TRIALS p_c + max_iter``,
+    where ``p_c`` is the shorter non-zero period of the two pixels (each
+    trial follows the reference word at most ``p_c`` steps) and the other
+    end's period is looked for up to ``max_iter`` steps.  0 for a pair of
+    which neither pixel slides (not bisected).  Writing the point's two
+    words out costs at most ``p_c + max_iter`` more.
+    """
+    pa, pb = period[a], period[b]
+    pc = np.where(pa == 0, pb, np.where(pb == 0, pa, np.minimum(pa, pb))).astype(np.int64)
+    return np.where(pc == 0, 0, PAIR_TRIALS * pc + int(max_iter))
+
+
+def _work_blocks(work, slice_work):
+    """Consecutive ``slice(start, stop)`` of the items whose summed ``work`` is at
+    most ``slice_work`` (an item over it alone: one item cannot be cut)."""
+    work = np.asarray(work, np.int64)
+    start, total = 0, 0
+    for i, w in enumerate(work.tolist()):
+        if i > start and total + w > slice_work:
+            yield slice(start, i)
+            start, total = i, 0
+        total += w
+    if start < work.size or work.size == 0:
+        yield slice(start, work.size)
+
+
+def grid_blocks(n_e, n_u, per_pixel, slice_work):
+    """grid_blocks(n_e, n_u, per_pixel, slice_work) -> iterator of (rows, cols) slices
+
+    Blocks covering an ``n_u x n_e`` grid of pixels costing ``per_pixel``
+    map steps each, in row-major order, of at most ``slice_work`` map steps
+    each (one pixel at least): bands of whole rows while a row fits, else
+    pieces of one row.
+    """
+    per_pixel = max(1, int(per_pixel))
+    per_row = n_e * per_pixel
+    if per_row <= slice_work:
+        rows = max(1, min(n_u, slice_work // per_row))
+        for s in range(0, n_u, rows):
+            yield slice(s, min(n_u, s + rows)), slice(0, n_e)
+        return
+    cols = max(1, slice_work // per_pixel)
+    for i in range(n_u):
+        for c in range(0, n_e, cols):
+            yield slice(i, i + 1), slice(c, min(n_e, c + cols))
+
+
+def border_point_slices(es, us, period, max_iter, attrs, slice_work):
+    """border_point_slices(es, us, period, max_iter, attrs, slice_work) -> generator, returning xarray.Dataset
+
+    :func:`border_points` (``outcome="word"``) of the grid ``us x es`` whose
+    pixels have the periods ``period`` (flat, row-major; 0: no slide within
+    ``max_iter``), computed in slices: each ``next()`` bisects a block of
+    consecutive pairs whose :func:`pair_work` and words (``p_c + max_iter``
+    each) sum to at most ``slice_work`` (a single pair over it alone) and
+    writes their rows; yields ``(pairs
+    done, pairs)``.  The returned Dataset equals :func:`border_points` of
+    the same scan (pairs are independent: which are computed together
+    changes no bit); ``attrs``: its window attributes.
+    """
+    period = np.asarray(period, np.int64)
+    a, b, axis = _pairs(period, us.size, es.size)
+    parts = []
+    work = pair_work(period, a, b, max_iter)
+    work = np.where(work == 0, 0, work + (work - max_iter) // PAIR_TRIALS + max_iter)  # + p_c + max_iter
+    for sl in _work_blocks(work, slice_work):
+        found, out = _run_pairs(es, us, period, a[sl], b[sl], axis[sl], max_iter, None)
+        aa, bb = a[sl][found], b[sl][found]
+        parts.append(_table(es, us, aa, axis[sl][found], out[found], max_iter,
+                            {**attrs, "outcome": "word"}, (period[aa] == 0) != (period[bb] == 0)))
+        yield sl.stop, a.size
+    if len(parts) == 1:
+        return parts[0]
+    return xr.concat(parts, dim="point", data_vars="all", combine_attrs="override")
+
+
+def word_group_slices(e, u, periods, slice_work):
+    """word_group_slices(e, u, periods, slice_work) -> generator, returning (ids, rows)
+
+    :func:`_word_groups` in slices: blocks of consecutive points whose
+    periods (the map steps of their words) sum to at most ``slice_work``,
+    grouped block by block, then merged by comparing the words whole (the
+    same groups; the ids may be numbered in another order).  Yields
+    ``(points done, points)``.
+    """
+    periods = np.asarray(periods, np.int64)
+    ids = np.full(e.size, -1, np.int64)
+    rows, where = [], {}
+    for sl in _work_blocks(periods, slice_work):
+        local, local_rows = _word_groups(e[sl], u[sl], periods[sl])
+        glob = np.empty(len(local_rows) + 1, np.int64)
+        glob[-1] = -1
+        for i, r in enumerate(local_rows):
+            key = r.tobytes()
+            if key not in where:
+                where[key] = len(rows)
+                rows.append(r)
+            glob[i] = where[key]
+        ids[sl] = glob[local]
+        yield sl.stop, e.size
+    return ids, rows
+
+
+def staged(stage, gen):
+    """Yield ``(stage, *value)`` for each value of the generator ``gen``;
+    return its return value (``yield from`` with a label)."""
+    while True:
+        try:
+            value = next(gen)
+        except StopIteration as stop:
+            return stop.value
+        yield (stage, *value)
+
+
+def word_table_slices(ds, points, slice_work):
+    """word_table_slices(ds, points, slice_work) -> generator, returning xarray.Dataset
+
+    :func:`word_table` of the scan Dataset ``ds`` in slices of at most
+    ``slice_work`` map steps: the border points (unless ``points`` is given)
+    by :func:`border_point_slices`, the words of the pixels by
+    :func:`word_group_slices`; the rest costs no map steps.  Yields
+    ``(stage, done, total)``, stage ``"points"`` or ``"words"``; returns the
+    same Dataset as ``word_table(ds, points=points)``.
+    """
+    es, us, period, max_iter = _grid_input(ds)
+    if points is None:
+        attrs = {k: ds.attrs[k] for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u") if k in ds.attrs}
+        points = yield from staged("points", border_point_slices(es, us, period, max_iter, attrs, slice_work))
+    elif not (isinstance(points, xr.Dataset) and "kind" in points and "word_low" in points):
+        raise ValueError("points must be a Dataset from border_points")
+    E, U = np.meshgrid(es, us)
+    E, U = E.ravel(), U.ravel()
+    ids, rows = yield from staged("words", word_group_slices(E, U, period, slice_work))
+    return _word_table_rows(ds, es, us, E, U, ids, rows, points, max_iter, False)
+
+
 def _scan_input(e, u, max_iter, progress):
     """A scan Dataset from window arguments (as :func:`stairbounce.scan`) or the
     Dataset itself, with the window attributes to carry on."""
@@ -1077,6 +1258,12 @@ def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=No
     E, U = np.meshgrid(es, us)
     E, U = E.ravel(), U.ravel()
     ids, rows = _word_groups(E, U, period)
+    return _word_table_rows(ds, es, us, E, U, ids, rows, points, max_iter, regions)
+
+
+def _word_table_rows(ds, es, us, E, U, ids, rows, points, max_iter, regions):
+    """The Dataset of :func:`word_table` once every pixel centre ``(E, U)``
+    (flat) of the scan ``ds`` has its word: ``rows[ids[i]]`` (-1: none)."""
     nw = len(rows)
     texts = [_word_text(r) for r in rows]
     sliding = ids >= 0

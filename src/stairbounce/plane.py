@@ -1434,6 +1434,10 @@ def load(path):
     fmt = _format(path)
     if not os.path.exists(path):
         raise ValueError(f"no such file: {path}")
+    if fmt == "zarr":
+        from ._io import check_store_metadata
+
+        check_store_metadata(path)
     engine = "zarr" if fmt == "zarr" else "netcdf4"
     kw = {"consolidated": False} if fmt == "zarr" else {}
     try:

@@ -953,6 +953,24 @@ def _label_grid(es, us, max_iter, y0, v0):
     return h1, h2, steps
 
 
+def _label_grid_slices(es, us, max_iter, y0, v0, slice_work):
+    """:func:`_label_grid` in blocks of at most ``slice_work`` potential map
+    steps (``max_iter`` per pixel; :func:`stairbounce.borders.grid_blocks`),
+    yielding ``(0, None)`` after each block (nothing when ``slice_work`` is
+    None: one call); returns the same arrays (pixels are independent)."""
+    if slice_work is None:
+        return _label_grid(es, us, max_iter, y0, v0)
+    from .borders import grid_blocks
+
+    h1 = np.empty((us.size, es.size), dtype=np.uint64)
+    h2 = np.empty_like(h1)
+    steps = np.empty((us.size, es.size), dtype=np.int64)
+    for r, c in grid_blocks(es.size, us.size, max_iter, slice_work):
+        h1[r, c], h2[r, c], steps[r, c] = _label_grid(es[c], us[r], max_iter, y0, v0)
+        yield 0, None
+    return h1, h2, steps
+
+
 def _fill(P, es, us):
     """Even-odd fill of the closed polygon ``P`` (N x 2) at the pixel centres."""
     x1, y1 = P[:-1, 0], P[:-1, 1]
@@ -1445,14 +1463,17 @@ def window_regions(e, u, *, resolution=None, max_iter=1000, y0=1.0, v0=0.0, poin
 
 
 def iter_window_regions(e, u, *, resolution=None, max_iter=1000, y0=1.0, v0=0.0, points=None,
-                        from_corners=False):
-    """iter_window_regions(e, u, ...) -> generator of (done, total), returning list[Region]
+                        from_corners=False, slice_work=None):
+    """iter_window_regions(e, u, ..., slice_work=None) -> generator of (done, total), returning list[Region]
 
     :func:`window_regions` one word at a time: yields ``(0, total)`` once the
     seeded words are known, then ``(done, total)`` after each word traced
     (``total`` grows when corner seeding finds new words); returns the
     regions, largest area first.  For callers that share a worker between
-    words (the explorer's scheduler).
+    words (the explorer's scheduler).  ``slice_work`` (map steps): the seed
+    scan (``max_iter`` per seed pixel) and the seeds' itineraries (their
+    periods) are cut into slices of at most that much work, each yielding
+    ``(0, None)`` (the words are not known yet) before ``(0, total)``.
     """
     e, u, es, us, pixel = _seed_grid(e, u, resolution)
     max_iter = check_count("max_iter", max_iter, 1)
@@ -1461,15 +1482,20 @@ def iter_window_regions(e, u, *, resolution=None, max_iter=1000, y0=1.0, v0=0.0,
     if points is not None and not all(k in getattr(points, "variables", ()) for k in ("e", "u", "width", "axis")):
         raise ValueError("points must be a Dataset from border_points (variables e, u, width, axis)")
     _check_centres(es)
-    h1, h2, steps = _label_grid(es, us, max_iter, y0, v0)
+    h1, h2, steps = yield from _label_grid_slices(es, us, max_iter, y0, v0, slice_work)
     keys, first = np.unique(np.stack([h1.ravel(), h2.ravel()], 1), axis=0, return_index=True)
     seeds = _point_seeds(points, e, u, y0, v0, max_iter) if points is not None else {}
     todo = {}
     buf = np.empty(max_iter, dtype=np.int64)
+    spent = 0  # map steps of this slice's itineraries (each its word's period)
     for idx, (a, b) in zip(first, keys):
         if a == 0:
             continue
         i, j = divmod(int(idx), es.size)
+        if slice_work is not None and spent and spent + int(steps[i, j]) > slice_work:
+            yield 0, None
+            spent = 0
+        spent += int(steps[i, j])
         n = _itinerary_of(es[j], us[i], y0, v0, max_iter, buf)
         todo[(int(a), int(b))] = buf[:n].copy()
     for key, (ks, _) in seeds.items():

@@ -150,6 +150,7 @@ def render(
     """Draw a scan store without loading it whole: large windows are reduced by blocks first."""
     import xarray as xr
 
+    from .._io import check_store_metadata
     from ..atlas import DamagedStoreError, tiles_done
     from ..plane import _check_grid
 
@@ -169,11 +170,13 @@ def render(
         if store.suffix == ".nc":
             ds = xr.open_dataset(store, engine="netcdf4", chunks={})
         else:
+            check_store_metadata(store)
             ds = xr.open_zarr(store, consolidated=False)
     except Exception as exc:  # noqa: BLE001 - any reader error is bad input here
         raise CLIError(f"cannot read {store} as a scan: {' '.join(str(exc).split())}") from None
-    if field not in ds.data_vars or set(ds[field].dims) != {"u", "e"}:
-        raise CLIError(f"{store} has no ({'u'}, {'e'}) variable {field!r}")
+    for name in dict.fromkeys([field, "status"]):  # status: where nothing slides (draw_store)
+        if name not in ds.data_vars or set(ds[name].dims) != {"u", "e"}:
+            raise CLIError(f"{store} has no ({'u'}, {'e'}) variable {name!r}")
     _check_grid(ds, store)
     try:
         done = tiles_done(store)

@@ -217,30 +217,80 @@ def itinerary_(
 ):
     """Print the impact number of every step up to the slide, with the signed time margins
     (T - t; >= 0: the event happens on the step) of the first contact, the next impact and
-    the accumulation point: the events whose crossing of 0 makes a border."""
+    the accumulation point: the events whose crossing of 0 makes a border; then the word
+    the impact numbers spell."""
     import csv
     import sys
 
-    from ..borders import itinerary
+    from ..borders import _itinerary_args, _itinerary_blocks
 
     u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
-    it = itinerary(e, u, max_iter=max_iter, y0=y0, v0=v0)
+    try:
+        e, u, max_iter, y0, v0 = _itinerary_args(e, u, max_iter, y0, v0)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
     cols = ("impacts", "contact", "next_impact", "accumulation")
-    rows = zip(it.step.values, *(it[c].values for c in cols))
+    # streamed block by block (report round 3, R5: the whole itinerary was kept in memory first)
+    word, steps, slid = _WordSpelled(), 0, False
     if as_csv:
         w = csv.writer(sys.stdout, lineterminator="\n")
         w.writerow(["step", *cols])
-        for n, k, *m in rows:
-            w.writerow([int(n), int(k), *(repr(float(x)) for x in m)])
+    else:
+        if stairs is not None:
+            typer.echo(st.describe(u, stairs))
+        typer.echo(ITINERARY_CONVENTION)
+        typer.echo(f"{'step':>6}  {'impacts':>8}  {'contact':>14}  {'next impact':>14}  {'accumulation':>14}")
+    for whole, slid in _itinerary_blocks(e, u, max_iter, y0, v0):
+        for lo in range(0, whole["impacts"].size, 4096):  # rows as text a few thousand at a time
+            block = {c: whole[c][lo:lo + 4096] for c in cols}
+            ks = block["impacts"]
+            word.add(ks)
+            ns = range(steps + 1, steps + ks.size + 1)
+            steps += ks.size
+            margins = zip(*(block[c].tolist() for c in cols[1:]))
+            if as_csv:
+                w.writerows([n, k, *(repr(x) for x in m)] for n, k, m in zip(ns, ks.tolist(), margins))
+                continue
+            typer.echo("\n".join(f"{n:6d}  {'slides' if k == -1 else k:>8}  "
+                                 + "  ".join(f"{x:14.6e}" for x in m) for n, k, m in zip(ns, ks.tolist(), margins)))
+    end = (f"e = {e!r}, u = {u!r}: " + (f"slides on step {steps}; the impact numbers spell the word "
+                                        f"{word.text()}" if slid else f"no slide within {max_iter} steps (no word)"))
+    if as_csv:  # the CSV alone on stdout; its convention and word beside it
+        print(f"stairbounce: {ITINERARY_CONVENTION}", file=sys.stderr)
+        print(f"stairbounce: {end}", file=sys.stderr)
         return
-    if stairs is not None:
-        typer.echo(st.describe(u, stairs))
-    typer.echo(f"{'step':>6}  {'impacts':>8}  {'contact':>14}  {'next impact':>14}  {'accumulation':>14}")
-    for n, k, *m in rows:
-        typer.echo(f"{int(n):6d}  {'slides' if k == -1 else int(k):>8}  "
-                   + "  ".join(f"{x:14.6e}" for x in m))
-    typer.echo(f"e = {e:g}, u = {u:g}: " + (f"slides on step {it.sizes['step']}" if it.attrs["slid"]
-                                         else f"no slide within {max_iter} steps"))
+    typer.echo(end)
+
+
+ITINERARY_CONVENTION = (
+    "margins are T - t (time units, T = 1/u the time of one step); >= 0: the event happens on the step. "
+    "contact: the first contact (>= 0: the step has an impact; 0 is a graze border); next impact: the "
+    "impact after the last one (< 0; 0 is an edge border; NaN on the sliding step); accumulation: the "
+    "accumulation point (>= 0: the step slides; 0 is a chatter border)"
+)
+
+
+class _WordSpelled:
+    """The word of a stream of impact numbers (``borders._word_text``'s letters:
+    the steps from one impact to the next, a 0 for each further impact on a
+    step), kept to its first ``keep`` letters and counted beyond."""
+
+    def __init__(self, keep=200):
+        self.keep, self.letters, self.count, self.jump = keep, [], 0, 0
+
+    def add(self, ks):
+        for k in ks.tolist():
+            self.jump += 1
+            if k == 0:
+                continue
+            new = [str(self.jump)] + (["0"] * (k - 1) if k > 1 else [])
+            self.jump = 0
+            self.count += len(new)
+            self.letters.extend(new[: max(0, self.keep - len(self.letters))])
+
+    def text(self):
+        more = self.count - len(self.letters)
+        return "(" + ", ".join(self.letters) + (f", ... ({self.count} letters)" if more else "") + ", 0^inf)"
 
 
 def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners=False):

@@ -80,15 +80,15 @@ from .view import (
     parse_window,
     pixel_of,
     point_details,
-    view_border_points,
-    word_row,
+    border_point_slices,
+    word_row_slices,
     preview_rgba,
     render_slices,
     shade,
     tidy,
     trace_slices,
     trace_window,
-    traced_overlay,
+    traced_overlay_slices,
     view_url_query,
     window_digits,
 )
@@ -700,11 +700,14 @@ class Explorer:
         )
 
     def _borders_work(self, view, pts, traced):
-        """Slices of the "borders" job: the view's border points (unless given),
-        then, for the traced arcs, the seed scan, one word's region per slice,
-        and the overlay's data; returns ``(points, traced_overlay dict or None)``."""
+        """Slices of the "borders" job, each of bounded work (view.SLICE_WORK map
+        steps, issue 38 R1; a traced word is one slice): the view's border
+        points (unless given: their grid's scan, then the pairs), then, for
+        the traced arcs, the seed scan, one word's region per slice, and the
+        overlay's data (the words beside the arcs); returns ``(points,
+        traced_overlay dict or None)``."""
         if pts is None:
-            pts = view_border_points(view)
+            pts = yield from border_point_slices(view)
             yield "points", pts
         if not traced:
             return pts, None
@@ -716,7 +719,13 @@ class Explorer:
                 regions = stop.value
                 break
             yield "trace", done, total
-        return pts, traced_overlay(view, regions, pts)
+        overlay = traced_overlay_slices(view, regions, pts)
+        while True:
+            try:
+                done, total = next(overlay)
+            except StopIteration as stop:
+                return pts, stop.value
+            yield "sides", done, total
 
     def _show_borders(self, pts, traced):
         """Draw border points (a view_border_points Dataset or None) and the
@@ -747,7 +756,17 @@ class Explorer:
             if "traced" in self.view.overlays:
                 self._trace_message(f"tracing borders: finding the words ({TRACE_SIDE} x {TRACE_SIDE} seeds) ...")
             return
-        _, done, total = value
+        stage, done, total = value
+        if stage in ("scan", "pairs"):
+            what = "the grid's rows" if stage == "scan" else "the pairs of pixels"
+            self._trace_message(f"locating the border points: {done} of {total} of {what} ...")
+            return
+        if stage == "sides":
+            self._trace_message(f"tracing borders: the words beside the arcs, {done} of {_plural(total, 'arc')} ...")
+            return
+        if total is None:
+            self._trace_message(f"tracing borders: finding the words ({TRACE_SIDE} x {TRACE_SIDE} seeds) ...")
+            return
         self._trace_message(f"tracing borders: {done} of {_plural(total, 'word')} ({TRACE_SIDE} x {TRACE_SIDE} "
                             f"seeds) ..." if done < total else
                             f"tracing borders: {total} of {_plural(total, 'word')}, joining the arcs ...")
@@ -1033,7 +1052,7 @@ class Explorer:
                 and max(view.width, view.height) <= BORDER_SIDE else None)
         self._sched.submit(
             self, "point", self._point_work(e, u, view, points, table, scan),
-            on_slice=lambda d: self._next_tick(
+            on_slice=lambda d: None if isinstance(d, tuple) else self._next_tick(
                 self._show_word_row if "word_row" in d else self._show_point, gen, view, d),
             on_done=lambda result, error, _job: self._next_tick(self._show_orbit, gen, view, result, error),
             alive=self._alive,
@@ -1050,7 +1069,9 @@ class Explorer:
         yield details
         if details["word"] is not None:
             text = details["word"].format(ascii=True)
-            yield {"word_row": word_row(view, text, points=points, table=table, scan=scan), "text": text}
+            # in slices of bounded work (their progress tuples are not shown)
+            found = yield from word_row_slices(view, text, points=points, table=table, scan=scan)
+            yield {"word_row": found, "text": text}
         return orbit_along_u(e, max(view.u_lo, 0.0), view.u_hi)
 
     def _show_point(self, gen, view, d):

@@ -74,6 +74,10 @@ __all__ = [
     "trace_window",
     "trace_slices",
     "traced_overlay",
+    "traced_overlay_slices",
+    "grid_scan_slices",
+    "border_point_slices",
+    "word_row_slices",
 ]
 
 MOTION_COLOR_VARS = ("k_mean", "lyap1")
@@ -160,6 +164,9 @@ SLICE_WORK = 100_000_000
 # 600 x 600 and max_iter 1000 is 3.6e8) skip it.
 COARSE = 8
 PREVIEW_WORK = 4 * SLICE_WORK
+
+# the slice_work of the one-call versions of the sliced jobs (word_row, traced_overlay)
+_UNBOUNDED = 2**62
 
 
 @dataclass(frozen=True)
@@ -470,7 +477,8 @@ def render_slices(view: View, slice_work: int | None = None, coarse: int = COARS
     coarse preview: every ``coarse``-th pixel centre of both axes (exact
     values of those pixels, 1/coarse^2 of the work); then the full grid.
     Both in bands of rows of at most ``slice_work`` potential map steps
-    (``max_iter`` per pixel; at least one row).  A view coloured by a motion
+    (``max_iter`` per pixel), a row over it in pieces of at most that
+    (:func:`_bands`; one pixel at least).  A view coloured by a motion
     field (:data:`MOTION_COLOR_VARS`) also has the fields of
     :func:`stairbounce.nonsliding.motion_coords` in every band (``max_iter``
     transient and ``max_iter`` kept steps, 3 ``max_iter`` per pixel in all),
@@ -488,30 +496,72 @@ def render_slices(view: View, slice_work: int | None = None, coarse: int = COARS
     # a motion field costs max_iter transient + max_iter kept steps per pixel
     per_pixel = view.max_iter * (3 if motion else 1)
 
-    def bands(e, u):
-        rows = max(1, min(u.size, slice_work // max(1, e.size * per_pixel)))
-        for start in range(0, u.size, rows):
-            band = plane.scan_coords(e, u[start : start + rows], max_iter=view.max_iter)
-            if motion:
-                band = _with_motion(band, view, e, u[start : start + rows])
-            yield min(u.size, start + rows), band
+    def compute(e, u):
+        band = plane.scan_coords(e, u, max_iter=view.max_iter)
+        return _with_motion(band, view, e, u) if motion else band
 
     pre = []
     if coarse > 1 and view.work > preview_work and min(view.width, view.height) >= 2 * coarse:
         off = coarse // 2
-        for _, band in bands(es[off::coarse], us[off::coarse]):
-            pre.append(band)
+        for _, band in _bands(es[off::coarse], us[off::coarse], per_pixel, slice_work, compute):
+            if band is not None:
+                pre.append(band)
             yield Partial(view, pre, [], 0, coarse)
-    parts = []
-    for done, band in bands(es, us):
-        parts.append(band)
-        if done < view.height:
-            yield Partial(view, pre, parts, done, coarse)
+    parts, rows = [], 0
+    for done, band in _bands(es, us, per_pixel, slice_work, compute):
+        if band is not None:
+            parts.append(band)
+            rows = done
+        if done < view.height or band is None:
+            yield Partial(view, pre, parts, rows, coarse)
     ds = parts[0] if len(parts) == 1 else xr.concat(parts, dim="u", combine_attrs="override")
     ds.attrs.update(
         e_min=view.e_lo, e_max=view.e_hi, n_e=view.width,
         u_min=view.u_lo, u_max=view.u_hi, n_u=view.height,
     )
+    return ds
+
+
+def _bands(es, us, per_pixel, slice_work, compute):
+    """The grid ``us x es`` computed by ``compute(e, u) -> Dataset`` in blocks of
+    at most ``slice_work`` potential map steps (``per_pixel`` each;
+    :func:`stairbounce.borders.grid_blocks`): yields ``(rows done, band)``
+    after each block, ``band`` the Dataset of the rows just completed, or
+    ``None`` after a piece of a row (pixels are independent: the pieces
+    joined along ``e`` are the row bit for bit)."""
+    from ..borders import grid_blocks
+
+    pieces = []
+    for r, c in grid_blocks(es.size, us.size, per_pixel, slice_work):
+        pieces.append(compute(es[c], us[r]))
+        if c.stop < es.size:
+            yield r.start, None
+            continue
+        band = pieces[0] if len(pieces) == 1 else xr.concat(pieces, dim="e", combine_attrs="override")
+        pieces = []
+        yield r.stop, band
+
+
+def grid_scan_slices(e, u, max_iter, slice_work=None):
+    """grid_scan_slices(e=(lo, hi, n), u=(lo, hi, n), max_iter, slice_work=SLICE_WORK) -> generator, returning xarray.Dataset
+
+    :func:`stairbounce.plane.scan_coords` of the window's pixel centres in
+    blocks of at most ``slice_work`` potential map steps (:func:`_bands`),
+    yielding ``(rows done, rows)`` after each; returns the scan with the
+    window's attributes (as :func:`stairbounce.scan`'s), which the border
+    points and the word table read.
+    """
+    slice_work = SLICE_WORK if slice_work is None else slice_work
+    es, us = plane.pixel_centres(*e), plane.pixel_centres(*u)
+    parts = []
+    for done, band in _bands(es, us, max_iter, slice_work,
+                             lambda a, b: plane.scan_coords(a, b, max_iter=max_iter)):
+        if band is not None:
+            parts.append(band)
+        yield done, us.size
+    ds = parts[0] if len(parts) == 1 else xr.concat(parts, dim="u", combine_attrs="override")
+    ds.attrs.update(e_min=float(e[0]), e_max=float(e[1]), n_e=int(e[2]),
+                    u_min=float(u[0]), u_max=float(u[1]), n_u=int(u[2]))
     return ds
 
 
@@ -786,6 +836,28 @@ def view_border_points(view: View, side: int = BORDER_SIDE) -> xr.Dataset:
     return border_points(e=e, u=u, max_iter=view.max_iter)
 
 
+def border_point_slices(view: View, side: int = BORDER_SIDE, slice_work: int | None = None):
+    """border_point_slices(view, side=BORDER_SIDE, slice_work=SLICE_WORK) -> generator, returning xarray.Dataset
+
+    :func:`view_border_points` in slices of at most ``slice_work`` map steps
+    (the explorer's scheduler; issue 38, R1): the grid's scan
+    (:func:`grid_scan_slices`, ``max_iter`` per pixel), then the pairs
+    (:func:`stairbounce.borders.border_point_slices`, a bound of
+    :func:`stairbounce.borders.pair_work` each).  Yields ``("scan", done,
+    total)`` and ``("pairs", done, total)``; returns the same Dataset as
+    :func:`view_border_points`.
+    """
+    from ..borders import _grid_input, staged
+    from ..borders import border_point_slices as pair_slices
+
+    slice_work = SLICE_WORK if slice_work is None else slice_work
+    e, u = border_grid(view, side)
+    ds = yield from staged("scan", grid_scan_slices(e, u, view.max_iter, slice_work))
+    es, us, period, max_iter = _grid_input(ds)
+    attrs = {k: ds.attrs[k] for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u")}
+    return (yield from staged("pairs", pair_slices(es, us, period, max_iter, attrs, slice_work)))
+
+
 def border_overlay(view: View, side: int = BORDER_SIDE, points: xr.Dataset | None = None) -> dict:
     """border_overlay(view, side=BORDER_SIDE, points=None) -> dict
 
@@ -809,20 +881,23 @@ def trace_window(view: View) -> tuple:
     return (view.e_lo, min(view.e_hi, 1.0 - 1e-12)), (max(view.u_lo, 1e-9), view.u_hi)
 
 
-def trace_slices(view: View, side: int = TRACE_SIDE):
-    """trace_slices(view, side=TRACE_SIDE) -> generator of (done, total), returning list[Region]
+def trace_slices(view: View, side: int = TRACE_SIDE, slice_work: int | None = None):
+    """trace_slices(view, side=TRACE_SIDE, slice_work=SLICE_WORK) -> generator of (done, total), returning list[Region]
 
     The regions of every word of the view (:func:`stairbounce.window_regions`'
     method, the words seen by ``side`` x ``side`` seed pixel centres of
     :func:`trace_window`, the view's max_iter), one word per ``next()``: the
     scheduler's slices, so a trace of many words stays cancellable and shares
-    the worker.  Yields ``(0, total)`` once the words are known, then
-    ``(done, total)`` after each word; returns the regions, largest first.
+    the worker.  The seed scan comes first, in slices of at most
+    ``slice_work`` map steps, each yielding ``(0, None)``; then ``(0,
+    total)`` once the words are known and ``(done, total)`` after each word;
+    returns the regions, largest first.
     """
     from ..regions import iter_window_regions
 
     e, u = trace_window(view)
-    return (yield from iter_window_regions(e, u, resolution=side, max_iter=view.max_iter))
+    return (yield from iter_window_regions(e, u, resolution=side, max_iter=view.max_iter,
+                                           slice_work=SLICE_WORK if slice_work is None else slice_work))
 
 
 def _word_at(e, u, window, max_iter, buf, texts):
@@ -913,8 +988,26 @@ def _on_arcs(points, arcs, window):
     return hit
 
 
+ARC_SIDE_WORK = 8
+"""Most orbits of ``max_iter`` steps :func:`_arc_sides` follows per arc (two
+sides at four offsets at most)."""
+
+
 def traced_overlay(view: View, regions, points=None) -> dict:
     """traced_overlay(view, regions, points=None) -> dict
+
+    :func:`traced_overlay_slices` run to its end in one call.
+    """
+    gen = traced_overlay_slices(view, regions, points, slice_work=_UNBOUNDED)
+    while True:
+        try:
+            next(gen)
+        except StopIteration as stop:
+            return stop.value
+
+
+def traced_overlay_slices(view: View, regions, points=None, slice_work=None):
+    """traced_overlay_slices(view, regions, points=None, slice_work=SLICE_WORK) -> generator, returning dict
 
     The traced borders of the view as the overlay draws them: the edges of
     :func:`stairbounce.border_graph` of ``regions`` (from :func:`trace_slices`)
@@ -927,16 +1020,24 @@ def traced_overlay(view: View, regions, points=None) -> dict:
     and neither of its words is incomplete (those points are replaced by the
     arcs; the others stay); ``"words"`` (words traced), ``"incomplete"``
     (their texts: a walk gave up, their points are kept) and ``"counts"``
-    (arcs by kind).
+    (arcs by kind).  The words beside the arcs cost up to
+    ``ARC_SIDE_WORK * max_iter`` map steps per arc: they are found for as
+    many arcs per ``next()`` as ``slice_work`` map steps allow (one at
+    least), yielding ``(arcs done, arcs)``.
     """
     from ..regions import border_graph
 
+    slice_work = SLICE_WORK if slice_work is None else slice_work
+    per_slice = max(1, slice_work // (ARC_SIDE_WORK * view.max_iter))
     window = trace_window(view)
     graph = border_graph(regions)
     buf, texts = np.empty(view.max_iter, dtype=np.int64), dict[tuple, str]()
     cols: dict = {k: [] for k in ("xs", "ys", "kind", "step", "word_low", "word_high")}
     counts: dict = {}
-    for _, _, arc in graph.edges:
+    edges = list(graph.edges)
+    for i, (_, _, arc) in enumerate(edges):
+        if i and i % per_slice == 0:
+            yield i, len(edges)
         low, high = _arc_sides(arc, window, view.max_iter, buf, texts)
         for k, v in (("xs", arc.e.tolist()), ("ys", arc.u.tolist()), ("kind", arc.kind), ("step", int(arc.step)),
                      ("word_low", low), ("word_high", high)):
@@ -963,6 +1064,21 @@ def word_row(view: View, text: str, side: int = BORDER_SIDE, points: xr.Dataset 
              table: xr.Dataset | None = None, scan: xr.Dataset | None = None) -> dict:
     """word_row(view, text, side=BORDER_SIDE, points=None, table=None, scan=None) -> dict
 
+    :func:`word_row_slices` run to its end in one call.
+    """
+    gen = word_row_slices(view, text, side, points, table, scan, slice_work=_UNBOUNDED)
+    while True:
+        try:
+            next(gen)
+        except StopIteration as stop:
+            return stop.value
+
+
+def word_row_slices(view: View, text: str, side: int = BORDER_SIDE, points: xr.Dataset | None = None,
+                    table: xr.Dataset | None = None, scan: xr.Dataset | None = None,
+                    slice_work: int | None = None):
+    """word_row_slices(view, text, side=BORDER_SIDE, points=None, table=None, scan=None, slice_work=SLICE_WORK) -> generator, returning dict
+
     The row of the word ``text`` (ASCII, as ``Word.format(ascii=True)``) in
     :func:`stairbounce.word_table` of the view: the grid :func:`border_grid`
     (at most ``side`` x ``side`` pixels of the window, the view's max_iter);
@@ -973,16 +1089,21 @@ def word_row(view: View, text: str, side: int = BORDER_SIDE, points: xr.Dataset 
     (n_e, n_u), "words": number of distinct words there, "row": {column:
     value} or None, "table": the word table}`` (row None: the word has no
     pixel centre on that grid, e.g. a region smaller than its pixels).
+    Computed in slices of at most ``slice_work`` map steps (the scan of
+    the grid, its border points unless given, the words of its pixels:
+    :func:`stairbounce.borders.word_table_slices`), yielding ``(stage,
+    done, total)``.
     """
-    from ..borders import word_table
+    from ..borders import staged, word_table_slices
 
+    slice_work = SLICE_WORK if slice_work is None else slice_work
     e, u = border_grid(view, side)
     if table is not None:
         tab = table
-    elif scan is not None:
-        tab = word_table(scan, points=points)
     else:
-        tab = word_table(e=e, u=u, max_iter=view.max_iter, points=points)
+        if scan is None:
+            scan = yield from staged("scan", grid_scan_slices(e, u, view.max_iter, slice_work))
+        tab = yield from word_table_slices(scan, points, slice_work)
     hit = np.flatnonzero(tab["text"].values == text)
     row = None
     if hit.size:
