@@ -1189,7 +1189,7 @@ def word_table_slices(ds, points, slice_work):
     E, U = np.meshgrid(es, us)
     E, U = E.ravel(), U.ravel()
     ids, rows = yield from staged("words", word_group_slices(E, U, period, slice_work))
-    return _word_table_rows(ds, es, us, E, U, ids, rows, points, max_iter, False)
+    return _word_table_rows(ds, es, us, E, U, ids, rows, points, max_iter, False, False)
 
 
 def _scan_input(e, u, max_iter, progress):
@@ -1258,10 +1258,10 @@ def word_table(e=(0.0, 1.0, 500), u=(0.0, 1.5, 350), max_iter=1000, *, points=No
     E, U = np.meshgrid(es, us)
     E, U = E.ravel(), U.ravel()
     ids, rows = _word_groups(E, U, period)
-    return _word_table_rows(ds, es, us, E, U, ids, rows, points, max_iter, regions)
+    return _word_table_rows(ds, es, us, E, U, ids, rows, points, max_iter, regions, prove)
 
 
-def _word_table_rows(ds, es, us, E, U, ids, rows, points, max_iter, regions):
+def _word_table_rows(ds, es, us, E, U, ids, rows, points, max_iter, regions, prove):
     """The Dataset of :func:`word_table` once every pixel centre ``(E, U)``
     (flat) of the scan ``ds`` has its word: ``rows[ids[i]]`` (-1: none)."""
     nw = len(rows)
