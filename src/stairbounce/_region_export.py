@@ -42,6 +42,9 @@ _S = np.linspace(0.0, 1.0, 17)[1:-1]
 # default tolerance, relative to the larger side of the window
 TOLERANCE = 1e-6
 _MAX_ROUNDS = 60
+# two chords closer to each other's curve than this (times the largest coordinate) are on
+# the same curve to rounding (the margins are exact to about 32 ulps of the position)
+_SAME = 256 * _EPS
 
 
 @njit(cache=True)
@@ -328,7 +331,8 @@ def _untangle(edges, window, slack):
 
 
 def _signed_area(R):
-    x, y = R[:, 0], R[:, 1]
+    """Shoelace area of the closed ring ``R``, about its first vertex (less cancellation)."""
+    x, y = R[:, 0] - R[0, 0], R[:, 1] - R[0, 1]
     return 0.5 * float(np.dot(x[:-1], y[1:]) - np.dot(x[1:], y[:-1]))
 
 
@@ -354,7 +358,7 @@ class Partition:
             self.edges.append(_Edge(arc, F, (nodes[a].e, nodes[a].u), (nodes[b].e, nodes[b].u)))
         for ed in self.edges:
             ed.densify(self.tolerance)
-        self.rounds, self.crossings = _untangle(self.edges, self.window, 1e-10 * self.scale) \
+        self.rounds, self.crossings = _untangle(self.edges, self.window, _SAME * max(map(abs, self.window))) \
             if untangle else (0, None)
         self.max_deviation = max((ed.max_dev for ed in self.edges), default=0.0)
         self.failed = sum(ed.failed for ed in self.edges)

@@ -151,6 +151,9 @@ def words_(
     from_corners: bool = typer.Option(False, "--from-corners", help="With --regions: also trace the "
                                       "regions smaller than a seed pixel found around the corners of "
                                       "their neighbours (several times slower)."),
+    tolerance: float = typer.Option(None, "--tolerance", help="With --regions: largest deviation of an "
+                                    "exported chord from the traced curve (default 1e-6 of the window's "
+                                    "larger side)."),
 ):
     """The distinct words of the periodic sliding solutions in a window: letters, period,
     pixels, area, a representative point, bounding box, border points by kind; and N(p)."""
@@ -160,8 +163,11 @@ def words_(
         raise CLIError(f"--top must be >= 0, got {top}")
     if from_corners and not regions:
         raise CLIError("--from-corners goes with --regions")
+    if tolerance is not None and not regions:
+        raise CLIError("--tolerance goes with --regions")
     if regions:
-        return _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners)
+        return _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners,
+                        tolerance)
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force)
     ds = with_row_progress(description="scan rows", rows=1,
                            run=lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
@@ -231,8 +237,12 @@ def itinerary_(
                                          else f"no slide within {max_iter} steps"))
 
 
-def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners=False):
+def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners=False,
+             tolerance=None):
     """``words --regions``: the window's regions traced (stairbounce.regions) to GeoJSON or SVG."""
+    import time
+
+    from .. import _region_export
     from .. import regions as rg
 
     if out is None or out.suffix.lower() not in (".geojson", ".json", ".svg"):
@@ -240,10 +250,16 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, None, 150, force,
                      outputs=False)
     check_outputs(force, out=out)
+    try:
+        tolerance, _, _ = rg._export_options(tolerance, None, max_iter)
+    except ValueError as err:
+        raise CLIError(f"--{err}") from None
     res = max(ew[2], uw[2])
     regs = with_row_progress(description="words traced", rows=1, run=lambda p: rg.window_regions(
         ew[:2], uw[:2], resolution=res, max_iter=max_iter, progress=p, from_corners=from_corners))
-    rg.write_regions(regs, out, overwrite=force)
+    start = time.perf_counter()
+    _, meta = _region_export.write(regs, out, force, tolerance, res, max_iter)
+    took = time.perf_counter() - start
     graph = rg.border_graph(regs)
     c = graph.counts()
     typer.echo(f"wrote {out}")
@@ -251,3 +267,9 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
                f"arcs by kind {c['arcs']}; area traced {sum(r.area for r in regs):.6g} of "
                f"{(ew[1] - ew[0]) * (uw[1] - uw[0]):.6g}; "
                f"{sum(not r.complete for r in regs)} words incomplete")
+    cov = meta["coverage"]
+    typer.echo(f"coverage: traced area {meta['traced_area']:.6g} of the {res}x{res} seed scan's sliding "
+               f"area {meta['sliding_area']:.6g}" + (f" ({100 * cov:.2f} %)" if cov is not None else "")
+               + f"; {len(meta['untraced'])} words seen beside traced arcs but not traced"
+               + (" (listed in the file)" if out.suffix.lower() != ".svg" else "")
+               + f"; exported in {took:.1f} s (tolerance {meta['tolerance']:.3g})")
