@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "dimension", "atlas",
-        "atlas_boxes", "nonsliding", "borders", "regions", "_io", "_interrupt", "_cache"]
+        "atlas_boxes", "nonsliding", "borders", "regions", "_region_export", "_colours", "_io", "_interrupt", "_cache"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 
