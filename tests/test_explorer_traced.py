@@ -193,7 +193,9 @@ def test_traced_mode_schedules_a_trace_a_new_view_cancels_it_and_arcs_replace_po
     assert set(arcs["kind"]) == {"chatter", "window"}
     for xs, ys in zip(arcs["xs"], arcs["ys"]):  # only the new view's arcs
         assert TONGUE1[0] <= min(xs) and max(xs) <= TONGUE1[1] and TONGUE1[2] <= min(ys) and max(ys) <= TONGUE1[3]
-    assert arcs["color"] == [{"chatter": "#e0002a"}.get(k, "#8c8c8c") for k in arcs["kind"]]
+    from stairbounce._colours import KIND_COLOURS
+
+    assert arcs["color"] == [KIND_COLOURS[k] for k in arcs["kind"]]   # the one set of border colours
     pts = V.view_border_points(app.view)
     kinds = pts["kind"].values.astype(str)
     assert (kinds == "chatter").sum() > 20
@@ -203,7 +205,7 @@ def test_traced_mode_schedules_a_trace_a_new_view_cancels_it_and_arcs_replace_po
     assert "traced borders: 1 word (48 x 48 seeds)" in status and "chatter 1" in status
     assert f"{(kinds == 'chatter').sum()} of {kinds.size} border points replaced by arcs" in status
     assert "overlays=traced" in app.history_out.text
-    assert [i.label.value for i in app.legend.items] == ["traced arcs (same colours; window grey)"]
+    assert [i.label.value for i in app.legend.items] == ["traced border arcs: graze violet, edge pink, chatter dark green, window grey"]
     # off: no arcs, no points, no job; on again: drawn from what was traced, no new job
     app.overlays.value = []
     assert app.arc_src.data["xs"] == [] and app.border_src.data["e"] == [] and not _borders_jobs(sched)
