@@ -270,7 +270,10 @@ def test_png_export_draws_the_traced_arcs():
     with_arcs = view_png(ds, view, borders={"points": points, "arcs": ov["arcs"]})
     without = view_png(ds, view, borders={"points": points, "arcs": {"xs": [], "ys": [], "kind": []}})
     assert Image.open(io.BytesIO(with_arcs)).format == "PNG" and with_arcs != without
-    # an arc drawn is red (chatter) pixels in the image: more of them with the arcs
-    red = [np.sum(np.all(np.asarray(Image.open(io.BytesIO(b)).convert("RGB"))[..., :3] == (224, 0, 42), axis=-1))
+    # an arc drawn is pixels of the chatter colour in the image: more of them with the arcs
+    from stairbounce._colours import KIND_COLOURS
+
+    chatter = tuple(int(KIND_COLOURS["chatter"][i:i + 2], 16) for i in (1, 3, 5))
+    red = [np.sum(np.all(np.asarray(Image.open(io.BytesIO(b)).convert("RGB"))[..., :3] == chatter, axis=-1))
            for b in (with_arcs, without)]
     assert red[0] > red[1] + 50
