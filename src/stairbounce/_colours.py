@@ -6,10 +6,11 @@ traced arcs, and the SVG export of traced regions (regions.regions_svg).
 They lie outside the word-length palette of the scans (black, then the turbo
 map from blue through cyan, green, yellow and orange to dark red;
 plot/plane.py), away from white (no sliding solution) and from the tongues'
-magenta: each is at least 58 CIELAB units from every colour of that palette
-(numerical: computed against ``plot.plane.color_key("word_length")``, which
-tests/test_regions_export.py repeats), so an arc drawn over a scan does not
-take the colour of a band.  A plain module without plotting imports: the
+magenta: each is at least 60 CIELAB units from every colour of that palette
+and 40 from white and the magenta (numerical: computed against
+``plot.plane.color_key("word_length")``; tests/test_regions_export.py checks
+40 from all of them), so an arc drawn over a scan does not take the colour of
+a band.  A plain module without plotting imports: the
 core's SVG export reads it too.
 """
 
