@@ -1807,9 +1807,14 @@ def regions_geojson(regions, *, tolerance=None, resolution=None, max_iter=1000) 
     Then every pair of segments is tested for intersection, and two segments
     that meet other than at a shared vertex (where two borders come closer
     than the tolerance, near a corner where they meet at a small angle) are
-    halved again until none does: every polygon is simple, and two polygons
-    meet only along shared edges and at vertices (``shapely.is_valid``, and
-    zero intersection area; tests/test_regions_export.py).
+    halved again until none does, except chords that lie on each other's
+    curve to rounding (256 ulps: the two sides of one border that
+    border_graph left as two edges, or a sliver narrower than rounding),
+    which are left and counted in ``metadata.crossings``.  Where that count
+    is 0, every polygon is simple and two polygons meet only along shared
+    edges and at vertices (``shapely.is_valid`` and zero intersection area
+    on the Fig. 5e window and e 0.30-0.36, u 0.32-0.38, numerical:
+    tests/test_regions_export.py).
 
     Properties of a polygon: ``word``, ``period``, ``impacts``,
     ``component``; ``area``, the traced area of the component (the shoelace
