@@ -9,8 +9,9 @@ from pathlib import Path
 import pytest
 
 CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "dimension", "atlas",
-        "atlas_boxes", "nonsliding", "borders", "regions", "_io", "_interrupt", "_cache", "structure",
-        "structure.certify"]
+        "atlas_boxes", "nonsliding", "borders", "regions", "_region_export", "_colours", "_io", "_interrupt",
+        "_cache", "structure", "structure.certify", "structure.verify", "structure.labels", "structure.tubes",
+        "cascades"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

@@ -199,7 +199,9 @@ def test_traced_mode_schedules_a_trace_a_new_view_cancels_it_and_arcs_replace_po
     assert set(arcs["kind"]) == {"chatter", "window"}
     for xs, ys in zip(arcs["xs"], arcs["ys"]):  # only the new view's arcs
         assert TONGUE1[0] <= min(xs) and max(xs) <= TONGUE1[1] and TONGUE1[2] <= min(ys) and max(ys) <= TONGUE1[3]
-    assert arcs["color"] == [{"chatter": "#e0002a"}.get(k, "#8c8c8c") for k in arcs["kind"]]
+    from stairbounce._colours import KIND_COLOURS
+
+    assert arcs["color"] == [KIND_COLOURS[k] for k in arcs["kind"]]   # the one set of border colours
     pts = V.view_border_points(app.view)
     kinds = pts["kind"].values.astype(str)
     assert (kinds == "chatter").sum() > 20
@@ -209,7 +211,7 @@ def test_traced_mode_schedules_a_trace_a_new_view_cancels_it_and_arcs_replace_po
     assert "traced borders: 1 word (48 x 48 seeds)" in status and "chatter 1" in status
     assert f"{(kinds == 'chatter').sum()} of {kinds.size} border points replaced by arcs" in status
     assert "overlays=traced" in app.history_out.text
-    assert [i.label.value for i in app.legend.items] == ["traced arcs (same colours; window grey)"]
+    assert [i.label.value for i in app.legend.items] == ["traced border arcs: graze violet, edge pink, chatter dark green, window grey"]
     # off: no arcs, no points, no job; on again: drawn from what was traced, no new job
     app.overlays.value = []
     assert app.arc_src.data["xs"] == [] and app.border_src.data["e"] == [] and not _borders_jobs(sched)
@@ -274,7 +276,10 @@ def test_png_export_draws_the_traced_arcs():
     with_arcs = view_png(ds, view, borders={"points": points, "arcs": ov["arcs"]})
     without = view_png(ds, view, borders={"points": points, "arcs": {"xs": [], "ys": [], "kind": []}})
     assert Image.open(io.BytesIO(with_arcs)).format == "PNG" and with_arcs != without
-    # an arc drawn is red (chatter) pixels in the image: more of them with the arcs
-    red = [np.sum(np.all(np.asarray(Image.open(io.BytesIO(b)).convert("RGB"))[..., :3] == (224, 0, 42), axis=-1))
+    # an arc drawn is pixels of the chatter colour in the image: more of them with the arcs
+    from stairbounce._colours import KIND_COLOURS
+
+    chatter = tuple(int(KIND_COLOURS["chatter"][i:i + 2], 16) for i in (1, 3, 5))
+    red = [np.sum(np.all(np.asarray(Image.open(io.BytesIO(b)).convert("RGB"))[..., :3] == chatter, axis=-1))
            for b in (with_arcs, without)]
     assert red[0] > red[1] + 50

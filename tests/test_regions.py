@@ -372,10 +372,12 @@ def test_graph_counts_and_exports(tmp_path, graph32):
     for i, j, arc in graph.edges:
         assert 0 <= i < len(graph.nodes) and 0 <= j < len(graph.nodes)
     gj = sb.regions_geojson(regs)
-    feats = gj["features"]
+    # one polygon per component (the untraced words seen beside arcs come after, unlocated)
+    feats = [f for f in gj["features"] if f["geometry"] is not None]
     assert len(feats) == counts["components"]
     for f, comp in zip(feats, [c for r in regs for c in r.components]):
-        ring = np.array(f["geometry"]["coordinates"][0])
+        poly = f["geometry"]["coordinates"]
+        ring = np.array(poly[0][0] if f["geometry"]["type"] == "MultiPolygon" else poly[0])
         shoelace = 0.5 * np.sum(ring[:-1, 0] * ring[1:, 1] - ring[1:, 0] * ring[:-1, 1])
         assert shoelace > 0  # counter-clockwise
         # the chords alone (no Hermite correction): the same polygon, a little inside
@@ -385,7 +387,7 @@ def test_graph_counts_and_exports(tmp_path, graph32):
     assert json.loads(out.read_text())["type"] == "FeatureCollection"
     svg = sb.write_regions(regs, tmp_path / "x.svg")
     root = ET.fromstring(svg.read_text())
-    assert root.tag.endswith("svg") and len(root.findall("{http://www.w3.org/2000/svg}polyline")) > 0
+    assert root.tag.endswith("svg") and len(list(root.iter("{http://www.w3.org/2000/svg}polyline"))) > 0
     with pytest.raises(ValueError, match="out must end in"):
         sb.write_regions(regs, tmp_path / "x.png")
     with pytest.raises(OutputExistsError):
@@ -455,9 +457,15 @@ def test_cli_words_regions(tmp_path, capsys):
     assert code == 0, err
     gj = json.loads(out.read_text())
     ref = sb.window_regions((0.02, 0.2), (0.95, 1.05), resolution=24)
-    assert len(gj["features"]) == sum(len(r.components) for r in ref)
+    assert len([f for f in gj["features"] if f["geometry"]]) == sum(len(r.components) for r in ref)
     assert any(f["properties"]["word"] == "(3, 0^inf)" for f in gj["features"])
     assert f"{len(ref)} words in" in text
+    # the coverage of the seed scan (24 x 24, the larger side of --size), in the file and the summary
+    meta = gj["metadata"]
+    assert meta["seed_resolution"] == 24 and f"({100 * meta['coverage']:.2f} %)" in text
+    code, _, err = run(["words", "--e", "0.02:0.2", "--u", "0.95:1.05", "--size", "24x24", "--regions",
+                        "--out", str(tmp_path / "t.geojson"), "--tolerance", "-1"])
+    assert code == 2 and "--tolerance must be" in err and "Traceback" not in err
     code, _, err = run(["words", "--e", "0.02:0.2", "--u", "0.95:1.05", "--size", "24x24",
                         "--regions", "--out", str(tmp_path / "w.svg")])
     assert code == 0 and (tmp_path / "w.svg").read_text().startswith("<svg")

@@ -1778,6 +1778,10 @@ class BorderGraph:
     edges: list
     regions: list
     junctions: int = 0       # arcs cut at a corner of another region's boundary (one-sided)
+    # the closed curves of the regions as edges: ``rings[(region, component, ring)]``
+    # (ring 0 the outer boundary, 1.. the holes) is the list of ``(edge index,
+    # reversed)`` in the curve's order (the export's faces, regions_geojson)
+    rings: dict = field(default_factory=dict)
 
     def counts(self):
         """Regions, arcs by kind and corners by their pair of kinds."""
@@ -1974,9 +1978,10 @@ def border_graph(regions):
         return index[key]
 
     # every arc with its end nodes; a closed curve's start is no corner
-    arcs, corner = [], set()
-    for r in regions:
-        for curve in _curves(r):
+    arcs, corner, owner = [], set(), []
+    for ri, r in enumerate(regions):
+        for ci, hi, curve in ((ci, hi, curve) for ci, comp in enumerate(r.components)
+                              for hi, curve in enumerate([comp.boundary] + list(comp.holes))):
             for i, arc in enumerate(curve):
                 prev, nxt = curve[i - 1], curve[(i + 1) % len(curve)]
                 a = node((arc.e[0], arc.u[0]), ((prev.kind, prev.step), (arc.kind, arc.step)))
@@ -1984,32 +1989,35 @@ def border_graph(regions):
                 if len(curve) > 1:
                     corner.update((a, b))
                 arcs.append((a, b, arc, len(curve) == 1))
+                owner.append((ri, ci, hi))
     margins = _GraphMargins(regions)
     xy = np.array([(c.e, c.u) for c in nodes])
 
     # split every arc at the corners on it (chords binned on a grid: a corner is
     # compared with the chords of its cell only)
     cuts = _corners_on_arcs(arcs, xy, sorted(corner), margins, tol, scale)
-    pieces, junctions = [], 0
+    pieces, junctions, ring_of = [], 0, []
     for k, (a, b, arc, closed) in enumerate(arcs):
         if not cuts[k]:
             pieces.append((a, b, arc, closed))
+            ring_of.append(owner[k])
             continue
         cut = sorted(cuts[k])
         junctions += len(cut)
         ends = [a] + [n for _, n in cut] + [b]
         for m, piece in enumerate(_split_arc(arc, cut, nodes, margins(arc))):
             pieces.append((ends[m], ends[m + 1], piece, False))
+            ring_of.append(owner[k])
 
     # one edge per piece of border: the pieces of the same event between the same
     # nodes whose middles lie on each other's curve are its two sides
-    edges, groups = [], {}
-    for a, b, arc, closed in pieces:
+    edges, groups, rings = [], {}, {}
+    for (a, b, arc, closed), ring in zip(pieces, ring_of):
         if arc.kind != "window":
             key = (arc.kind, arc.step) + (("closed",) if closed else (frozenset((a, b)),))
             mid = margins.middle(arc)
             twin = None
-            for other in groups.get(key, ()):
+            for other, index in groups.get(key, ()):
                 Q = np.stack([other.e, other.u], 1)
                 if _chord_position(Q, mid, tol) is not None and \
                         _on_arc_curve(margins(other), other._slot, mid, 2.0 * tol):
@@ -2018,92 +2026,133 @@ def border_graph(regions):
             if twin is not None:
                 if twin.inside != arc.inside:
                     twin.outside = arc.inside
+                # both sides keep their region on the left: the other side runs backwards
+                rings.setdefault(ring, []).append((index, twin.inside != arc.inside))
                 continue
-            groups.setdefault(key, []).append(arc)
+            groups.setdefault(key, []).append((arc, len(edges)))
+        rings.setdefault(ring, []).append((len(edges), False))
         edges.append((a, b, arc))
-    return BorderGraph(nodes, edges, regions, junctions)
+    return BorderGraph(nodes, edges, regions, junctions, rings)
 
 
 # --------------------------------------------------------------------------- #
 # Export                                                                      #
 # --------------------------------------------------------------------------- #
 
-KIND_COLOURS = {"graze": "#1f77b4", "edge": "#2ca02c", "chatter": "#d62728", "window": "#999999"}
+from ._colours import KIND_COLOURS  # noqa: E402  (one definition for every output)
 
 
-def regions_geojson(regions) -> dict:
-    """regions_geojson(regions) -> dict
+def regions_geojson(regions, *, tolerance=None, resolution=None, max_iter=1000) -> dict:
+    """regions_geojson(regions, *, tolerance=None, resolution=None, max_iter=1000) -> dict
 
-    A GeoJSON FeatureCollection of ``regions`` (from :func:`word_region` or
-    :func:`window_regions`): one Polygon feature per connected component,
-    coordinates ``[e, u]``, the outer ring counter-clockwise and the holes
-    clockwise; properties ``word``, ``period``, ``impacts``, ``area``,
-    ``area_error``, ``kinds`` (arcs by kind) and ``corners``.
+    A GeoJSON FeatureCollection (RFC 7946) of ``regions`` (from
+    :func:`word_region` or :func:`window_regions`) that is a planar
+    partition: one Polygon feature per connected component, coordinates
+    ``[e, u]``, the outer ring counter-clockwise and the holes clockwise.
+
+    The rings are built from the edges of :func:`border_graph`: a piece of
+    border between two traced words is one edge, densified once and used by
+    both faces, so neighbouring words share the same vertices along their
+    common arc (no overlap, no gap).  Each edge is densified until every
+    chord deviates from the traced curve by at most ``tolerance`` (the
+    deviation from the cubic Hermite curve of the chord's ends and tangents,
+    which matches the curve to O(L^4) for a chord of length L; each new vertex
+    put on the border to rounding by Newton's method on the edge's margin).
+    Then every pair of segments is tested for intersection, and two segments
+    that meet other than at a shared vertex (where two borders come closer
+    than the tolerance, near a corner where they meet at a small angle) are
+    halved again until none does, except chords that lie on each other's
+    curve to rounding (256 ulps: the two sides of one border that
+    border_graph left as two edges, or a sliver narrower than rounding),
+    which are left and counted in ``metadata.crossings``.  Where that count
+    is 0, every polygon is simple and two polygons meet only along shared
+    edges and at vertices (``shapely.is_valid`` and zero intersection area
+    on the Fig. 5e window and e 0.30-0.36, u 0.32-0.38, numerical:
+    tests/test_regions_export.py).
+
+    Properties of a polygon: ``word``, ``period``, ``impacts``,
+    ``component``; ``area``, the traced area of the component (the shoelace
+    sum of the dense traced curve plus the cubic Hermite correction of every
+    chord: exact to ``area_error``) and ``polygon_area``, the area of the
+    exported rings themselves (outer minus holes; it differs from ``area`` by
+    at most about the perimeter times ``tolerance``); ``kinds`` (arcs by
+    kind), ``corners``, ``complete`` and ``reason``.  A word whose walks
+    failed has ``complete: false`` and the reason on each of its features
+    (with a null geometry when no component closed).  Words seen just
+    outside a traced arc whose other side no traced word claims (regions
+    that no seed pixel centre found) are features with a null geometry,
+    ``complete: false``, the reason and ``seen_at``, a point beside them.
+
+    The top-level member ``metadata`` (a foreign member, RFC 7946 section
+    6.1) holds the window, ``tolerance`` and the largest chord deviation
+    left (``max_deviation``), the counts (``words``, ``components``,
+    ``edges``, ``shared_edges``, ``vertices``), ``incomplete`` and
+    ``untraced`` (word lists), ``traced_area`` and ``polygon_area`` (sums),
+    ``crossings`` (segment pairs still meeting: 0) and, with ``resolution``,
+    the window's coverage: ``sliding_area``, the sliding area of a scan of
+    ``resolution`` x ``resolution`` pixel centres (the seed scan of
+    :func:`window_regions` when given its resolution and ``max_iter``), and
+    ``coverage = traced_area / sliding_area``.
+
+    Parameters
+    ----------
+    tolerance : float > 0, default 1e-6 times the larger side of the window
+        Largest deviation of a chord from the traced curve.
+    resolution : int >= 2, optional
+        The seed scan's pixels per side, for ``coverage``.
+    max_iter : int >= 1, default 1000
+        Steps of that scan (and of the probes beside untraced arcs).
     """
-    feats = []
-    for r in _region_list("regions", regions):
-        for ci, comp in enumerate(r.components):
-            rings = []
-            for h in [None] + list(range(len(comp.holes))):
-                pe, pu = comp.polygon(h)
-                rings.append(np.stack([pe, pu], 1).tolist())
-            feats.append({
-                "type": "Feature",
-                "geometry": {"type": "Polygon", "coordinates": rings},
-                "properties": {"word": r.word.format(ascii=True), "period": r.word.period,
-                               "impacts": r.word.impacts, "component": ci,
-                               "area": comp.area, "area_error": comp.area_error,
-                               "kinds": comp.kinds, "corners": len(comp.corners)},
-            })
-    return {"type": "FeatureCollection", "features": feats}
+    from . import _region_export
+
+    regions = _region_list("regions", regions)
+    tolerance, resolution, max_iter = _export_options(tolerance, resolution, max_iter)
+    return _region_export.geojson(regions, tolerance, resolution, max_iter)
 
 
-def regions_svg(regions, size=800) -> str:
-    """regions_svg(regions, size=800) -> str
+def _export_options(tolerance, resolution, max_iter):
+    if tolerance is not None:
+        tolerance = _v.real("tolerance", tolerance)
+        if not (tolerance > 0.0 and math.isfinite(tolerance)):
+            raise ValueError(f"tolerance must be a finite number > 0, got {tolerance!r}")
+    if resolution is not None:
+        resolution = check_count("resolution", resolution, 2, 8192)
+    return tolerance, resolution, check_count("max_iter", max_iter, 1)
 
-    An SVG drawing of the traced borders of ``regions`` in their window, each
-    arc coloured by its kind (graze blue, edge green, chatter red, window
-    grey), e to the right and u upwards.
+
+def regions_svg(regions, size=800, *, tolerance=None, resolution=None, max_iter=1000) -> str:
+    """regions_svg(regions, size=800, *, tolerance=None, resolution=None, max_iter=1000) -> str
+
+    An SVG figure of ``regions`` in their window (``size`` x ``size`` pixels
+    of plot, e to the right and u upwards): the faces of the planar
+    partition of :func:`regions_geojson` filled light grey (each with its
+    word and area as a tooltip), every edge of :func:`border_graph` drawn
+    once in the colour of its kind (graze violet, edge pink, chatter dark
+    green; the colours of the ``borders`` PNG and the explorer, outside the
+    scans' word-length palette), the window as the frame, ticks and labels
+    on both axes, a title (words, and with ``resolution`` the coverage of
+    the seed scan's sliding area) and a legend.  Options as in
+    :func:`regions_geojson` (here the segments are not untangled: a figure
+    needs no valid polygons).
     """
+    from . import _region_export
+
     regions = _region_list("regions", regions)
     size = check_count("size", size, 16, 100000)
-    if not regions:
-        return f'<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{size}"/>\n'
-    e, u = regions[0].e, regions[0].u
-    sx, sy = size / (e[1] - e[0]), size / (u[1] - u[0])
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{size}" '
-           f'viewBox="0 0 {size} {size}">',
-           f'<title>borders of [{e[0]:g}, {e[1]:g}] x [{u[0]:g}, {u[1]:g}]</title>',
-           '<rect width="100%" height="100%" fill="white"/>']
-    for r in regions:
-        for curve in _curves(r):
-            for arc in curve:
-                if arc.kind == "window":
-                    continue
-                pts = " ".join(f"{(x - e[0]) * sx:.3f},{(u[1] - y) * sy:.3f}" for x, y in zip(arc.e, arc.u))
-                out.append(f'<polyline fill="none" stroke="{KIND_COLOURS[arc.kind]}" '
-                           f'stroke-width="0.6" points="{pts}"><title>{arc.kind} at step {arc.step}: '
-                           f'{arc.inside}</title></polyline>')
-    out.append("</svg>")
-    return "\n".join(out) + "\n"
+    tolerance, resolution, max_iter = _export_options(tolerance, resolution, max_iter)
+    return _region_export.svg(regions, size, tolerance, resolution, max_iter)[0]
 
 
-def write_regions(regions, path, overwrite=False):
-    """Write ``regions`` as GeoJSON (``.geojson``/``.json``) or SVG (``.svg``),
-    atomically; ValueError for another suffix."""
-    import json
-    from pathlib import Path
+def write_regions(regions, path, overwrite=False, *, tolerance=None, resolution=None, max_iter=1000):
+    """write_regions(regions, path, overwrite=False, *, tolerance=None, resolution=None, max_iter=1000) -> Path
 
-    from ._io import atomic_path
+    Write ``regions`` as GeoJSON (``.geojson``/``.json``, :func:`regions_geojson`)
+    or SVG (``.svg``, :func:`regions_svg`), atomically; ValueError for
+    another suffix."""
+    from . import _region_export
 
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix not in (".geojson", ".json", ".svg"):
-        raise ValueError(f"out must end in .geojson, .json or .svg, got {path.name!r}")
-    text = regions_svg(regions) if suffix == ".svg" else json.dumps(regions_geojson(regions))
-    with atomic_path(path, overwrite) as tmp:
-        Path(tmp).write_text(text)
-    return path
+    tolerance, resolution, max_iter = _export_options(tolerance, resolution, max_iter)
+    return _region_export.write(regions, path, overwrite, tolerance, resolution, max_iter)[0]
 
 
 # --------------------------------------------------------------------------- #

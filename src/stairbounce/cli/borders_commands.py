@@ -158,6 +158,9 @@ def words_(
     prove: bool = typer.Option(False, "--prove", help="Prove each word by intervals at one of its "
                                "pixel centres (stairbounce.structure.labels) and report the proven "
                                "words, a proven lower bound on the distinct words, first."),
+    tolerance: float = typer.Option(None, "--tolerance", help="With --regions: largest deviation of an "
+                                    "exported chord from the traced curve (default 1e-6 of the window's "
+                                    "larger side)."),
 ):
     """The distinct words of the periodic sliding solutions in a window: letters, period,
     pixels, area, a representative point, bounding box, border points by kind; and N(p)."""
@@ -169,8 +172,11 @@ def words_(
         raise CLIError("--from-corners goes with --regions")
     if regions and png is not None:
         raise CLIError("--png does not go with --regions: draw the traced regions with --out FILE.svg")
+    if tolerance is not None and not regions:
+        raise CLIError("--tolerance goes with --regions")
     if regions:
-        return _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners)
+        return _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners,
+                        tolerance)
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force)
     ds = with_row_progress(description="scan rows", rows=1,
                            run=lambda p: plane.scan(e=ew, u=uw, max_iter=max_iter, progress=p))
@@ -293,8 +299,12 @@ class _WordSpelled:
         return "(" + ", ".join(self.letters) + (f", ... ({self.count} letters)" if more else "") + ", 0^inf)"
 
 
-def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners=False):
+def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners=False,
+             tolerance=None):
     """``words --regions``: the window's regions traced (stairbounce.regions) to GeoJSON or SVG."""
+    import time
+
+    from .. import _region_export
     from .. import regions as rg
 
     if out is None or out.suffix.lower() not in (".geojson", ".json", ".svg"):
@@ -302,6 +312,10 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
     ew, uw = _window(e, u, speed, step_height, step_length, g, size, max_iter, out, None, 150, force,
                      outputs=False)
     check_outputs(force, out=out)
+    try:
+        tolerance, _, _ = rg._export_options(tolerance, None, max_iter)
+    except ValueError as err:
+        raise CLIError(f"--{err}") from None
     if not (2 <= ew[2] <= 8192 and 2 <= uw[2] <= 8192):
         raise CLIError(f"--size with --regions must be 2 to 8192 pixels a side (the seed scan), got "
                        f"{ew[2]}x{uw[2]}")
@@ -310,7 +324,9 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
     regs = with_row_progress(description="words traced", rows=1, run=lambda p: rg.window_regions(
         ew, uw, max_iter=max_iter, progress=p, from_corners=from_corners))
     graph = rg.border_graph(regs)  # before the file: nothing is written when it fails
-    rg.write_regions(regs, out, overwrite=force)
+    start = time.perf_counter()
+    _, meta = _region_export.write(regs, out, force, tolerance, (ew[2], uw[2]), max_iter)
+    took = time.perf_counter() - start
     c = graph.counts()
     arcs = ", ".join(f"{k} {n}" for k, n in sorted(c["arcs"].items())) or "none"
     incomplete = [r.word.format(ascii=True) for r in regs if not r.complete]
@@ -322,3 +338,9 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
                                                          "if any, are in the file):" if incomplete else ""))
     for text in incomplete:
         typer.echo(f"  {text}")
+    cov = meta["coverage"]
+    typer.echo(f"coverage: traced area {meta['traced_area']:.6g} of the {ew[2]}x{uw[2]} seed scan's sliding "
+               f"area {meta['sliding_area']:.6g}" + (f" ({100 * cov:.2f} %)" if cov is not None else "")
+               + f"; {len(meta['untraced'])} words seen beside traced arcs but not traced"
+               + (" (listed in the file)" if out.suffix.lower() != ".svg" else "")
+               + f"; exported in {took:.1f} s (tolerance {meta['tolerance']:.3g})")

@@ -50,6 +50,7 @@ from bokeh.models import (
 from bokeh.plotting import figure
 from panel.io.state import set_curdoc
 
+from .._colours import KIND_COLOURS, kinds_legend
 from .export import export_name, view_netcdf, view_png
 from .preview import REMOVE_JS
 from .scheduler import Scheduler
@@ -120,11 +121,11 @@ _OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bou
                     "exact borders (graze, edge, chatter)": "borders",
                     "exact borders as traced arcs (seconds)": "traced"}
 _OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u = (1-e)/(2\u221a(2e)), Cor. 2.1",
-                   "borders": "exact borders: graze blue, edge orange, chatter red",
-                   "traced": "traced arcs (same colours; window grey)"}
+                   "borders": f"exact border points: {kinds_legend()}",
+                   "traced": f"traced border arcs: {kinds_legend(('graze', 'edge', 'chatter', 'window'))}"}
 
 # the traced arcs' colour on the window's sides (the other kinds: plot.borders.KIND_COLORS)
-_WINDOW_ARC_COLOR = "#8c8c8c"
+_WINDOW_ARC_COLOR = KIND_COLOURS["window"]
 # least time between two "tracing borders: N of M words" lines sent to the page (s)
 _TRACE_PROGRESS_EVERY = 0.25
 

@@ -95,14 +95,14 @@ def _draw_borders(ax, view, borders):
     """The border points (and traced arcs) of ``borders``, else the view's border points."""
     from matplotlib.collections import LineCollection
 
-    from ..plot.borders import KIND_COLORS
+    from .._colours import KIND_COLOURS as KIND_COLORS
 
     b = border_overlay(view) if borders is None else borders["points"]
     ax.scatter(b["e"], b["u"], s=2, c=[KIND_COLORS[k] for k in b["kind"]], linewidths=0)
     arcs = {} if borders is None else borders.get("arcs", {})
     if arcs.get("xs"):
         lines = [np.column_stack([x, y]) for x, y in zip(arcs["xs"], arcs["ys"])]
-        ax.add_collection(LineCollection(lines, colors=[KIND_COLORS.get(k, "0.55") for k in arcs["kind"]],
+        ax.add_collection(LineCollection(lines, colors=[KIND_COLORS[k] for k in arcs["kind"]],
                                          linewidths=1.2))
 
 

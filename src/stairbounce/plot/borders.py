@@ -7,9 +7,12 @@ import numpy as np
 
 from .. import _validate as _v
 
-KIND_COLORS = {"graze": "#0050ff", "edge": "#ff9d00", "chatter": "#e0002a"}
-"""One colour per kind of border point, chosen apart from the word-length key
-and from the tongues' magenta."""
+from .._colours import KIND_COLOURS as _KIND_COLOURS
+
+KIND_COLORS = {k: _KIND_COLOURS[k] for k in ("graze", "edge", "chatter")}
+"""One colour per kind of border point (stairbounce._colours, the same in the
+explorer and the SVG export), outside the word-length key and apart from the
+tongues' magenta."""
 
 _KINDS = tuple(KIND_COLORS)
 
