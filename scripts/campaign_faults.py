@@ -48,6 +48,20 @@ Round 2 (issue 23, report ``reliability-round2.md``):
   address-space limit refused by the memory estimate.
 - ``dask``: the scheduler SIGKILLed mid-scan, then a new one resumes.
 
+Round 3 (issue 38, report ``reliability-round3.md``):
+
+- ``round3a``: the explorer's slices of every job kind bounded in map steps (R1);
+  a tile and its checksum copied from another tile or store (R3); ``itinerary``
+  with a huge ``--max-iter`` refused up front, its rows streamed (R5); a store
+  without its metadata (R9); the figures' cache for bifurcation entries and its
+  kernel hash (R10); a store bind-mounted under another name (R11); a tiled scan
+  with no Dask worker says so (the observation).
+- ``round3b``: region areas of windows 1e-6 to 1e-12 wide against exact ones (R2);
+  ``border_graph`` and ``words --regions`` without components (R4); every bad
+  value of every regions parameter (R6, R7); zero-copy arrays under a 6 GB
+  address-space limit (R8); ``words --regions --png`` refused (R12); traced points
+  inside their window (R13).
+
 Prints one line per case and a table of counts per part.  Exit status 1 when
 any defect was found.
 """

@@ -515,7 +515,10 @@ def build(regions, tolerance=None, resolution=None, max_iter=1000, untangle=True
     }
     if resolution is not None and part.regions:
         sliding, pixels = coverage(part.regions, resolution, max_iter)
-        meta.update({"seed_resolution": resolution, "sliding_pixels": pixels,
+        if np.ndim(resolution) == 1 and resolution[0] == resolution[1]:
+            resolution = int(resolution[0])  # pixels per side; [n_e, n_u] where they differ
+        meta.update({"seed_resolution": resolution if np.ndim(resolution) == 0 else [int(n) for n in resolution],
+                     "sliding_pixels": pixels,
                      "sliding_area": sliding, "coverage": traced / sliding if sliding else None})
     return part, faces, missing, meta
 
