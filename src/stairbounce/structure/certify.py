@@ -3,9 +3,10 @@
 :func:`certify_box` states what is proven over one box of parameters,
 :func:`certify` covers a window with an adaptive quadtree of such boxes and
 returns a :class:`CertifiedAtlas`.  The decisions are taken with outward-rounded
-float64 intervals along the itinerary of the edge state ``(1, 0)``
-(:mod:`stairbounce.structure._kernel`; the argument for rigour is in
-docs/design.md, "Certified boxes").
+float64 bounds along the itinerary of the edge state ``(1, 0)``, by default at the
+box's two corners, where each margin takes its least and largest value
+(:func:`certify_box`; :mod:`stairbounce.structure._kernel`; the argument for
+rigour is in docs/design.md, "Certified boxes").
 """
 
 from __future__ import annotations
