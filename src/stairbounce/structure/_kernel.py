@@ -17,6 +17,12 @@ mean-value form ``c + a (E - ec) + b (U - uc)`` (valid because the itinerary is
 frozen: every decision up to here is proven over the box, so the quantity is
 one smooth formula of (e, u) on the box).
 
+The corners form (:func:`_corners`, the default of ``certify``) carries no
+MV numbers: along a frozen itinerary every margin is monotone in e and u, so
+one-sided point bounds at the box's two corners ``(E1, U1)`` and ``(E0, U0)``
+decide the whole box (the argument is in :func:`_corners` and in
+``certify_box``'s docstring).
+
 Min and max propagate NaN (``np.minimum``/``np.maximum``), so a bound is
 either NaN or valid; a NaN bound never passes a decision's test (``lo >= 0``,
 ``hi < 0``), and an intersection keeps the other bound (``np.fmax``/``np.fmin``).
@@ -42,6 +48,8 @@ REASON_CODES = ("graze", "edge", "chatter", "impacts", "nonsliding", "range")
 # the least u a box may hold (the valid numeric range, stairbounce._validate.U_MIN)
 _U_MIN = 1e-150
 SLIDING = -1
+# the enclosures (certify.FORMS, in this order)
+NAIVE, MEAN_VALUE, CORNERS = 0, 1, 2
 
 # impacts followed one by one on a step; a step proven to have more is left
 # undecided with reason "impacts" (its bounces are shorter than the enclosures)
@@ -283,8 +291,104 @@ def _no_sliding(E0, U0):
 
 
 @njit(cache=True)
-def _certify_box(E0, E1, U0, U1, max_iter, cap, mv, itin, rec, dec, marg):
-    """Certify the box ``[E0, E1] x [U0, U1]``.
+def _record2(rec, dec, marg, nd, code, lo, hi):
+    if rec and nd < dec.shape[0]:
+        dec[nd] = code
+        marg[nd, 0] = lo
+        marg[nd, 1] = hi
+    return nd + 1
+
+
+@njit(cache=True)
+def _corners(E0, E1, U0, U1, max_iter, cap, itin, rec, dec, marg):
+    """The corners form of :func:`_certify_box`: two point evaluations.
+
+    Along a frozen itinerary the state ``(v, s)``, ``s = sqrt(v^2 + 2y)``,
+    starts at ``(0, sqrt 2)`` and a step with k impacts gives
+    ``v' = v - T + B_k s`` (``B_0 = 0``, ``B_k = (1+e)(1 + e + ... + e^(k-1))``)
+    and ``s'^2 = 2 + e^(2k) s^2``; by induction v and s do not decrease with e
+    nor with u, so every margin ``T - v - C s`` (``C`` = ratio, or
+    ``A_j = 1 + 2(e + ... + e^(j-1))``) does not increase with e and decreases
+    with u.  Its least value over the box is at ``(E1, U1)``, its largest at
+    ``(E0, U0)``: a decision happens on the whole box when a lower bound of the
+    margin at ``(E1, U1)`` is >= 0, and nowhere when an upper bound at
+    ``(E0, U0)`` is < 0.  So the kernel carries upper bounds of ``v, s, t_j,
+    w_j = e^j s`` at ``(E1, U1)`` (names ending in ``h``) and lower bounds at
+    ``(E0, U0)`` (``l``), each operation rounded to nearest and stepped one
+    float outward (up for ``h``, down for ``l``) on the side it bounds.  The
+    recorded enclosure of a margin is ``[lo at (E1, U1), hi at (E0, U0)]``.
+    Both corners take the same decisions, so the itinerary is frozen for both.
+    """
+    Tl = _dn(1.0 / U1)  # T = 1/u: a lower bound at U1, an upper one at U0
+    Th = _up(1.0 / U0)
+    Rh = _up(_up(1.0 + E1) / _dn(1.0 - E1))  # ratio = (1+e)/(1-e) > 0
+    Rl = _dn(_dn(1.0 + E0) / _up(1.0 - E0))
+    vh = 0.0
+    vl = 0.0
+    sh = _up(math.sqrt(2.0))
+    sl = _dn(math.sqrt(2.0))
+    nd = 0
+    for n in range(max_iter):
+        step = n + 1
+        # the slide test (2.4): T - (v + ratio s) >= 0
+        lo = _dn(_dn(Tl - vh) - _up(Rh * sh))
+        hi = _up(_up(Th - vl) - np.maximum(_dn(Rl * sl), 0.0))
+        nd = _record2(rec, dec, marg, nd, 0, lo, hi)
+        if lo >= 0.0:
+            itin[n] = SLIDING
+            return WORD, -1, step, n + 1, nd
+        if not hi < 0.0:
+            return UNDECIDED, CHATTER, step, n, nd
+        # first impact t_1 = v + s
+        th = _up(vh + sh)
+        tl = _dn(vl + sl)
+        lo = _dn(Tl - th)
+        hi = _up(Th - tl)
+        nd = _record2(rec, dec, marg, nd, 1, lo, hi)
+        if not lo >= 0.0:
+            if not hi < 0.0:
+                return UNDECIDED, GRAZE, step, n, nd
+            # flies over: v' = v - T, s'^2 = 2 + s^2
+            vh = _up(vh - Tl)
+            vl = _dn(vl - Th)
+            sh = _up(math.sqrt(_up(2.0 + _up(sh * sh))))
+            sl = _dn(math.sqrt(_dn(2.0 + _dn(sl * sl))))
+            itin[n] = 0
+            continue
+        # impacts: t_{j+1} = t_j + 2 w_j, w_j = e^j s (eq. 2.2); w >= 0
+        wh = _up(E1 * sh)
+        wl = np.maximum(_dn(E0 * sl), 0.0)
+        k = 1
+        while True:
+            tnh = _up(th + 2.0 * wh)
+            tnl = _dn(tl + 2.0 * wl)
+            lo = _dn(Tl - tnh)
+            hi = _up(Th - tnl)
+            nd = _record2(rec, dec, marg, nd, k + 1, lo, hi)
+            if not lo >= 0.0:
+                if not hi < 0.0:
+                    return UNDECIDED, EDGE, step, n, nd
+                break
+            if k >= cap:
+                return UNDECIDED, IMPACTS, step, n, nd
+            th = tnh
+            tl = tnl
+            wh = _up(E1 * wh)
+            wl = np.maximum(_dn(E0 * wl), 0.0)
+            k += 1
+        # after k impacts: v' = w_k - (T - t_k), s'^2 = 2 + w_k^2
+        vh = _up(_up(wh + th) - Tl)
+        vl = _dn(_dn(wl + tl) - Th)
+        sh = _up(math.sqrt(_up(2.0 + _up(wh * wh))))
+        sl = _dn(math.sqrt(_dn(2.0 + _dn(wl * wl))))
+        itin[n] = k
+    return NO_SLIDE_WITHIN, -1, max_iter, max_iter, nd
+
+
+@njit(cache=True)
+def _certify_box(E0, E1, U0, U1, max_iter, cap, form, itin, rec, dec, marg):
+    """Certify the box ``[E0, E1] x [U0, U1]`` with the enclosures of ``form``
+    (:data:`NAIVE`, :data:`MEAN_VALUE` or :data:`CORNERS`).
 
     Returns ``(status, reason, step, n_itinerary, n_decisions)``; the itinerary
     (impact number per decided step, -1 for the slide) is written to
@@ -293,6 +397,9 @@ def _certify_box(E0, E1, U0, U1, max_iter, cap, mv, itin, rec, dec, marg):
     """
     if _no_sliding(E0, U0):
         return NO_SLIDING, -1, 0, 0, 0
+    if form == CORNERS:
+        return _corners(E0, E1, U0, U1, max_iter, cap, itin, rec, dec, marg)
+    mv = form == MEAN_VALUE
     ec = 0.5 * (E0 + E1)
     uc = 0.5 * (U0 + U1)
     de0, de1 = _dn(E0 - ec), _up(E1 - ec)
@@ -395,7 +502,7 @@ def _any_slides(E0, E1, U0, U1, max_iter, points):
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _certify_level(win, level, ii, jj, max_iter, cap, mv, ns_points, status, reason, step, nsteps, kept, halt):
+def _certify_level(win, level, ii, jj, max_iter, cap, form, ns_points, status, reason, step, nsteps, kept, halt):
     """Certify the boxes ``(ii[b], jj[b])`` of one level of the window's
     quadtree (``win = (e_lo, e_hi, u_lo, u_hi)``), in parallel; a box left
     undecided gets the reason "nonsliding" when ``ns_points > 0`` and the
@@ -420,7 +527,7 @@ def _certify_level(win, level, ii, jj, max_iter, cap, mv, ns_points, status, rea
             if U0 < _U_MIN or E1 >= 1.0:  # touches u = 0 or e = 1: outside the model
                 st, rs, sp, ni = UNDECIDED, RANGE, 0, 0
             else:
-                st, rs, sp, ni, nd = _certify_box(E0, E1, U0, U1, max_iter, cap, mv, itin, False, dec, marg)
+                st, rs, sp, ni, nd = _certify_box(E0, E1, U0, U1, max_iter, cap, form, itin, False, dec, marg)
             if (st == UNDECIDED and ns_points > 0 and rs != RANGE and rs != IMPACTS
                     and not _any_slides(E0, E1, U0, U1, max_iter, ns_points)):
                 rs = NONSLIDING
@@ -434,7 +541,7 @@ def _certify_level(win, level, ii, jj, max_iter, cap, mv, ns_points, status, rea
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _itineraries(win, level, ii, jj, max_iter, cap, mv, offsets, out, halt):
+def _itineraries(win, level, ii, jj, max_iter, cap, form, offsets, out, halt):
     """Write the itineraries of the boxes ``(level[b], ii[b], jj[b])`` to
     ``out[offsets[b]:offsets[b+1]]`` (the same computation as :func:`_certify_level`)."""
     n = ii.shape[0]
@@ -452,7 +559,7 @@ def _itineraries(win, level, ii, jj, max_iter, cap, mv, offsets, out, halt):
             E1 = _edge(win[0], ew, win[1], ii[b] + 1, L)
             U0 = _edge(win[2], uw, win[3], jj[b], L)
             U1 = _edge(win[2], uw, win[3], jj[b] + 1, L)
-            _certify_box(E0, E1, U0, U1, max_iter, cap, mv, itin, False, dec, marg)
+            _certify_box(E0, E1, U0, U1, max_iter, cap, form, itin, False, dec, marg)
             o = offsets[b]
             for k in range(offsets[b + 1] - o):
                 out[o + k] = itin[k]

@@ -3,9 +3,10 @@
 :func:`certify_box` states what is proven over one box of parameters,
 :func:`certify` covers a window with an adaptive quadtree of such boxes and
 returns a :class:`CertifiedAtlas`.  The decisions are taken with outward-rounded
-float64 intervals along the itinerary of the edge state ``(1, 0)``
-(:mod:`stairbounce.structure._kernel`; the argument for rigour is in
-docs/design.md, "Certified boxes").
+float64 bounds along the itinerary of the edge state ``(1, 0)``, by default at the
+box's two corners, where each margin takes its least and largest value
+(:func:`certify_box`; :mod:`stairbounce.structure._kernel`; the argument for
+rigour is in docs/design.md, "Certified boxes").
 """
 
 from __future__ import annotations
@@ -33,7 +34,11 @@ centre, so the box is taken for non-sliding motion and not split further) and
 ``range`` (atlases only: the box touches ``e = 1`` or ``u = 0``, outside the
 model's range; it is split down to the last level like a border)."""
 
-FORMS = ("mean-value", "naive")
+FORMS = ("corners", "mean-value", "naive")
+"""The enclosures a box can be certified with (the first is the default;
+:func:`certify_box`)."""
+_FORM_CODES = {"corners": K.CORNERS, "mean-value": K.MEAN_VALUE, "naive": K.NAIVE}
+_FORM_NAMES = {c: f for f, c in _FORM_CODES.items()}
 # levels (counted up from the deepest) at which an undecided box may stop as
 # "nonsliding" (benchmarks/certify.py measured the choice)
 _NONSLIDING_LEVELS = 4
@@ -88,9 +93,9 @@ def _check_u(u, window=False):
 
 
 def _check_form(form):
-    if form not in FORMS:
+    if not isinstance(form, str) or form not in FORMS:
         raise ValueError(f"form must be one of {', '.join(FORMS)}, got {form!r}")
-    return form == "mean-value"
+    return _FORM_CODES[form]
 
 
 def _itinerary_buffer(max_iter):
@@ -107,14 +112,14 @@ def _decision_name(code):
     return "slide" if code == 0 else f"impact {code}"
 
 
-def _run_box(e0, e1, u0, u1, max_iter, mv, itin):
+def _run_box(e0, e1, u0, u1, max_iter, form, itin):
     """Certify one box twice: once to size the record, once recording it."""
     dummy_d = np.empty(0, np.int64)
     dummy_m = np.empty((0, 2))
-    st, rs, sp, ni, nd = K._certify_box(e0, e1, u0, u1, max_iter, K.IMPACT_CAP, mv, itin, False, dummy_d, dummy_m)
+    st, rs, sp, ni, nd = K._certify_box(e0, e1, u0, u1, max_iter, K.IMPACT_CAP, form, itin, False, dummy_d, dummy_m)
     dec = np.empty(nd, np.int64)
     marg = np.empty((nd, 2))
-    again = K._certify_box(e0, e1, u0, u1, max_iter, K.IMPACT_CAP, mv, itin, True, dec, marg)
+    again = K._certify_box(e0, e1, u0, u1, max_iter, K.IMPACT_CAP, form, itin, True, dec, marg)
     assert again == (st, rs, sp, ni, nd)  # the same computation, the same answer
     return st, rs, sp, itin[:ni].copy(), dec, marg
 
@@ -132,8 +137,8 @@ def _certificate(e0, e1, u0, u1, max_iter, st, rs, sp, itin, dec, marg):
     )
 
 
-def certify_box(e, u, max_iter=1000, *, form="mean-value") -> Certificate:
-    """certify_box(e=(e0, e1), u=(u0, u1), max_iter=1000, *, form="mean-value") -> Certificate
+def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
+    """certify_box(e=(e0, e1), u=(u0, u1), max_iter=1000, *, form="corners") -> Certificate
 
     What is proven over the box ``[e0, e1] x [u0, u1]`` of the (e, u) plane (a
     point when ``e0 == e1`` and ``u0 == u1``), with the evidence.
@@ -162,10 +167,29 @@ def certify_box(e, u, max_iter=1000, *, form="mean-value") -> Certificate:
     u : pair (u0, u1), 1e-150 <= u0 <= u1 <= 1e150
     max_iter : int >= 1, default 1000
         Steps followed before the claim ``no_slide_within``.
-    form : "mean-value" (default) or "naive"
-        The enclosures: naive intervals, or naive intersected with the
-        first-order (mean-value) form about the box's centre along the frozen
-        itinerary (tighter on small boxes; both rigorous).
+    form : "corners" (default), "mean-value" or "naive"
+        The enclosures, all rigorous.  ``"corners"``: two point evaluations,
+        at ``(e1, u1)`` and ``(e0, u0)`` (below); ``"naive"``: interval
+        arithmetic over the box on ``(y, v)``; ``"mean-value"``: naive
+        intersected with the first-order form about the box's centre along
+        the frozen itinerary.
+
+    The corners form (proven).  Along a frozen itinerary carry ``(v, s)``,
+    ``s = sqrt(v^2 + 2y)``, from ``v = 0``, ``s = sqrt 2``: a step with k
+    impacts (k = 0: a fly-over) gives ``v' = v - T + B_k s`` with ``B_0 = 0``,
+    ``B_k = (1+e)(1 + e + ... + e^(k-1))``, and ``s'^2 = 2 + e^(2k) s^2``
+    (Prop. 2.3, eq. (2.2); energy over the flight).  ``T = 1/u`` decreases in
+    u, ``B_k >= 0`` and ``e^(2k)`` do not decrease in e, ``s >= 0``: by
+    induction v and s do not decrease in e nor in u.  The margins
+    ``T - v - ratio s`` (slide, ``ratio = (1+e)/(1-e)``) and
+    ``T - v - A_j s`` (impact j, ``A_j = 1 + 2(e + ... + e^(j-1)) >= 1``) do
+    not increase in e and decrease strictly in u.  So over the box a margin
+    is >= 0 everywhere iff it is at ``(e1, u1)``, and < 0 everywhere iff it is
+    at ``(e0, u0)``: each decision is taken from a lower bound of the margin
+    at ``(e1, u1)`` and an upper bound at ``(e0, u0)`` (outward-rounded point
+    evaluations), both corners walking the same itinerary; the recorded
+    enclosure is ``[lo at (e1, u1), hi at (e0, u0)]``.  These are the margin's
+    exact range up to rounding, so no enclosure over the box decides more.
 
     >>> import stairbounce as sb
     >>> c = sb.certify_box(e=(0.18, 0.1801), u=(0.62, 0.6201))
@@ -175,8 +199,8 @@ def certify_box(e, u, max_iter=1000, *, form="mean-value") -> Certificate:
     e0, e1 = _check_e(e)
     u0, u1 = _check_u(u)
     max_iter = check_count("max_iter", max_iter, 1)
-    mv = _check_form(form)
-    st, rs, sp, itin, dec, marg = _run_box(e0, e1, u0, u1, max_iter, mv, _itinerary_buffer(max_iter))
+    code = _check_form(form)
+    st, rs, sp, itin, dec, marg = _run_box(e0, e1, u0, u1, max_iter, code, _itinerary_buffer(max_iter))
     return _certificate(e0, e1, u0, u1, max_iter, st, rs, sp, itin, dec, marg)
 
 
@@ -196,8 +220,8 @@ def _edges(lo, hi, level, i):
 
 
 def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress=None, *, tiles=1,
-            form="mean-value") -> CertifiedAtlas:
-    """certify(e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, progress=None, *, tiles=1, form="mean-value") -> CertifiedAtlas
+            form="corners") -> CertifiedAtlas:
+    """certify(e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, progress=None, *, tiles=1, form="corners") -> CertifiedAtlas
 
     Cover a window of the (e, u) plane with boxes, each certified
     (:func:`certify_box`): an adaptive quadtree down to boxes of
@@ -231,7 +255,7 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
         Called after each level of each tile.
     tiles : 1, 2, 4 or 8 (at most 2^depth), default 1
         Tiles a side, certified one after the other (the same boxes).
-    form : "mean-value" (default) or "naive"
+    form : "corners" (default), "mean-value" or "naive"
         The enclosures (:func:`certify_box`).
 
     Returns
@@ -243,7 +267,7 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     depth = check_count("depth", depth, 0, _MAX_DEPTH)
     max_iter = check_count("max_iter", max_iter, 1)
     _itinerary_buffer(max_iter)
-    mv = _check_form(form)
+    code = _check_form(form)
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
     start = min(_START_LEVEL, depth)
@@ -272,16 +296,16 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
             # the tile's boxes of the start level, as one level-wide batch
             gi, gj = np.meshgrid(np.arange(ti * per_tile, (ti + 1) * per_tile),
                                  np.arange(tj * per_tile, (tj + 1) * per_tile))
-            parts += _run_tile(win, depth, start, gi.ravel(), gj.ravel(), max_iter, mv, tick)
+            parts += _run_tile(win, depth, start, gi.ravel(), gj.ravel(), max_iter, code, tick)
     cols = [np.concatenate([p[k] for p in parts]) for k in range(8)]
     level, ii, jj = cols[:3]
     order = np.lexsort((ii, jj, level))
     level, ii, jj, status, reason, step, nsteps, kept = (c[order] for c in cols)
-    ds = _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step, nsteps, kept)
+    ds = _atlas_dataset(win, depth, max_iter, code, level, ii, jj, status, reason, step, nsteps, kept)
     return CertifiedAtlas(ds, seconds=time.perf_counter() - t0)
 
 
-def _run_tile(win, depth, start, gi, gj, max_iter, mv, tick):
+def _run_tile(win, depth, start, gi, gj, max_iter, form, tick):
     """The quadtree below a batch of boxes ``(gi, gj)`` of level ``start``: the final
     boxes as arrays ``(level, i, j, status, reason, step, nsteps)``, one tuple per level."""
     from .._interrupt import run_kernel
@@ -301,7 +325,7 @@ def _run_tile(win, depth, start, gi, gj, max_iter, mv, tick):
             # the leaves' reason by their centre alone (the pixel of a scan at 2^depth); coarser
             # boxes stop as "nonsliding" only when neither the centre nor a corner slides
             ns_points = 0 if level < ns_level else (1 if level == depth else 5)
-            run_kernel(K._certify_level, win, level, ii, jj, max_iter, K.IMPACT_CAP, mv, ns_points,
+            run_kernel(K._certify_level, win, level, ii, jj, max_iter, K.IMPACT_CAP, form, ns_points,
                        status, reason, step, nsteps, kept)
         final = (status != K.UNDECIDED) | (reason == K.NONSLIDING) | (level == depth)
         out.append((np.full(int(final.sum()), level, np.int8), ii[final], jj[final], status[final],
@@ -315,7 +339,7 @@ def _run_tile(win, depth, start, gi, gj, max_iter, mv, tick):
     return out
 
 
-def _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step, nsteps, kept):
+def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, step, nsteps, kept):
     """The atlas's table: one row per box, with the array form of certificate.py
     (the itineraries from ``kept`` where they fit, else computed again)."""
     import xarray as xr
@@ -343,7 +367,7 @@ def _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step
         sub_off = np.zeros(sel.size + 1, np.int64)
         np.cumsum(lengths[sel], out=sub_off[1:])
         buf = np.empty(int(sub_off[-1]), np.int64)
-        run_kernel(K._itineraries, win, level[sel].astype(np.int64), ii[sel], jj[sel], max_iter, K.IMPACT_CAP, mv,
+        run_kernel(K._itineraries, win, level[sel].astype(np.int64), ii[sel], jj[sel], max_iter, K.IMPACT_CAP, form,
                    sub_off, buf)
         for k, b in enumerate(sel):
             itinerary[offsets[b]:offsets[b + 1]] = buf[sub_off[k]:sub_off[k + 1]]
@@ -370,7 +394,7 @@ def _atlas_dataset(win, depth, max_iter, mv, level, ii, jj, status, reason, step
         },
         attrs={
             "e_range": [float(win[0]), float(win[1])], "u_range": [float(win[2]), float(win[3])],
-            "depth": int(depth), "max_iter": int(max_iter), "form": FORMS[0] if mv else FORMS[1],
+            "depth": int(depth), "max_iter": int(max_iter), "form": _FORM_NAMES[form],
             "statuses": ",".join(STATUSES), "impact_cap": int(K.IMPACT_CAP),
             "nonsliding_levels": int(_NONSLIDING_LEVELS), "stairbounce_version": __version__,
             "kind": "stairbounce certified atlas",
@@ -507,13 +531,13 @@ class CertifiedAtlas:
         certificates, each decision and margin recomputed exactly as the atlas
         computed it."""
         ds = self.boxes
-        mv = ds.attrs["form"] == FORMS[0]
+        form = _FORM_CODES[str(ds.attrs["form"])]
         st = ds["status"].values
         itin = _itinerary_buffer(self.max_iter)
         cols = [ds[k].values for k in ("e0", "e1", "u0", "u1")]
         for b in np.flatnonzero(st != K.UNDECIDED):
             e0, e1, u0, u1 = (float(c[b]) for c in cols)
-            s, rs, sp, it, dec, marg = _run_box(e0, e1, u0, u1, self.max_iter, mv, itin)
+            s, rs, sp, it, dec, marg = _run_box(e0, e1, u0, u1, self.max_iter, form, itin)
             yield _certificate(e0, e1, u0, u1, self.max_iter, s, rs, sp, it, dec, marg)
 
     def border_box_counts(self):
