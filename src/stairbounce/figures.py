@@ -6,7 +6,8 @@ Every recipe uses only the public API (``trajectory``, ``scan``, ``fractal``,
 it wrote, a caption (what is drawn, the colours, which parameters are the
 paper's and which are ours), rows of "paper says / we measured" each with a
 verdict (:class:`Row`: agrees, differs by how much, or not comparable and
-why), its parameters and how long it took.  :func:`make_figures` runs a
+why, and a basis: proven, saying by what, or numerical), its parameters and
+how long it took.  :func:`make_figures` runs a
 selection, keeps going when one fails, and caches the expensive datasets on
 disk keyed by their inputs; :func:`write_report` writes ``report.md``,
 ``report.html`` and ``manifest.json``, keeping the figures of an earlier run
@@ -236,7 +237,7 @@ def _rejections(verdicts):
     return checked, rejected, first
 
 
-def _proof(n_certs, rejected, first, what):
+def _proof(n_certs, rejected, first):
     """(basis, proof, verdict override or None) of a row resting on
     ``n_certs`` certificates of which the checker ``rejected`` some."""
     if rejected:
@@ -305,7 +306,7 @@ def _tongue_proof_row(s, n_max=8):
                 straddle += 1
                 proven_straddle += c.status != "undecided"
     checked, rejected, first = _rejections([sb.verify(c) for c in certs])
-    basis, proof, override = _proof(len(certs), rejected, first, "tongues")
+    basis, proof, override = _proof(len(certs), rejected, first)
     ok = not wrong and not proven_straddle
     verdict, why = ("agrees" if ok else "differs",
                     "every box inside a tongue proven (n, 0^inf), no box across a border proven" if ok
@@ -331,13 +332,16 @@ def _certified_atlas(s, name, e, u):
     import stairbounce as sb
 
     depth = _certify_depth(s)
+    moved = e[0] < 2.0 ** -53
     e = (max(e[0], 2.0 ** -53), e[1])
     s.note(f"{name}: certified atlas, depth {depth}")
     atlas = sb.certify(e=e, u=u, depth=depth, max_iter=s.max_iter)
     n_proven = int((atlas.boxes["status"].values != _undecided_code()).sum())
     v = sb.verify(atlas)
     rejected = 0 if v.ok else max(v.rejected, 1)
-    basis, proof, override = _proof(n_proven, rejected, v.message, name)
+    basis, proof, override = _proof(n_proven, rejected, v.message)
+    if moved:
+        proof += "; the window starts at e = 2^-53, inside the checker's domain 0 < e"
     return atlas, depth, n_proven, basis, proof, override
 
 
