@@ -395,7 +395,7 @@ def test_figs_6_and_7_square_and_unaliased_with_the_study(drawn):
         assert f"paper: D = {F.DIMENSION_WINDOWS[name][1]}" in text
     assert "D = 1.457 [1.410, 1.500] with its drift, test fixture" in "\n".join(t.get_text() for t in figs["fig6"].texts)
     assert "no study result" in "\n".join(t.get_text() for t in figs["fig7"].texts)
-    row = results["fig6"].rows[-1]
+    row = next(r for r in results["fig6"].rows if r.quantity.startswith("dimension study"))
     assert row.verdict == "differs" and row.why.startswith("+0.133")
 
 
@@ -604,3 +604,31 @@ def test_every_dimension_row_computed_in_the_run_states_its_max_iter_check(made)
         assert len(rows) == 3
         for row in rows:
             assert re.search(r"max_iter 1000 -> 4000: (converged at|not converged at)", row["measured"]), row
+
+
+def test_every_row_states_its_basis_and_the_certifier_rows_are_proven(made):
+    """Each row is proven (saying by what) or numerical; the certifier's rows
+    (issue 36, item 8) are proven, re-verified by sb.verify, and agree."""
+    out, _, manifest = made
+    report = (out / "report.md").read_text()
+    assert "| quantity | paper | here | verdict | basis |" in report
+    assert F.BASIS_CRITERION[:40] in report
+    proven = []
+    for f in manifest["figures"]:
+        for row in f["rows"]:
+            assert row["basis"] in F.BASES, (f["name"], row)
+            if row["basis"] == "proven":
+                assert row["proof"], row
+                proven.append((f["name"], row["quantity"]))
+                assert row["verdict"] == "agrees", row
+    depth = F._certify_depth(F.Settings(out=out, scale=SCALE))
+    assert depth == 6
+    names = [name for name, q in proven]
+    assert ("fig3", "tongues (n, 0^inf) proven over boxes up to their tips (Theorem 3.1, n = 1..8)") in proven
+    for name in ("fig5e", "fig7"):
+        assert (name, f"proven sliding area and number of words (certified atlas, depth {depth})") in proven
+    for name in ("fig6", "fig7"):
+        assert (name, f"proven bracket on the border's box counts and slope (certified atlas, depth {depth})") in proven
+    assert names.count("fig1") == 1  # the periodic solution, proven at its point
+    # nothing else: every other row is a floating-point computation
+    assert len(proven) == 6

@@ -6,7 +6,8 @@ Every recipe uses only the public API (``trajectory``, ``scan``, ``fractal``,
 it wrote, a caption (what is drawn, the colours, which parameters are the
 paper's and which are ours), rows of "paper says / we measured" each with a
 verdict (:class:`Row`: agrees, differs by how much, or not comparable and
-why), its parameters and how long it took.  :func:`make_figures` runs a
+why, and a basis: proven, saying by what, or numerical), its parameters and
+how long it took.  :func:`make_figures` runs a
 selection, keeps going when one fails, and caches the expensive datasets on
 disk keyed by their inputs; :func:`write_report` writes ``report.md``,
 ``report.html`` and ``manifest.json``, keeping the figures of an earlier run
@@ -87,6 +88,10 @@ VERDICTS = ("agrees", "differs", "not comparable")
 """What a report row can conclude; "differs" says by how much and
 "not comparable" says why, in :attr:`Row.why`."""
 
+BASES = ("proven", "numerical")
+"""What a report row's statement rests on (:attr:`Row.basis`): a proof, or
+a floating-point computation (see :data:`BASIS_CRITERION`)."""
+
 
 @dataclass
 class Row:
@@ -96,6 +101,9 @@ class Row:
     differs, why it is not comparable, or on what margin it agrees.  Rows
     made with only ``agrees`` (True/False) get "agrees"/"differs"; a row with
     neither is printed as "no verdict", which the tests do not let through.
+    ``basis`` is one of :data:`BASES`: "proven" (with ``proof`` saying by
+    what) only where the row's statement is a theorem for every real point it
+    speaks of (:data:`BASIS_CRITERION`); "numerical", the default, otherwise.
     """
 
     quantity: str
@@ -104,8 +112,14 @@ class Row:
     agrees: bool | None = None
     verdict: str | None = None
     why: str = ""
+    basis: str = "numerical"
+    proof: str = ""
 
     def __post_init__(self):
+        if self.basis not in BASES:
+            raise ValueError(f"basis must be one of {', '.join(BASES)}, got {self.basis!r}")
+        if self.basis == "proven" and not self.proof:
+            raise ValueError("a proven row must say by what (proof)")
         if self.verdict is None and self.agrees is not None:
             self.verdict = "agrees" if self.agrees else "differs"
         if self.verdict is not None and self.verdict not in VERDICTS:
@@ -117,6 +131,10 @@ class Row:
         if self.verdict is None:
             return "no verdict"
         return self.verdict + (f": {self.why}" if self.why else "")
+
+    def basis_text(self) -> str:
+        """``"proven: PROOF"`` or ``"numerical"`` (with its note, if any)."""
+        return self.basis + (f": {self.proof}" if self.proof else "")
 
 
 @dataclass
@@ -147,6 +165,21 @@ CRITERION = (
 )
 """The report's verdict criterion, stated once in its header."""
 
+BASIS_CRITERION = (
+    "Every row is either **proven** or **numerical** (the basis column). A row is proven only "
+    "when its statement holds at every real point it speaks of, by a proof the column names: "
+    "every decision taken by outward-rounded interval arithmetic over whole boxes of (e, u) "
+    "(stairbounce.certify_box / certify) and every certificate re-verified by the independent "
+    "checker stairbounce.verify; a proven row whose certificates the checker rejects is "
+    "numerical and differs. Everything else is numerical: floating-point computations (exact to "
+    "rounding and checked against independent code, but a float decision near a border can fall "
+    "on the wrong side), pixel samples, fits, and analytic facts evaluated in floats. Proven areas "
+    "are rounded down and proven counts are lower or upper bounds, as the row says; a proven row "
+    "agrees when its certificates are re-verified and the numerical measurement beside it does "
+    "not contradict the proven bound."
+)
+"""The criterion of the report's basis column (:attr:`Row.basis`), stated in its header."""
+
 
 def _compare(value, paper, ci, unit=""):
     """A verdict on a measured ``value`` with interval ``ci`` against the
@@ -170,6 +203,275 @@ def _ours(quantity, measured, holds, criterion):
     return Row(f"ours: {quantity}", "-",
                f"{measured}; {'holds' if holds else 'FAILS'} ({criterion})",
                verdict="not comparable", why="a claim of ours; the paper says nothing about it")
+
+
+# --------------------------------------------------------------------------- #
+# proven rows: the certifier (stairbounce.certify_box / certify), re-verified  #
+# by the independent checker (stairbounce.verify)                             #
+# --------------------------------------------------------------------------- #
+
+CERTIFY_DEPTH = 9
+"""Depth of the certified atlases of the report's windows at scale 1 (boxes of
+window/256); each halving of ``Settings.scale`` takes one level off (4..12)."""
+
+TONGUE_COLUMNS = 30
+"""Columns of the tongue cover per end: widths halving towards e = 0 and
+towards the tip, so that the cover reaches within tip * 2^-30 of both."""
+
+TONGUE_INSET = 0.01
+"""The tongue cover's boxes stay this share of the tongue's height (at the
+column's right edge) inside both borders of Theorem 3.1."""
+
+
+def _certify_depth(s):
+    """The atlas depth for the settings' scale: CERTIFY_DEPTH at scale 1, one
+    level less per halving of the scale, within 4..12."""
+    return int(min(12, max(4, CERTIFY_DEPTH + round(math.log2(s.scale)))))
+
+
+def _rejections(verdicts):
+    """``(checked, rejected, first message)`` over stairbounce.verify's verdicts."""
+    checked = sum(v.checked for v in verdicts)
+    rejected = sum(0 if v.ok else max(v.rejected, 1) for v in verdicts)
+    first = next((v.message for v in verdicts if not v.ok), "")
+    return checked, rejected, first
+
+
+def _proof(n_certs, rejected, first):
+    """(basis, proof, verdict override or None) of a row resting on
+    ``n_certs`` certificates of which the checker ``rejected`` some."""
+    if rejected:
+        return ("numerical", f"NOT proven: sb.verify rejected {rejected} of {n_certs} certificates "
+                f"({first})", ("differs", f"the independent checker rejected {rejected} certificates"))
+    return ("proven", f"interval arithmetic; {n_certs} certificates re-verified by sb.verify", None)
+
+
+def _tongue_tip(n):
+    """The e where tongue n of Theorem 3.1 ends (u_low = u_high), 1 for n = 1."""
+    c = math.sqrt((n - 1) / n)
+    return (1 - c) / (1 + c)
+
+
+def _tongue_high(n, e):
+    return math.sqrt(n / 2) * (1 - e) / (1 + e)
+
+
+def _cover_column(e0, e1, u0, u1, max_iter, split=8):
+    """Certify ``[e0, e1] x [u0, u1]``, halving it in u where undecided
+    (at most ``split`` times): the certificates of the pieces."""
+    import stairbounce as sb
+
+    c = sb.certify_box(e=(e0, e1), u=(u0, u1), max_iter=max_iter)
+    if c.status != "undecided" or split == 0:
+        return [c]
+    m = 0.5 * (u0 + u1)
+    return _cover_column(e0, e1, u0, m, max_iter, split - 1) + _cover_column(e0, e1, m, u1, max_iter, split - 1)
+
+
+def _tongue_proof_row(s, n_max=8):
+    """Theorem 3.1's tongues (n, 0^inf), n = 1..n_max, proven over boxes up to
+    their tips: each tongue covered by columns in e (widths halving towards
+    e = 0 and the tip), each column's box TONGUE_INSET inside both analytic
+    borders and halved in u where undecided; every box must be proven
+    ``(n, 0^inf)`` and re-verified, and boxes straddling either border (at
+    three e per tongue) must never be proven."""
+    import stairbounce as sb
+
+    s.note("fig3: certifying the tongues of Theorem 3.1")
+    certs, wrong, area, tongue_area, straddle, proven_straddle = [], [], 0.0, 0.0, 0, 0
+    for n in range(1, n_max + 1):
+        tip, low = _tongue_tip(n), math.sqrt((n - 1) / 2)
+        j = range(1, TONGUE_COLUMNS + 1)
+        edges = sorted({tip * 2.0 ** -k for k in j} | {tip * (1 - 2.0 ** -k) for k in j})
+        for e0, e1 in zip(edges[:-1], edges[1:]):
+            h = _tongue_high(n, e1) - low
+            if not h > 0:
+                continue
+            for c in _cover_column(e0, e1, low + TONGUE_INSET * h, low + (1 - TONGUE_INSET) * h,
+                                   s.max_iter):
+                certs.append(c)
+                if c.status != "word" or c.word is None or tuple(c.word.letters) != (n,):
+                    wrong.append(c)
+                else:
+                    area += (c.e[1] - c.e[0]) * (c.u[1] - c.u[0])
+        # the tongue's area: integral over (0, tip) of sqrt(n/2)(1-e)/(1+e) - low
+        tongue_area += math.sqrt(n / 2) * (2 * math.log1p(tip) - tip) - low * tip
+        for frac in (0.25, 0.5, 0.75):  # boxes straddling the borders are never proven
+            e = frac * tip
+            box_e = (e, e * (1 + 1e-9))
+            hi = _tongue_high(n, box_e[1])
+            for mid in ((low,) if n > 1 else ()) + (hi,):
+                d = 1e-9 * max(mid, 1e-3)
+                c = sb.certify_box(e=box_e, u=(mid - d, mid + d), max_iter=s.max_iter)
+                straddle += 1
+                proven_straddle += c.status != "undecided"
+    checked, rejected, first = _rejections([sb.verify(c) for c in certs])
+    basis, proof, override = _proof(len(certs), rejected, first)
+    ok = not wrong and not proven_straddle
+    verdict, why = ("agrees" if ok else "differs",
+                    "every box inside a tongue proven (n, 0^inf), no box across a border proven" if ok
+                    else f"{len(wrong)} boxes inside a tongue not proven (n, 0^inf), "
+                         f"{proven_straddle} boxes across a border proven")
+    if override:
+        verdict, why = override
+    return Row(f"tongues (n, 0^inf) proven over boxes up to their tips (Theorem 3.1, n = 1..{n_max})",
+               "(n, 0^inf) iff (n-1)/2 < u^2 <= n/2 ((1-e)/(1+e))^2",
+               f"{len(certs)} boxes {100 * TONGUE_INSET:g}% of the height inside both borders, e from "
+               f"tip * 2^-{TONGUE_COLUMNS} to tip * (1 - 2^-{TONGUE_COLUMNS}) (tip: u_low = u_high; "
+               f"n = 1 to e = 1 - 2^-{TONGUE_COLUMNS}), covering {100 * area / tongue_area:.1f}% of the "
+               f"tongues' area: {len(certs) - len(wrong)} proven (n, 0^inf) by certify_box, "
+               f"{len(wrong)} not; {proven_straddle} of {straddle} boxes straddling u_low or u_high "
+               f"(three e per tongue) proven", verdict=verdict, why=why, basis=basis,
+               proof=proof + "; the theorem checks the certifier, and the certifier the theorem")
+
+
+def _certified_atlas(s, name, e, u):
+    """The certified atlas of a window at :func:`_certify_depth` and the
+    checker's verdict on it: ``(atlas, depth, n_proven, basis, proof, override)``.
+    A window from e = 0 starts at e = 2^-53: the checker's domain is 0 < e."""
+    import stairbounce as sb
+
+    depth = _certify_depth(s)
+    moved = e[0] < 2.0 ** -53
+    e = (max(e[0], 2.0 ** -53), e[1])
+    s.note(f"{name}: certified atlas, depth {depth}")
+    atlas = sb.certify(e=e, u=u, depth=depth, max_iter=s.max_iter)
+    n_proven = int((atlas.boxes["status"].values != _undecided_code()).sum())
+    v = sb.verify(atlas)
+    rejected = 0 if v.ok else max(v.rejected, 1)
+    basis, proof, override = _proof(n_proven, rejected, v.message)
+    if moved:
+        proof += "; the window starts at e = 2^-53, inside the checker's domain 0 < e"
+    return atlas, depth, n_proven, basis, proof, override
+
+
+def _undecided_code():
+    from .structure.certificate import STATUSES
+
+    return STATUSES.index("undecided")
+
+
+def _window_text(e, u):
+    return f"[{e[0]:.3g}, {e[1]:g}] x [{u[0]:g}, {u[1]:g}]"
+
+
+def _pixels_in_proven_boxes(atlas, ds):
+    """The scan's pixel centres that lie in a box the atlas proves a word or
+    no sliding: ``(pixels, mismatches)``, a mismatch being a pixel whose float
+    status, period or jump count is not the proven one."""
+    from .symbolic import parse_word
+
+    b = atlas.boxes
+    (e_lo, e_hi), (u_lo, u_hi) = atlas.window
+    depth = atlas.depth
+    E, U = np.meshgrid(ds.e.values, ds.u.values, indexing="ij")
+    stat = ds.status.transpose("e", "u").values
+    period = ds.period.transpose("e", "u").values
+    jumps = ds.jumps.transpose("e", "u").values
+    n = 1 << depth
+    fi = np.floor((E - e_lo) / (e_hi - e_lo) * n).astype(np.int64)
+    fj = np.floor((U - u_lo) / (u_hi - u_lo) * n).astype(np.int64)
+    inside = (fi >= 0) & (fi < n) & (fj >= 0) & (fj < n)
+    st = b["status"].values
+    keep = st != _undecided_code()
+    level, ii, jj = (b[k].values.astype(np.int64)[keep] for k in ("level", "i", "j"))
+    words, st = b["word"].values[keep], st[keep]
+    # the proven word's period and jump count per box (-1: proven not sliding)
+    names, inv = np.unique(words, return_inverse=True)
+    parsed = [parse_word(str(w)) if w else None for w in names]
+    per = np.array([-1 if w is None else w.period for w in parsed], dtype=np.int64)[inv]
+    jmp = np.array([-1 if w is None else sum(a > 0 for a in w.letters) for w in parsed], dtype=np.int64)[inv]
+    per[st != 0] = jmp[st != 0] = -1
+    key = (level << 50) | (ii << 25) | jj
+    order = np.argsort(key)
+    key = key[order]
+    pixels = mismatches = 0
+    fi, fj = fi[inside], fj[inside]
+    stat, period, jumps = stat[inside], period[inside], jumps[inside]
+    for lv in range(depth + 1):
+        if not key.size:
+            break
+        q = (np.int64(lv) << 50) | ((fi >> (depth - lv)) << 25) | (fj >> (depth - lv))
+        pos = np.minimum(np.searchsorted(key, q), key.size - 1)
+        hit = key[pos] == q
+        box = order[pos[hit]]
+        sliding = per[box] >= 0
+        good = np.where(sliding, (stat[hit] == 0) & (period[hit] == per[box]) & (jumps[hit] == jmp[box]),
+                        stat[hit] != 0)
+        pixels += int(hit.sum())
+        mismatches += int((~good).sum())
+    return pixels, mismatches
+
+
+def _proven_area_row(s, name, e, u, ds, certified):
+    """The window's proven sliding area and proven number of distinct words
+    (a lower bound), from its certified atlas, against the scan ``ds`` of the
+    same window: the proven share must not exceed the pixels' sliding share,
+    and every pixel centre in a proven box must have the proven word."""
+    atlas, depth, n_proven, basis, proof, override = certified
+    f = atlas.fraction()
+    why_f = atlas.fraction(by="reason")
+    words = atlas.words()
+    by_period = words.attrs.get("by_period", {})
+    pixel_share = float((ds.status.values == 0).mean())
+    pixels, mismatches = _pixels_in_proven_boxes(atlas, ds)
+    floor = math.floor(1000 * f["word"]) / 10  # rounded down: a proven lower bound
+    ok = floor <= 100 * pixel_share and mismatches == 0
+    verdict, why = ("agrees" if ok else "differs",
+                    (f"the proven {floor:.1f}% <= the pixels' {100 * pixel_share:.1f}%, and all {pixels} "
+                     f"pixel centres in proven boxes have the proven word" if ok else
+                     f"proven {floor:.1f}% against the pixels' {100 * pixel_share:.1f}%; {mismatches} of "
+                     f"{pixels} pixel centres in proven boxes disagree with their box"))
+    if override:
+        verdict, why = override
+    und = ", ".join(f"{r} {100 * v:.1f}%" for r, v in why_f.items() if v > 0)
+    return Row(f"proven sliding area and number of words (certified atlas, depth {depth})",
+               "the paper's picture of the window (numerical evidence)",
+               f"{_window_text(*atlas.window)}, boxes down to 1/{1 << depth} of the window: at least "
+               f"{floor:.1f}% of the window proven to slide, with at least {len(words)} distinct words "
+               f"(by period: {', '.join(f'{p}: {c}' for p, c in by_period.items())}); "
+               f"{100 * (f['no_sliding'] + f['no_slide_within']):.1f}% proven not to slide; undecided "
+               f"{100 * f['undecided']:.1f}% ({und}); the {ds.sizes['e']} x {ds.sizes['u']} pixel scan: "
+               f"{100 * pixel_share:.1f}% sliding (numerical)",
+               verdict=verdict, why=why, basis=basis, proof=proof + " (areas rounded down)")
+
+
+def _slope_scales(depth):
+    """The scales k1 < k2 of the proven slope bracket: k = 3 .. depth - 2 (the
+    lower bound is 0 at the last two levels by construction), at small depths
+    the two coarsest informative levels."""
+    k2 = max(2, depth - 2)
+    return min(3, k2 - 1), k2
+
+
+def _border_bracket_row(s, name, certified, est):
+    """The proven bracket on the border's box counts N(s) and on the
+    box-counting slope between two scales, beside the numerical dimension
+    ``est`` of this picture: does it lie inside the bracket?"""
+    atlas, depth, n_proven, basis, proof, override = certified
+    counts = atlas.border_box_counts()
+    k1, k2 = _slope_scales(depth)
+    low, up = counts["lower"].to_numpy(float), counts["upper"].to_numpy(float)
+    with np.errstate(divide="ignore"):  # as CertifiedAtlas.slope_bracket, on these counts
+        lo = float(np.log2(low[k2] / up[k1]) / (k2 - k1))
+        hi = float(np.log2(up[k2] / low[k1]) / (k2 - k1))
+    lo_r, hi_r = math.floor(lo * 1000) / 1000, math.ceil(hi * 1000) / 1000  # outward
+    inside = lo_r <= est.dimension <= hi_r
+    verdict, why = ("agrees" if inside else "differs",
+                    f"the numerical D = {est.dimension:.3f} is {'inside' if inside else 'outside'} the "
+                    f"proven bracket [{lo_r:.3f}, {hi_r:.3f}]")
+    if override:
+        verdict, why = override
+    table = "; ".join(f"k = {int(r.k)}: {int(r.lower)}..{int(r.upper)}" for r in counts.itertuples()
+                      if k1 <= r.k <= k2)
+    return Row(f"proven bracket on the border's box counts and slope (certified atlas, depth {depth})",
+               f"D = {DIMENSION_WINDOWS[name][1]} (numerical, box counting on pictures)",
+               f"{_window_text(*atlas.window)}: s-boxes of side window/2^k meeting the border of the "
+               f"sliding region, proven lower..upper bounds, {table}; box-counting slope between k = "
+               f"{k1} and {k2} proven in [{lo_r:.3f}, {hi_r:.3f}] (wide: the dimension stays numerical); "
+               f"this picture's fit: D = {est.dimension:.3f} (numerical)",
+               verdict=verdict, why=why, basis=basis,
+               proof=proof + " (the counts bound N(s); the slope bracket is rounded outward)")
 
 
 STUDY_FILE = Path(__file__).parent / "data" / "border_dimension.json"
@@ -371,12 +673,24 @@ def fig1(s: Settings) -> Result:
     fig.tight_layout()
     ys, vs, ks = iterate(1.0, 0.0, e, u, steps)
     back = (ys[-1], vs[-1]) == (1.0, 0.0) and ks[-1] == SLIDING and not (ks[1:-1] == SLIDING).any()
+    # the same statement proven at the point (e, u) by interval arithmetic, re-verified
+    import stairbounce as sb
+
+    cert = sb.certify_box(e=(e, e), u=(u, u), max_iter=s.max_iter)
+    proven = cert.status == "word" and cert.word == word and bool(sb.verify(cert))
+    contradicted = cert.status != "undecided" and not (cert.status == "word" and cert.word == word)
     rows = [
         Row("the drawn solution is periodic", "a periodic sliding solution returns to (1, 0) "
             "by sliding (Section 3)",
             f"{word}: from (1, 0), the first slide is on step {steps}, back at "
-            f"({ys[-1]:g}, {vs[-1]:g})", verdict="agrees" if back else "differs",
-            why="exactly (1, 0) after one period" if back else "it does not return"),
+            f"({ys[-1]:g}, {vs[-1]:g}); certify_box at the point: {cert.status}"
+            + (f" {cert.word}" if cert.word is not None else f" ({cert.reason})"),
+            verdict="agrees" if back and not contradicted else "differs",
+            why=("exactly (1, 0) after one period" if back else "it does not return")
+            + ("; the certificate states another outcome" if contradicted else ""),
+            basis="proven" if proven else "numerical",
+            proof=(f"interval arithmetic at the point (e, u) = ({e}, {u}); {len(cert.itinerary)} "
+                   f"steps decided, the certificate re-verified by sb.verify") if proven else ""),
     ]
     acc = traj.accumulations[0] if traj.accumulations else None
     if acc is not None:
@@ -483,6 +797,7 @@ def fig3(s: Settings) -> Result:
         Row("tongue tips on the Corollary 2.1 curve", "the tongues finish on u = (1-e)/(2 sqrt(2e))",
             f"largest gap between tip and curve, n = 2..{n_max}: {worst:.1e}",
             verdict="agrees" if worst < 1e-12 else "differs", why=f"to {worst:.0e}"),
+        _tongue_proof_row(s),
     ]
     caption = ("Black: the (n, 0^inf) tongues sqrt((n-1)/2) < u <= sqrt(n/2)(1-e)/(1+e) of "
                f"Theorem 3.1, n = 1..{n_max}, drawn from the formula (the paper's window "
@@ -658,6 +973,8 @@ def _blowup(name):
                 why="a description: the paper gives no number, and any window with some "
                     "structure shows many word lengths, so a count of them could not fail"),
         ]
+        if name == "fig5e":
+            rows.append(_proven_area_row(s, name, e, u, ds, _certified_atlas(s, name, e, u)))
         if name == "fig5c":
             # self-similarity measured on exact borders (issue 22); the former row that
             # compared how far the raster structure reaches between tongues only restated
@@ -700,7 +1017,8 @@ def _dimension(name):
         res = s.px(500)
         # perimeter_dimension's steps, on the cached scan: the border of the
         # sliding region (status 0), the window's frame not counted
-        region = _scan(s, name, e, u, res, res).status.transpose("u", "e").values == 0
+        ds = _scan(s, name, e, u, res, res)
+        region = ds.status.transpose("u", "e").values == 0
         s.note(f"{name}: box counting")
         border = boundary(region)
         fit_range = (1, max(4, 2 ** round(math.log2(res / 8))))
@@ -766,6 +1084,10 @@ def _dimension(name):
         ]
         rows.append(_slicing_row(s, name, e, u, paper))
         rows.append(_study_row(name, paper, best))
+        certified = _certified_atlas(s, name, e, u)
+        if name == "fig7":
+            rows.append(_proven_area_row(s, name, e, u, ds, certified))
+        rows.append(_border_bracket_row(s, name, certified, est))
         if best is not None:
             from types import SimpleNamespace
 
@@ -1185,11 +1507,14 @@ def _cell(text):
 
 
 def _md_table(rows):
-    lines = ["| quantity | paper | here | verdict |", "|---|---|---|---|"]
+    lines = ["| quantity | paper | here | verdict | basis |", "|---|---|---|---|---|"]
     for r in rows:
         v = r.verdict_text()
         v = f"**{v}**" if r.verdict != "agrees" else v
-        lines.append(f"| {_cell(r.quantity)} | {_cell(r.paper)} | {_cell(r.measured)} | {_cell(v)} |")
+        b = r.basis_text()
+        b = f"**{b}**" if r.basis == "proven" else b
+        lines.append(f"| {_cell(r.quantity)} | {_cell(r.paper)} | {_cell(r.measured)} | {_cell(v)} "
+                     f"| {_cell(b)} |")
     return lines
 
 
@@ -1241,7 +1566,8 @@ def write_report(results, settings: Settings, total_seconds=None, merge=True):
     kept = []
     if merge:
         results, kept = merge_results(read_manifest(out), results)
-    summary = [Row(f"{r.name}: {x.quantity}", x.paper, x.measured, x.agrees, x.verdict, x.why)
+    summary = [Row(f"{r.name}: {x.quantity}", x.paper, x.measured, x.agrees, x.verdict, x.why,
+                   x.basis, x.proof)
                for r in results for x in r.rows]
     tally = verdict_tally(results)
     mixed = len({json.dumps(r.params.get("settings"), sort_keys=True) for r in results}) > 1
@@ -1260,10 +1586,12 @@ def write_report(results, settings: Settings, total_seconds=None, merge=True):
     md += [
         f"**Criterion.** {CRITERION}",
         "",
+        f"**Basis.** {BASIS_CRITERION}",
+        "",
         "## Summary",
         "",
-        f"Every row states a verdict: agrees, differs (by how much), or not comparable (why). "
-        f"Here: {tally}.",
+        f"Every row states a verdict: agrees, differs (by how much), or not comparable (why), "
+        f"and its basis: proven (by what) or numerical. Here: {tally}; {basis_tally(results)}.",
         "",
         *_md_table(summary),
         "",
@@ -1313,6 +1641,12 @@ def verdict_tally(results):
     return ", ".join(f"{n} {v}" for v, n in counts.items())
 
 
+def basis_tally(results):
+    """``"N proven, M numerical"`` over every row of ``results``."""
+    counts = {b: sum(x.basis == b for r in results for x in r.rows) for b in BASES}
+    return ", ".join(f"{n} {b}" for b, n in counts.items())
+
+
 def rows_with_verdict(results, verdict="differs", width=160):
     """One line per row of ``results`` with that ``verdict``: ``"fig6: QUANTITY
     (paper P; here M): WHY"``, cut at ``width`` characters (the report has
@@ -1342,10 +1676,11 @@ def _html(results, settings, summary, total_seconds, kept, tally):
         cells = "".join(
             f"<tr><td>{esc(r.quantity)}</td><td>{esc(r.paper)}</td><td>{esc(r.measured)}</td>"
             f"<td class='{esc((r.verdict or 'none').replace(' ', '-'))}'>"
-            f"{esc(r.verdict_text())}</td></tr>"
+            f"{esc(r.verdict_text())}</td><td class='{esc(r.basis)}'>{esc(r.basis_text())}</td></tr>"
             for r in rows
         )
-        return ("<table><tr><th>quantity</th><th>paper</th><th>here</th><th>verdict</th></tr>"
+        return ("<table><tr><th>quantity</th><th>paper</th><th>here</th><th>verdict</th>"
+                "<th>basis</th></tr>"
                 f"{cells}</table>")
 
     parts = [
@@ -1353,7 +1688,7 @@ def _html(results, settings, summary, total_seconds, kept, tally):
         "<style>body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
         "table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:3px 6px;"
         "vertical-align:top}img{max-width:100%}.differs,.none{font-weight:bold;color:#a00}"
-        ".not-comparable{color:#555}figcaption{font-style:italic;margin:.3em 0 .8em}</style>"
+        ".not-comparable{color:#555}.proven{font-weight:bold;color:#060}figcaption{font-style:italic;margin:.3em 0 .8em}</style>"
         "</head><body>",
         "<h1>stairbounce: the paper reproduced</h1>",
         f"<p>stairbounce {esc(__version__)}; this run: scale {settings.scale}, "
@@ -1364,8 +1699,12 @@ def _html(results, settings, summary, total_seconds, kept, tally):
                      "folder (merged by figure).</p>")
     crit = esc(CRITERION).replace("**agrees**", "<b>agrees</b>").replace(
         "**differs**", "<b>differs</b>").replace("**not comparable**", "<b>not comparable</b>")
-    parts += [f"<p><b>Criterion.</b> {crit}</p>",
-              "<h2>Summary</h2>", f"<p>Every row states a verdict. Here: {esc(tally)}.</p>",
+    basis = esc(BASIS_CRITERION).replace("**proven**", "<b>proven</b>").replace(
+        "**numerical**", "<b>numerical</b>")
+    parts += [f"<p><b>Criterion.</b> {crit}</p>", f"<p><b>Basis.</b> {basis}</p>",
+              "<h2>Summary</h2>",
+              f"<p>Every row states a verdict and its basis. Here: {esc(tally)}; "
+              f"{esc(basis_tally(results))}.</p>",
               table(summary)]
     for r in results:
         parts.append(f"<h2>{esc(r.name)}: {esc(r.title)}</h2>")
