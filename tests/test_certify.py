@@ -338,11 +338,11 @@ def test_the_paper_plane_edges_are_undecided_by_range():
     r = a.fraction("reason")
     assert r["range"] > 0
     ds = a.boxes
-    edge = (ds["e1"].values == 1.0) | (ds["u0"].values == 0.0)
+    edge = (ds["e1"].values == 1.0) | (ds["u0"].values == 0.0) | (ds["e0"].values == 0.0)
     assert (ds["reason"].values[edge] == "range").all()
-    # split to the last level: a strip one box wide along the two edges
+    # split to the last level: a strip one box wide along the three edges e = 0, e = 1, u = 0
     assert (ds["level"].values[edge] == 4).all()
-    assert r["range"] == pytest.approx((2 * 16 - 1) / 256)
+    assert r["range"] == pytest.approx((3 * 16 - 2) / 256)
 
 
 # ---- the command line -------------------------------------------------------
@@ -539,3 +539,17 @@ def test_the_atlas_form_is_stored_and_its_certificates_follow_it(tmp_path):
             assert (c.status, c.itinerary) == (ref.status, ref.itinerary)
             np.testing.assert_array_equal(c.margins, ref.margins)
     assert sb.certify(**kw).boxes.attrs["form"] == "corners"  # the default
+
+
+def test_e_zero_is_a_window_edge_not_a_box():
+    # a box has 0 < e0 (the checker and the Arb reference refuse e0 = 0); a window
+    # may start at e = 0, and its boxes touching e = 0 are undecided "range", so
+    # every certificate of such an atlas passes the independent checker
+    with pytest.raises(ValueError, match=r"^e must be"):
+        sb.certify_box(e=(0.0, 0.01), u=(0.6, 0.61))
+    atlas = sb.certify(e=(0.0, 0.333), u=(0.4, 0.733), depth=6)
+    b = atlas.boxes
+    at_zero = (b.e0.values == 0.0)
+    assert at_zero.any() and set(b.status.values[at_zero].tolist()) == {sb.structure.certificate.STATUSES.index("undecided")}
+    assert set(b.reason.values[at_zero].tolist()) == {"range"}
+    assert sb.verify(atlas).ok

@@ -31,8 +31,9 @@ impact, ``edge``: a later impact, ``chatter``: the slide test (2.4)), then
 bounces are shorter than the enclosures), ``nonsliding`` (numerical, atlases
 only: the float map does not slide within max_iter at the box's corners and
 centre, so the box is taken for non-sliding motion and not split further) and
-``range`` (atlases only: the box touches ``e = 1`` or ``u = 0``, outside the
-model's range; it is split down to the last level like a border)."""
+``range`` (atlases only: the box touches ``e = 0``, ``e = 1`` or ``u = 0``, outside
+the open range 0 < e < 1, u > 0 of a certified box; it is split down to the last
+level like a border)."""
 
 FORMS = ("corners", "mean-value", "naive")
 """The enclosures a box can be certified with (the first is the default;
@@ -63,11 +64,13 @@ def _pair(name, value):
 
 
 def _check_e(e, window=False):
-    """``(e0, e1)`` with ``0 <= e0 <= e1 < 1`` (``e1 <= 1`` for a window), each 0 or >= 2^-53."""
+    """``(e0, e1)`` with ``0 < e0 <= e1 < 1`` (a box) or ``0 <= e0 < e1 <= 1`` (a
+    window, whose boxes touching e = 0 or e = 1 are undecided "range"), each 0 or
+    >= 2^-53."""
     e0, e1 = _pair("e", e)
     top = "<= 1" if window else "< 1"
-    rule = f"e must be a pair (e0, e1) with 0 <= e0 {'<' if window else '<='} e1 {top}"
-    if not (0.0 <= e0 and (e1 <= 1.0 if window else e1 < 1.0)):
+    rule = f"e must be a pair (e0, e1) with 0 {'<=' if window else '<'} e0 {'<' if window else '<='} e1 {top}"
+    if not ((0.0 <= e0 if window else 0.0 < e0) and (e1 <= 1.0 if window else e1 < 1.0)):
         raise ValueError(f"{rule} (restitution coefficients), got ({e0}, {e1})")
     if not (e0 < e1 if window else e0 <= e1):
         raise ValueError(f"{rule}: {'an empty' if e0 == e1 else 'a reversed'} range, got ({e0}, {e1})")
@@ -163,7 +166,7 @@ def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
 
     Parameters
     ----------
-    e : pair (e0, e1), 0 <= e0 <= e1 < 1, each 0 or >= 2^-53
+    e : pair (e0, e1), 0 < e0 <= e1 < 1, each >= 2^-53
     u : pair (u0, u1), 1e-150 <= u0 <= u1 <= 1e150
     max_iter : int >= 1, default 1000
         Steps followed before the claim ``no_slide_within``.
@@ -237,7 +240,7 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     tells the undecided area of a border from that of non-sliding motion; an
     undecided box of the last level is "nonsliding" when its centre does not
     slide (the pixel of a scan with 2^depth pixels a side).  A
-    box touching ``e = 1`` or ``u = 0`` is undecided (reason ``"range"``) and
+    box touching ``e = 0``, ``e = 1`` or ``u = 0`` is undecided (reason ``"range"``) and
     split down to the last level, so only a strip one box wide stays so.
 
     Every box is computed from its integer position in the window's quadtree

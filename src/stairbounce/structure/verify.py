@@ -8,7 +8,9 @@ shares no code with the certifier's kernel nor with ``stairbounce.model``; only
 
 What is checked, per box (the first failure is the box's verdict):
 
-* ``box``: ``0 < e0 <= e1 < 1`` and ``1e-150 <= u0 <= u1 <= 1e150``, finite;
+* ``box``: ``0 < e0 <= e1 < 1`` and ``1e-150 <= u0 <= u1 <= 1e150``, finite (an
+  undecided box with no listed step, which claims nothing, may touch e = 0, e = 1
+  and u = 0: an atlas's boxes on its window's edges);
 * ``status``: a known status code;
 * ``itinerary``: impact numbers >= -1, the slide (-1) only as the last entry;
   ``word``: ends with -1 and has at most ``max_iter`` steps;
@@ -177,7 +179,11 @@ def _structure(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
     with np.errstate(invalid="ignore"):
         bad_box = ~(np.isfinite(e0) & np.isfinite(e1) & np.isfinite(u0) & np.isfinite(u1)
                     & (e0 > 0.0) & (e0 <= e1) & (e1 < 1.0) & (u0 >= _v.U_MIN) & (u0 <= u1) & (u1 <= _v.U_MAX))
-    code[bad_box] = _BOX
+        # an undecided box with no listed step claims nothing: an atlas's boxes on
+        # its window's edges e = 0, e = 1, u = 0 (reason "range") are such boxes
+        edge_box = ((status == _UNDECIDED_S) & (np.diff(offsets) == 0) & (e0 >= 0.0) & (e0 <= e1)
+                    & (e1 <= 1.0) & (u0 >= 0.0) & (u0 <= u1) & (u1 <= _v.U_MAX))
+    code[bad_box & ~edge_box] = _BOX
     bad_status = (status < 0) | (status >= len(STATUSES))
     code[(code == 0) & bad_status] = _STATUS
     length = np.diff(offsets)
