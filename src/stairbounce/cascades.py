@@ -794,7 +794,7 @@ def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None, law_k=
     else:
         stop = f"k_max = {k_max} reached"
 
-    import pandas as pd  # type: ignore[import-untyped]  # (xarray's dependency; no stubs here)
+    import pandas as pd  # (xarray's dependency)
 
     cols = ["k", "word", "period", "impacts", "lo", "hi", "width", "lo_kind", "lo_step", "lo_index",
             "hi_kind", "hi_step", "hi_index", "lo_neighbour", "hi_neighbour", "lo_out", "hi_out"]

@@ -87,7 +87,7 @@ class Certificate:
         return {
             "e": [float(self.e[0]), float(self.e[1])], "u": [float(self.u[0]), float(self.u[1])],
             "max_iter": int(self.max_iter), "status": self.status,
-            "word": None if self.word is None else [int(a) for a in self.word.letters],
+            "word": None if self.word is None else [int(a) for a in getattr(self.word, "letters")],
             "reason": self.reason, "step": self.step,
             "itinerary": [int(k) for k in self.itinerary], "decisions": list(self.decisions),
             "margins": [[float(lo), float(hi)] for lo, hi in np.asarray(self.margins).reshape(-1, 2)],

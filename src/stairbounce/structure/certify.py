@@ -164,19 +164,6 @@ def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
     certificate lists every decision taken and the enclosure of its margin
     (:class:`stairbounce.Certificate`).
 
-    Parameters
-    ----------
-    e : pair (e0, e1), 0 < e0 <= e1 < 1, each >= 2^-53
-    u : pair (u0, u1), 1e-150 <= u0 <= u1 <= 1e150
-    max_iter : int >= 1, default 1000
-        Steps followed before the claim ``no_slide_within``.
-    form : "corners" (default), "mean-value" or "naive"
-        The enclosures, all rigorous.  ``"corners"``: two point evaluations,
-        at ``(e1, u1)`` and ``(e0, u0)`` (below); ``"naive"``: interval
-        arithmetic over the box on ``(y, v)``; ``"mean-value"``: naive
-        intersected with the first-order form about the box's centre along
-        the frozen itinerary.
-
     The corners form (proven).  Along a frozen itinerary carry ``(v, s)``,
     ``s = sqrt(v^2 + 2y)``, from ``v = 0``, ``s = sqrt 2``: a step with k
     impacts (k = 0: a fly-over) gives ``v' = v - T + B_k s`` with ``B_0 = 0``,
@@ -194,6 +181,21 @@ def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
     enclosure is ``[lo at (e1, u1), hi at (e0, u0)]``.  These are the margin's
     exact range up to rounding, so no enclosure over the box decides more.
 
+    Parameters
+    ----------
+    e : pair (e0, e1), 0 < e0 <= e1 < 1, each >= 2^-53
+    u : pair (u0, u1), 1e-150 <= u0 <= u1 <= 1e150
+    max_iter : int >= 1, default 1000
+        Steps followed before the claim ``no_slide_within``.
+    form : "corners" (default), "mean-value" or "naive"
+        The enclosures, all rigorous.  ``"corners"``: two point evaluations,
+        at ``(e1, u1)`` and ``(e0, u0)`` (below); ``"naive"``: interval
+        arithmetic over the box on ``(y, v)``; ``"mean-value"``: naive
+        intersected with the first-order form about the box's centre along
+        the frozen itinerary.
+
+    Examples
+    --------
     >>> import stairbounce as sb
     >>> c = sb.certify_box(e=(0.18, 0.1801), u=(0.62, 0.6201))
     >>> c.status, str(c.word)
