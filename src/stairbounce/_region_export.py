@@ -480,12 +480,13 @@ def _untraced_reason():
             "in its region")
 
 
-def build(regions, tolerance=None, resolution=None, max_iter=1000, untangle=True):
+def build(regions, tolerance=None, resolution=None, max_iter=1000, untangle=True, graph=None):
     """The partition of ``regions``, its faces, the untraced words and the
-    metadata (see regions_geojson): ``(partition, faces, untraced, metadata)``."""
+    metadata (see regions_geojson): ``(partition, faces, untraced, metadata)``;
+    ``graph``: their :func:`stairbounce.border_graph` when the caller has it."""
     from ._version import __version__
 
-    part = Partition(regions, tolerance, untangle=untangle)
+    part = Partition(regions, tolerance, graph=graph, untangle=untangle)
     faces = part.faces()
     missing = untraced(part, max_iter)
     traced = sum(c.area for r in part.regions for c in r.components)
@@ -523,9 +524,9 @@ def build(regions, tolerance=None, resolution=None, max_iter=1000, untangle=True
     return part, faces, missing, meta
 
 
-def geojson(regions, tolerance=None, resolution=None, max_iter=1000):
+def geojson(regions, tolerance=None, resolution=None, max_iter=1000, graph=None):
     """regions_geojson's work (see its docstring)."""
-    part, faces, missing, meta = build(regions, tolerance, resolution, max_iter)
+    part, faces, missing, meta = build(regions, tolerance, resolution, max_iter, graph=graph)
     feats = []
     for ri, r in enumerate(part.regions):
         base = {"word": r.word.format(ascii=True), "period": r.word.period, "impacts": r.word.impacts,
@@ -568,11 +569,11 @@ def _ticks(lo, hi, most=6):
     return vals, digits
 
 
-def svg(regions, size=800, tolerance=None, resolution=None, max_iter=1000):
+def svg(regions, size=800, tolerance=None, resolution=None, max_iter=1000, graph=None):
     """regions_svg's work (see its docstring)."""
     from html import escape
 
-    part, faces, missing, meta = build(regions, tolerance, resolution, max_iter, untangle=False)
+    part, faces, missing, meta = build(regions, tolerance, resolution, max_iter, untangle=False, graph=graph)
     e0, e1, u0, u1 = part.window
     left, top, right, bottom = 84, 48, 230, 64
     W, H = left + size + right, top + size + bottom
@@ -646,8 +647,8 @@ def svg(regions, size=800, tolerance=None, resolution=None, max_iter=1000):
     return "\n".join(out) + "\n", meta
 
 
-def write(regions, path, overwrite=False, tolerance=None, resolution=None, max_iter=1000):
-    """write_regions's work: ``(path, metadata)``."""
+def write(regions, path, overwrite=False, tolerance=None, resolution=None, max_iter=1000, graph=None):
+    """write_regions's work: ``(path, metadata)``; ``graph`` as in :func:`build`."""
     import json
     from pathlib import Path
 
@@ -658,9 +659,9 @@ def write(regions, path, overwrite=False, tolerance=None, resolution=None, max_i
     if suffix not in (".geojson", ".json", ".svg"):
         raise ValueError(f"out must end in .geojson, .json or .svg, got {path.name!r}")
     if suffix == ".svg":
-        text, meta = svg(regions, tolerance=tolerance, resolution=resolution, max_iter=max_iter)
+        text, meta = svg(regions, tolerance=tolerance, resolution=resolution, max_iter=max_iter, graph=graph)
     else:
-        doc = geojson(regions, tolerance, resolution, max_iter)
+        doc = geojson(regions, tolerance, resolution, max_iter, graph=graph)
         text, meta = json.dumps(doc), doc["metadata"]
     with atomic_path(path, overwrite) as tmp:
         Path(tmp).write_text(text)

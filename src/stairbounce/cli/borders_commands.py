@@ -325,7 +325,7 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
         ew, uw, max_iter=max_iter, progress=p, from_corners=from_corners))
     graph = rg.border_graph(regs)  # before the file: nothing is written when it fails
     start = time.perf_counter()
-    _, meta = _region_export.write(regs, out, force, tolerance, (ew[2], uw[2]), max_iter)
+    _, meta = _region_export.write(regs, out, force, tolerance, (ew[2], uw[2]), max_iter, graph=graph)
     took = time.perf_counter() - start
     c = graph.counts()
     arcs = ", ".join(f"{k} {n}" for k, n in sorted(c["arcs"].items())) or "none"
