@@ -875,17 +875,28 @@ def _r3a_bind_mount(t, work):
         subprocess.run(["umount", str(alias)], capture_output=True)
 
 
-def _r3a_no_workers(t, work):
-    """Observation: a Dask scan whose scheduler has no worker says so; Ctrl-C ends it (exit 130)."""
+def _dask_cli():
+    """The ``dask`` command beside this Python, or None when it is not installed."""
     dask_cli = str(Path(sys.executable).with_name("dask"))
-    if not os.path.exists(dask_cli):
-        t.skip("round3a", "no workers", "no dask command")
-        return
+    return dask_cli if os.path.exists(dask_cli) else None
+
+
+def _free_port():
+    """A TCP port on 127.0.0.1 that nothing listens on now (for a scheduler)."""
     import socket
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
+        return s.getsockname()[1]
+
+
+def _r3a_no_workers(t, work):
+    """Observation: a Dask scan whose scheduler has no worker says so; Ctrl-C ends it (exit 130)."""
+    dask_cli = _dask_cli()
+    if dask_cli is None:
+        t.skip("round3a", "no workers", "no dask command")
+        return
+    port = _free_port()
     d = Path(tempfile.mkdtemp(dir=work))
     sched = subprocess.Popen([dask_cli, "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -915,15 +926,11 @@ def part_round3a(t, work, args):
 
 def part_dask(t, work, args):
     """N7: the scheduler killed mid-scan: one line, exit 2; the store resumes bit for bit."""
-    dask_cli = str(Path(sys.executable).with_name("dask"))
-    if not os.path.exists(dask_cli):
+    dask_cli = _dask_cli()
+    if dask_cli is None:
         t.skip("dask", "all", "no dask command")
         return
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
+    port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
     d = Path(tempfile.mkdtemp(dir=work))
     n, tile = (1536, 96) if args.full else (256, 32)
