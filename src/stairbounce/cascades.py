@@ -623,8 +623,9 @@ class Cascade:
     (``lo_neighbour`` / ``hi_neighbour``).  ``stop`` says why the member
     after the last one is not listed.  ``limit_enclosure`` ``(lo, hi, n)``:
     the closure of the points whose first n impact numbers are the limit
-    itinerary's, which contains the accumulation point (proven, to rounding;
-    module docstring); ``law`` the fitted :class:`CascadeLaw`; ``limit_name``
+    itinerary's, which contains the accumulation point (the argument is
+    exact, module docstring; its ends are located by float decisions, so the
+    enclosure is numerical, to rounding); ``law`` the fitted :class:`CascadeLaw`; ``limit_name``
     the known curve (Theorem 3.1 tongue edges, the neutral one-impact
     families, Corollary 2.1) that crosses the line inside the enclosure, or
     None.
@@ -674,7 +675,7 @@ class Cascade:
                          f"[{self.law.approach_interval[0]:.4g}, {self.law.approach_interval[1]:.4g}]")
         if self.limit_enclosure is not None:
             a, b, n = self.limit_enclosure
-            lines.append(f"accumulation (proven enclosure, first {n} steps of the limit itinerary): "
+            lines.append(f"accumulation (enclosure to rounding, numerical: its ends are float decisions; first {n} steps of the limit itinerary): "
                          f"{self.axis} in [{a:.15g}, {b:.15g}]")
         if self.limit_name is not None:
             lines.append(f"accumulation lies on: {self.limit_name} ({self.axis} = {self.limit_curve:.15g})")
@@ -912,7 +913,7 @@ def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_ma
     ``k_first``, ``k_last``, ``stop``, ``law`` (kind), ``exponent`` and
     ``exponent_lo``/``exponent_hi``, ``ratio`` and ``ratio_lo``/``ratio_hi``
     (:func:`cascade_law` on the last 8 members), ``limit_lo``/``limit_hi``
-    (the proven enclosure of the accumulation point) and ``limit_name``.
+    (the enclosure of the accumulation point, to rounding) and ``limit_name``.
     The candidates depend on the words seen (a sampled line); the members
     listed do not.
 
