@@ -48,6 +48,7 @@ extensions = [
     "sphinx.ext.viewcode",  # [source] links: the highlighted module beside each entry
     "sb_gallery",
     "sb_mathjax",  # MathJax served by the site itself: the maths typesets offline
+    "sb_offline_panel",  # the tutorial's inline explorer: Bokeh and Panel served by the site
 ]
 
 root_doc = "index"

@@ -179,6 +179,13 @@ def test_html_site_builds_without_warnings(site):
     assert len(re.findall(r'<img[^>]+src="_images/', tutorial)) >= 5
     assert "of the pixels have a periodic sliding solution" in tutorial and "D = " in tutorial
     assert "data-root-id" in tutorial  # Panel's rendered page
+    # ... whose BokehJS and Panel files the site serves (docs/_ext/sb_offline_panel.py):
+    # the notebook's output named the public CDNs
+    assert "cdn.bokeh.org" not in tutorial and "cdn.holoviz.org" not in tutorial
+    served = re.findall(r'_static/offline/([^"\'\s\\]+)', tutorial)
+    assert "bokeh/bokeh.min.js" in served and "panel/panel.min.js" in served
+    for rel in served:
+        assert (out / "_static" / "offline" / rel).stat().st_size > 0, rel
     assert list((out / "_downloads").rglob("tutorial.ipynb"))
 
 
@@ -212,6 +219,11 @@ def test_the_site_typesets_its_maths_and_navigates_offline(site):
                 # one line of top bar, and an "On this page" column beside the article
                 assert page.locator("header.bd-header").bounding_box()["height"] < 100, name
                 assert page.locator(".bd-sidebar-secondary .toc-entry a").count() >= 3, name
+            # the tutorial's inline explorer draws its first view with no network
+            page.goto((site / "tutorial.html").as_uri())
+            page.wait_for_function("() => window.Bokeh !== undefined && Bokeh.documents.length > 0",
+                                   timeout=30_000)
+            page.wait_for_function("() => Bokeh.documents.some(d => d.roots().length > 0)", timeout=30_000)
             # the column's links move the page to the section
             page.goto((site / "gallery.html").as_uri())
             page.locator(".sb-gallery-grid a").nth(3).click()
