@@ -3,8 +3,11 @@
     python scripts/readme_images.py [--out docs]
 
 They are the figures of ``stairbounce figures`` drawn at a low dpi (the
-renderers keep one-pixel borders connected at any dpi), and ``model.png``: a
-periodic sliding solution beside a Poincare section.  Kept small (well under
+renderers keep one-pixel borders connected at any dpi), ``model.png``: a
+periodic sliding solution beside a Poincare section, and ``borders.png``: the
+exact borders of the window e in [0, 0.2], u in [0.55, 0.75] by kind, the same
+picture as ``stairbounce borders --e 0:0.2 --u 0.55:0.75 --size 250x250 --png
+borders.png --dpi 80``.  Kept small (well under
 100 kB each) so that the repository stays light.
 """
 
@@ -26,8 +29,10 @@ def main(argv=None):
     import matplotlib.pyplot as plt
 
     from stairbounce import figures as F
+    from stairbounce.borders import border_points
     from stairbounce.model import iterate
-    from stairbounce.plot import plot_poincare_section, plot_trajectory
+    from stairbounce.plane import scan
+    from stairbounce.plot import plot_borders, plot_poincare_section, plot_trajectory
     from stairbounce.symbolic import sliding_word
     from stairbounce.trajectory import trajectory
 
@@ -55,6 +60,13 @@ def main(argv=None):
     fig.tight_layout()
     fig.savefig(args.out / "model.png")
     print(f"wrote {args.out / 'model.png'}")
+
+    ds = scan(e=(0.0, 0.2, 250), u=(0.55, 0.75, 250))
+    fig, ax = plt.subplots(figsize=(8, 6.5), dpi=80)  # as the borders command draws it
+    plot_borders(border_points(ds), ax=ax, scan=ds)
+    fig.tight_layout()
+    fig.savefig(args.out / "borders.png")
+    print(f"wrote {args.out / 'borders.png'}")
 
 
 if __name__ == "__main__":

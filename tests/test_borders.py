@@ -621,6 +621,13 @@ def test_plot_borders_and_bifurcations_draw_one_mark_per_point(fig5a, fig8_bifur
         n = int((fig5a.kind.values == kind).sum())
         assert drawn[f"{kind} ({n})"] == n
     assert ax.images[0].get_alpha() == 0.3
+    # the muted scan has its key, muted alike, and the legend's markers are legible
+    key = ax.images[0].colorbar
+    assert key is not None and key.solids.get_alpha() == 0.3 and "muted" in key.ax.get_ylabel()
+    legend = ax.get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == [f"{k} ({int((fig5a.kind.values == k).sum())})"
+                                                          for k in borders.KINDS]
+    assert min(h.get_markersize() for h in legend.legend_handles) >= 6
     with pytest.raises(ValueError, match="kinds"):
         sb.plot.plot_borders(fig5a, kinds=("slide",))
     plt.close("all")

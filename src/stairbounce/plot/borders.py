@@ -16,6 +16,9 @@ tongues' magenta."""
 
 _KINDS = tuple(KIND_COLORS)
 
+MUTED = 0.3
+"""Opacity of the scan drawn under the borders, and of its colour key."""
+
 
 def plot_borders(points, ax=None, scan=None, kinds=_KINDS, size=None, legend="upper right", title=None):
     """plot_borders(points, ax=None, scan=None, kinds=("graze", "edge", "chatter"), size=None, legend="upper right", title=None) -> Axes
@@ -27,10 +30,12 @@ def plot_borders(points, ax=None, scan=None, kinds=_KINDS, size=None, legend="up
     points : xarray.Dataset from :func:`stairbounce.border_points`.
     ax : matplotlib Axes, default a new figure (or the scan's).
     scan : optional scan Dataset drawn first with :func:`plot_scan` (the
-        raster the borders separate), muted and without its colour bar.
+        raster the borders separate), muted (opacity ``MUTED``), with its
+        colour key muted alike.
     kinds : the kinds to draw, among "graze", "edge", "chatter".
     size : marker area in points^2, default from the number of points.
-    legend : location of the legend (counts per kind), or None.
+    legend : location of the legend (counts per kind, markers of a fixed,
+        legible size), or None.
     title : default "exact borders" with the count.
     """
     import matplotlib.pyplot as plt
@@ -42,10 +47,16 @@ def plot_borders(points, ax=None, scan=None, kinds=_KINDS, size=None, legend="up
     if scan is not None:
         from .plane import plot_scan
 
-        ax = plot_scan(scan, ax=ax, colorbar=False, legend=None,
+        ax = plot_scan(scan, ax=ax, colorbar=True, legend=None,
                        title=title if title is not None else "")
-        for image in ax.images:  # muted, so that the borders stand out
-            image.set_alpha(0.3)
+        for image in ax.images:  # muted, so that the borders stand out, and its key with it
+            image.set_alpha(MUTED)
+            key = getattr(image, "colorbar", None)
+            if key is not None and key.solids is not None:
+                key.solids.set_alpha(MUTED)
+                label = key.ax.get_ylabel()
+                key.set_label(label.replace("  (", " (muted; ", 1) if "  (" in label else label + " (muted)",
+                              fontsize="small")
     elif ax is None:
         _, ax = plt.subplots(figsize=(8, 6))
     n = points.sizes.get("point", 0)
@@ -72,6 +83,11 @@ def plot_borders(points, ax=None, scan=None, kinds=_KINDS, size=None, legend="up
         earlier = ax.get_legend()
         if earlier is not None:  # the scan's overlay legend stays
             ax.add_artist(earlier)
-        ax.legend(loc=legend, markerscale=max(1.0, 6.0 / max(size, 0.1)), fontsize="small",
+        from matplotlib.lines import Line2D
+
+        # legend markers of a legible size, whatever the size of the dots
+        handles = [Line2D([], [], linestyle="", marker="o", markersize=7, color=KIND_COLORS[k],
+                          label=f"{k} ({int((kind == k).sum())})") for k in kinds]
+        ax.legend(handles=handles, loc=legend, fontsize="small",
                   title="event at the step's edge", title_fontsize="small")
     return ax
