@@ -7,7 +7,7 @@ and :mod:`~stairbounce.structure.checks`.
 Every name the module defined is re-exported here, the very object of its new
 module, so ``from stairbounce.borders import X`` keeps working.  An assignment
 through this module (``monkeypatch.setattr``) reaches nothing: patch the module
-that holds the name (docs/design.md, "Architecture and data flow").
+that looks the name up (docs/design.md, "Architecture and data flow").
 """
 
 from .structure.bifurcations import (  # noqa: F401

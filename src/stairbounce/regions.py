@@ -8,7 +8,7 @@ package :mod:`stairbounce.structure` (issue 36, item 9):
 Every name the module defined is re-exported here, the very object of its new
 module, so ``from stairbounce.regions import X`` keeps working.  An assignment
 through this module (``monkeypatch.setattr``) reaches nothing: patch the module
-that holds the name (docs/design.md, "Architecture and data flow").
+that looks the name up (docs/design.md, "Architecture and data flow").
 """
 
 from .structure.checks import band_similarity  # noqa: F401
@@ -111,4 +111,6 @@ from .structure.trace import (  # noqa: F401
     trace_border,
 )
 
-__all__ = ["BorderArc", "Corner", "Region", "RegionComponent", "BorderGraph", "trace_border", "word_region", "window_regions", "border_graph", "regions_geojson", "regions_svg", "write_regions", "band_similarity"]
+__all__ = ["BorderArc", "Corner", "Region", "RegionComponent", "BorderGraph", "trace_border",
+           "word_region", "window_regions", "border_graph", "regions_geojson", "regions_svg",
+           "write_regions", "band_similarity"]
