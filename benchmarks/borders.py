@@ -34,7 +34,8 @@ import numba
 import numpy as np
 
 import stairbounce as sb
-from stairbounce import borders
+from stairbounce import structure
+from stairbounce.structure import borders
 
 FIG5E = ((0.04, 0.065), (0.92, 0.945))
 WINDOWS = {"fig6": ((0.0, 0.333), (0.4, 0.733)), "fig7": ((0.155, 0.2138), (0.6, 0.658))}
@@ -137,7 +138,7 @@ def main(argv=None):
             q = sb.border_points(dsw, outcome=outcome)
             s = q.sliding_border.values
             kinds = q.kind.values[s]
-            shares = ", ".join(f"{k} {100 * np.mean(kinds == k):.1f} %" for k in borders.KINDS)
+            shares = ", ".join(f"{k} {100 * np.mean(kinds == k):.1f} %" for k in structure.itinerary.KINDS)
             print(f"   {name} {e} x {u}, outcome {outcome}: {int(s.sum())} points: {shares}")
 
 

@@ -1,4 +1,4 @@
-"""Borders as curves (stairbounce.regions, issue 22): time per traced point and
+"""Borders as curves (stairbounce.structure, issue 22): time per traced point and
 per arc, all regions of the Fig. 5e window, counts of regions, arcs and corners
 by kind in the Fig. 5e and Fig. 7 windows, N(p) from regions, areas against
 pixel counts, the bands' self-similarity, and the words found from corners
@@ -19,7 +19,8 @@ import time
 import numpy as np
 
 import stairbounce as sb
-from stairbounce import regions
+from stairbounce import structure
+from stairbounce.structure import regions
 from stairbounce.figures import BLOWUPS, DIMENSION_WINDOWS
 
 
@@ -77,7 +78,7 @@ def _coverage(e, u, res=32, fine=512):
         found = set()
         for r in regs:
             ks = regions.itinerary_of_word(r.word)
-            found.add(tuple(int(h) for h in regions._hash_itinerary(ks, ks.size)))
+            found.add(tuple(int(h) for h in structure.itinerary._hash_itinerary(ks, ks.size)))
         row = []
         for frac in (1.0, 0.25, 1 / 16, 1 / 64):
             big = {k for k, c in px.items() if c >= frac * per}
@@ -136,7 +137,7 @@ def main(argv=None):
         cell = ((e5[1] - e5[0]) / n) * ((u5[1] - u5[0]) / n)
         for r in regs5[:6]:
             ks = regions.itinerary_of_word(r.word)
-            h = regions._hash_itinerary(ks, ks.size)
+            h = structure.itinerary._hash_itinerary(ks, ks.size)
             mask = (h1 == h[0]) & (h2 == h[1])
             px = mask.sum() * cell
             # the pixel-boundary error: half the pixels between those surely inside

@@ -828,7 +828,7 @@ def _r3a_cache(t, work):
     code = """
 import numpy as np
 from stairbounce import _cache, figures as F
-from stairbounce.borders import bifurcations
+from stairbounce.structure.bifurcations import bifurcations
 s = F.Settings(out=".", cache_dir="cache")
 inputs = {"e": 0.5, "u": [0.3, 1.0], "n": 40, "y0": 0.1, "v0": 0.0, "transient": 300, "keep": 50}
 calls = []
@@ -837,7 +837,7 @@ def compute():
     return bifurcations(0.5, np.linspace(0.3, 1.0, 40), y0=0.1, v0=0.0, transient=300, keep=50)
 F._cached(s, "bifurcations", dict(inputs), compute)
 F._cached(s, "bifurcations", dict(inputs), compute)
-print("CALLS", len(calls), "BORDERS", "borders.py" in {n for n, _ in _cache._kernel_sources()})
+print("CALLS", len(calls), "BORDERS", "structure/borders.py" in {n for n, _ in _cache._kernel_sources()})
 """
     r = _py(code, Path(tempfile.mkdtemp(dir=work)))
     t.case("round3a", "R10 bifurcations entry used the second time", "CALLS 1" in r.stdout, (r.stdout + r.stderr)[-200:])

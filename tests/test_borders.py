@@ -1,4 +1,4 @@
-"""Borders of the (e, u) plane located to rounding (stairbounce.borders, issue 21).
+"""Borders of the (e, u) plane located to rounding (stairbounce.structure.borders, issue 21).
 
 Independent references: the map of ``model._step`` (``model.iterate``), the
 impact-by-impact loop of ``tests/naive.py`` and the analytic curves of
@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 import stairbounce as sb
-from stairbounce import borders, model
+from stairbounce import model, structure
+from stairbounce.structure import borders
 
 from . import naive
 
@@ -49,10 +50,10 @@ def test_margin_signs_reproduce_the_impact_numbers(e, u):
         if k >= 1:
             # k impacts: t_k <= T < t_(k+1), each margin from the scalar helper
             # that a continuation code calls as a function of (e, u)
-            assert borders._margin(e, u, j, borders.EDGE, k, 1.0, 0.0, empty) >= 0.0
-            assert borders._margin(e, u, j, borders.EDGE, k + 1, 1.0, 0.0, empty) == nx
-        assert borders._margin(e, u, j, borders.GRAZE, 1, 1.0, 0.0, empty) == c
-        assert borders._margin(e, u, j, borders.CHATTER, 0, 1.0, 0.0, empty) == a
+            assert structure.itinerary._margin(e, u, j, structure.itinerary.EDGE, k, 1.0, 0.0, empty) >= 0.0
+            assert structure.itinerary._margin(e, u, j, structure.itinerary.EDGE, k + 1, 1.0, 0.0, empty) == nx
+        assert structure.itinerary._margin(e, u, j, structure.itinerary.GRAZE, 1, 1.0, 0.0, empty) == c
+        assert structure.itinerary._margin(e, u, j, structure.itinerary.CHATTER, 0, 1.0, 0.0, empty) == a
 
 
 @pytest.mark.parametrize("e,u", POINTS[:150])
@@ -86,13 +87,13 @@ def test_margin_is_nan_off_the_prefix_and_after_a_slide():
     n = ks.size
     assert it.attrs["slid"] == 1 and n == 4
     prefix = ks.astype(np.int64)
-    assert not math.isnan(borders._margin(e, u, n, borders.CHATTER, 0, 1.0, 0.0, prefix))
-    assert borders._margin(e, u, n, borders.CHATTER, 0, 1.0, 0.0, prefix) >= 0.0
-    assert math.isnan(borders._margin(e, u, n + 1, borders.CHATTER, 0, 1.0, 0.0, prefix))
+    assert not math.isnan(structure.itinerary._margin(e, u, n, structure.itinerary.CHATTER, 0, 1.0, 0.0, prefix))
+    assert structure.itinerary._margin(e, u, n, structure.itinerary.CHATTER, 0, 1.0, 0.0, prefix) >= 0.0
+    assert math.isnan(structure.itinerary._margin(e, u, n + 1, structure.itinerary.CHATTER, 0, 1.0, 0.0, prefix))
     if n > 1:
         wrong = prefix.copy()
         wrong[0] = wrong[0] + 1
-        assert math.isnan(borders._margin(e, u, n, borders.CHATTER, 0, 1.0, 0.0, wrong))
+        assert math.isnan(structure.itinerary._margin(e, u, n, structure.itinerary.CHATTER, 0, 1.0, 0.0, wrong))
 
 
 def test_itinerary_tongue_n_slides_at_step_n():
@@ -151,7 +152,7 @@ def tongues():
 
 def _word(e, u, max_iter=1000):
     w = sb.sliding_word(e, u, max_iter)
-    return w.format(ascii=True) if w else borders.NONE_WORD
+    return w.format(ascii=True) if w else structure.words.NONE_WORD
 
 
 def test_pairs_are_exactly_those_with_different_words(small):
@@ -200,7 +201,7 @@ def _check_point(pt, max_iter):
     # the words on each side, by sliding_word
     assert _word(el, ul, max_iter) == pt.word_low.item()
     assert _word(eh, uh, max_iter) == pt.word_high.item()
-    assert bool(pt.sliding_border) == (borders.NONE_WORD in (pt.word_low.item(), pt.word_high.item()))
+    assert bool(pt.sliding_border) == (structure.words.NONE_WORD in (pt.word_low.item(), pt.word_high.item()))
     assert pt.word_low.item() != pt.word_high.item()
     # the impact-by-impact loop of tests/naive.py: same impact numbers before
     # step j, and at step j the labelled event's time equals T = 1/u to rounding
@@ -317,7 +318,7 @@ def test_word_text_is_the_symbolic_convention():
 
     for ks in ([-1], [0, 0, -1], [2, 0, 1, 3, -1], [0, 1, 0, 4, 0, -1]):
         a = np.array(ks, np.int64)
-        assert borders._word_text(a) == word_from_impacts(a).format(ascii=True)
+        assert structure.words._word_text(a) == word_from_impacts(a).format(ascii=True)
 
 
 def test_progress_is_called_and_changes_nothing(small):
@@ -411,7 +412,7 @@ def test_word_table_against_sliding_word(fig5a):
         assert (float(row.e_min), float(row.e_max)) == (pts[:, 0].min(), pts[:, 0].max())
         assert (float(row.u_min), float(row.u_max)) == (pts[:, 1].min(), pts[:, 1].max())
         assert sb.sliding_word(float(row.e_rep), float(row.u_rep)).format(ascii=True) == text
-        for kind in borders.KINDS:
+        for kind in structure.itinerary.KINDS:
             on = (fig5a.kind.values == kind)
             n = np.sum(on & (fig5a.word_low.values == text)) + np.sum(on & (fig5a.word_high.values == text))
             assert int(row[kind]) == n
@@ -438,11 +439,11 @@ def test_word_groups_fall_back_to_whole_rows_on_a_hash_collision(monkeypatch):
     E, U = np.meshgrid(sb.pixel_centres(*FIG5A["e"]), sb.pixel_centres(*FIG5A["u"]))
     ds = sb.scan(**FIG5A)
     period = np.where(ds.status.values == 0, ds.period.values, 0).ravel()
-    ids, rows = borders._word_groups(E.ravel(), U.ravel(), period)
-    monkeypatch.setattr(borders, "_rows_equal", lambda *a: False)
-    ids2, rows2 = borders._word_groups(E.ravel(), U.ravel(), period)
-    texts = np.array([borders._word_text(r) for r in rows] + [borders.NONE_WORD], dtype=object)
-    texts2 = np.array([borders._word_text(r) for r in rows2] + [borders.NONE_WORD], dtype=object)
+    ids, rows = structure.words._word_groups(E.ravel(), U.ravel(), period)
+    monkeypatch.setattr(structure.words, "_rows_equal", lambda *a: False)
+    ids2, rows2 = structure.words._word_groups(E.ravel(), U.ravel(), period)
+    texts = np.array([structure.words._word_text(r) for r in rows] + [structure.words.NONE_WORD], dtype=object)
+    texts2 = np.array([structure.words._word_text(r) for r in rows2] + [structure.words.NONE_WORD], dtype=object)
     assert np.array_equal(texts[ids], texts2[ids2]) and len(rows) == len(rows2) > 20
 
 
@@ -571,10 +572,10 @@ def test_long_run_itinerary_is_a_pattern_up_to_its_phase():
     halt = np.zeros(1, np.int64)
     # inside tongue 3 the long run is the word (3, 0^inf): two flights and a slide
     lo, hi = sb.tongue(3, 0.001)
-    p = borders._long_run(0.001, 0.5 * (lo + hi), 0.1, 0.0, 100, 20, buf, halt)
+    p = structure.bifurcations._long_run(0.001, 0.5 * (lo + hi), 0.1, 0.0, 100, 20, buf, halt)
     assert p == 3 and list(buf[:3]) == [-1, 0, 0]
-    assert borders._run_text(p, buf) == "(3, 0^inf)"
-    assert borders._run_text(0, buf) == "not periodic within keep"
+    assert structure.bifurcations._run_text(p, buf) == "(3, 0^inf)"
+    assert structure.bifurcations._run_text(0, buf) == "not periodic within keep"
 
 
 @pytest.mark.parametrize("kw,name", [
@@ -590,21 +591,21 @@ def test_bifurcations_bad_input(kw, name):
 
 def test_report_measures_on_known_answers():
     # the tongue window at a coarse grid: every (n, 0^inf) border point within 1e-14
-    (e0, e1), (u0, u1) = borders.TONGUE_WINDOW
+    (e0, e1), (u0, u1) = structure.checks.TONGUE_WINDOW
     pts = sb.border_points(e=(e0, e1, 30), u=(u0, u1, 120), max_iter=200)
-    t = borders.tongue_distances(pts)
+    t = structure.checks.tongue_distances(pts)
     assert t["points"] > 30 and t["wrong_kind"] == 0 and t["max_relative"] <= 1e-14
     assert t["kinds"][1] == {"chatter"} and t["kinds"][5] == {"graze", "chatter"}
     # a point moved off its curve by 1e-9 is measured as such
     moved = pts.copy(deep=True)
     i = int(np.flatnonzero(moved.word_low.values == "(3, 0^inf)")[0])
     moved["u"].values[i] *= 1 + 1e-9
-    assert borders.tongue_distances(moved)["max_relative"] > 5e-10
-    assert borders.above_no_sliding_curve(pts) == 0
+    assert structure.checks.tongue_distances(moved)["max_relative"] > 5e-10
+    assert structure.checks.above_no_sliding_curve(pts) == 0
     moved["u"].values[i] = 10.0
-    assert borders.above_no_sliding_curve(moved) == 1
+    assert structure.checks.above_no_sliding_curve(moved) == 1
     ds = sb.scan(**FIG5A)
-    share, near = borders.side_agreement(sb.border_points(ds), ds)
+    share, near = structure.checks.side_agreement(sb.border_points(ds), ds)
     assert near > 100 and 0.8 < share <= 1.0
 
 
@@ -617,7 +618,7 @@ def test_plot_borders_and_bifurcations_draw_one_mark_per_point(fig5a, fig8_bifur
     ds = sb.scan(**FIG5A)
     ax = sb.plot.plot_borders(fig5a, scan=ds)
     drawn = {c.get_label(): len(c.get_offsets()) for c in ax.collections}
-    for kind in borders.KINDS:
+    for kind in structure.itinerary.KINDS:
         n = int((fig5a.kind.values == kind).sum())
         assert drawn[f"{kind} ({n})"] == n
     assert ax.images[0].get_alpha() == 0.3

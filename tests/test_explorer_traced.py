@@ -1,5 +1,5 @@
 """The explorer's "traced" overlay (issue 22 item 4): the exact borders drawn as
-traced arcs (stairbounce.regions) instead of pixel-bound points where they exist.
+traced arcs (stairbounce.structure.regions) instead of pixel-bound points where they exist.
 
 The overlay's data (view.trace_slices, view.traced_overlay) is checked against
 the library (window_regions, border_graph) and the map itself (sliding_word,
@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import stairbounce as sb
-from stairbounce.borders import NONE_WORD
+from stairbounce.structure.words import NONE_WORD
 from stairbounce.explorer import view as V
 from stairbounce.model import SLIDING
 

@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stairbounce import borders, plane, regions
+from stairbounce import plane, structure
+from stairbounce.structure import borders, regions
 from stairbounce.explorer import view as V
 
 # --------------------------------------------------------------------------- #
@@ -65,7 +66,7 @@ class Meter:
 
         count(plane, "_run", lambda es, us, grid, max_iter, *r: (es.size * us.size if grid else es.size) * max_iter)
         count(borders, "_border_kernel", lambda es, us, period, a, b, axis, max_iter, *r: _pairs_bound(period, a, b, max_iter))
-        count(borders, "_fill_impacts", lambda e, u, periods, *r: periods.sum())
+        count(structure.words, "_fill_impacts", lambda e, u, periods, *r: periods.sum())
         count(regions, "_words_grid", lambda es, us, y0, v0, max_iter, *r: es.size * us.size * max_iter)
         count(V, "_word_at", lambda e, u, window, max_iter, *r: max_iter)
         orig = regions._trace_word
@@ -161,7 +162,7 @@ def test_r1_sliced_results_equal_the_one_call_results(meter):
     ref = borders.border_points(*V.border_grid(R1_VIEW), max_iter=R1_VIEW.max_iter)
     assert pts.sizes["point"] > 10 and pts.equals(ref)
     text = str(pts["word_low"].values[0])
-    if text == borders.NONE_WORD:
+    if text == structure.words.NONE_WORD:
         text = str(pts["word_high"].values[0])
     works, row = _slices(V.word_row_slices(R1_VIEW, text), meter)
     assert max(works) <= R1_SLICE
@@ -395,7 +396,7 @@ BIF_INPUTS = {"e": 0.5, "u": [0.3, 1.0], "n": 40, "y0": 0.1, "v0": 0.0, "transie
 
 
 def _bifurcations():
-    return borders.bifurcations(0.5, np.linspace(0.3, 1.0, 40), y0=0.1, v0=0.0, transient=300, keep=50)
+    return structure.bifurcations.bifurcations(0.5, np.linspace(0.3, 1.0, 40), y0=0.1, v0=0.0, transient=300, keep=50)
 
 
 def test_r10_a_bifurcations_entry_is_used_the_second_time(tmp_path):
@@ -423,23 +424,29 @@ def test_r10_the_kernel_hash_covers_every_module_that_computes_a_cached_entry(mo
     """Report R10: the kernel hash left out borders.py, which computes the
     bifurcation entries (a change of it would reuse stale entries once they
     hit).  Every function whose result figures.py caches is in a hashed
-    module, and a change of borders.py makes a new entry."""
+    module, and a change of borders.py makes a new entry.  Since issue 36
+    item 9 the bifurcations live in structure/bifurcations.py and the border
+    kernels they call in structure/borders.py and structure/itinerary.py:
+    every module of the structure package they import is hashed."""
     import re
 
     from stairbounce import _cache, figures, nonsliding, orbits
 
     kinds = set(re.findall(r'_cached\(\s*settings, "([a-z_]+)"', Path(figures.__file__).read_text()))
-    computed_by = {"scan": plane.scan, "orbits": orbits.orbit_diagram, "bifurcations": borders.bifurcations,
+    computed_by = {"scan": plane.scan, "orbits": orbits.orbit_diagram,
+                   "bifurcations": structure.bifurcations.bifurcations,
                    "motion": nonsliding.motion_scan}
     assert kinds == set(computed_by)  # a new cached kind: name the function that computes it here
     hashed = {name for name, _ in _cache._kernel_sources()}
     for fn in computed_by.values():
         rel = Path(fn.__code__.co_filename).resolve().relative_to(Path(_cache.__file__).resolve().parent)
         assert rel.as_posix() in hashed, rel
-    assert "regions.py" in hashed  # not listed: followed from the modules that import it
+    # not listed: followed from the modules that import them
+    assert {"structure/regions.py", "structure/borders.py", "structure/itinerary.py", "structure/words.py"} <= hashed
+    assert not {"borders.py", "regions.py", "_region_export.py"} & hashed  # the old paths' shims compute nothing
     _figures_cached(tmp_path, "bifurcations", BIF_INPUTS, _bifurcations)
     real = _cache._kernel_sources()
-    changed = [(n, t + b"\n# changed") if n == "borders.py" else (n, t) for n, t in real]
+    changed = [(n, t + b"\n# changed") if n == "structure/borders.py" else (n, t) for n, t in real]
     monkeypatch.setattr(_cache, "_kernel_sources", lambda: changed)
     _cache.kernel_hash.cache_clear()
     try:
@@ -465,15 +472,15 @@ def test_r5_itinerary_refuses_a_max_iter_over_the_memory_before_it_starts(monkey
     from stairbounce import _validate
 
     calls = []
-    orig = borders._itinerary_block
-    monkeypatch.setattr(borders, "_itinerary_block", lambda *a: calls.append(1) or orig(*a))
+    orig = structure.itinerary._itinerary_block
+    monkeypatch.setattr(structure.itinerary, "_itinerary_block", lambda *a: calls.append(1) or orig(*a))
     for avail, max_iter in [(64 << 20, 2_000_000), (1 << 30, 2**31 - 1)]:
         monkeypatch.setattr(_validate, "available_memory", lambda avail=avail: avail)
         with pytest.raises(ValueError, match=f"max_iter = {max_iter}.*memory"):
-            borders.itinerary(max_iter=max_iter, **NEAR_ONE)
+            structure.itinerary.itinerary(max_iter=max_iter, **NEAR_ONE)
         assert calls == []
     monkeypatch.setattr(_validate, "available_memory", lambda: 64 << 20)
-    assert borders.itinerary(0.02, 0.7, max_iter=100_000).sizes["step"] == 4  # a small one still runs
+    assert structure.itinerary.itinerary(0.02, 0.7, max_iter=100_000).sizes["step"] == 4  # a small one still runs
 
 
 def _itinerary_peak(tmp_path, max_iter):

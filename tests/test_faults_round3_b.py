@@ -22,7 +22,8 @@ import numpy as np
 import pytest
 
 import stairbounce as sb
-from stairbounce import regions as rg
+from stairbounce import structure
+from stairbounce.structure import regions as rg
 from stairbounce.explorer import view as V
 
 from .test_contract import NOT_COUNTS, NOT_FINITE, NOT_NUMBERS, _names_parameter
@@ -278,9 +279,9 @@ def test_r13_trace_border_stays_in_its_window():
 
 
 def test_r13_into_window_moves_only_points_outside():
-    F = rg._Margins(rg.itinerary_of_word((2,)), (0.0, 0.5, 0.5, 1.5))
+    F = structure.continuation._Margins(rg.itinerary_of_word((2,)), (0.0, 0.5, 0.5, 1.5))
     x = np.array([0.1, 0.9])
     g = F(x)
-    assert rg._into_window(F, x, g)[0] is x
-    y, gy = rg._into_window(F, np.array([-2.7e-17, 0.9]), g)
+    assert structure.continuation._into_window(F, x, g)[0] is x
+    y, gy = structure.continuation._into_window(F, np.array([-2.7e-17, 0.9]), g)
     assert y[0] == 0.0 and y[1] == 0.9 and np.isfinite(gy[0][-4:]).all() and gy[0][-4] == 0.0

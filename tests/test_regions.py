@@ -1,10 +1,10 @@
-"""Borders as curves (stairbounce.regions, issue 22): continuation, corners,
+"""Borders as curves (stairbounce.structure, issue 22): continuation, corners,
 regions as polygons.
 
 Known answers: Theorem 3.1's tongues (their two curves u^2 = (n-1)/2 and
 u^2 = n/2 ((1-e)/(1+e))^2, their tips e_n = (sqrt(n) - sqrt(n-1))^2 on the
 Corollary 2.1 curve, their areas as integrals of the two curves); the map
-itself (``model._step`` through ``borders._margin`` and ``model.iterate``) for
+itself (``model._step`` through ``structure.itinerary._margin`` and ``model.iterate``) for
 every traced point; pixel counts of a scan for the areas; i21's border points
 for the continuation.
 """
@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 import stairbounce as sb
-from stairbounce import borders, model, regions
+from stairbounce import model, structure
+from stairbounce.structure import regions
 from stairbounce._io import OutputExistsError
 from stairbounce.symbolic import word_from_impacts
 
@@ -80,10 +81,10 @@ def test_margins_decide_like_the_map_and_their_derivatives_are_exact():
     buf = np.empty(1000, np.int64)
     checked = 0
     for e, u in zip(rng.uniform(0.0, 0.6, 400), rng.uniform(0.3, 1.5, 400)):
-        n = regions._itinerary_of(e, u, 1.0, 0.0, 1000, buf)
+        n = structure.itinerary._itinerary_of(e, u, 1.0, 0.0, 1000, buf)
         if n <= 0:
             continue
-        F = regions._Margins(buf[:n].copy(), (0.0, 0.9, 0.1, 2.0))
+        F = structure.continuation._Margins(buf[:n].copy(), (0.0, 0.9, 0.1, 2.0))
         g, ge, gu = F((e, u))
         assert F.inside(g)
         # derivatives against central differences of the margins themselves
@@ -103,7 +104,7 @@ def test_word_and_itinerary_are_inverse():
     rng = np.random.default_rng(3)
     buf = np.empty(1000, np.int64)
     for e, u in zip(rng.uniform(0.0, 0.5, 300), rng.uniform(0.5, 1.5, 300)):
-        n = regions._itinerary_of(e, u, 1.0, 0.0, 1000, buf)
+        n = structure.itinerary._itinerary_of(e, u, 1.0, 0.0, 1000, buf)
         if n > 0:
             ks = buf[:n]
             assert np.array_equal(regions.itinerary_of_word(word_from_impacts(ks)), ks)
@@ -170,7 +171,8 @@ def test_traced_points_satisfy_F_evaluated_with_model_step(start):
     j = arc.step
     prefix = model.iterate(1.0, 0.0, arc.e[0], arc.u[0], j - 1)[2][1:].astype(np.int64)
     side_k = model.iterate(1.0, 0.0, arc.e[0], arc.u[0], j)[2][j]
-    kind = {"graze": borders.GRAZE, "edge": borders.EDGE, "chatter": borders.CHATTER}[arc.kind]
+    it = structure.itinerary
+    kind = {"graze": it.GRAZE, "edge": it.EDGE, "chatter": it.CHATTER}[arc.kind]
     for x in zip(arc.e, arc.u):
         if arc.kind == "edge":
             # the border between k and k+1 impacts: t_(k+1) = T, k the smaller side
@@ -180,7 +182,7 @@ def test_traced_points_satisfy_F_evaluated_with_model_step(start):
         else:
             index = 1 if arc.kind == "graze" else 0
         def F(a, b):
-            return borders._margin(a, b, j, kind, index, 1.0, 0.0, prefix)
+            return structure.itinerary._margin(a, b, j, kind, index, 1.0, 0.0, prefix)
         h = 1e-8
         grad = math.hypot((F(x[0] + h, x[1]) - F(x[0] - h, x[1])) / (2 * h),
                           (F(x[0], x[1] + h) - F(x[0], x[1] - h)) / (2 * h))
@@ -243,7 +245,7 @@ def test_region_area_against_pixel_counts(word):
     es, us = regions._grid(*FIG5E, res)
     h1, h2, _ = regions._label_grid(es, us, 1000, 1.0, 0.0)
     ks = regions.itinerary_of_word(word)
-    a, b = regions._hash_itinerary(ks, ks.size)
+    a, b = structure.itinerary._hash_itinerary(ks, ks.size)
     mask = (h1 == a) & (h2 == b)
     cell = (0.025 / res) ** 2
     lo, hi = _pixel_area(mask, cell)
@@ -318,7 +320,7 @@ def test_graph_edges_meet_only_at_nodes_and_separate_two_words(graph32):
     (e0, e1), (u0, u1) = GRAPH_WINDOW
     scale = max(e1 - e0, u1 - u0)
     tol = 1e-11 * scale
-    margins = regions._GraphMargins(graph.regions)
+    margins = structure.graph._GraphMargins(graph.regions)
     boxes = _edge_boxes(graph)
     buf = np.empty(1000, np.int64)
     shared = 0
@@ -338,7 +340,7 @@ def test_graph_edges_meet_only_at_nodes_and_separate_two_words(graph32):
                 if min(math.hypot(x[0] - graph.nodes[n].e, x[1] - graph.nodes[n].u) for n in (a2, b2)) <= 1e-9 * scale:
                     continue
                 assert not (regions._chord_position(np.stack([other.e, other.u], 1), x, tol) is not None and
-                            regions._on_arc_curve(margins(other), other._slot, x, 2 * tol)), (edge, other)
+                            structure.graph._on_arc_curve(margins(other), other._slot, x, 2 * tol)), (edge, other)
         if edge.kind == "window":
             assert edge.outside == ""
             continue
@@ -351,7 +353,7 @@ def test_graph_edges_meet_only_at_nodes_and_separate_two_words(graph32):
         words = []
         for side in (1, -1):
             y = x + side * 1e-9 * scale * left
-            n = regions._itinerary_of(y[0], y[1], 1.0, 0.0, 1000, buf)
+            n = structure.itinerary._itinerary_of(y[0], y[1], 1.0, 0.0, 1000, buf)
             words.append(word_from_impacts(buf[:n]).format(ascii=True) if n > 0 else "")
         assert words[0] == edge.inside and words[1] != edge.inside
         if edge.outside:
@@ -529,18 +531,18 @@ def test_previously_incomplete_walks_close(window, pixel, steps):
     e, u = window
     es, us = regions._grid(e, u, 128)
     buf = np.empty(1000, np.int64)
-    n = regions._itinerary_of(es[pixel[1]], us[pixel[0]], 1.0, 0.0, 1000, buf)
+    n = structure.itinerary._itinerary_of(es[pixel[1]], us[pixel[0]], 1.0, 0.0, 1000, buf)
     assert n == steps
     ks = buf[:n].copy()
     r = sb.word_region(word_from_impacts(ks), e, u, resolution=128)
     assert r.complete and len(r.components) == 1
     # every traced point lies on its arc's curve and in the closure of the region, to the
     # margins' rounding (32 ulps of the position times the gradient)
-    F = regions._Margins(ks, (*e, *u))
+    F = structure.continuation._Margins(ks, (*e, *u))
     for arc in r.components[0].boundary:
         for x in zip(arc.e, arc.u):
             g = F(np.array(x))
-            tol = regions._noise(g, x)
+            tol = structure.continuation._noise(g, x)
             assert abs(g[0][arc._slot]) <= tol[arc._slot]
             assert np.all(g[0] >= -tol)
     # the area between the pixels surely inside and those touching at 1024 x 1024 over the
@@ -552,7 +554,7 @@ def test_previously_incomplete_walks_close(window, pixel, steps):
     res = 1024
     zs, ws = regions._grid(ze, zu, res)
     h1, h2, _ = regions._label_grid(zs, ws, 1000, 1.0, 0.0)
-    a, b = regions._hash_itinerary(ks, ks.size)
+    a, b = structure.itinerary._hash_itinerary(ks, ks.size)
     lo, hi = _pixel_area((h1 == a) & (h2 == b), (ze[1] - ze[0]) * (zu[1] - zu[0]) / res ** 2)
     assert hi > 0 and lo <= r.area <= hi
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import stairbounce as sb
-from stairbounce import _colours, regions
+from stairbounce import _colours, structure
 
 import shapely  # noqa: E402  (the [test] extra)
 from shapely.geometry import shape  # noqa: E402
@@ -176,7 +176,7 @@ def test_border_colours_are_one_set_outside_the_word_length_palette():
 
     kinds = ("graze", "edge", "chatter")
     assert KIND_COLORS == {k: _colours.KIND_COLOURS[k] for k in kinds}
-    assert regions.KIND_COLOURS is _colours.KIND_COLOURS
+    assert structure.export.KIND_COLOURS is _colours.KIND_COLOURS
     assert app._WINDOW_ARC_COLOR == _colours.KIND_COLOURS["window"]
     for k in kinds:
         assert _colours.KIND_COLOUR_NAMES[k] in app._OVERLAY_LEGEND["traced"]

@@ -4,7 +4,7 @@ at 4096 x 4096 (issue 22).
 
 Known answers: the regions traced from a finer seed scan (the same margins,
 walked from pixels instead of corners) and the pixel counts of a 4096 x 4096
-scan with the map itself (``model._step`` through ``regions._words_grid``).
+scan with the map itself (``model._step`` through ``structure.itinerary._words_grid``).
 """
 
 import math
@@ -13,14 +13,15 @@ import numpy as np
 import pytest
 
 import stairbounce as sb
-from stairbounce import regions
+from stairbounce import structure
+from stairbounce.structure import regions
 from tests.test_cli_consistency import run as run_cli
 from tests.test_regions import _pixel_area
 
 
 def _key(word):
     ks = regions.itinerary_of_word(word)
-    return tuple(int(h) for h in regions._hash_itinerary(ks, ks.size))
+    return tuple(int(h) for h in structure.itinerary._hash_itinerary(ks, ks.size))
 
 
 def test_corners_find_regions_smaller_than_a_seed_pixel():
@@ -80,7 +81,7 @@ def test_corner_rings_surround_every_corner():
     buf = np.empty(1000, np.int64)
     words = set()
     for p in P[tip, 0]:
-        n = regions._itinerary_of(p[0], p[1], 1.0, 0.0, 1000, buf)
+        n = structure.itinerary._itinerary_of(p[0], p[1], 1.0, 0.0, 1000, buf)
         words.add(tuple(buf[:n]) if n > 0 else None)
     assert tuple(regions.itinerary_of_word((3,))) in words and len(words) >= 3
     assert regions._corner_rings([], pixel)[0].shape == (0, 2)

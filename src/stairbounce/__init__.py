@@ -75,23 +75,15 @@ from .plane import (
     tongue_mask,
 )
 from .plane import scan as _scan_function
-from .borders import bifurcations, border_points, itinerary, word_table
 from .cascades import Cascade, CascadeLaw, cascade, cascade_law, cascades
-from .regions import (
-    BorderArc,
-    BorderGraph,
-    Corner,
-    Region,
-    RegionComponent,
-    band_similarity,
-    border_graph,
-    regions_geojson,
-    regions_svg,
-    trace_border,
-    window_regions,
-    word_region,
-    write_regions,
-)
+from .structure.bifurcations import bifurcations
+from .structure.borders import border_points, word_table
+from .structure.checks import band_similarity
+from .structure.export import regions_geojson, regions_svg, write_regions
+from .structure.graph import BorderGraph, border_graph
+from .structure.itinerary import itinerary
+from .structure.regions import BorderArc, Corner, Region, RegionComponent, window_regions, word_region
+from .structure.trace import trace_border
 from ._progress import progress_bar
 from .structure import Certificate, CertifiedAtlas, certify, certify_box
 from .structure.labels import prove_labels
@@ -103,6 +95,7 @@ from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, phys
 from ._compat import register_alias as _register_alias
 from ._version import __version__
 from . import fractal  # noqa: F401  (the old name of stairbounce.dimension, an alias)
+from . import _region_export, borders, regions  # noqa: F401  (old paths of stairbounce.structure's modules)
 
 
 # ``sb.scan`` is the function; it doubles as the old module ``stairbounce.scan``

@@ -37,14 +37,15 @@ __all__ = ["kernel_hash", "entry_path", "read_entry", "write_entry", "entries", 
            "KERNEL_MODULES", "MAX_BYTES"]
 
 # The modules whose code computes the entries the cache holds, as dotted names
-# under stairbounce (a package covers all its modules: "structure" if the
-# borders move there): the scans (plane), orbit diagrams (orbits),
-# bifurcations (borders), motion fields (nonsliding).  The hash follows every
+# under stairbounce (a package covers all its modules): the scans (plane),
+# orbit diagrams (orbits), bifurcations (structure.bifurcations, which imports
+# the border kernels of structure.borders and structure.itinerary), motion
+# fields (nonsliding).  The hash follows every
 # stairbounce module they import, anywhere in their code, transitively
 # (_kernel_files), so a helper they call is covered without being listed;
 # tests/test_faults_round3.py checks that every function whose result
 # figures.py caches is defined in a hashed module.
-KERNEL_MODULES = ("model", "plane", "orbits", "nonsliding", "symbolic", "borders")
+KERNEL_MODULES = ("model", "plane", "orbits", "nonsliding", "symbolic", "structure.bifurcations")
 # never followed: drawing and interfaces compute no cached number
 _NOT_KERNEL = ("plot", "cli", "explorer", "figures", "_cache")
 MAX_BYTES = 2 << 30

@@ -1,7 +1,7 @@
 """The colours of the three kinds of border (and of the window's sides), defined
 once for every output: the ``borders`` PNG (plot/borders.py), the orbit
 diagram's border ticks (plot/orbits.py), the explorer's border points and
-traced arcs, and the SVG export of traced regions (regions.regions_svg).
+traced arcs, and the SVG export of traced regions (structure.export.regions_svg).
 
 They lie outside the word-length palette of the scans (black, then the turbo
 map from blue through cyan, green, yellow and orange to dark red;

@@ -21,8 +21,8 @@ the first step where the orbit leaves a word's impact numbers says on which
 side of the point the word's interval lies (more impacts than the word there:
 the word lies at larger u).  So a member is found by bisection on that sign
 (:func:`_search`), its two edges are shrunk to adjacent floats with the
-secant/bisection of :func:`stairbounce.borders._shrink_secant` and labelled
-with :func:`stairbounce.borders._first_difference` (graze / edge / chatter and
+secant/bisection of :func:`stairbounce.structure.borders._shrink_secant` and labelled
+with :func:`stairbounce.structure.borders._first_difference` (graze / edge / chatter and
 the step, as :func:`stairbounce.border_points` labels them), and member k+1 is
 searched beyond member k on the side the order of their words gives: nothing
 is sampled, so a member narrower than any grid is not missed, and a member that
@@ -49,7 +49,8 @@ import numpy as np
 from numba import njit
 
 from . import _validate as _v
-from .borders import KINDS, _event_of, _first_difference, _shrink_secant, _trial
+from .structure.borders import _event_of, _first_difference, _shrink_secant, _trial
+from .structure.itinerary import KINDS
 from .model import SLIDING, check_count, check_e, check_u, no_sliding_bound
 from .symbolic import Word, sliding_word
 

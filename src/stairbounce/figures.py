@@ -813,7 +813,7 @@ def _draw_borders(settings, ds, ax, label):
     coloured by kind; returns a caption sentence ("" without)."""
     if not settings.borders:
         return ""
-    from .borders import border_points
+    from .structure.borders import border_points
     from .plot import plot_borders
 
     settings.note(f"{label}: exact borders")
@@ -824,11 +824,11 @@ def _draw_borders(settings, ds, ax, label):
 
 
 def _border_rows(s, ds):
-    """Report rows of the exact borders (stairbounce.borders): the tongue
+    """Report rows of the exact borders (stairbounce.structure.borders): the tongue
     borders against Theorem 3.1, none above Corollary 2.1, and the pixel words
     against the words on their side of the nearest border point."""
-    from .borders import (TONGUE_WINDOW, above_no_sliding_curve, border_points,
-                          side_agreement, tongue_distances)
+    from .structure.borders import border_points
+    from .structure.checks import TONGUE_WINDOW, above_no_sliding_curve, side_agreement, tongue_distances
 
     s.note("fig4: exact borders")
     (e0, e1), (u0, u1) = TONGUE_WINDOW
@@ -916,10 +916,10 @@ def fig4(s: Settings) -> Result:
 
 
 def _band_similarity_row(s):
-    """Self-similarity measured on exact borders (stairbounce.regions.band_similarity):
+    """Self-similarity measured on exact borders (stairbounce.structure.checks.band_similarity):
     the tips (corner of largest e) and areas of the words (n, n) and (n, n, n) in
     bands n = 2..6, and their ratios between consecutive bands."""
-    from .regions import band_similarity
+    from .structure.checks import band_similarity
 
     s.note("fig5c: tracing the word families of bands 2..6")
     sim = band_similarity(resolution=s.px(128))
@@ -1309,7 +1309,7 @@ def _bifurcation_marks(settings, e, u_window, n, ax):
     """Mark the discontinuity-induced bifurcations (sb.bifurcations, located to
     rounding and labelled graze / edge / chatter) found between ``n`` values of
     u on an orbit diagram's axes; returns their count."""
-    from .borders import bifurcations
+    from .structure.bifurcations import bifurcations
     from .plot import plot_bifurcations
 
     settings.note(f"bifurcations e = {e:g}, u in [{u_window[0]:g}, {u_window[1]:g}], {n} values")

@@ -793,7 +793,7 @@ def _chunking(npix, threads, unit_min=_UNIT_MIN):
     slides in a step or two, high u runs to max_iter, above the Corollary 2.1
     curve nothing is iterated) and end together but for their last pixels.
     At least ``unit_min`` pixels per unit (_UNIT_MIN; the bisection rounds of
-    :mod:`stairbounce.borders` ask for less, to use every thread on a few
+    :mod:`stairbounce.structure.borders` ask for less, to use every thread on a few
     thousand points).  Segments of at most _CHUNK_MAX pixels, about 16 per
     thread.  Results do not depend on any of these choices.
     """

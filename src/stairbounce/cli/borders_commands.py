@@ -1,6 +1,6 @@
 """``stairbounce borders`` and ``stairbounce words``: the plane's borders located
 to rounding and labelled graze / edge / chatter, and the table of its words
-(:mod:`stairbounce.borders`)."""
+(:mod:`stairbounce.structure.borders`)."""
 
 from __future__ import annotations
 
@@ -108,7 +108,9 @@ def borders_(
     """Every border between neighbouring pixels located to rounding and labelled by its
     event at a step's edge: graze (first contact), edge (a later impact) or chatter
     (the accumulation point)."""
-    from .. import borders, plane
+    from .. import plane
+    from ..structure import borders
+    from ..structure.itinerary import KINDS
 
     if outcome not in ("word", "sliding"):
         raise CLIError(f"--outcome must be word or sliding, got {outcome!r}")
@@ -128,7 +130,7 @@ def borders_(
         typer.echo(f"wrote {png}")
     kinds = pts.kind.values
     n = kinds.size
-    shares = ", ".join(f"{k} {int((kinds == k).sum())}" for k in borders.KINDS)
+    shares = ", ".join(f"{k} {int((kinds == k).sum())}" for k in KINDS)
     typer.echo(f"{ew[2]} x {uw[2]} pixels, e in [{ew[0]:g}, {ew[1]:g}], u in [{uw[0]:g}, {uw[1]:g}], "
                f"max_iter {max_iter}: {n} border points ({shares}); "
                f"{int(pts.sliding_border.values.sum())} on the border of the sliding region")
@@ -150,7 +152,7 @@ def words_(
     dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     regions: bool = typer.Option(False, "--regions", help="Trace every word's region as polygons "
-                                 "(stairbounce.regions; seeded by a scan of the window at --size, 2 to "
+                                 "(stairbounce.structure.regions; seeded by a scan of the window at --size, 2 to "
                                  "8192 pixels a side) and write them to --out .geojson or .svg."),
     from_corners: bool = typer.Option(False, "--from-corners", help="With --regions: also trace the "
                                       "regions smaller than a seed pixel found around the corners of "
@@ -164,7 +166,8 @@ def words_(
 ):
     """The distinct words of the periodic sliding solutions in a window: letters, period,
     pixels, area, a representative point, bounding box, border points by kind; and N(p)."""
-    from .. import borders, plane
+    from .. import plane
+    from ..structure import borders
 
     if top < 0:
         raise CLIError(f"--top must be >= 0, got {top}")
@@ -228,7 +231,7 @@ def itinerary_(
     import csv
     import sys
 
-    from ..borders import _itinerary_args, _itinerary_blocks
+    from ..structure.itinerary import _itinerary_args, _itinerary_blocks
 
     u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
     try:
@@ -277,7 +280,7 @@ ITINERARY_CONVENTION = (
 
 
 class _WordSpelled:
-    """The word of a stream of impact numbers (``borders._word_text``'s letters:
+    """The word of a stream of impact numbers (``structure.words._word_text``'s letters:
     the steps from one impact to the next, a 0 for each further impact on a
     step), kept to its first ``keep`` letters and counted beyond."""
 
@@ -301,11 +304,12 @@ class _WordSpelled:
 
 def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, force, from_corners=False,
              tolerance=None):
-    """``words --regions``: the window's regions traced (stairbounce.regions) to GeoJSON or SVG."""
+    """``words --regions``: the window's regions traced (stairbounce.structure.regions) to GeoJSON or SVG."""
     import time
 
-    from .. import _region_export
-    from .. import regions as rg
+    from ..structure import export as _region_export
+    from ..structure import regions as rg
+    from ..structure.graph import border_graph
 
     if out is None or out.suffix.lower() not in (".geojson", ".json", ".svg"):
         raise CLIError(f"--regions needs --out ending in .geojson or .svg, got {str(out) if out else None!r}")
@@ -313,7 +317,7 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
                      outputs=False)
     check_outputs(force, out=out)
     try:
-        tolerance, _, _ = rg._export_options(tolerance, None, max_iter)
+        tolerance, _, _ = _region_export._export_options(tolerance, None, max_iter)
     except ValueError as err:
         raise CLIError(f"--{err}") from None
     if not (2 <= ew[2] <= 8192 and 2 <= uw[2] <= 8192):
@@ -323,7 +327,7 @@ def _regions(e, u, speed, step_height, step_length, g, size, max_iter, out, forc
     # e = 1 and u = 0 are traced just inside (stairbounce.word_region)
     regs = with_row_progress(description="words traced", rows=1, run=lambda p: rg.window_regions(
         ew, uw, max_iter=max_iter, progress=p, from_corners=from_corners))
-    graph = rg.border_graph(regs)  # before the file: nothing is written when it fails
+    graph = border_graph(regs)  # before the file: nothing is written when it fails
     start = time.perf_counter()
     _, meta = _region_export.write(regs, out, force, tolerance, (ew[2], uw[2]), max_iter, graph=graph)
     took = time.perf_counter() - start

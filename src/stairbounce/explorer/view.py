@@ -525,11 +525,11 @@ def render_slices(view: View, slice_work: int | None = None, coarse: int = COARS
 def _bands(es, us, per_pixel, slice_work, compute):
     """The grid ``us x es`` computed by ``compute(e, u) -> Dataset`` in blocks of
     at most ``slice_work`` potential map steps (``per_pixel`` each;
-    :func:`stairbounce.borders.grid_blocks`): yields ``(rows done, band)``
+    :func:`stairbounce.structure.borders.grid_blocks`): yields ``(rows done, band)``
     after each block, ``band`` the Dataset of the rows just completed, or
     ``None`` after a piece of a row (pixels are independent: the pieces
     joined along ``e`` are the row bit for bit)."""
-    from ..borders import grid_blocks
+    from ..structure.borders import grid_blocks
 
     pieces = []
     for r, c in grid_blocks(es.size, us.size, per_pixel, slice_work):
@@ -830,7 +830,7 @@ def border_grid(view: View, side: int = BORDER_SIDE) -> tuple:
 
 def view_border_points(view: View, side: int = BORDER_SIDE) -> xr.Dataset:
     """:func:`stairbounce.border_points` of :func:`border_grid` (the view's max_iter)."""
-    from ..borders import border_points
+    from ..structure.borders import border_points
 
     e, u = border_grid(view, side)
     return border_points(e=e, u=u, max_iter=view.max_iter)
@@ -842,13 +842,13 @@ def border_point_slices(view: View, side: int = BORDER_SIDE, slice_work: int | N
     :func:`view_border_points` in slices of at most ``slice_work`` map steps
     (the explorer's scheduler; issue 38, R1): the grid's scan
     (:func:`grid_scan_slices`, ``max_iter`` per pixel), then the pairs
-    (:func:`stairbounce.borders.border_point_slices`, a bound of
-    :func:`stairbounce.borders.pair_work` each).  Yields ``("scan", done,
+    (:func:`stairbounce.structure.borders.border_point_slices`, a bound of
+    :func:`stairbounce.structure.borders.pair_work` each).  Yields ``("scan", done,
     total)`` and ``("pairs", done, total)``; returns the same Dataset as
     :func:`view_border_points`.
     """
-    from ..borders import _grid_input, staged
-    from ..borders import border_point_slices as pair_slices
+    from ..structure.borders import _grid_input, staged
+    from ..structure.borders import border_point_slices as pair_slices
 
     slice_work = SLICE_WORK if slice_work is None else slice_work
     e, u = border_grid(view, side)
@@ -875,7 +875,7 @@ def trace_window(view: View) -> tuple:
     """trace_window(view) -> ((e_lo, e_hi), (u_lo, u_hi))
 
     The window whose regions :func:`trace_slices` traces: the view's, with e
-    below 1 and u above 0 (the margins of :mod:`stairbounce.regions` need
+    below 1 and u above 0 (the margins of :mod:`stairbounce.structure.itinerary` need
     both; as :func:`stairbounce.word_table` with ``regions=True``).
     """
     return (view.e_lo, min(view.e_hi, 1.0 - 1e-12)), (max(view.u_lo, 1e-9), view.u_hi)
@@ -893,7 +893,7 @@ def trace_slices(view: View, side: int = TRACE_SIDE, slice_work: int | None = No
     total)`` once the words are known and ``(done, total)`` after each word;
     returns the regions, largest first.
     """
-    from ..regions import iter_window_regions
+    from ..structure.regions import iter_window_regions
 
     e, u = trace_window(view)
     return (yield from iter_window_regions(e, u, resolution=side, max_iter=view.max_iter,
@@ -904,8 +904,8 @@ def _word_at(e, u, window, max_iter, buf, texts):
     """The word text of the orbit of (1, 0) at (e, u) as the border points write
     it, or "outside the view" outside ``window`` (``texts``: the texts found
     so far, by the itinerary's hashes)."""
-    from ..borders import NONE_WORD, _word_text
-    from ..regions import _hash_itinerary, _itinerary_of
+    from ..structure.itinerary import _hash_itinerary, _itinerary_of
+    from ..structure.words import NONE_WORD, _word_text
 
     (e0, e1), (u0, u1) = window
     if not (e0 <= e <= e1 and u0 <= u <= u1):
@@ -1025,7 +1025,7 @@ def traced_overlay_slices(view: View, regions, points=None, slice_work=None):
     many arcs per ``next()`` as ``slice_work`` map steps allow (one at
     least), yielding ``(arcs done, arcs)``.
     """
-    from ..regions import border_graph
+    from ..structure.graph import border_graph
 
     slice_work = SLICE_WORK if slice_work is None else slice_work
     per_slice = max(1, slice_work // (ARC_SIDE_WORK * view.max_iter))
@@ -1091,10 +1091,10 @@ def word_row_slices(view: View, text: str, side: int = BORDER_SIDE, points: xr.D
     pixel centre on that grid, e.g. a region smaller than its pixels).
     Computed in slices of at most ``slice_work`` map steps (the scan of
     the grid, its border points unless given, the words of its pixels:
-    :func:`stairbounce.borders.word_table_slices`), yielding ``(stage,
+    :func:`stairbounce.structure.borders.word_table_slices`), yielding ``(stage,
     done, total)``.
     """
-    from ..borders import staged, word_table_slices
+    from ..structure.borders import staged, word_table_slices
 
     slice_work = SLICE_WORK if slice_work is None else slice_work
     e, u = border_grid(view, side)
