@@ -29,7 +29,7 @@ def main(argv=None):
     import matplotlib.pyplot as plt
 
     from stairbounce import figures as F
-    from stairbounce.borders import border_points
+    from stairbounce.structure.borders import border_points
     from stairbounce.model import iterate
     from stairbounce.plane import scan
     from stairbounce.plot import plot_borders, plot_poincare_section, plot_trajectory
