@@ -159,6 +159,15 @@ def plot_cascade_law(c, ax=None, k=None):
         a_geo = np.mean(lw - kk * math.log(law.ratio))
         ax.loglog(grid, np.exp(a_geo + grid * math.log(law.ratio)), "--", color="C0", lw=1.2,
                   label=f"geometric: ${law.ratio:.3g}^k$ (residual {law.residual_geometric:.2g})")
+    # plain numbers on the k axis (no 3x10^0 labels crowding the decade)
+    from matplotlib.ticker import NullFormatter, ScalarFormatter
+
+    ks = m.k.values
+    if len(ks):
+        ax.set_xticks([t for t in (1, 2, 3, 5, 10, 20, 50, 100, 200, 500, 1000)
+                       if ks.min() <= t <= ks.max()])
+    ax.xaxis.set_major_formatter(ScalarFormatter())
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("k")
     ax.set_ylabel(f"width of member k (in {c.axis})")
     span = f"k = {law.ks_used[0]}..{law.ks_used[-1]}" if law.ks_used else "no members"
