@@ -115,15 +115,21 @@ def test_members_are_marked_on_their_branches(tmp_path):
     assert (ax.get_xlim(), ax.get_ylim()) == view  # the marks never move the view
     members = c.members[c.members.k.between(2, 5)]
     assert list(members.k) == [2, 3, 4, 5]
-    ticks = [ln for ln in ax.lines if ln.get_marker() == "|" and ln.get_xydata().size]
-    assert len(ticks) == 4
+    (ticks,) = [ln for ln in ax.lines if ln.get_marker() == "|"]  # one line per cascade
+    x, y = np.asarray(ticks.get_xdata()), np.asarray(ticks.get_ydata())
     # the diagram's own columns at the members' centres hold the ticks' heights
     at = sb.orbit_diagram(e, 0.5 * (members.lo.values + members.hi.values), y0=0.1, v0=0.0,
                           transient=2000, keep=50)
-    for tick, m, col in zip(ticks, members.itertuples(), at.y.values):
-        x, y = tick.get_xdata(), tick.get_ydata()
-        assert np.all(x == 0.5 * (m.lo + m.hi)) and len(y) == m.period  # one per branch
-        assert np.allclose(np.sort(y), np.unique(np.round(col, 9)), atol=1e-8), m.k
+    assert len(x) == members.period.sum()  # one tick per branch
+    for m, col in zip(members.itertuples(), at.y.values):
+        mine = y[x == 0.5 * (m.lo + m.hi)]
+        assert len(mine) == m.period
+        assert np.allclose(np.sort(mine), np.unique(np.round(col, 9)), atol=1e-8), m.k
+    bands = [p for p in ax.collections if len(p.get_paths()) == 4]
+    assert len(bands) == 1  # one band per member, in one collection
+    for path, m in zip(bands[0].get_paths(), members.itertuples()):
+        assert path.vertices[:, 0].min() == pytest.approx(m.lo, abs=1e-15)
+        assert path.vertices[:, 0].max() == pytest.approx(m.hi, abs=1e-15)
     labels = [t.get_text() for t in ax.texts]
     assert labels == ["k=2", "k=3"]
     legend = [a for a in ax.artists if a.get_title().get_text() == "cascade members (sb.cascade)"]

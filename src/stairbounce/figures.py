@@ -1361,10 +1361,10 @@ CASCADE_NOTE = "edges and enclosures are float decisions, exact to rounding; the
 # each panel of Fig. 9: (pattern, members drawn); member k = 1 of (n^k, 0^inf) is tongue n
 FIG8_CASCADES = [(f"({n}^k, 0^inf)", (2, 6)) for n in (1, 2, 3)]
 FIG9_CASCADES = [
-    [("(1^k, 0^inf)", (2, 40))],
-    [("(1^k, 0^inf)", (2, 40))],
-    [("((1, 0)^k, 0^inf)", (2, 40)), ("((1, 0)^k, 1, 1, 0^inf)", (1, 40))],
-    [("((1, 0, 0)^k, 1, 0^inf)", (1, 40)), ("((1, 0, 0)^k, 1, 0, 1, 0^inf)", (1, 40))],
+    [("(1^k, 0^inf)", (2, 20))],
+    [("(1^k, 0^inf)", (2, 20))],
+    [("((1, 0)^k, 0^inf)", (2, 20)), ("((1, 0)^k, 1, 1, 0^inf)", (1, 20))],
+    [("((1, 0, 0)^k, 1, 0^inf)", (1, 20)), ("((1, 0, 0)^k, 1, 0, 1, 0^inf)", (1, 20))],
 ]
 
 

@@ -88,21 +88,24 @@ def plot_cascade_members(cascades, ax=None, heights=None, k=None, first=4, color
         if not len(m):
             continue
         h = heights[i] if heights is not None else {}
+        mids = 0.5 * (m.lo.values + m.hi.values)
+        if band:  # one collection for all the bands: the full height of the axes
+            ax.broken_barh(list(zip(m.lo.values, m.hi.values - m.lo.values)), (0, 1),
+                           transform=top, facecolors=color, alpha=0.13, lw=0, zorder=1)
+        # the ticks: one line of markers per cascade, on the branches where known
+        on = [(x, y) for x, kk in zip(mids, m.k.values) for y in h.get(int(kk), ())]
+        if on:
+            xs, ys = zip(*on)
+            ax.plot(xs, ys, ls="none", marker="|", ms=9, mew=1.3, color=color, zorder=5)
+        off = [x for x, kk in zip(mids, m.k.values) if not len(h.get(int(kk), ()))]
+        if off:
+            ax.plot(off, [0.97] * len(off), ls="none", marker="|", ms=9, mew=1.3, color=color,
+                    transform=top, zorder=5)
         last_label = -math.inf
         labelled = 0
-        for row in m.itertuples():
-            mid = 0.5 * (row.lo + row.hi)
-            if band:
-                ax.axvspan(row.lo, row.hi, color=color, alpha=0.13, lw=0, zorder=1)
-            ys = h.get(int(row.k))
-            if ys is not None and len(ys):
-                ax.plot(np.full(len(ys), mid), ys, ls="none", marker="|", ms=9, mew=1.3,
-                        color=color, zorder=5)
-            else:
-                ax.plot([mid], [0.97], ls="none", marker="|", ms=9, mew=1.3, color=color,
-                        transform=top, zorder=5)
+        for kk, mid in zip(m.k.values, mids):
             if labelled < firsts[i] and mid - last_label > 0.04 * span:
-                ax.annotate(f"k={row.k}", (mid, 0.065), xycoords=("data", "axes fraction"),
+                ax.annotate(f"k={kk}", (mid, 0.065), xycoords=("data", "axes fraction"),
                             ha="center", va="bottom", fontsize="x-small", color=color,
                             bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none",
                                   "alpha": 0.8}, zorder=6)
