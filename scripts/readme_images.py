@@ -4,11 +4,12 @@
 
 They are the figures of ``stairbounce figures`` drawn at a low dpi (the
 renderers keep one-pixel borders connected at any dpi), ``model.png``: a
-periodic sliding solution beside a Poincare section, and ``borders.png``: the
+periodic sliding solution beside a Poincare section, ``borders.png``: the
 exact borders of the window e in [0, 0.2], u in [0.55, 0.75] by kind, the same
 picture as ``stairbounce borders --e 0:0.2 --u 0.55:0.75 --size 250x250 --png
-borders.png --dpi 80``.  Kept small (well under
-100 kB each) so that the repository stays light.
+borders.png --dpi 80``, and ``cascade.png`` (the guide's page on cascades): the
+regions of the first members of (1^k, 0^inf) beside the law of the widths.
+Kept small (well under 100 kB each) so that the repository stays light.
 """
 
 from __future__ import annotations
@@ -67,6 +68,40 @@ def main(argv=None):
     fig.tight_layout()
     fig.savefig(args.out / "borders.png")
     print(f"wrote {args.out / 'borders.png'}")
+    cascade_picture(args.out / "cascade.png")
+
+
+def cascade_picture(path, dpi=66):
+    """The members k = 2..6 of (1^k, 0^inf): their regions in (e, u)
+    (sb.word_region), the line e = 0.02 with the members' intervals on it
+    (sb.cascade), and the widths against k with the two laws weighed
+    (plot_cascade_law); the code shown in docs/guide/cascades.md."""
+    import matplotlib.pyplot as plt
+
+    import stairbounce as sb
+    from stairbounce.plot import plot_cascade_law
+
+    e0 = 0.02
+    c = sb.cascade("(1^k, 0^inf)", e=e0, u=(0.6, 0.75), law_k=(5, 12))
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2), dpi=dpi)
+    for k in range(2, 6):
+        member = c.members[c.members.k == k].iloc[0]
+        region = sb.word_region(member.word, e=(0, 0.12), u=(0.64, 0.71), resolution=96)
+        for comp in region.components:
+            e, u = comp.polygon()
+            left.fill(e, u, color=f"C{k - 2}", alpha=0.75, lw=0,
+                      label=f"k = {k}: $(" + "1, " * k + r"0^{\infty})$")
+        left.plot([e0, e0], [member.lo, member.hi], color="k", lw=2.5, solid_capstyle="butt")
+    left.axvline(e0, color="k", lw=0.6, ls=":")
+    left.set(xlabel="restitution e", ylabel="horizontal speed u", xlim=(0, 0.12), ylim=(0.64, 0.71))
+    left.set_title(r"regions of $(1^k, 0^{\infty})$; black: the members on e = " + f"{e0}",
+                   fontsize="medium")
+    left.legend(fontsize="x-small", loc="lower left")
+    plot_cascade_law(c, ax=right)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":

@@ -468,6 +468,34 @@ def test_fig9_one_colour_bar_and_legible_sparse_cells(drawn):
         assert ax.get_ylabel() == f"(y - 1) / $10^{{-{2 * k}}}$"
 
 
+def _cascade_legends(ax):
+    return [a for a in ax.artists if hasattr(a, "get_title")
+            and a.get_title().get_text() == "cascade members (sb.cascade)"]
+
+
+def test_figs_8_and_9_mark_the_cascade_members(drawn):
+    """Issue 39: every panel names its cascades in a legend of its own, draws a
+    tick per member (at its centre, inside the panel) and numbers the first ones."""
+    figs, results = drawn
+    panels = [(figs["fig8"].axes[0], F.FIG8_CASCADES)]
+    panels += list(zip(figs["fig9"].axes[:4], F.FIG9_CASCADES))
+    for ax, cascades in panels:
+        (legend,) = _cascade_legends(ax)
+        texts = [t.get_text() for t in legend.get_texts()]
+        assert len(texts) == len(cascades)
+        for text, (pattern, _) in zip(texts, cascades):
+            assert pattern.replace("0^inf", r"0^{\infty}") in text and "exact" in text, text
+        lo, hi = sorted(ax.get_xlim())
+        ticks = [ln for ln in ax.lines if ln.get_marker() == "|"]
+        assert ticks and all(lo <= ln.get_xdata()[0] <= hi for ln in ticks)
+    # fig9's first panel: (1^k, 0^inf), k = 2..5 at e = 0.1, numbered under the branches
+    ax = figs["fig9"].axes[0]
+    assert [t.get_text() for t in ax.texts if t.get_text().startswith("k=")][:1] == ["k=2"]
+    assert "k = 2..5 (4 members" in _cascade_legends(ax)[0].get_texts()[0].get_text()
+    assert "(stairbounce.cascade" in results["fig9"].caption
+    assert "(stairbounce.cascade" in results["fig8"].caption
+
+
 def test_a_long_figure_says_what_it_is_doing(tmp_path):
     """`figures --only fig4 --scale 2` shows progress inside the figure, not a
     bar stuck at 0/1: the recipe reports its scan rows and its drawing."""

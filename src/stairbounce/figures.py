@@ -160,7 +160,9 @@ CRITERION = (
     "nothing our measurement could contradict, or when our measurement cannot test the statement "
     "(a fit whose interval leaves [1, 2], a number that restates a theorem); the row says why. "
     "Rows whose quantity begins with 'ours:' are claims of ours, not the paper's: their paper "
-    "column is '-' and the measurement says whether the claim holds. 'Here' means computed in "
+    "column is '-' and the measurement says whether the claim holds; where the row tests the "
+    "claim by a criterion it states (a fitted law's decision, a closed form) it **agrees** when "
+    "the claim passes and **differs** when it fails, otherwise it is not comparable. 'Here' means computed in "
     "this run, except where the row says 'not recomputed'."
 )
 """The report's verdict criterion, stated once in its header."""
@@ -203,6 +205,13 @@ def _ours(quantity, measured, holds, criterion):
     return Row(f"ours: {quantity}", "-",
                f"{measured}; {'holds' if holds else 'FAILS'} ({criterion})",
                verdict="not comparable", why="a claim of ours; the paper says nothing about it")
+
+
+def _ours_tested(quantity, measured, holds, criterion, note=""):
+    """A row for a claim of ours tested by a stated criterion: the paper column
+    is '-', the verdict agrees when the claim passes and differs when it fails."""
+    return Row(f"ours: {quantity}", "-", measured, verdict="agrees" if holds else "differs",
+               why=f"a claim of ours, {'passes' if holds else 'FAILS'}: {criterion}", proof=note)
 
 
 # --------------------------------------------------------------------------- #
@@ -1325,6 +1334,162 @@ def _distinct(row):
     return np.unique(np.round(row, 9)).size
 
 
+# --------------------------------------------------------------------------- #
+# cascades of words (issue 39): the laws found between tongues 1 and 2 (report #
+# rows of Fig. 9) and the members marked on Figs. 8 and 9                      #
+# --------------------------------------------------------------------------- #
+
+CASCADE_LINE = (0.02, (0.6, 0.75))
+"""The line of the cascade rows: e = 0.02, u across the gap between tongues 1 and 2."""
+
+CASCADE_LAW_K = (5, 12)
+"""Members of ``(1^k, 0^inf)`` the law is fitted on: past the first few, before the
+family's end (k = 25 at e = 0.02), where the widths fall faster than any law."""
+
+CASCADE_K_MAX = 100
+"""Members searched of ``((1, 0)^k, 1, 1, 0^inf)`` (it has more: the law is on the last 8)."""
+
+APPROACH_TOL = 0.1
+"""How far from 1 the local exponents of the edges' approach may be for "like C/k"."""
+
+CASCADE_SAME_C = 0.01
+"""How close k (u* - edge) must be for the two edges of the last member (one C)."""
+
+CASCADE_NOTE = "edges and enclosures are float decisions, exact to rounding; the law is a fit"
+
+# the cascades marked on Fig. 8 (each tongue's family, in the gap that follows it) and on
+# each panel of Fig. 9: (pattern, members drawn); member k = 1 of (n^k, 0^inf) is tongue n
+FIG8_CASCADES = [(f"({n}^k, 0^inf)", (2, 6)) for n in (1, 2, 3)]
+FIG9_CASCADES = [
+    [("(1^k, 0^inf)", (2, 20))],
+    [("(1^k, 0^inf)", (2, 20))],
+    [("((1, 0)^k, 0^inf)", (2, 20)), ("((1, 0)^k, 1, 1, 0^inf)", (1, 20))],
+    [("((1, 0, 0)^k, 1, 0^inf)", (1, 20)), ("((1, 0, 0)^k, 1, 0, 1, 0^inf)", (1, 20))],
+]
+
+
+def _members_law(c, k=None, edge=None):
+    """sb.cascade_law on the members of ``c`` not cut by the range (those with k
+    in ``k``; by default the last 8), with ``edge`` ("lo" or "hi"; by default
+    the one facing the accumulation point) as the positions."""
+    from .cascades import cascade_law
+
+    m = c.members
+    m = m[(m.lo_kind != "range") & (m.hi_kind != "range") & (m.width > 0) & (m.k >= 1)]
+    if k is not None:
+        m = m[(m.k >= k[0]) & (m.k <= k[1])]
+    if edge is None:
+        edge = "hi" if len(m) < 2 or m.lo.iloc[-1] > m.lo.iloc[0] else "lo"
+    tail = max(4, len(m)) if k is not None else 8
+    return cascade_law(m.k.values.astype(float), m.width.values.astype(float),
+                         m[edge].values.astype(float), tail=tail)
+
+
+def _range_text(lo, hi, digits=4):
+    return f"[{lo:.{digits}g}, {hi:.{digits}g}]"
+
+
+def _cascade_rows(s):
+    """The laws of two cascades between tongues 1 and 2 at e = 0.02, measured
+    exactly (sb.cascade) and fitted (sb.cascade_law): three rows of ours."""
+    from .cascades import cascade
+
+    e, u = CASCADE_LINE
+    line = f"e = {e:g}, u in [{u[0]:g}, {u[1]:g}]"
+    s.note(f"fig9: cascades between tongues 1 and 2 at e = {e:g}")
+    ones = cascade("(1^k, 0^inf)", e=e, u=u, k_max=CASCADE_K_MAX)
+    # the right edges face the accumulation point (the members move right with k)
+    law = _members_law(ones, CASCADE_LAW_K, "hi")
+    ks = ones.members.k
+    k0, k1 = CASCADE_LAW_K
+    rule = (f"sb.cascade_law decides algebraic when the RMS residual of log w against log k is "
+            f"{law.threshold:g} times smaller than that of log w against k on k = {k0}..{k1}, "
+            f"geometric for the reverse, undecided otherwise")
+    rows = [_ours_tested(
+        f"widths of the cascade (1^k, 0^inf) between tongues 1 and 2 ({line})",
+        f"members k = {ks.iloc[0]}..{ks.iloc[-1]} located exactly (sb.cascade; stop: "
+        f"{ones.stop.split(':')[0]}); widths on k = {k0}..{k1}: {law.kind}, exponent "
+        f"{law.exponent:.3g} in {_range_text(*law.exponent_interval, 3)} (ratio {law.ratio:.3g}); "
+        f"residuals algebraic {law.residual_algebraic:.2g}, geometric {law.residual_geometric:.2g}",
+        law.kind == "algebraic", rule, CASCADE_NOTE)]
+
+    # the accumulation point against the closed form of the neutral family, and the
+    # approach of both edges: C/k with one C
+    u_star = math.sqrt((1 - e) / (2 * (1 + e)))
+    enc = ones.limit_enclosure
+    inside = enc is not None and enc[0] <= u_star <= enc[1]
+    beta = law.approach_interval
+    like_1_over_k = (law.approach_kind == "algebraic"
+                     and all(abs(b - 1) <= APPROACH_TOL for b in beta))
+    left = _members_law(ones, CASCADE_LAW_K, "lo")
+    whole = ones.members[(ones.members.lo_kind != "range") & (ones.members.hi_kind != "range")]
+    first, last = whole.iloc[0], whole.iloc[-1]
+    c_lo = [r.k * (u_star - r.lo) for r in (first, last)]
+    c_hi = last.k * (u_star - last.hi)
+    one_c = c_hi > 0 and abs(c_lo[1] / c_hi - 1) <= CASCADE_SAME_C
+    enc_text = (f"enclosure {_range_text(enc[0], enc[1], 9)} (first {enc[2]} steps of 1, 1, 1, ...)"
+                if enc is not None else "no enclosure")
+    rows.append(_ours_tested(
+        f"(1^k, 0^inf) accumulates on u* = sqrt((1-e)/(2(1+e))), its edges like C/k ({line})",
+        f"u* = {u_star:.10g}; {enc_text}; right edges (facing u*) on k = {k0}..{k1} approach "
+        f"{law.approach_kind}ally, exponent {law.approach:.3g} in {_range_text(*beta, 3)}, "
+        f"extrapolated limit {law.limit:.9g} ({law.limit - u_star:+.1e} from u*); left edges: "
+        f"local exponents {_range_text(*left.approach_interval, 3)} on k = {k0}..{k1}, "
+        f"k (u* - u_lo) = {c_lo[0]:.4g} at k = {first.k}, {c_lo[1]:.4g} at k = {last.k}, against "
+        f"k (u* - u_hi) = {c_hi:.4g} there",
+        inside and like_1_over_k and one_c,
+        f"the enclosure (the points that follow 1, 1, 1, ... for its first steps) contains u*; the "
+        f"right edges' gaps are algebraic by sb.cascade_law's criterion with every local exponent "
+        f"within {APPROACH_TOL:g} of 1; and at the last member k (u* - edge) is the same for both "
+        f"edges within {100 * CASCADE_SAME_C:g}% (one C)", CASCADE_NOTE))
+
+    nested = cascade("((1, 0)^k, 1, 1, 0^inf)", e=e, u=u, k_max=CASCADE_K_MAX)
+    nlaw = _members_law(nested)
+    nenc = nested.limit_enclosure
+    agree = (nenc is not None and math.isfinite(nlaw.limit)
+             and nenc[0] <= nlaw.limit <= nenc[1])
+    nk = nlaw.ks_used
+    rows.append(_ours_tested(
+        f"widths and accumulation of the cascade ((1, 0)^k, 1, 1, 0^inf) ({line})",
+        f"members k = {nested.members.k.iloc[0]}..{nested.members.k.iloc[-1]} (stop: "
+        f"{nested.stop}); widths on k = {nk[0]}..{nk[-1]}: {nlaw.kind}, exponent "
+        f"{nlaw.exponent:.4g} in {_range_text(*nlaw.exponent_interval, 4)}; extrapolated limit "
+        f"{nlaw.limit:.9g}; "
+        + (f"enclosure {_range_text(nenc[0], nenc[1], 9)} (first {nenc[2]} steps of the limit itinerary)"
+           if nenc is not None else "no enclosure"),
+        nlaw.kind == "algebraic" and agree,
+        f"sb.cascade_law decides algebraic ({nlaw.threshold:g} times smaller residual, last "
+        f"{len(nk)} members), and the limit extrapolated from the edges lies in the enclosure "
+        f"found from the order of itineraries", CASCADE_NOTE))
+    return rows
+
+
+def _cascade_marks(settings, ax, e, window, cascades, offset=0.0, unit=1.0, first=4,
+                   legend="upper right"):
+    """Locate the members of ``cascades`` ((pattern, (k_lo, k_hi)) pairs) on the
+    line e = const inside ``window`` (sb.cascade), and mark them on an orbit
+    diagram's axes at the heights of their periodic orbits, drawn as
+    ``(y - offset) / unit``; returns the cascades."""
+    from .cascades import cascade
+    from .model import iterate
+    from .plot import plot_cascade_members
+
+    settings.note(f"cascades e = {e:g}, u in [{window[0]:g}, {window[1]:g}]")
+    found, heights = [], []
+    for pattern, (k_lo, k_hi) in cascades:
+        c = cascade(pattern, e=e, u=window, k_max=k_hi)
+        h = {}
+        for r in c.members.itertuples():
+            if k_lo <= r.k <= k_hi:
+                ys, _, _ = iterate(1.0, 0.0, e, 0.5 * (r.lo + r.hi), int(r.period))
+                h[int(r.k)] = (np.unique(np.round(ys[:-1], 12)) - offset) / unit
+        found.append(c)
+        heights.append(h)
+    plot_cascade_members(found, ax=ax, heights=heights, k=[c[1] for c in cascades], first=first,
+                         legend=legend)
+    return found
+
+
 def fig8(s: Settings) -> Result:
     """Fig. 8: orbit diagram for e = 0.001: grazing bifurcations, one per tongue."""
     from .model import tongue
@@ -1337,6 +1502,8 @@ def fig8(s: Settings) -> Result:
     # the legend goes above it, clear of the bifurcation and of the tongue numbers
     plot_orbit_diagram(ds, ax=ax, overlay=("tongues",), legend="center left")
     _bifurcation_marks(s, e, window, s.px(500), ax)
+    # the legend sits above the first branches, clear of the tongue numbers
+    _cascade_marks(s, ax, e, window, FIG8_CASCADES, first=0, legend=(0.2, 0.7))
     ax.set_title(f"Fig. 8: orbit diagram, e = {e} (iterates 2001-2200 from (0.1, 0))")
     fig.tight_layout()
     counts, ok = [], True
@@ -1361,7 +1528,13 @@ def fig8(s: Settings) -> Result:
                f"coincide; each tongue is numbered at its middle. Ticks at the bottom: the "
                f"discontinuity-induced bifurcations found between {s.px(500)} values of u "
                f"(stairbounce.bifurcations: where the itinerary of iterates 2001-2200 changes, "
-               f"located to rounding), coloured by their event.")
+               f"located to rounding), coloured by their event. Ticks on the branches: the "
+               f"members k = {FIG8_CASCADES[0][1][0]}..{FIG8_CASCADES[0][1][1]} of the cascades "
+               f"(n^k, 0^inf), n = 1..{len(FIG8_CASCADES)} (ours, issue 39; k = 1 is tongue n), "
+               f"each at the heights of its periodic orbit, at the centre of its u-interval "
+               f"(stairbounce.cascade, edges located to rounding): at this e they fill the "
+               f"narrow gap after tongue n, a few 1e-4 wide, and accumulate on the neutral "
+               f"family u = sqrt(n(1-e)/(2(1+e))).")
     return Result("fig8", "Orbit diagram, e = 0.001", [_save(fig, s, "fig8")], rows,
                   {"e": e, "u": window, "n": n, "y0": 0.1, "v0": 0.0, "transient": 2000,
                    "keep": 200}, caption=caption)
@@ -1395,6 +1568,11 @@ def fig9(s: Settings) -> Result:
                                label=f"(y - 1) / $10^{{-{2 * k}}}$")
             ax.set_title(f"zoom {k}: u in [{window[0]:g}, {window[1]:g}]", fontsize="medium")
         _bifurcation_marks(s, e, window, s.px(300), ax)
+        # numbered: the first cascade of each panel (the second's first members sit
+        # under the bifurcations' legend)
+        _cascade_marks(s, ax, e, window, FIG9_CASCADES[k], offset=0.0 if k == 0 else 1.0,
+                       unit=1.0 if k == 0 else e ** (2 * k), first=[4, 0][:len(FIG9_CASCADES[k])],
+                       legend=(0.01, 0.74))
         images += ax.get_images()
         if k < len(FIG9_WINDOWS) - 1:
             nxt = FIG9_WINDOWS[k + 1]
@@ -1417,12 +1595,21 @@ def fig9(s: Settings) -> Result:
             why=("one scale factor for both zoom steps, within "
                  f"{100 * abs(ratios[1] / ratios[0] - 1):.1f}%; the paper gives no number")
             if len(ratios) == 2 else "too few zooms measured"),
+        *_cascade_rows(s),
     ]
     caption = (f"As Fig. 8 at the paper's e = {e}, {n} values of u per panel. The zoom windows "
                f"(ours: the paper gives none) sit inside each other, shaded in the panel "
                f"before; zoom k shows (y - 1) in units of 10^(-2k) = e^(2k), so that the three "
                f"read alike if the scheme is self-similar with factor e^2. One colour scale "
-               f"(iterates per cell) for all four panels.")
+               f"(iterates per cell) for all four panels. Shaded bands and ticks (ours, issue "
+               f"39): the members of the cascades in each panel, located exactly on the line "
+               f"(stairbounce.cascade, edges to rounding), the ticks at the heights of each "
+               f"member's periodic orbit (its branches), the first members numbered k: "
+               f"(1^k, 0^inf) in the gap between tongues 1 and 2 (top panel, zoom 1), ((1, 0)^k, 0^inf) and "
+               f"((1, 0)^k, 1, 1, 0^inf) on either side of their common accumulation point "
+               f"(zoom 2), and one level down ((1, 0, 0)^k, 1, 0^inf) and "
+               f"((1, 0, 0)^k, 1, 0, 1, 0^inf) (zoom 3). The report's cascade rows measure "
+               f"their laws at e = {CASCADE_LINE[0]:g}.")
     return Result("fig9", "Orbit diagrams, e = 0.1, with zooms", [_save(fig, s, "fig9")], rows,
                   {"e": e, "windows": FIG9_WINDOWS, "n": n, "y0": 0.1, "v0": 0.0,
                    "transient": 2000, "keep": 200, "heights": heights}, caption=caption)

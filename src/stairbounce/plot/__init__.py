@@ -12,6 +12,8 @@ computed by                    drawn by
 ``sb.scan``                    :func:`plot_scan` (Figs. 3-5)
 ``sb.orbit_diagram``           :func:`plot_orbit_diagram` (Figs. 8, 9)
 ``sb.bifurcations``            :func:`plot_bifurcations` (marks on them)
+``sb.cascade``                 :func:`plot_cascade_members` (marks on them),
+                               :func:`plot_cascade_law`
 ``sb.perimeter_dimension``     :func:`plot_box_dimension` (Figs. 6, 7),
                                :func:`plot_box_counts`, :func:`plot_border`
 ``sb.uncertainty_dimension``   :func:`plot_uncertainty`
@@ -27,6 +29,7 @@ computed by                    drawn by
 
 from .._compat import register_alias as _register_alias
 from .borders import plot_borders
+from .cascades import plot_cascade_law, plot_cascade_members
 from .fractal import plot_border, plot_box_counts, plot_box_dimension, plot_local_dimension, plot_uncertainty
 from .motion import plot_motion, plot_motion_cut
 from .orbits import plot_bifurcations, plot_orbit_diagram
@@ -42,6 +45,8 @@ __all__ = [
     "plot_bifurcations",
     "plot_border",
     "plot_borders",
+    "plot_cascade_law",
+    "plot_cascade_members",
     "plot_box_counts",
     "plot_box_dimension",
     "plot_local_dimension",
