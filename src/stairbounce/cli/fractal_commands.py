@@ -370,6 +370,9 @@ def dimension(
         fr = None
         if fit_range is not None:
             fr = parse_range("fit-range", fit_range)
+            if not (0 < fr[0] and fr[1] <= 0.25):
+                raise CLIError(f"--fit-range with --method slicing is box lengths MIN:MAX in (0, 0.25] "
+                               f"(fractions of the window), got {fit_range!r}")
         ew, uw = parse_range("e", e), parse_range("u", u)
 
         from ..dimension import sliding_classifier, slicing_dimension
