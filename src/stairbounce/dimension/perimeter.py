@@ -62,8 +62,9 @@ _BOX_DEFAULTS = dict(resolution=2048, connectivity=4, sizes=None, offsets=1, red
 
 #: The defaults of :func:`perimeter_dimension` and ``stairbounce dimension``
 #: for a window of the model, per method (issue 37): the package's best answer
-#: within about a minute on 2 idle cores (measured CPU time, Fig. 6 window,
-#: the costliest: uncertainty 30 s, slicing 9 s, boxes 2 s; docs/guide/dimension.md,
+#: within about a minute on 2 cores (measured CPU time of one process in the Fig. 6
+#: window, the costliest: uncertainty 11.6 s, slicing 8.0 s, boxes 1.8 s; wall up
+#: to 99 s on the shared 2-core machine at load 23; docs/guide/dimension.md,
 #: "The defaults").  Fine scales, where the local dimension has stopped
 #: drifting (1e-8..1e-4 of the window), at ``max_iter`` 4000, which moves the
 #: local dimension there by at most about 0.02 against 16000 (the guide's table);
