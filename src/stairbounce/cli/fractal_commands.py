@@ -126,7 +126,18 @@ def _print_accounting(result, ew, uw, at_defaults, checked, which):
         slo, shi = entry["ci95"][0] - entry.get("systematic", 0.0), entry["ci95"][1] + entry.get("systematic", 0.0)
         typer.echo(f"the dimension study's number for this window ({name}, shipped with the package, not "
                    f"recomputed here; {entry['method']}): D = {entry['dimension']:.4f} interval "
-                   f"[{slo:.4f}, {shi:.4f}] (noise and drift only); recomputed by: {command}")
+                   f"[{slo:.4f}, {shi:.4f}] (noise and drift only{_study_bias(entry)}); recomputed by: {command}")
+
+
+def _study_bias(entry):
+    """``"; the uncertainty exponent's measured bias ... is not in it"`` for the study's estimator."""
+    from ..dimension.result import KNOWN_BIAS
+
+    key = next((k for k in KNOWN_BIAS if str(entry.get("method", "")).startswith(k)), None)
+    if key is None:
+        return ""
+    blo, bhi = KNOWN_BIAS[key]
+    return f"; the {key} estimator's measured bias {blo:+.3f}..{bhi:+.3f} is not in it"
 
 
 def _study_entry(ew, uw):
