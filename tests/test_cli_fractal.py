@@ -195,7 +195,8 @@ def test_store_is_box_counted_tile_by_tile(small_store, capsys):
         (["--eps", "1e-3:1.5:5"], "--eps must have 0 < MIN < MAX < 1"),
         (["--eps", "1e-3"], "--eps must be MIN:MAX:N"),
         (["--e", "0.2:0.2"], "MIN < MAX"),
-        (["--fit-range", "0.5:2"], "--fit-range with --method uncertainty"),
+        (["--method", "uncertainty", "--fit-range", "0.5:2"], "--fit-range with --method uncertainty"),
+        (["--fit-range", "0.5:2"], "--fit-range with --method slicing"),  # the default method
         (["--store", "{tmp}/missing.zarr"], "no such store"),
         (["--store", "{tmp}/text.png"], "not a tiled scan store"),
         (["--store", "{store}", "--png", "{tmp}/a.png"], "--png draws a picture in memory"),

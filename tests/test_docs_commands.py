@@ -64,7 +64,7 @@ ADDED = {
     "orbit-diagram": ["--n", "40", "--transient", "100", "--keep", "50"],
     "motion": ["--steps", "200", "--transient", "100"],
     "itinerary": ["--max-iter", "200"],
-    ("dimension", "uncertainty"): ["--points", "2000", "--max-iter", "200"],
+    ("dimension", "uncertainty"): ["--points", "2000", "--max-iter", "200", "--eps", "1e-4:0.1:7"],
     ("dimension", "boxes"): ["--resolution", "64", "--max-iter", "200"],
     ("dimension", "slicing"): ["--lines", "8", "--max-iter", "200"],
 }
@@ -201,7 +201,9 @@ def tiny(args: list[str]) -> list[str]:
             out[i + 1] = str(min(int(value), cap))
     key: str | tuple[str, str] = " ".join(names)
     if names == ["dimension"]:
-        method = out[out.index("--method") + 1] if "--method" in out else "uncertainty"
+        method = out[out.index("--method") + 1] if "--method" in out else (
+            "uncertainty" if ("--points" in out or "--eps" in out) else "boxes" if "--resolution" in out
+            else "slicing")  # the options of a method select it, as the command does
         key = ("dimension", method)
     added = ADDED.get(key, [])
     for opt, value in zip(added[::2], added[1::2]):

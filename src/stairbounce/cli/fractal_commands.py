@@ -1,5 +1,5 @@
-"""``stairbounce dimension``: fractal dimension of a border (Figs. 6 and 7), by the uncertainty
-exponent or by box counting of a scan, a picture or a tiled store."""
+"""``stairbounce dimension``: fractal dimension of a border (Figs. 6 and 7), by slicing, the
+uncertainty exponent or box counting of a scan, a picture or a tiled store."""
 
 from __future__ import annotations
 
@@ -107,6 +107,56 @@ def _print_estimate(result):
         typer.echo(warn)
 
 
+def _print_accounting(result, ew, uw, at_defaults, checked, which):
+    """The interval widened for the estimator's known bias, what it leaves
+    out, and in a window of the dimension study its shipped number, labelled,
+    with the command that recomputes it (issue 37)."""
+    blo, bhi = result.known_bias
+    lo, hi = result.bias_interval
+    where = ("measured at these settings" if at_defaults else
+             "measured at the default settings, not at these: a different bias may apply")
+    typer.echo(f"with the estimator's bias: [{lo:.4f}, {hi:.4f}]  (the interval above corrected for a "
+               f"bias of {blo:+.3f}..{bhi:+.3f} on sets of known dimension, {where}; "
+               "benchmarks/dimension_bias.py, docs/guide/dimension.md)")
+    if not checked:
+        typer.echo("left out: the effect of max_iter (--check-max-iter measures it at 4 x max_iter)")
+    study = _study_entry(ew, uw) if which == "sliding" else None
+    if study is not None:
+        name, entry, command = study
+        slo, shi = entry["ci95"][0] - entry.get("systematic", 0.0), entry["ci95"][1] + entry.get("systematic", 0.0)
+        typer.echo(f"the dimension study's number for this window ({name}, shipped with the package, not "
+                   f"recomputed here; {entry['method']}): D = {entry['dimension']:.4f} interval "
+                   f"[{slo:.4f}, {shi:.4f}] (noise and drift only{_study_bias(entry)}); recomputed by: {command}")
+
+
+def _study_bias(entry):
+    """``"; the uncertainty exponent's measured bias ... is not in it"`` for the study's estimator."""
+    from ..dimension.result import KNOWN_BIAS
+
+    key = next((k for k in KNOWN_BIAS if str(entry.get("method", "")).startswith(k)), None)
+    if key is None:
+        return ""
+    blo, bhi = KNOWN_BIAS[key]
+    return f"; the {key} estimator's measured bias {blo:+.3f}..{bhi:+.3f} is not in it"
+
+
+def _study_entry(ew, uw):
+    """``(name, entry, command)`` of the shipped dimension study when the
+    window is one of its windows, else None."""
+    from ..dimension import border_dimension_estimates
+    from ..figures import DIMENSION_WINDOWS
+
+    for name, ((e, u), _) in DIMENSION_WINDOWS.items():
+        if np.allclose([*ew, *uw], [*e, *u], rtol=0, atol=1e-12):
+            try:
+                study = border_dimension_estimates()
+            except (OSError, ValueError):
+                return None
+            if name in study:
+                return name, study[name], study.get("generated_by", "benchmarks/dimension_study.py")
+    return None
+
+
 def _strip(d, half, dim, width=41):
     """One row of the local-dimension curve as text: the range 1..2 in
     ``width`` characters, ``*`` at ``d``, ``-`` over ``d -+ half``, ``|`` at ``dim``."""
@@ -198,19 +248,20 @@ def dimension(
     u: str = typer.Option("0.4:0.733", "--u", help="Window along u, MIN:MAX (default: the paper's Fig. 6)."),
     method: str = typer.Option(
         None, "--method",
-        help="'uncertainty', 'slicing' or 'boxes'. 'slicing': crossings of the border along --lines random "
-             "lines refined down to 1e-10 of the window (--scales). Default: uncertainty for a window of the model (the uncertainty "
-             "exponent of random points: no picture, so no pixel scale to bias it, and its CI covers the "
-             "sampling noise; it agrees with box counting of 32768^2 px pictures: docs/guide/dimension-study.md), boxes for "
-             "--image and --store (pictures can only be box-counted). 'boxes' on a window scans a "
-             "--resolution picture: the paper's method (--fit-range 1:64 at 500 px gives its numbers)."),
-    resolution: int = typer.Option(512, "--resolution", help="Boxes: pixels along each axis of the scan (>= 8)."),
-    max_iter: int = typer.Option(1000, "--max-iter", help="Steps before a point counts as non-sliding (>= 1)."),
-    points: int = typer.Option(100_000, "--points", help="Uncertainty: random points (>= 100)."),
-    eps: str = typer.Option("1e-6:0.1:11", "--eps", help="Uncertainty: perturbations MIN:MAX:N, log-spaced fractions of the window."),
+        help="'slicing', 'uncertainty' or 'boxes'. Default: slicing for a window of the model (crossings of the "
+             "border along --lines random lines refined down to 1e-8 of the window, --scales: of the three, the "
+             "smallest bias on sets of known dimension, docs/guide/dimension.md; before 0.4 the default was "
+             "uncertainty), boxes for --image and --store (pictures can only be box-counted). 'uncertainty': the "
+             "uncertainty exponent of random points (reads high where thin tongues abound). 'boxes' on a window "
+             "scans a --resolution picture: the paper's method (--resolution 500 --fit-range 1:64 --max-iter 1000 "
+             "gives its numbers). Each prints its interval widened for the estimator's measured bias."),
+    resolution: int = typer.Option(None, "--resolution", help="Boxes: pixels along each axis of the scan (>= 8; default 2048, fitted over boxes of 4..64 px unless --fit-range; before 0.4: 512 with the automatic range)."),
+    max_iter: int = typer.Option(None, "--max-iter", help="Steps before a point counts as non-sliding (>= 1; default 4000 for uncertainty and slicing, 1000 for boxes; before 0.4: 1000)."),
+    points: int = typer.Option(None, "--points", help="Uncertainty: random points (>= 100; default 300000; before 0.4: 100000)."),
+    eps: str = typer.Option(None, "--eps", help="Uncertainty: perturbations MIN:MAX:N, log-spaced fractions of the window (default 1e-8:1e-4:9; before 0.4: 1e-6:0.1:11)."),
     seed: int = typer.Option(0, "--seed", help="Uncertainty, slicing: seed of the random points or lines (same seed, same answer)."),
-    lines: int = typer.Option(64, "--lines", help="Slicing: random lines (>= 1)."),
-    scales: str = typer.Option("1e-10:1e-2", "--scales", help="Slicing: smallest and largest box length along the lines, MIN:MAX fractions of the window."),
+    lines: int = typer.Option(None, "--lines", help="Slicing: random lines (>= 1; default 128; before 0.4: 64)."),
+    scales: str = typer.Option(None, "--scales", help="Slicing: smallest and largest box length along the lines, MIN:MAX fractions of the window (default 1e-8:1e-2, fitted over 1e-8..1e-4 unless --fit-range; before 0.4: 1e-10:1e-2, every level fitted)."),
     check_max_iter: bool = typer.Option(False, "--check-max-iter", help="A window of the model, any method: measure again at 4 x --max-iter and show, scale by scale, whether the local dimension moves (and where not to fit)."),
     image: Path = typer.Option(None, "--image", help="Measure the border of the region of this black-and-white picture instead of scanning."),
     store: Path = typer.Option(None, "--store", help="Measure the border in a finished tiled store (stairbounce scan --tile ... --out X.zarr), tile by tile: no memory limit."),
@@ -243,9 +294,35 @@ def dimension(
     if scheduler is not None and store is None:
         raise CLIError("--scheduler counts the tiles of a --store: give --store too")
     if method is None:
-        method = "boxes" if (image is not None or store is not None) else "uncertainty"
+        # the options of one method select it; none: slicing (issue 37; before, the uncertainty exponent)
+        if image is not None or store is not None or resolution is not None:
+            method = "boxes"
+        elif points is not None or eps is not None:
+            method = "uncertainty"
+        else:
+            method = "slicing"
     if method not in ("boxes", "uncertainty", "slicing"):
         raise CLIError(f"--method must be boxes, uncertainty or slicing, got {method!r}")
+    # the defaults for a window of the model: the package's best answer in about a minute
+    from ..dimension.perimeter import MODEL_DEFAULTS
+
+    best = MODEL_DEFAULTS[method]
+    at_defaults = fit_range is None and max_iter is None and {
+        "uncertainty": points is None and eps is None,
+        "slicing": lines is None and scales is None,
+        "boxes": resolution is None and offsets == 1 and connectivity == 4}[method]
+    default_fit = fit_range is None and (scales is None if method == "slicing" else resolution is None)
+    max_iter = best["max_iter"] if max_iter is None else max_iter
+    points = MODEL_DEFAULTS["uncertainty"]["n_points"] if points is None else points
+    lines = MODEL_DEFAULTS["slicing"]["n_lines"] if lines is None else lines
+    if method == "boxes" and image is None and store is None and default_fit:
+        fit_range = "{}:{}".format(*best["fit_range"])
+    if method == "slicing" and default_fit:
+        fit_range = "{}:{}".format(*best["fit_range"])
+    if resolution is None:
+        resolution = MODEL_DEFAULTS["boxes"]["resolution"]
+    if scales is None:
+        scales = "{}:{}".format(*MODEL_DEFAULTS["slicing"]["scales"])
     if method in ("uncertainty", "slicing") and (image is not None or store is not None):
         raise CLIError(f"--method {method} classifies points of the model: give a window (--e, --u), "
                        "not --image or --store")
@@ -262,7 +339,7 @@ def dimension(
     if method == "uncertainty":
         if points < 100:
             raise CLIError(f"--points must be an integer >= 100, got {points}")
-        eps_values = _parse_eps(eps)
+        eps_values = np.asarray(MODEL_DEFAULTS["uncertainty"]["eps"]) if eps is None else _parse_eps(eps)
         fr = None
         if fit_range is not None:
             fr = parse_range("fit-range", fit_range)
@@ -285,6 +362,7 @@ def dimension(
         )
         typer.echo(result.table())
         _print_estimate(result)
+        _print_accounting(result, ew, uw, at_defaults, check_max_iter, which)
         typer.echo(f"r = {result.r:.5f}; fit: eps {result.fit_range[0]:.3g}..{result.fit_range[1]:.3g} of the "
                    f"window, {result.fit.n} values, alpha = {result.alpha:.4f}, D = 2 - alpha (stderr "
                    f"binomial {result.stderr_binomial:.4f}, scatter about the line {result.stderr_fit:.4f})")
@@ -303,6 +381,9 @@ def dimension(
         fr = None
         if fit_range is not None:
             fr = parse_range("fit-range", fit_range)
+            if not (0 < fr[0] and fr[1] <= 0.25):
+                raise CLIError(f"--fit-range with --method slicing is box lengths MIN:MAX in (0, 0.25] "
+                               f"(fractions of the window), got {fit_range!r}")
         ew, uw = parse_range("e", e), parse_range("u", u)
 
         from ..dimension import sliding_classifier, slicing_dimension
@@ -325,6 +406,7 @@ def dimension(
         )
         typer.echo(result.table())
         _print_estimate(result)
+        _print_accounting(result, ew, uw, at_defaults, check_max_iter, which)
         # the same seed: the same lines
         compare = _measure_again(result, run, max_iter) if check_max_iter else ()
         if png is not None:
@@ -387,6 +469,8 @@ def dimension(
         used = fr
 
     _print_estimate(result)
+    if image is None and store is None:
+        _print_accounting(result, ew, uw, at_defaults, check_max_iter, which)
     typer.echo(f"r = {result.r:.5f}")
     auto = " (automatic: largest linear region, a heuristic)" if used is None else ""
     typer.echo(f"fit: boxes of {result.fit_range[0]}..{result.fit_range[1]} px, {result.fit.n} sizes{auto}")

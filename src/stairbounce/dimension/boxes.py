@@ -265,6 +265,7 @@ class BoxDimension(Estimate):
     """
 
     scale_unit = "px"
+    estimator = "boxes"
 
     dimension: float
     stderr: float

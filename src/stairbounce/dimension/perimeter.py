@@ -18,7 +18,7 @@ from .boxes import BoxDimension, box_dimension
 from .classifier import _WHICH, sliding_classifier
 from .uncertainty import uncertainty_dimension
 
-__all__ = ["PerimeterDimension", "perimeter_dimension"]
+__all__ = ["MODEL_DEFAULTS", "PerimeterDimension", "perimeter_dimension"]
 
 
 @dataclass(frozen=True)
@@ -58,11 +58,29 @@ def _check_window(name, window):
 
 
 # the parameters of box counting alone, and their defaults (None: not given)
-_BOX_DEFAULTS = dict(resolution=512, connectivity=4, sizes=None, offsets=1, reduce="mean", tol=0.1, min_boxes=32)
+_BOX_DEFAULTS = dict(resolution=2048, connectivity=4, sizes=None, offsets=1, reduce="mean", tol=0.1, min_boxes=32)
+
+#: The defaults of :func:`perimeter_dimension` and ``stairbounce dimension``
+#: for a window of the model, per method (issue 37): the package's best answer
+#: within about a minute on 2 cores (measured CPU time of one process in the Fig. 6
+#: window, the costliest: uncertainty 11.6 s, slicing 8.0 s, boxes 1.8 s; wall up
+#: to 99 s on the shared 2-core machine at load 23; docs/guide/dimension.md,
+#: "The defaults").  Fine scales, where the local dimension has stopped
+#: drifting (1e-8..1e-4 of the window), at ``max_iter`` 4000, which moves the
+#: local dimension there by at most about 0.02 against 16000 (the guide's table);
+#: a picture reaches only coarse scales, so box counting fits 2e-3..3e-2 of the
+#: window, clear of the pixel scale.  The defaults before issue 37 (``max_iter``
+#: 1000; 10^5 points at eps 1e-6..0.1; 64 lines fitted 1e-10..1e-2; 512 px with
+#: the automatic fit range) are reached by giving those values.
+MODEL_DEFAULTS = {
+    "uncertainty": dict(max_iter=4000, n_points=300_000, eps=tuple(np.logspace(-8.0, -4.0, 9))),
+    "slicing": dict(max_iter=4000, n_lines=128, scales=(1e-8, 1e-2), fit_range=(1e-8, 1e-4)),
+    "boxes": dict(max_iter=1000, resolution=2048, fit_range=(4, 64)),
+}
 
 
 def _method_and_boxes(method, counts, boxes):
-    """The method (None: the uncertainty exponent, unless parameters of box
+    """The method (None: slicing, unless parameters of box
     counting alone are given: then box counting, with a DeprecationWarning)
     and the box parameters with their defaults; box parameters or pixel
     counts given to another method are refused, never ignored."""
@@ -71,12 +89,12 @@ def _method_and_boxes(method, counts, boxes):
         if given:
             warnings.warn(
                 f"perimeter_dimension: {', '.join(given)} given without method: measured by box "
-                "counting as before, but the default method is now the uncertainty exponent (as "
+                "counting as before, but the default method is now slicing (as "
                 "on the command line); pass method='boxes' to keep box counting",
                 DeprecationWarning, stacklevel=3)
             method = "boxes"
         else:
-            method = "uncertainty"
+            method = "slicing"
     if method not in _METHODS:
         raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
     n_e, n_u = counts
@@ -130,7 +148,7 @@ def perimeter_dimension(
     e=(0.0, 0.333),
     u=(0.4, 0.733),
     resolution=None,
-    max_iter=1000,
+    max_iter=None,
     which="sliding",
     connectivity=None,
     sizes=None,
@@ -143,18 +161,31 @@ def perimeter_dimension(
     v0=0.0,
     progress=None,
     method=None,
-    n_points=100_000,
+    n_points=None,
     eps=None,
     seed=0,
     prune=True,
-    n_lines=64,
-    scales=(1e-10, 1e-2),
+    n_lines=None,
+    scales=None,
 ):
-    """perimeter_dimension(e=(0, 0.333), u=(0.4, 0.733), max_iter=1000, which="sliding", ..., method="uncertainty") -> UncertaintyDimension, PerimeterDimension or SlicingDimension
+    """perimeter_dimension(e=(0, 0.333), u=(0.4, 0.733), max_iter=None, which="sliding", ..., method="slicing") -> SlicingDimension, UncertaintyDimension, PerimeterDimension or SlicingDimension
 
     The dimension of the perimeter of the region of periodic sliding
     solutions in a window of the ``(e, u)`` plane (Section 3, Figs. 6 and 7),
-    by default the uncertainty exponent, as ``stairbounce dimension``.
+    by default slicing along random lines, as ``stairbounce dimension``:
+    of the three estimators it has the smallest bias on sets of known
+    dimension that resemble the border (-0.02 to 0.00 on Weierstrass graphs
+    of dimension 1.3 to 1.6, 0.00 on a sliver family, where the uncertainty
+    exponent reads up to 0.2 high; docs/guide/dimension.md, "Bias on sets of
+    known dimension"; issue 37).
+
+    Every default is the package's best answer within about a minute on 2
+    idle cores (``stairbounce.dimension.perimeter.MODEL_DEFAULTS``, issue 37): fine scales (1e-8..1e-4 of
+    the window) at ``max_iter`` 4000 for the uncertainty exponent and slicing,
+    a 2048 px picture fitted over 4..64 px for box counting.  The result's
+    :attr:`~stairbounce.dimension.result.Estimate.bias_interval` also covers
+    the estimator's bias measured on sets of known dimension
+    (``stairbounce.dimension.result.KNOWN_BIAS``).
 
     With ``method="boxes"``: scans the window on ``resolution x resolution`` pixel centres
     (:func:`stairbounce.plane.scan`; status 0: the orbit of ``(y0, v0)``
@@ -169,10 +200,15 @@ def perimeter_dimension(
         The window; default the paper's Fig. 6, ``[0, 0.333] x [0.4, 0.733]``.
         Fig. 7 is ``e=(0.155, 0.2138), u=(0.6, 0.658)``.  ``n`` (the same
         along both) is the pixel count of box counting, as ``resolution``.
-    resolution : int >= 8, default 512
-        Pixels along each axis (box counting only).
-    max_iter : int >= 1, default 1000
-        Steps of the Poincare map before a pixel counts as non-sliding.
+    resolution : int >= 8, default 2048
+        Pixels along each axis (box counting only).  With the default picture
+        and no ``fit_range`` or ``sizes``, boxes of 4..64 px are fitted
+        (2e-3..3e-2 of the window); a ``resolution`` given without
+        ``fit_range`` gets the automatic range (512: the default before 0.4).
+    max_iter : int >= 1, default None
+        Steps of the Poincare map before a pixel counts as non-sliding; None:
+        4000 for the uncertainty exponent and slicing, 1000 for box counting
+        (whose scales, above 1e-3 of the window, it does not move).
     which : "sliding" or "words", default "sliding"
         ``"sliding"``: the border of the sliding region (the paper's
         "perimeter").  ``"words"``: the borders between regions of different
@@ -191,8 +227,11 @@ def perimeter_dimension(
         Called after each band of rows of the scan (the scan then runs in
         bands of :func:`stairbounce.plane.scan_coords`, bit-identical to one
         call); for a progress bar.
-    method : "uncertainty", "boxes" or "slicing", default "uncertainty"
-        ``"uncertainty"`` (the default, as on the command line): the
+    method : "slicing", "uncertainty" or "boxes", default "slicing"
+        ``"slicing"`` (the default, as on the command line; before issue 37
+        the default was ``"uncertainty"``, still chosen when ``n_points`` or
+        ``eps`` is given without ``method``): see below.
+        ``"uncertainty"``: the
         uncertainty exponent of random points of the window
         (:func:`uncertainty_dimension` with :func:`sliding_classifier`; no
         picture, so ``resolution``, ``connectivity``, ``sizes``, ``offsets``,
@@ -209,10 +248,14 @@ def perimeter_dimension(
         is ``(scale_min, scale_max)``); returns a ``SlicingDimension``.
     n_points, eps, seed :
         Only for ``method="uncertainty"``: as in :func:`uncertainty_dimension`
-        (default 100_000 points, :data:`DEFAULT_EPS`, seed 0); ``seed`` also
+        (default 300_000 points at 9 eps from 1e-8 to 1e-4 of the window, seed
+        0; before 0.4: 100_000 points at :data:`DEFAULT_EPS`); ``seed`` also
         for ``method="slicing"``.
     n_lines, scales :
-        Only for ``method="slicing"`` (default 64 lines, 1e-10..1e-2).
+        Only for ``method="slicing"`` (default 128 lines refined from 1e-2 to
+        1e-8 of the window, fitted over 1e-8..1e-4 when neither ``scales`` nor
+        ``fit_range`` is given; before 0.4: 64 lines, 1e-10..1e-2, every
+        level fitted).
     prune : bool, default True
         As in :func:`stairbounce.plane.scan` (same answer; False iterates
         the pixels above the Corollary 2.1 curve too).
@@ -221,12 +264,26 @@ def perimeter_dimension(
     """
     e, n_e = _check_window("e", e)
     u, n_u = _check_window("u", u)
-    max_iter = check_count("max_iter", max_iter, 1)
     if which not in _WHICH:
         raise ValueError(f"which must be one of {_WHICH}, got {which!r}")
+    default_picture = resolution is None and n_e is None and n_u is None
+    if method is None and (n_points is not None or eps is not None):
+        method = "uncertainty"  # its own parameters select it, as before issue 37
     method, boxes = _method_and_boxes(method, (n_e, n_u), dict(
         resolution=resolution, connectivity=connectivity, sizes=sizes, offsets=offsets, reduce=reduce,
         tol=tol, min_boxes=min_boxes))
+    best = MODEL_DEFAULTS[method]
+    max_iter = check_count("max_iter", best["max_iter"] if max_iter is None else max_iter, 1)
+    if method == "boxes" and default_picture and fit_range is None and sizes is None:
+        fit_range = best["fit_range"]
+    if method == "slicing":
+        if scales is None and fit_range is None:
+            fit_range = best["fit_range"]
+        scales = best["scales"] if scales is None else scales
+        n_lines = best["n_lines"] if n_lines is None else n_lines
+    if method == "uncertainty":
+        n_points = best["n_points"] if n_points is None else n_points
+        eps = np.asarray(best["eps"]) if eps is None else eps
     resolution, connectivity, sizes, offsets, reduce, tol, min_boxes = (
         boxes[k] for k in ("resolution", "connectivity", "sizes", "offsets", "reduce", "tol", "min_boxes"))
     what = "sliding region" if which == "sliding" else "word-length regions"

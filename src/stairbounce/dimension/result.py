@@ -17,7 +17,29 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-__all__ = ["Estimate", "disagree"]
+__all__ = ["Estimate", "KNOWN_BIAS", "disagree"]
+
+#: The estimators' bias (estimate minus the exact box dimension): the lowest
+#: and the highest mean over 3 seeds, measured by ``benchmarks/dimension_bias.py``
+#: at the defaults for a window of the model
+#: (``stairbounce.dimension.perimeter.MODEL_DEFAULTS``) on sets of known
+#: dimension that resemble the border: graphs of Weierstrass functions of
+#: dimension 1.3, 1.5 and 1.6 (Kaplan, Mallet-Paret and Yorke 1984) and a family
+#: of slivers of widths 2^-6..2^-33 (dimension 1).  The noise of each estimate
+#: (its spread over seeds) is in its own interval; this is the bias beyond it.
+#: Slicing: -0.018..-0.006 on the graphs (crossings hidden below a box's samples),
+#: 0.000 on the slivers; the uncertainty exponent: -0.005..+0.007 on the graphs,
+#: +0.17 on the slivers (strips wider than eps count twice, thinner ones once);
+#: box counting of a 2048 px picture (scales 2e-3..3e-2): -0.19..-0.11 on the
+#: graphs, -0.03 on the slivers.  Table in docs/guide/dimension.md, "Bias on
+#: sets of known dimension"; measured at no other settings than these and the
+#: defaults before issue 37, and on no dimension above 1.6 (slicing reads 0.03-0.04
+#: low at 1.75, tests/test_slicing.py).
+KNOWN_BIAS = {
+    "slicing": (-0.02, 0.0),
+    "uncertainty": (-0.01, 0.17),
+    "boxes": (-0.20, -0.03),
+}
 
 
 class Estimate:
@@ -27,6 +49,8 @@ class Estimate:
 
     #: unit of :attr:`scales` (set by each result type)
     scale_unit = ""
+    #: which estimator, the key of :data:`KNOWN_BIAS` (set by each result type)
+    estimator = ""
 
     if TYPE_CHECKING:  # the fields each result type declares (for the type checker only)
         dimension: float
@@ -52,6 +76,22 @@ class Estimate:
         """The 95% interval widened on each side by :attr:`systematic`, the
         drift of the local slope across the fitted scales."""
         return (self.ci[0] - self.systematic, self.ci[1] + self.systematic)
+
+    @property
+    def known_bias(self) -> tuple[float, float]:
+        """``(lowest, highest)`` bias of this estimator on sets of known
+        dimension at the model's default settings (:data:`KNOWN_BIAS`)."""
+        return KNOWN_BIAS.get(self.estimator, (math.nan, math.nan))
+
+    @property
+    def bias_interval(self) -> tuple[float, float]:
+        """:attr:`interval` corrected for every bias in :attr:`known_bias`:
+        ``(interval[0] - highest, interval[1] - lowest)``; it covers the noise,
+        the drift across the fitted scales and the estimator's bias, not the
+        effect of ``max_iter`` (measure it: ``convergence.max_iter_check``)."""
+        lo, hi = self.interval
+        blo, bhi = self.known_bias
+        return (lo - bhi, hi - blo)
 
     def scales_text(self) -> str:
         lo, hi = self.scales

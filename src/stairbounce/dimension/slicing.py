@@ -74,6 +74,7 @@ class SlicingDimension(Estimate):
     """
 
     scale_unit = "of the window (box length along the lines)"
+    estimator = "slicing"
 
     dimension: float
     stderr: float

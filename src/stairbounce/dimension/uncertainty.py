@@ -270,6 +270,7 @@ class UncertaintyDimension(Estimate):
     """
 
     scale_unit = "of the window (eps)"
+    estimator = "uncertainty"
 
     dimension: float
     stderr: float
