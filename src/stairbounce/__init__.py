@@ -76,7 +76,7 @@ from .plane import (
 )
 from .plane import scan as _scan_function
 from .borders import bifurcations, border_points, itinerary, word_table
-from .cascades import Cascade, CascadeLaw, cascade, cascade_law, cascades
+from .cascades import Cascade, CascadeLaw, cascade, cascade_law, cascades, family_of
 from .regions import (
     BorderArc,
     BorderGraph,
@@ -214,6 +214,7 @@ __all__ = [
     "cascade",
     "cascade_law",
     "cascades",
+    "family_of",
     "prove_labels",
     "BorderTube",
     "border_tube",
