@@ -22,13 +22,10 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 import statistics
-import subprocess
-import sys
 import time
 
-_LOOPBACK = re.compile(r"^(https?|wss?)://(127\.0\.0\.1|localhost|\[::1\])[:/]")
+from explorer_first_picture import _LOOPBACK, _start_server  # same folder: run as a script
 
 _POLL_PREVIEW = """
 (() => {
@@ -43,19 +40,6 @@ _POLL_PREVIEW = """
 """
 
 HEAVY = "?e=0:1&u=0:1.5&size=1000x1000&max_iter=5000"
-
-
-def _start_server():
-    proc = subprocess.Popen([sys.executable, "-c", "from stairbounce.cli import main; main()",
-                             "explore", "--no-browser", "--port", "0"],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    url = None
-    for line in proc.stdout:
-        m = re.search(r"stairbounce explorer at (\S+) ", line)
-        url = url or (m.group(1) if m else None)
-        if "kernels ready" in line:
-            return proc, url
-    raise RuntimeError("the explorer did not start")
 
 
 def _new_page(browser):

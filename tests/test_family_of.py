@@ -18,7 +18,7 @@ import stairbounce as sb
     ((1, 1, 1), "(1^k, 0^inf)", 3),
     ((1, 0, 1, 0, 1, 1), "((1, 0)^k, 1, 1, 0^inf)", 2),  # ((1, 0), (1, 0), 1, 1, 0^inf)
     ("(1, 1, 1, 2, 0^inf)", "(1^k, 2, 0^inf)", 3),
-    ((3, 0, 0, 1), "(3, 0^k, 1, 0^inf)", 2),  # a block of zeros counts
+    ((3, 0, 0, 1, 1), "(3, 0, 0, 1^k, 0^inf)", 2),  # a block of zeros does not count
     ((2, 1, 2, 1, 2), "((2, 1)^k, 2, 0^inf)", 2),  # (2, 1)^2 from the first letter, not (1, 2)^2
     ((1, 1, 2, 1, 1, 2, 1, 1), "((1, 1, 2)^k, 1, 1, 0^inf)", 2),  # six letters beat 1^2's two
     ((2, 2, 3, 3), "(2^k, 3, 3, 0^inf)", 2),  # equal runs: the earlier one
@@ -34,7 +34,7 @@ def test_known_patterns(word, pattern, k):
     assert member == (sb.Word(word) if isinstance(word, tuple) else sb.parse_word(word))
 
 
-@pytest.mark.parametrize("word", [(2,), (1, 2), (3, 1, 2, 0, 1), "(2, 0^inf)", (2, 1, 3)])
+@pytest.mark.parametrize("word", [(2,), (1, 2), (3, 1, 2, 0, 1), "(2, 0^inf)", (2, 1, 3), (3, 0, 0, 1)])
 def test_no_repeated_block_is_none(word):
     assert sb.family_of(word) is None
 

@@ -1015,12 +1015,13 @@ def family_of(word) -> Family | None:
     exponent, so the word is member ``k`` of the family.
 
     The rule (a definition of the word's form, not a measurement): among the
-    runs ``X^m`` of the letters with ``m >= 2`` and ``X`` primitive (no power
-    of a shorter block), each run taken from its first letter as far as it
-    repeats, the one covering the most letters (``m * len(X)``); among equal
-    ones the shorter block, then the run that starts first.  A block of zeros
-    counts (``(3, 0, 0, 1)`` is ``(3, 0^k, 1, 0^inf)``, k = 2).  ``None`` when
-    no block repeats.
+    runs ``X^m`` of the letters with ``m >= 2``, ``X`` primitive (no power of a
+    shorter block) and with a jump (a block of zeros would raise the impacts
+    of one step, not a cascade of steps), each run taken from its first
+    letter as far as it repeats (the attachments :func:`cascades` finds
+    families by), the one covering the most letters (``m * len(X)``); among
+    equal ones the shorter block, then the run that starts first.  ``None``
+    when no such block repeats.
 
     Examples: ``(1, 1, 1, 0^inf)`` -> ``("(1^k, 0^inf)", 3)``;
     ``((1, 0), (1, 0), 1, 1, 0^inf)``, the letters (1, 0, 1, 0, 1, 1) ->
@@ -1039,23 +1040,8 @@ def family_of(word) -> Family | None:
     from .regions import _as_word
 
     letters = tuple(int(a) for a in _as_word(word).letters)
-    n = len(letters)
-    best = None  # (letters covered, -block length, -start), (prefix, block, suffix, m)
-    for b in range(1, n // 2 + 1):
-        i = 0
-        while i + 2 * b <= n:
-            x = letters[i:i + b]
-            m = 1
-            while letters[i + m * b:i + (m + 1) * b] == x:
-                m += 1
-            if m >= 2 and _primitive(x):
-                rank = (m * b, -b, -i)
-                if best is None or rank > best[0]:
-                    best = (rank, (letters[:i], x, letters[i + m * b:], m))
-                i += m * b
-            else:
-                i += 1
-    if best is None:
+    runs = _attachments(letters, len(letters) // 2)
+    if not runs:
         return None
-    prefix, block, suffix, m = best[1]
+    (prefix, block, suffix), m = max(runs, key=lambda r: (r[1] * len(r[0][1]), -len(r[0][1]), -len(r[0][0])))
     return Family(_pattern_text(prefix, block, suffix), m)

@@ -124,8 +124,14 @@ _OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bou
                     "proven: certified atlas (interval arithmetic)": "proven"}
 _OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u = (1-e)/(2\u221a(2e)), Cor. 2.1",
                    "borders": f"exact border points: {kinds_legend()}",
-                   "traced": f"traced border arcs: {kinds_legend(('graze', 'edge', 'chatter', 'window'))}",
+                   "traced": "traced border arcs, the exact curves between two words (sb.border_graph; hover "
+                             f"near one for its kind, step and both words): "
+                             f"{kinds_legend(('graze', 'edge', 'chatter', 'window'))}",
                    "proven": "certified atlas: proven boxes solid, undecided hatched (key below the map)"}
+
+# width (px) of the invisible copy of the traced arcs that carries their hover: the pointer
+# within half of it from an arc reports the arc
+ARC_HOVER_PX = 14
 
 # the traced arcs' colour on the window's sides (the other kinds: plot.borders.KIND_COLORS)
 _WINDOW_ARC_COLOR = KIND_COLOURS["window"]
@@ -368,8 +374,13 @@ class Explorer:
         # a white casing under each arc (same data) sets it off from the map's orange and red classes
         fig.multi_line("xs", "ys", source=self.arc_src, line_color="white", line_width=4, line_alpha=0.8)
         arcs = fig.multi_line("xs", "ys", source=self.arc_src, line_color="color", line_width=2)
-        fig.add_tools(HoverTool(renderers=[arcs], line_policy="interp", tooltips=[
-            ("traced border", "@kind at step @step"), ("low side", "@word_low"), ("high side", "@word_high")]))
+        # hovering near an arc reports it: the same arcs, invisible and ARC_HOVER_PX wide (Bokeh hit-tests
+        # a line within half its width), carry the hover
+        near = fig.multi_line("xs", "ys", source=self.arc_src, line_color="color", line_alpha=0.0,
+                              line_width=ARC_HOVER_PX, name="sb-arc-hover")
+        fig.add_tools(HoverTool(renderers=[near], line_policy="nearest", tooltips=[
+            ("traced border arc", "@kind at step @step"), ("word below / left", "@word_low"),
+            ("word above / right", "@word_high")]))
         self._overlay_items = {
             "tongues": LegendItem(label=_OVERLAY_LEGEND["tongues"], renderers=[tongues]),
             "no_sliding": LegendItem(label=_OVERLAY_LEGEND["no_sliding"], renderers=[bound]),
