@@ -211,9 +211,9 @@ def test_traced_mode_schedules_a_trace_a_new_view_cancels_it_and_arcs_replace_po
     assert "traced borders: 1 word (48 x 48 seeds)" in status and "chatter 1" in status
     assert f"{(kinds == 'chatter').sum()} of {kinds.size} border points replaced by arcs" in status
     assert "overlays=traced" in app.history_out.text
-    [legend] = [i.label.value for i in app.legend.items]
-    assert legend.startswith("traced border arcs, the exact curves between two words")
-    assert legend.endswith("graze violet, edge pink, chatter dark green, window grey")
+    assert [i.label.value for i in app.legend.items] == [
+        "traced borders between words: graze violet, edge pink, chatter dark green, window grey"]
+    assert app.arcs_note.visible and "Hover near an arc" in app.arcs_note.object
     # off: no arcs, no points, no job; on again: drawn from what was traced, no new job
     app.overlays.value = []
     assert app.arc_src.data["xs"] == [] and app.border_src.data["e"] == [] and not _borders_jobs(sched)
@@ -298,7 +298,9 @@ def test_hovering_near_a_traced_arc_reports_its_kind_step_and_both_words():
 
     from stairbounce.explorer import app as A
 
-    app = A.Explorer(V.View(0.0, 0.4, 0.3, 1.1, 60, 50, max_iter=300))
+    from stairbounce.explorer.scheduler import Scheduler
+
+    app = A.Explorer(V.View(0.0, 0.4, 0.3, 1.1, 60, 50, max_iter=300), scheduler=Scheduler(thread=False))
     hovers = [t for t in app.map_fig.tools if isinstance(t, HoverTool)
               and any(r.data_source is app.arc_src for r in (t.renderers or []) if hasattr(r, "data_source"))]
     assert len(hovers) == 1
@@ -311,4 +313,8 @@ def test_hovering_near_a_traced_arc_reports_its_kind_step_and_both_words():
     fields = " ".join(v for _, v in hovers[0].tooltips)
     for col in ("@kind", "@step", "@word_low", "@word_high"):
         assert col in fields
-    assert "hover near one for its kind, step and both words" in A._OVERLAY_LEGEND["traced"]
+    assert A._OVERLAY_LEGEND["traced"].startswith("traced borders between words:")
+    assert not app.arcs_note.visible  # said under the map while the arcs are on
+    app.overlays.value = ["traced"]
+    assert app.arcs_note.visible and "the exact borders between two words" in app.arcs_note.object
+    assert "the words on its two sides" in app.arcs_note.object

@@ -124,14 +124,18 @@ _OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bou
                     "proven: certified atlas (interval arithmetic)": "proven"}
 _OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u = (1-e)/(2\u221a(2e)), Cor. 2.1",
                    "borders": f"exact border points: {kinds_legend()}",
-                   "traced": "traced border arcs, the exact curves between two words (sb.border_graph; hover "
-                             f"near one for its kind, step and both words): "
-                             f"{kinds_legend(('graze', 'edge', 'chatter', 'window'))}",
+                   "traced": f"traced borders between words: {kinds_legend(('graze', 'edge', 'chatter', 'window'))}",
                    "proven": "certified atlas: proven boxes solid, undecided hatched (key below the map)"}
 
 # width (px) of the invisible copy of the traced arcs that carries their hover: the pointer
 # within half of it from an arc reports the arc
 ARC_HOVER_PX = 14
+
+# what the traced arcs are, under the map while they are drawn (the legend names their colours)
+_ARCS_NOTE = ('<span style="font-size:12px">Traced arcs: the exact borders between two words (the edges of '
+              "sb.border_graph of the view's traced regions), coloured by the event that changes the word "
+              f"({kinds_legend(('graze', 'edge', 'chatter'))}; the window's sides grey). Hover near an arc "
+              "for its kind, its step and the words on its two sides.</span>")
 
 # the traced arcs' colour on the window's sides (the other kinds: plot.borders.KIND_COLORS)
 _WINDOW_ARC_COLOR = KIND_COLOURS["window"]
@@ -304,7 +308,8 @@ class Explorer:
                 self.url_messages,
                 width=310,
             ),
-            pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note, self.proven_note),
+            pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note, self.arcs_note,
+                      self.proven_note),
             self.tap_panels,
             flex_wrap="wrap",
             align_items="flex-start",
@@ -481,6 +486,8 @@ class Explorer:
             css_classes=["sb-point"], width=700, margin=(0, 5))
         self.key_note = pn.pane.HTML(_key_note(v.color), css_classes=["sb-key-note"], width=700)
         self.proven_note = pn.pane.HTML("", css_classes=["sb-proven-note"], width=700, visible=False)
+        self.arcs_note = pn.pane.HTML(_ARCS_NOTE, css_classes=["sb-arcs-note"], width=700,
+                                      visible="traced" in v.overlays)
 
         self.color.param.watch(self._locked(self._on_color), "value")
         for w in (self.max_iter, self.width_in, self.height_in):
@@ -689,6 +696,7 @@ class Explorer:
             self._draw_borders(view)
             self._draw_proven(view)
         self.legend.items = [self._overlay_items[n] for n in OVERLAYS if n in view.overlays]
+        self.arcs_note.visible = "traced" in view.overlays
         self.legend.visible = bool(view.overlays)
 
     # ----------------------------------------------------------- proven boxes
@@ -1361,7 +1369,7 @@ def _proven_key_html(atlas, seconds):
                                      "#f66b19 75%)" if fill is None else fill, h=hcol)
         rows.append(f'<tr class="sb-proven-{name}"><td><span style="display:inline-block;width:22px;height:12px;'
                     f'border:1px solid #888;background:{bg}"></span></td><td>{html.escape(text)}</td>'
-                    f'<td style="text-align:right">{100 * shares.get(name, 0.0):.1f} %</td></tr>')
+                    f'<td style="text-align:right;white-space:nowrap">{100 * shares.get(name, 0.0):.1f} %</td></tr>')
     depth = atlas.depth
     return (f'<div style="font-size:12px"><b>Proven overlay</b>: the certified atlas of this view '
             f"(sb.certify, corners form, max_iter {atlas.max_iter}): an adaptive quadtree of boxes down to "
