@@ -105,19 +105,23 @@ def test_overlay_draws_the_atlas_in_the_scan_s_colours_with_its_key():
     note = app.proven_note.object
     assert app.proven_note.visible and "Undecided areas are numerical" in note
     assert f"depth {P.proven_depth(VIEW)}" in note and f"at least {P.MIN_BOX_PX} pixels" in note
-    # every pixel centre inside a proven word box has the scan's colour of the box's fill
-    rgba = V.shade(app.ds, VIEW.color)
+    # every pixel centre inside a proven word box has the scan's colour of the box's fill, in every
+    # colouring the overlay follows
     es, us = app.ds.e.values, app.ds.u.values
-    checked = 0
     labels = np.array(d["what"])
-    for b in np.flatnonzero(np.char.startswith(labels.astype(str), "proven word")):
-        cols = np.flatnonzero((es > d["left"][b]) & (es < d["right"][b]))
-        rows = np.flatnonzero((us > d["bottom"][b]) & (us < d["top"][b]))
-        if cols.size and rows.size:
-            want = V._rgba32((d["fill"][b],))[0]
-            assert np.all(rgba[np.ix_(rows, cols)] == want), labels[b]
-            checked += rows.size * cols.size
-    assert checked > 200
+    for var in ("word_length", "period", "status"):
+        app.color.value = var
+        d = app.proven_src.data
+        rgba = V.shade(app.ds, var)
+        checked = 0
+        for b in np.flatnonzero(np.char.startswith(labels.astype(str), "proven word")):
+            cols = np.flatnonzero((es > d["left"][b]) & (es < d["right"][b]))
+            rows = np.flatnonzero((us > d["bottom"][b]) & (us < d["top"][b]))
+            if cols.size and rows.size:
+                want = V._rgba32((d["fill"][b],))[0]
+                assert np.all(rgba[np.ix_(rows, cols)] == want), (var, labels[b])
+                checked += rows.size * cols.size
+        assert checked > 200
     # undecided boxes hatched by reason; the proven non-sliding ones marked
     kinds = {w.split(": ")[-1] for w in labels if w.startswith("undecided")}
     assert kinds and kinds <= set(P.STYLES)

@@ -356,6 +356,7 @@ class Explorer:
         proven = fig.quad(left="left", right="right", bottom="bottom", top="top", source=self.proven_src,
                           fill_color="fill", fill_alpha="alpha", line_color=None, hatch_pattern="hatch",
                           hatch_color="hatch_color", hatch_scale=7, hatch_weight=1.2)
+        fig.add_tools(HoverTool(renderers=[proven], tooltips=[("certified box", "@what")]))
         # the picture sent with the page's HTML (.preview) goes when the session's first pixels come
         self.img_src.js_on_change("data", CustomJS(code=REMOVE_JS))
         self.hover = HoverTool(renderers=[img], formatters={

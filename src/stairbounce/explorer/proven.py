@@ -165,10 +165,14 @@ def _labels(ds):
 
 def _word_colours(words, var):
     """The scan's colour of each word (ASCII text) for the colouring variable
-    ``var`` (a count; other variables colour by word length)."""
+    ``var``: a count's class colour, the "found" colour for ``status``, the
+    "slides" grey for a motion field."""
     from ..symbolic import parse_word
 
-    var = var if V.FIELDS.get(var, (None, None, None))[2] is not None else "word_length"
+    if var in V.MOTION_COLOR_VARS:
+        return [V.SLIDES_COLOR] * len(words)
+    if var == "status":
+        return [V.color_key("status").colors[0]] * len(words)
     distinct = sorted(set(words))
     parsed = [parse_word(w) for w in distinct]
     values = {"word_length": [len(w) for w in parsed], "period": [w.period for w in parsed],
