@@ -1372,7 +1372,7 @@ def _proven_key_html(atlas, seconds):
                     f'border:1px solid #888;background:{bg}"></span></td><td>{html.escape(text)}</td>'
                     f'<td style="text-align:right;white-space:nowrap">{100 * shares.get(name, 0.0):.1f} %</td></tr>')
     depth = atlas.depth
-    return (f'<div style="font-size:12px"><b>Proven overlay</b>: the certified atlas of this view '
+    return (f'<div class="sb-proven-key" style="font-size:12px"><b>Proven overlay</b>: the certified atlas of this view '
             f"(sb.certify, corners form, max_iter {atlas.max_iter}): an adaptive quadtree of boxes down to "
             f"window/2<sup>{depth}</sup> (depth {depth}, chosen from the view's size so that the smallest boxes "
             f"are at least {MIN_BOX_PX} pixels a side), computed in {seconds:.2f} s on the server. "

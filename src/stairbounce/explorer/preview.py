@@ -61,7 +61,7 @@ PREVIEW_ID = "sb-preview"
 # both; measured in Chromium (tests/test_explorer_browser.py checks both, so a
 # change of the page's layout, a widget more in the controls, says so there).
 _FRAME_SIDE = (392, 64)
-_FRAME_BELOW = (70, 648)
+_FRAME_BELOW = (70, 667)
 _SIDE_BY_SIDE_EXTRA = 180  # the colour bar and its labels right of the frame
 
 # Run in the browser by the map's image source on its first data: the
