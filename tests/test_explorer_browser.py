@@ -658,7 +658,7 @@ def test_traced_borders_mode_draws_the_arcs(server, page):
     page.goto(server.url + "?e=0.6:0.8&u=0.05:0.2&size=200x150&max_iter=300&overlays=none")
     _wait_rendered(page)
     boxes = page.locator(".sb-overlays input")
-    assert boxes.count() == 4
+    assert boxes.count() == 5
     boxes.nth(3).check()
     line = page.locator(".sb-status .sb-trace").get_by_text("traced borders: 1 word")
     line.wait_for(timeout=60_000)
@@ -680,3 +680,34 @@ def test_traced_borders_mode_draws_the_arcs(server, page):
     i = arcs["kind"].index("chatter")
     assert arcs["points"][i] > 5 and arcs["low"][i] == "(1, 0^inf)"
     page.screenshot(path=str(ARTIFACTS / "explorer-traced.png"))
+
+
+def test_proven_overlay_draws_the_certified_atlas_and_its_key(server, page):
+    """Issue 36 item 8: the "proven" overlay, turned on in the Fig. 7 window,
+    draws the certified atlas's boxes (the page's Bokeh model, read in the
+    browser: as many quads as the status line counts boxes, proven words and
+    hatched undecided ones), shows its key saying that undecided areas are
+    numerical, and puts the mode in the URL."""
+    page.goto(server.url + "?e=0.155:0.2138&u=0.6:0.658&size=128x128&max_iter=300&overlays=none")
+    _wait_rendered(page)
+    page.locator(".sb-overlays input").nth(4).check()
+    line = page.locator(".sb-status .sb-proven").get_by_text("certified in")
+    line.wait_for(timeout=60_000)
+    n = int(re.search(r"proven overlay: (\d+) boxes to depth 6", line.inner_text()).group(1))
+    assert _query(page)["overlays"] == "proven"
+    boxes = page.evaluate(
+        """() => {
+            for (const doc of Bokeh.documents) {
+              const m = doc.get_model_by_name('sb-proven-boxes');
+              if (m == null) continue;
+              const d = m.data instanceof Map ? Object.fromEntries(m.data) : m.data;
+              return {n: d.left.length, hatch: Array.from(d.hatch), what: Array.from(d.what)};
+            }
+            return null;
+        }"""
+    )
+    assert boxes is not None and boxes["n"] == n > 100
+    assert any(w.startswith("proven word") for w in boxes["what"]) and "/" in boxes["hatch"]
+    key = page.locator(".sb-proven-key").get_by_text("Undecided areas are numerical")
+    key.wait_for(timeout=10_000)
+    page.screenshot(path=str(ARTIFACTS / "explorer-proven.png"))

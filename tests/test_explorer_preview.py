@@ -118,3 +118,44 @@ def test_the_narrow_layout_rule_follows_the_view_width():
     snippet = pv.preview_html(view, b"png")
     side = pv._FRAME_SIDE[0] + 300 + pv._SIDE_BY_SIDE_EXTRA
     assert f"@media (max-width:{side}px)" in snippet
+
+
+def test_beside_a_long_render_the_preview_takes_its_turn_and_is_not_skipped():
+    """Issue 37: a page opened while another session's long render keeps the
+    worker busy went without its preview (its budget counted the wait for the
+    slice under way).  The preview is placed on the fair scheduler ahead of
+    the render's remaining slices (its page is a new, idle session) and the
+    page waits for that turn; its budget counts its own computation.  The
+    worker here is run by the test: the wait before the preview's turn is
+    made longer than its budget, deterministically."""
+    sched = Scheduler(thread=False, name="preview-busy")
+    other = object()
+
+    def long_render():  # another session's render, many slices
+        for _ in range(100):
+            time.sleep(0.06)
+            yield None
+
+    sched.submit(other, "render", long_render())
+    for _ in range(10):  # under way: 0.6 s of that session's compute, over the scheduler's quantum
+        sched.run_next()
+
+    async def page():
+        task = asyncio.create_task(pv.page_preview(_query(size="50x50"), sched, budget=1.0, turn=60.0))
+        await asyncio.sleep(1.5)  # the slice under way outlasts the preview's budget: not a reason to skip it
+        assert not task.done() and sched.busy()
+        assert sched._pick().kind == "preview"  # its place: next, before the render's remaining slices
+        while not task.done():
+            await asyncio.to_thread(sched.run_next)
+            await asyncio.sleep(0.01)
+        return task.result()
+
+    snippet = asyncio.run(page())
+    assert 'id="sb-preview"' in snippet
+    assert [j.kind for j in sched._jobs] == ["render"]  # the long render goes on afterwards
+
+
+def test_a_preview_that_gets_no_turn_is_cancelled_and_the_page_goes_without():
+    sched = Scheduler(thread=False, name="preview-no-turn")  # nothing runs: the worker never frees
+    snippet = asyncio.run(pv.page_preview(_query(size="50x50"), sched, budget=30.0, turn=0.2))
+    assert snippet == "" and not sched.busy()  # the job was dropped with the page's wait

@@ -211,7 +211,9 @@ def test_traced_mode_schedules_a_trace_a_new_view_cancels_it_and_arcs_replace_po
     assert "traced borders: 1 word (48 x 48 seeds)" in status and "chatter 1" in status
     assert f"{(kinds == 'chatter').sum()} of {kinds.size} border points replaced by arcs" in status
     assert "overlays=traced" in app.history_out.text
-    assert [i.label.value for i in app.legend.items] == ["traced border arcs: graze violet, edge pink, chatter dark green, window grey"]
+    assert [i.label.value for i in app.legend.items] == [
+        "traced borders between words: graze violet, edge pink, chatter dark green, window grey"]
+    assert app.arcs_note.visible and "Hover near an arc" in app.arcs_note.object
     # off: no arcs, no points, no job; on again: drawn from what was traced, no new job
     app.overlays.value = []
     assert app.arc_src.data["xs"] == [] and app.border_src.data["e"] == [] and not _borders_jobs(sched)
@@ -283,3 +285,36 @@ def test_png_export_draws_the_traced_arcs():
     red = [np.sum(np.all(np.asarray(Image.open(io.BytesIO(b)).convert("RGB"))[..., :3] == chatter, axis=-1))
            for b in (with_arcs, without)]
     assert red[0] > red[1] + 50
+
+
+def test_hovering_near_a_traced_arc_reports_its_kind_step_and_both_words():
+    """Issue 37: the arcs' hover answered only with the pointer exactly on a
+    2 px line.  An invisible copy of the arcs, ARC_HOVER_PX wide (Bokeh
+    hit-tests a line within half its width), carries a hover naming the
+    arc's kind and step and the words on its two sides, from the same data
+    as the drawn arcs; the legend says what the arcs are."""
+    pytest.importorskip("panel", reason="panel is in the web extra")
+    from bokeh.models import HoverTool, MultiLine
+
+    from stairbounce.explorer import app as A
+
+    from stairbounce.explorer.scheduler import Scheduler
+
+    app = A.Explorer(V.View(0.0, 0.4, 0.3, 1.1, 60, 50, max_iter=300), scheduler=Scheduler(thread=False))
+    hovers = [t for t in app.map_fig.tools if isinstance(t, HoverTool)
+              and any(r.data_source is app.arc_src for r in (t.renderers or []) if hasattr(r, "data_source"))]
+    assert len(hovers) == 1
+    [r] = hovers[0].renderers
+    glyph = r.glyph
+    assert isinstance(glyph, MultiLine) and glyph.line_alpha == 0.0 and glyph.line_width == A.ARC_HOVER_PX >= 10
+    drawn = [x.glyph for x in app.map_fig.renderers if getattr(x, "data_source", None) is app.arc_src
+             and x.glyph.line_alpha != 0.0 and x.glyph.line_color == "color"]
+    assert drawn and all(A.ARC_HOVER_PX >= 5 * g.line_width for g in drawn)  # the pointer may be off the line
+    fields = " ".join(v for _, v in hovers[0].tooltips)
+    for col in ("@kind", "@step", "@word_low", "@word_high"):
+        assert col in fields
+    assert A._OVERLAY_LEGEND["traced"].startswith("traced borders between words:")
+    assert not app.arcs_note.visible  # said under the map while the arcs are on
+    app.overlays.value = ["traced"]
+    assert app.arcs_note.visible and "the exact borders between two words" in app.arcs_note.object
+    assert "the words on its two sides" in app.arcs_note.object

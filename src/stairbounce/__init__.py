@@ -75,7 +75,7 @@ from .plane import (
     tongue_mask,
 )
 from .plane import scan as _scan_function
-from .cascades import Cascade, CascadeLaw, cascade, cascade_law, cascades
+from .cascades import Cascade, CascadeLaw, cascade, cascade_law, cascades, family_of
 from .structure.bifurcations import bifurcations
 from .structure.borders import border_points, word_table
 from .structure.checks import band_similarity
@@ -207,6 +207,7 @@ __all__ = [
     "cascade",
     "cascade_law",
     "cascades",
+    "family_of",
     "prove_labels",
     "BorderTube",
     "border_tube",

@@ -54,7 +54,7 @@ from .structure.itinerary import KINDS
 from .model import SLIDING, check_count, check_e, check_u, no_sliding_bound
 from .symbolic import Word, sliding_word
 
-__all__ = ["Cascade", "CascadeLaw", "cascade", "cascade_law", "cascades"]
+__all__ = ["Cascade", "CascadeLaw", "cascade", "cascade_law", "cascades", "family_of"]
 
 # longest pattern text read, and most letters a member may have (memory and time
 # grow with them; a million letters is far beyond any cascade on a line)
@@ -979,3 +979,70 @@ def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_ma
             "exponent_hi", "ratio", "ratio_lo", "ratio_hi", "limit_lo", "limit_hi", "limit_name"]
     out = pd.DataFrame(rows, columns=cols)
     return out.sort_values(["members", "seen"], ascending=False, kind="stable").reset_index(drop=True)
+
+
+# --------------------------------------------------------------------------- #
+# The family of one word                                                      #
+# --------------------------------------------------------------------------- #
+
+
+class Family(tuple):
+    """``(pattern, k)``: a word's family as :func:`family_of` names it."""
+
+    __slots__ = ()
+
+    def __new__(cls, pattern: str, k: int):
+        return super().__new__(cls, (pattern, k))
+
+    @property
+    def pattern(self) -> str:
+        return self[0]
+
+    @property
+    def k(self) -> int:
+        return self[1]
+
+    def __repr__(self) -> str:
+        return f"Family(pattern={self[0]!r}, k={self[1]})"
+
+
+def family_of(word) -> Family | None:
+    """family_of(word) -> Family(pattern, k) or None
+
+    The family a word belongs to by its form, written as a pattern that
+    :func:`cascade` reads: the word's letters ``P + X^k + S`` with the run
+    ``X^k`` of a repeated block chosen by the rule below, as
+    ``"(P, X^k, S, 0^inf)"`` in the paper's notation; ``k`` is the word's
+    exponent, so the word is member ``k`` of the family.
+
+    The rule (a definition of the word's form, not a measurement): among the
+    runs ``X^m`` of the letters with ``m >= 2``, ``X`` primitive (no power of a
+    shorter block) and with a jump (a block of zeros would raise the impacts
+    of one step, not a cascade of steps), each run taken from its first
+    letter as far as it repeats (the attachments :func:`cascades` finds
+    families by), the one covering the most letters (``m * len(X)``); among
+    equal ones the shorter block, then the run that starts first.  ``None``
+    when no such block repeats.
+
+    Examples: ``(1, 1, 1, 0^inf)`` -> ``("(1^k, 0^inf)", 3)``;
+    ``((1, 0), (1, 0), 1, 1, 0^inf)``, the letters (1, 0, 1, 0, 1, 1) ->
+    ``("((1, 0)^k, 1, 1, 0^inf)", 2)`` (the run (1, 0)^2 covers four letters,
+    1^2 two); ``(2, 0^inf)`` -> None.
+
+    Parameters
+    ----------
+    word : Word, a sequence of letters or its text (``"(1, 1, 1, 0^inf)"``)
+
+    Returns
+    -------
+    Family or None
+        A named pair: ``pattern`` (str) and ``k`` (int >= 2).
+    """
+    from .regions import _as_word
+
+    letters = tuple(int(a) for a in _as_word(word).letters)
+    runs = _attachments(letters, len(letters) // 2)
+    if not runs:
+        return None
+    (prefix, block, suffix), m = max(runs, key=lambda r: (r[1] * len(r[0][1]), -len(r[0][1]), -len(r[0][0])))
+    return Family(_pattern_text(prefix, block, suffix), m)

@@ -53,6 +53,7 @@ from panel.io.state import set_curdoc
 from .._colours import KIND_COLOURS, kinds_legend
 from .export import export_name, view_netcdf, view_png
 from .preview import REMOVE_JS
+from .proven import MIN_BOX_PX, STYLES, proven_at, proven_depth, proven_overlay, proven_slices, proven_summary
 from .scheduler import Scheduler
 from .view import (
     DEFAULT_VIEW,
@@ -119,10 +120,22 @@ _PREVIEW_AFTER = 0.25
 _COLOR_OPTIONS = {menu: var for var, (menu, _, _) in FIELDS.items()}
 _OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bound, Cor. 2.1": "no_sliding",
                     "exact borders (graze, edge, chatter)": "borders",
-                    "exact borders as traced arcs (seconds)": "traced"}
+                    "exact borders as traced arcs (seconds)": "traced",
+                    "proven: certified atlas (interval arithmetic)": "proven"}
 _OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u = (1-e)/(2\u221a(2e)), Cor. 2.1",
                    "borders": f"exact border points: {kinds_legend()}",
-                   "traced": f"traced border arcs: {kinds_legend(('graze', 'edge', 'chatter', 'window'))}"}
+                   "traced": f"traced borders between words: {kinds_legend(('graze', 'edge', 'chatter', 'window'))}",
+                   "proven": "certified atlas: proven boxes solid, undecided hatched (key below the map)"}
+
+# width (px) of the invisible copy of the traced arcs that carries their hover: the pointer
+# within half of it from an arc reports the arc
+ARC_HOVER_PX = 14
+
+# what the traced arcs are, under the map while they are drawn (the legend names their colours)
+_ARCS_NOTE = ('<span style="font-size:12px">Traced arcs: the exact borders between two words (the edges of '
+              "sb.border_graph of the view's traced regions), coloured by the event that changes the word "
+              f"({kinds_legend(('graze', 'edge', 'chatter'))}; the window's sides grey). Hover near an arc "
+              "for its kind, its step and the words on its two sides.</span>")
 
 # the traced arcs' colour on the window's sides (the other kinds: plot.borders.KIND_COLORS)
 _WINDOW_ARC_COLOR = KIND_COLOURS["window"]
@@ -241,6 +254,14 @@ class Explorer:
         self._borders_want = (None, None)
         self._borders_gen = 0
         self._trace_text, self._trace_level = "", "busy"
+        # the certified atlas last computed: (proven key, CertifiedAtlas, seconds); the one wanted; its line
+        self._proven = None
+        self._proven_want = None
+        self._proven_gen = 0
+        self._proven_text, self._proven_level = "", "busy"
+        # the tap's pane: word lines, the certificate's line, the non-sliding motion's table
+        self._cert_html, self._motion_html = "", ""
+        self._cert_gen = -1  # the tap whose certificate is shown
         self._syncing = False
         self._closed = False
         self._connected = False
@@ -287,7 +308,8 @@ class Explorer:
                 self.url_messages,
                 width=310,
             ),
-            pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note),
+            pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note, self.arcs_note,
+                      self.proven_note),
             self.tap_panels,
             flex_wrap="wrap",
             align_items="flex-start",
@@ -327,6 +349,14 @@ class Explorer:
                  x=[v.e_lo], y=[v.u_lo], dw=[v.e_hi - v.e_lo], dh=[v.u_hi - v.u_lo])
         )
         img = fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.img_src)
+        # the certified atlas (overlay "proven", explorer/proven.py): one quad per box, over the
+        # picture and under the curves; named for the browser tests
+        self.proven_src = ColumnDataSource(dict(left=[], right=[], bottom=[], top=[], fill=[], alpha=[], hatch=[],
+                                                hatch_color=[], what=[]), name="sb-proven-boxes")
+        proven = fig.quad(left="left", right="right", bottom="bottom", top="top", source=self.proven_src,
+                          fill_color="fill", fill_alpha="alpha", line_color=None, hatch_pattern="hatch",
+                          hatch_color="hatch_color", hatch_scale=7, hatch_weight=1.2)
+        fig.add_tools(HoverTool(renderers=[proven], tooltips=[("certified box", "@what")]))
         # the picture sent with the page's HTML (.preview) goes when the session's first pixels come
         self.img_src.js_on_change("data", CustomJS(code=REMOVE_JS))
         self.hover = HoverTool(renderers=[img], formatters={
@@ -350,13 +380,19 @@ class Explorer:
         # a white casing under each arc (same data) sets it off from the map's orange and red classes
         fig.multi_line("xs", "ys", source=self.arc_src, line_color="white", line_width=4, line_alpha=0.8)
         arcs = fig.multi_line("xs", "ys", source=self.arc_src, line_color="color", line_width=2)
-        fig.add_tools(HoverTool(renderers=[arcs], line_policy="interp", tooltips=[
-            ("traced border", "@kind at step @step"), ("low side", "@word_low"), ("high side", "@word_high")]))
+        # hovering near an arc reports it: the same arcs, invisible and ARC_HOVER_PX wide (Bokeh hit-tests
+        # a line within half its width), carry the hover
+        near = fig.multi_line("xs", "ys", source=self.arc_src, line_color="color", line_alpha=0.0,
+                              line_width=ARC_HOVER_PX, name="sb-arc-hover")
+        fig.add_tools(HoverTool(renderers=[near], line_policy="nearest", tooltips=[
+            ("traced border arc", "@kind at step @step"), ("word below / left", "@word_low"),
+            ("word above / right", "@word_high")]))
         self._overlay_items = {
             "tongues": LegendItem(label=_OVERLAY_LEGEND["tongues"], renderers=[tongues]),
             "no_sliding": LegendItem(label=_OVERLAY_LEGEND["no_sliding"], renderers=[bound]),
             "borders": LegendItem(label=_OVERLAY_LEGEND["borders"], renderers=[borders]),
             "traced": LegendItem(label=_OVERLAY_LEGEND["traced"], renderers=[arcs]),
+            "proven": LegendItem(label=_OVERLAY_LEGEND["proven"], renderers=[proven]),
         }
         self.legend = Legend(items=[], orientation="horizontal", label_text_font_size="9pt",
                              border_line_alpha=0)
@@ -450,6 +486,9 @@ class Explorer:
             "<i>Tap a point of the map for its word; its trajectory and orbit diagram follow.</i>",
             css_classes=["sb-point"], width=700, margin=(0, 5))
         self.key_note = pn.pane.HTML(_key_note(v.color), css_classes=["sb-key-note"], width=700)
+        self.proven_note = pn.pane.HTML("", css_classes=["sb-proven-note"], width=700, visible=False)
+        self.arcs_note = pn.pane.HTML(_ARCS_NOTE, css_classes=["sb-arcs-note"], width=700,
+                                      visible="traced" in v.overlays)
 
         self.color.param.watch(self._locked(self._on_color), "value")
         for w in (self.max_iter, self.width_in, self.height_in):
@@ -515,7 +554,7 @@ class Explorer:
     def _show_status(self):
         colours = {"info": "#1a5e1a", "busy": "#555555", "error": "#b00020", "warning": "#8a5a00"}
         parts = [(self._status_level, self._status_text, ""), (self._trace_level, self._trace_text, " sb-trace"),
-                 ("error", self._error_text, "")]
+                 (self._proven_level, self._proven_text, " sb-proven"), ("error", self._error_text, "")]
         self.status.object = "<br>".join(
             f'<span class="sb-{lv}{extra}" style="color:{colours[lv]}">{html.escape(t)}</span>'
             for lv, t, extra in parts if t
@@ -633,6 +672,8 @@ class Explorer:
             # window with them (superseding one in progress without them)
             self._request(self.view, history=None)
         self._set_hover(self.shown or self.view)
+        if self._proven is not None and self._proven[0] == self._proven_want:  # the atlas's words recoloured
+            self._show_proven(self._proven[1:])
 
     def _on_color(self, _event):
         if self._syncing or self.color.value == self.view.color:
@@ -654,8 +695,88 @@ class Explorer:
             src.data = dict(xs=list(xs), ys=list(ys))
         if borders:
             self._draw_borders(view)
+            self._draw_proven(view)
         self.legend.items = [self._overlay_items[n] for n in OVERLAYS if n in view.overlays]
+        self.arcs_note.visible = "traced" in view.overlays
         self.legend.visible = bool(view.overlays)
+
+    # ----------------------------------------------------------- proven boxes
+
+    def _draw_proven(self, view):
+        """The certified atlas of the view when the "proven" overlay is on
+        (proven.proven_slices: sb.certify of the view's window, boxes at
+        least MIN_BOX_PX pixels a side, the view's max_iter), one "proven"
+        job on the scheduler in bounded slices; a view with another atlas
+        supersedes the job under way, one already computed is drawn at once."""
+        key = _proven_key(view) if "proven" in view.overlays else None
+        if key == self._proven_want:
+            return  # drawn, or being computed
+        self._proven_want = key
+        self._proven_gen += 1
+        gen = self._proven_gen
+        done = self._proven if key is not None and self._proven is not None and self._proven[0] == key else None
+        self._show_proven(None if done is None else done[1:])
+        if key is None or done is not None:
+            self._sched.cancel(self, "proven")
+            self._proven_message("" if done is None else _proven_line(*done[1:]), "info")
+            return
+        depth = proven_depth(view)
+        self._proven_message(f"certifying the view: quadtree to depth {depth} ...", "busy")
+        last = [0.0]  # when progress was last sent (worker thread)
+
+        def on_slice(value):
+            now = time.monotonic()
+            if now - last[0] >= _TRACE_PROGRESS_EVERY:
+                last[0] = now
+                self._next_tick(self._proven_progress, gen, value)
+
+        self._sched.submit(
+            self, "proven", proven_slices(view), on_slice=on_slice,
+            on_done=lambda result, error, job: self._next_tick(self._proven_done, gen, key, result, error, job),
+            alive=self._alive,
+        )
+
+    def _proven_message(self, text, level="busy"):
+        self._proven_text, self._proven_level = text, level
+        self._show_status()
+
+    def _proven_progress(self, gen, value):
+        if gen != self._proven_gen:
+            return
+        stage, done, total = value
+        self._proven_message(f"certifying the view: level {done} of {total} of the quadtree ..." if stage == "level"
+                             else f"certifying the view: the itineraries of {done} of {total} boxes ...")
+
+    def _proven_done(self, gen, key, atlas, error, job):
+        if gen != self._proven_gen:
+            return
+        if error is not None:
+            self._proven_message(f"certifying the view failed: {error}", "error")
+            return
+        self._proven = (key, atlas, job.attained)
+        self._show_proven((atlas, job.attained))
+        self._proven_message(_proven_line(atlas, job.attained), "info")
+        point = self.view.point
+        if point is not None and "proven" in self.view.overlays:
+            # the tap waiting for the atlas: its certificate now
+            gen_tap, view = self._tap_gen, self.view
+            self._sched.submit(
+                self, "certificate", _certificate_work(atlas, *point),
+                on_done=lambda d, err, _job: None if err is not None else self._next_tick(
+                    self._show_certificate, gen_tap, view, d),
+                alive=self._alive)
+
+    def _show_proven(self, done):
+        """Draw the atlas (``(atlas, seconds)``, or None: nothing) and its key."""
+        if done is None:
+            self.proven_src.data = dict(left=[], right=[], bottom=[], top=[], fill=[], alpha=[], hatch=[],
+                                        hatch_color=[], what=[])
+            self.proven_note.visible = False
+            return
+        atlas, seconds = done
+        self.proven_src.data = proven_overlay(atlas, self.view.color)
+        self.proven_note.object = _proven_key_html(atlas, seconds)
+        self.proven_note.visible = True
 
     # ---------------------------------------------------------- exact borders
 
@@ -883,6 +1004,7 @@ class Explorer:
         if gen == self._gen and job.started is False:
             self._message(self._waiting_text(view, job), "busy")
         self._draw_borders(view)  # queued after the render: the picture comes first
+        self._draw_proven(view)
 
     def _waiting_text(self, view, job):
         what = f"{view.width} x {view.height} pixels, max_iter {view.max_iter}"
@@ -1051,16 +1173,20 @@ class Explorer:
         scan = (self.ds if shown is not None and self.ds is not None and _border_key(shown) == _border_key(view)
                 and (shown.width, shown.height) == (view.width, view.height)
                 and max(view.width, view.height) <= BORDER_SIDE else None)
+        atlas = self._atlas_of(view)
         self._sched.submit(
-            self, "point", self._point_work(e, u, view, points, table, scan),
+            self, "point", self._point_work(e, u, view, points, table, scan, atlas),
             on_slice=lambda d: None if isinstance(d, tuple) else self._next_tick(
-                self._show_word_row if "word_row" in d else self._show_point, gen, view, d),
+                self._show_word_row if "word_row" in d else
+                self._show_certificate if "certificate" in d else self._show_point, gen, view, d),
             on_done=lambda result, error, _job: self._next_tick(self._show_orbit, gen, view, result, error),
             alive=self._alive,
         )
 
-    def _point_work(self, e, u, view, points=None, table=None, scan=None):
-        """Slices: the word and trajectory (shown at once); for a sliding point
+    def _point_work(self, e, u, view, points=None, table=None, scan=None, atlas=None):
+        """Slices: the word and trajectory (shown at once); with the view's
+        certified atlas (``atlas``, the "proven" overlay), the certificate of
+        its box at the point, re-verified (proven.proven_at); for a sliding point
         its row of the view's word table (view.word_row, on a grid of at most
         BORDER_SIDE x BORDER_SIDE pixels; ``points``: that grid's border points
         when the overlay has them, ``table``: its word table when a previous
@@ -1068,6 +1194,8 @@ class Explorer:
         then the orbit diagram."""
         details = point_details(e, u, view.max_iter, max_steps=MAX_TRAJECTORY_STEPS)
         yield details
+        if atlas is not None:
+            yield {"certificate": proven_at(atlas, e, u), "depth": atlas.depth}
         if details["word"] is not None:
             text = details["word"].format(ascii=True)
             # in slices of bounded work (their progress tuples are not shown)
@@ -1099,6 +1227,10 @@ class Explorer:
                     f"(plus the accumulation), {_plural(w.jumps, 'non-zero letter')}")
             shown = "one full period" if steps >= w.period else f"first {steps} steps of the period"
             title = f"trajectory from (1, 0), {_plural(steps, 'step')}: {shown} (period {w.period})"
+        family = d.get("family")
+        if family is not None:
+            body += (f'<br><span class="sb-family">family {html.escape(family.pattern)}, member k = {family.k}'
+                     "</span> (the word's form: its longest run of a repeated block, sb.family_of)")
         if w is None:
             body += '<br><span class="sb-row">its row of the word table: none within max_iter (no row)</span>'
         else:
@@ -1106,7 +1238,14 @@ class Explorer:
             body += (f'<br><span class="sb-row"><i>its row of the word table of this view '
                      f"({n_e} x {n_u} pixels): computing ...</i></span>")
         self._point_text = head + body
-        self.point_pane.object = head + body + _motion_table(d.get("motion"))
+        self._motion_html = _motion_table(d.get("motion"))
+        if self._cert_gen != gen:  # this tap's certificate is not shown yet
+            self._cert_html = ("" if "proven" not in view.overlays else
+                               '<br><span class="sb-cert"><i>certificate: computing ...</i></span>'
+                               if self._atlas_of(view) is not None else
+                               '<br><span class="sb-cert"><i>certificate: the proven overlay is being computed; '
+                               "it shows here when done</i></span>")
+        self._refresh_point()
         sec = d.get("section")
         self.section_src.data = dict(x=sec[0], y=sec[1]) if sec is not None else dict(x=[], y=[])
         self.section_fig.title.text = (f"Poincare section at e = {e:.6g}, u = {u:.6g}: last "
@@ -1130,7 +1269,24 @@ class Explorer:
             return
         head = self._point_text.split('<br><span class="sb-row">')[0]
         self._point_text = head + '<br><span class="sb-row">' + _row_text(d["word_row"], d["text"]) + "</span>"
-        self.point_pane.object = self._point_text
+        self._refresh_point()
+
+    def _refresh_point(self):
+        """The tap's pane: the word lines, the certificate's line, the motion's table."""
+        self.point_pane.object = self._point_text + self._cert_html + self._motion_html
+
+    def _show_certificate(self, gen, view, d):
+        """The certificate of the atlas's box at the tapped point (proven.proven_at)."""
+        if gen != self._tap_gen:
+            return
+        self._cert_gen = gen
+        self._cert_html = '<br><span class="sb-cert">' + _certificate_text(d["certificate"], d["depth"]) + "</span>"
+        self._refresh_point()
+
+    def _atlas_of(self, view):
+        """The certified atlas of ``view`` when computed and the overlay is on, else None."""
+        p = self._proven
+        return p[1] if "proven" in view.overlays and p is not None and p[0] == _proven_key(view) else None
 
     def _show_orbit(self, gen, view, orbit, error):
         if gen != self._tap_gen:
@@ -1168,6 +1324,85 @@ class Explorer:
         ds = self.ds
         data = await asyncio.wrap_future(_EXPORTS.submit(view_netcdf, ds))
         return io.BytesIO(data)
+
+
+def _proven_key(view):
+    """What the certified atlas of a view depends on: its window, depth and max_iter."""
+    return view.e_lo, view.e_hi, view.u_lo, view.u_hi, proven_depth(view), view.max_iter
+
+
+def _certificate_work(atlas, e, u):
+    """The certificate of the atlas's box at (e, u), as one scheduler slice."""
+    return {"certificate": proven_at(atlas, e, u), "depth": atlas.depth}
+    yield  # a generator: the scheduler's slices
+
+
+def _proven_line(atlas, seconds):
+    """The status line of a finished atlas."""
+    shares = proven_summary(atlas)
+    proven = sum(v for k, v in shares.items() if k in ("word", "no_sliding", "no_slide_within"))
+    return (f"proven overlay: {atlas.boxes.sizes['box']} boxes to depth {atlas.depth}, "
+            f"{100 * proven:.1f} % of the view proven ({100 * shares.get('word', 0.0):.1f} % with a proven word), "
+            f"{100 * (1 - proven):.1f} % undecided (numerical); certified in {seconds:.2f} s")
+
+
+# CSS backgrounds of the key's swatches, like the map's hatch patterns
+_SWATCH = {" ": "{c}", ".": "radial-gradient({h} 1px, #fff 1.5px) 0 0/4px 4px",
+           "o": "radial-gradient(#fff 1.2px, {h} 1.5px, {h} 2px, #fff 2.5px) 0 0/6px 6px",
+           "/": "repeating-linear-gradient(-45deg, {h} 0 1.5px, #fff 1.5px 5px)",
+           "\\": "repeating-linear-gradient(45deg, {h} 0 1.5px, #fff 1.5px 5px)",
+           "x": "repeating-linear-gradient(45deg, {h} 0 1px, transparent 1px 5px), "
+                "repeating-linear-gradient(-45deg, {h} 0 1px, #fff 1px 5px)",
+           "-": "repeating-linear-gradient(0deg, {h} 0 1.5px, #fff 1.5px 5px)",
+           "|": "repeating-linear-gradient(90deg, {h} 0 1.5px, #fff 1.5px 5px)",
+           "+": "repeating-linear-gradient(0deg, {h} 0 1px, transparent 1px 5px), "
+                "repeating-linear-gradient(90deg, {h} 0 1px, #fff 1px 5px)"}
+
+
+def _proven_key_html(atlas, seconds):
+    """The proven overlay's key under the map: what each mark means, its share
+    of the view, and that the undecided areas are numerical."""
+    shares = proven_summary(atlas)
+    (e0, e1), (u0, u1) = atlas.window
+    rows = []
+    for name, (fill, _alpha, hatch, hcol, text) in STYLES.items():
+        bg = _SWATCH[hatch].format(c="linear-gradient(90deg, #000 0 25%, #3e9bfe 25% 50%, #a2fc3c 50% 75%, "
+                                     "#f66b19 75%)" if fill is None else fill, h=hcol)
+        rows.append(f'<tr class="sb-proven-{name}"><td><span style="display:inline-block;width:22px;height:12px;'
+                    f'border:1px solid #888;background:{bg}"></span></td><td>{html.escape(text)}</td>'
+                    f'<td style="text-align:right;white-space:nowrap">{100 * shares.get(name, 0.0):.1f} %</td></tr>')
+    depth = atlas.depth
+    return (f'<div class="sb-proven-key" style="font-size:12px"><b>Proven overlay</b>: the certified atlas of this view '
+            f"(sb.certify, corners form, max_iter {atlas.max_iter}): an adaptive quadtree of boxes down to "
+            f"window/2<sup>{depth}</sup> (depth {depth}, chosen from the view's size so that the smallest boxes "
+            f"are at least {MIN_BOX_PX} pixels a side), computed in {seconds:.2f} s on the server. "
+            f'<table style="font-size:12px">{"".join(rows)}</table>'
+            "<b>Undecided areas are numerical</b>: there the picture's colour is a floating-point answer, "
+            "which rounding may have chosen (next to a border) or which is only a finite run (non-sliding "
+            "motion). Tap a point for the certificate of its box.</div>")
+
+
+def _certificate_text(c, depth):
+    """The tap's line for the atlas's box at the point (proven.proven_at)."""
+    if c is None:
+        return "<i>certificate: the point is outside the certified atlas</i>"
+    (e0, e1), (u0, u1) = c["box"]
+    box = f"box e [{e0:.10g}, {e1:.10g}] x u [{u0:.10g}, {u1:.10g}] (level {c['level']} of {depth})"
+    if c["status"] == "undecided":
+        where = f" at step {c['step']}" if c["step"] else ""
+        return (f"certified atlas, {box}: <b>undecided</b> (numerical), reason <b>{html.escape(c['reason'])}</b>"
+                f"{where}: {html.escape(STYLES[c['reason']][4].split(': ', 1)[-1])}")
+    claim = {"word": f"every point has the periodic sliding solution of the word "
+                     f"<b>{html.escape(c['word'] or '')}</b>",
+             "no_sliding": "no periodic sliding solution anywhere (Corollary 2.1 over the whole box)",
+             "no_slide_within": f"the orbit of (1, 0) does not slide within max_iter = {c['max_iter']} steps "
+                                "anywhere"}[c["status"]]
+    verdict = c["verdict"]
+    how = ("proven by interval arithmetic, re-verified by sb.verify" if verdict is not None and verdict.ok else
+           "proven by interval arithmetic; sb.verify did NOT re-verify it: "
+           + html.escape(verdict.message if verdict is not None else "not run"))
+    return (f'certified atlas, {box}, max_iter {c["max_iter"]}: <b class="sb-cert-status">{c["status"]}</b>, '
+            f"{claim}; {how}")
 
 
 def _border_key(view):

@@ -69,6 +69,8 @@ def view_png(ds, view: View, dpi: int = 100, borders: dict | None = None) -> byt
                 _draw_borders(ax, view, borders)
             drew_borders = True
             continue
+        if name == "proven":  # the certified atlas is drawn on the page only
+            continue
         for xs, ys in zip(*curves[name]):
             ax.plot(xs, ys, **styles[name])
     ax.set_xlim(view.e_lo, view.e_hi)

@@ -15,9 +15,16 @@ The preview is computed on the explorer's shared scheduler like any render
 (one worker thread enters the numba kernels, sessions take turns), within a
 budget: views of more than :data:`PREVIEW_MAX_PIXELS` pixels, pages asking
 for a view with a bad query value (they show the message instead), and
-previews not done within :data:`PREVIEW_BUDGET_S` (a busy server, a
-long ``max_iter``) send the page without one, cancelling the job.  A preview
-is the same scan as the view's render, so its pixels are the picture's.
+previews not done within :data:`PREVIEW_BUDGET_S` of computation (a long
+``max_iter``) send the page without one, cancelling the job.  The budget
+counts from the preview's first slice: on a busy server (another session's
+long render) the preview takes its place on the fair scheduler (its page is
+a new, idle session, so it runs after the slice under way, or within the
+scheduler's quantum) and the page waits for that turn up to
+:data:`PREVIEW_TURN_S` (issue 37: the budget counted the wait, so a page
+opened beside a heavy render went without its preview;
+``benchmarks/explorer_preview_busy.py``).  A preview is the same scan as
+the view's render, so its pixels are the picture's.
 """
 
 from __future__ import annotations
@@ -31,14 +38,20 @@ import numpy as np
 
 from .view import View, parse_query, render_slices, shade
 
-__all__ = ["PREVIEW_BUDGET_S", "PREVIEW_MAX_PIXELS", "PREVIEW_ID", "preview_png", "preview_html",
+__all__ = ["PREVIEW_BUDGET_S", "PREVIEW_TURN_S", "PREVIEW_MAX_PIXELS", "PREVIEW_ID", "preview_png", "preview_html",
            "page_preview", "with_preview"]
 
 PREVIEW_MAX_PIXELS = 600 * 600
 """Largest view (pixels) whose picture is sent with the page's HTML."""
 
 PREVIEW_BUDGET_S = 0.3
-"""How long a page request waits for its preview before it is sent without one."""
+"""How long a page request waits for its preview's computation, from its
+first slice, before it is sent without one."""
+
+PREVIEW_TURN_S = 1.0
+"""How long a page request waits for its preview's turn on the scheduler (the
+slice under way and the quantum of a busy server's job, each bounded:
+scheduler.QUANTUM, view.SLICE_WORK) before it is sent without one."""
 
 PREVIEW_ID = "sb-preview"
 """The ``id`` of the preview's element; the map's data source removes it."""
@@ -48,7 +61,7 @@ PREVIEW_ID = "sb-preview"
 # both; measured in Chromium (tests/test_explorer_browser.py checks both, so a
 # change of the page's layout, a widget more in the controls, says so there).
 _FRAME_SIDE = (392, 64)
-_FRAME_BELOW = (70, 648)
+_FRAME_BELOW = (70, 667)
 _SIDE_BY_SIDE_EXTRA = 180  # the colour bar and its labels right of the frame
 
 # Run in the browser by the map's image source on its first data: the
@@ -113,14 +126,22 @@ def _work(view: View):
     return preview_png(view, shade(ds, view.color))
 
 
-async def page_preview(query_arguments, scheduler, ready=None, budget=PREVIEW_BUDGET_S) -> str:
-    """page_preview(query_arguments, scheduler, ready=None, budget=PREVIEW_BUDGET_S) -> str
+def _announced(work, started):
+    """``work``'s slices, calling ``started()`` as its first slice begins."""
+    started()
+    return (yield from work)
+
+
+async def page_preview(query_arguments, scheduler, ready=None, budget=PREVIEW_BUDGET_S,
+                       turn=PREVIEW_TURN_S) -> str:
+    """page_preview(query_arguments, scheduler, ready=None, budget=PREVIEW_BUDGET_S, turn=PREVIEW_TURN_S) -> str
 
     The preview's HTML for a page request's query (Tornado's
     ``query_arguments``), or ``""``: when the query has a bad value, the view
     is larger than :data:`PREVIEW_MAX_PIXELS`, the kernels are not loaded yet
-    (``ready``, an Event, not set) or the scheduler did not finish it within
-    ``budget`` seconds (the job is then cancelled).
+    (``ready``, an Event, not set), the scheduler did not start it within
+    ``turn`` seconds or did not finish it within ``budget`` seconds of its
+    start (the job is then cancelled).
     """
     view, messages = parse_query(query_arguments)
     if messages or view.pixels > PREVIEW_MAX_PIXELS or (ready is not None and not ready.is_set()):
@@ -134,9 +155,12 @@ async def page_preview(query_arguments, scheduler, ready=None, budget=PREVIEW_BU
                 answer.set_result(None if error is not None else result)
         loop.call_soon_threadsafe(give)
 
+    started = asyncio.Event()
     owner = object()  # a page without a session yet: an owner of its own, idle so far
-    scheduler.submit(owner, "preview", _work(view), on_done=done)
+    scheduler.submit(owner, "preview", _announced(_work(view), lambda: loop.call_soon_threadsafe(started.set)),
+                     on_done=done)
     try:
+        await asyncio.wait_for(started.wait(), turn)  # its turn: after the slice under way
         png = await asyncio.wait_for(asyncio.shield(answer), budget)
     except asyncio.TimeoutError:
         scheduler.cancel(owner)

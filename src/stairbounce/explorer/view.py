@@ -31,6 +31,7 @@ import numpy as np
 import xarray as xr
 
 from .. import orbits, plane
+from ..cascades import family_of
 from ..model import check_e, check_u, tongue
 from ..symbolic import sliding_answer
 from ..plot.plane import _CLASS_STARTS, _LEAST, NO_SLIDING_COLOR, ColorKey
@@ -106,12 +107,13 @@ COLOR_VARS = tuple(FIELDS)
 NO_SLIDING_LABEL = "none within max_iter"
 """Key entry of white pixels: no periodic sliding solution within max_iter steps."""
 
-OVERLAYS = ("tongues", "no_sliding", "borders", "traced")
+OVERLAYS = ("tongues", "no_sliding", "borders", "traced", "proven")
 """What can be drawn over the map: the (n, 0^inf) tongues of Theorem 3.1, the
 no-sliding bound of Corollary 2.1, the exact borders of the view
-(:func:`border_overlay`) and, ``"traced"``, those borders as traced arcs
+(:func:`border_overlay`), ``"traced"``, those borders as traced arcs
 (:func:`trace_slices`, :func:`traced_overlay`; the border points are shown
-until the arcs come and where there are none)."""
+until the arcs come and where there are none) and, ``"proven"``, the
+certified atlas of the view (:mod:`stairbounce.explorer.proven`)."""
 
 DEFAULT_OVERLAYS = ("tongues", "no_sliding")
 """The overlays a new view shows (the exact borders cost a computation: off)."""
@@ -1127,7 +1129,8 @@ def point_details(e: float, u: float, max_iter: int, steps: int | None = None,
     over ``steps`` steps (default: one full period and two more steps, at
     least 4 and at most ``max_steps``; 12 when it does not slide) sampled for
     drawing (at most about 40 000 points), with its impacts, accumulation
-    points and slides.
+    points and slides; ``"family"``: the word's family by its form
+    (:func:`stairbounce.family_of`, ``None`` without a repeated block or a word).
     """
     e, u = check_e(e), check_u(u)
     answer = sliding_answer(e, u, max_iter=max_iter)
@@ -1155,6 +1158,7 @@ def point_details(e: float, u: float, max_iter: int, steps: int | None = None,
         "slides": [(s.x_start, s.x_end, s.y) for s in traj.slides],
         "motion": mo,
         "section": section,
+        "family": None if w is None else family_of(w),
     }
 
 
