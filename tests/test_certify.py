@@ -602,3 +602,21 @@ def test_the_slide_cache_answers_each_corner_as_the_float_map():
             T, ratio = _constants(e, u)
             assert g == (_slide_or_steps(1.0, 0.0, e, T, ratio, 300)[0] > 0)
     assert 0 < cache.slid.sum() < cache.keys.size and np.all(np.diff(cache.keys) > 0)
+
+
+def test_words_are_spelled_the_same_when_hashes_collide(monkeypatch):
+    # the atlas tells itineraries apart by a hash; boxes whose hashes collide are told
+    # apart by their itineraries' bytes: every hash equal gives the same words
+    import importlib
+
+    C = importlib.import_module("stairbounce.structure.certify")
+    kw = dict(depth=5, **FIG7)
+    good = sb.certify(**kw).boxes
+    monkeypatch.setattr(K, "_itinerary_hashes", lambda itin, off, boxes, out: out.fill(7))
+    bad = sb.certify(**kw).boxes
+    assert len(set(good["word"].values.tolist())) > 5
+    assert good.drop_attrs().identical(bad.drop_attrs())
+    # and each word is the one its itinerary spells
+    o, it = good["offsets"].values, good["itinerary"].values
+    for b in np.flatnonzero(good["status"].values == K.WORD)[::7]:
+        assert good["word"].values[b] == C.word_from_impacts(it[o[b]:o[b + 1]]).format(ascii=True)

@@ -515,6 +515,46 @@ def _grid_points(win, level, gi, gj, es, us):
         us[p] = _edge(win[2], uw, win[3], gj[p], level)
 
 
+@njit(cache=True, parallel=True)
+def _box_edges(win, level, ii, jj, e0, e1, u0, u1):
+    """The edges of the boxes ``(level[b], ii[b], jj[b])`` (:func:`_edge`), into ``e0, e1, u0, u1``."""
+    ew = win[1] - win[0]
+    uw = win[3] - win[2]
+    for b in prange(ii.shape[0]):
+        L = level[b]
+        e0[b] = _edge(win[0], ew, win[1], ii[b], L)
+        e1[b] = _edge(win[0], ew, win[1], ii[b] + 1, L)
+        u0[b] = _edge(win[2], uw, win[3], jj[b], L)
+        u1[b] = _edge(win[2], uw, win[3], jj[b] + 1, L)
+
+
+@njit(cache=True)
+def _itinerary_hashes(itin, offsets, boxes, out):
+    """A 64-bit FNV-1a hash of each box's itinerary ``itin[offsets[b]:offsets[b+1]]``,
+    ``b`` in ``boxes`` (to tell itineraries apart; equal ones are checked by
+    :func:`_same_itineraries`)."""
+    for k in range(boxes.shape[0]):
+        b = boxes[k]
+        h = np.uint64(14695981039346656037)
+        for x in itin[offsets[b]:offsets[b + 1]]:
+            h = (h ^ np.uint64(x & 0xFFFFFFFF)) * np.uint64(1099511628211)
+        out[k] = np.int64(h)
+
+
+@njit(cache=True)
+def _same_itineraries(itin, offsets, boxes, rep):
+    """Whether each box ``boxes[k]`` has the itinerary of the box ``rep[k]``."""
+    for k in range(boxes.shape[0]):
+        a, b = boxes[k], rep[k]
+        n = offsets[a + 1] - offsets[a]
+        if n != offsets[b + 1] - offsets[b]:
+            return False
+        for t in range(n):
+            if itin[offsets[a] + t] != itin[offsets[b] + t]:
+                return False
+    return True
+
+
 @njit(cache=True)
 def _any_slides(E0, E1, U0, U1, max_iter, points):
     """Whether the float map slides from (1, 0) within max_iter steps at the

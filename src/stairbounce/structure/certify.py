@@ -214,16 +214,6 @@ def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
 # --------------------------------------------------------------------------- #
 
 
-def _edges(lo, hi, level, i):
-    """Box edges as the kernel computes them (:func:`_kernel._edge`), vectorised."""
-    n = 1 << int(level) if np.ndim(level) == 0 else None
-    i = np.asarray(i, dtype=np.int64)
-    if n is None:
-        n = np.left_shift(np.int64(1), np.asarray(level, dtype=np.int64))
-    x = lo + (hi - lo) * (i.astype(np.float64) * (1.0 / n))
-    return np.where(i >= n, hi, x)
-
-
 def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress=None, *, tiles=1,
             form="corners") -> CertifiedAtlas:
     """certify(e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, progress=None, *, tiles=1, form="corners") -> CertifiedAtlas
@@ -314,7 +304,9 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False):
     cols = [np.concatenate([p[k] for p in parts]) for k in range(8)]
     del parts
     level, ii, jj = cols[:3]
-    order = np.lexsort((ii, jj, level))
+    # by level, then j, then i (np.lexsort((ii, jj, level))'s order) by one int64 key:
+    # i, j < 2^27 at depth <= 26
+    order = np.argsort((level.astype(np.int64) << 56) | (jj << 28) | ii)
     # the kept rows follow their proven boxes (kept for the proven boxes only, in box order)
     st = cols[3]
     keep = ((st == K.WORD) | (st == K.NO_SLIDE_WITHIN)) & (cols[6] <= _KEPT)
@@ -454,10 +446,8 @@ def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, st
     from .._interrupt import run_kernel
     from .._version import __version__
 
-    e0 = _edges(win[0], win[1], level, ii)
-    e1 = _edges(win[0], win[1], level, ii + 1)
-    u0 = _edges(win[2], win[3], level, jj)
-    u1 = _edges(win[2], win[3], level, jj + 1)
+    e0, e1, u0, u1 = (np.empty(level.size) for _ in range(4))
+    K._box_edges(win, level.astype(np.int64), ii, jj, e0, e1, u0, u1)
     proven_path = (status == K.WORD) | (status == K.NO_SLIDE_WITHIN)
     lengths = np.where(proven_path, nsteps, 0)
     offsets = np.zeros(level.size + 1, np.int64)
@@ -479,7 +469,7 @@ def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, st
                    sub_off, buf)
         for k, b in enumerate(sel):
             itinerary[offsets[b]:offsets[b + 1]] = buf[sub_off[k]:sub_off[k + 1]]
-    words = _word_texts(status, row, kept, lengths, itinerary, offsets)
+    words = _word_texts(status, itinerary, offsets)
     reasons = np.array([""] + list(UNDECIDED_REASONS), dtype=object)[np.where(status == K.UNDECIDED, reason + 1, 0)]
     ds = xr.Dataset(
         {
@@ -504,28 +494,27 @@ def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, st
     return ds
 
 
-def _word_texts(status, row, kept, lengths, itinerary, offsets):
+def _word_texts(status, itinerary, offsets):
     """The word (ASCII text, ``""`` unless proven) of every box, spelled once per distinct
-    itinerary: the kept ones told apart as rows of bytes, the longer ones by a dict."""
+    itinerary (told apart by a hash, the boxes of one hash checked to share the itinerary;
+    where they do not, by the itineraries' bytes)."""
     words = np.full(status.size, "", dtype=object)
     wb = np.flatnonzero(status == K.WORD)
-    short = wb[row[wb] >= 0]
-    if short.size:
-        r = kept[row[short]]
-        r[np.arange(_KEPT)[None, :] >= lengths[short][:, None]] = np.iinfo(np.int16).min
-        v = np.ascontiguousarray(r).view(np.dtype((np.void, r.dtype.itemsize * _KEPT))).ravel()
-        _, first, inverse = np.unique(v, return_index=True, return_inverse=True)
-        del r, v
-        names = np.array([word_from_impacts(itinerary[offsets[b]:offsets[b + 1]]).format(ascii=True)
-                          for b in short[first]] + [""], dtype=object)[:-1]
-        words[short] = names[inverse.ravel()]
-    seen = {}
-    for b in wb[row[wb] < 0]:
-        key = itinerary[offsets[b]:offsets[b + 1]].tobytes()
-        w = seen.get(key)
-        if w is None:
-            w = seen[key] = word_from_impacts(itinerary[offsets[b]:offsets[b + 1]]).format(ascii=True)
-        words[b] = w
+    if not wb.size:
+        return words
+    h = np.empty(wb.size, np.int64)
+    K._itinerary_hashes(itinerary, offsets, wb, h)
+    _, first, inverse = np.unique(h, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    if not K._same_itineraries(itinerary, offsets, wb, wb[first][inverse]):  # a collision: by the bytes
+        keys = [itinerary[offsets[b]:offsets[b + 1]].tobytes() for b in wb]
+        index = {}
+        inverse = np.array([index.setdefault(k, len(index)) for k in keys], np.int64)
+        first = np.zeros(len(index), np.int64)
+        first[inverse[::-1]] = np.arange(wb.size)[::-1]
+    names = np.array([word_from_impacts(itinerary[offsets[b]:offsets[b + 1]]).format(ascii=True)
+                      for b in wb[first]] + [""], dtype=object)[:-1]
+    words[wb] = names[inverse]
     return words
 
 
