@@ -793,12 +793,17 @@ class CertifiedAtlas:
             raise ValueError(f"cannot read a certified atlas from {path}: {exc}") from None
         if ds.attrs.get("kind") != "stairbounce certified atlas":
             raise ValueError(f"{path} is not a certified atlas written by stairbounce")
+        import pandas as pd
+
         for k in ("word", "reason"):
             if f"{k}_code" in ds:  # a Zarr store (save)
-                names = np.array(list(ds.attrs.pop(f"{k}_names")) or [""], dtype=str)
+                names = np.array([str(x) for x in ds.attrs.pop(f"{k}_names")] or [""], dtype=object)
                 ds[k] = ("box", names[ds[f"{k}_code"].values])
                 ds = ds.drop_vars(f"{k}_code")
-            ds[k] = ds[k].astype(str)
+            # one Python string per distinct text, as certify makes them (8 bytes a box)
+            v = np.asarray(ds[k].values)
+            codes, names = pd.factorize(v if v.dtype.kind == "O" else v.astype(str).astype(object))
+            ds[k] = ("box", np.asarray(names, dtype=object)[codes])
         for k in ("e_range", "u_range"):
             ds.attrs[k] = [float(x) for x in np.atleast_1d(ds.attrs[k])]
         return cls(ds)
