@@ -474,12 +474,12 @@ def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, st
     ds = xr.Dataset(
         {
             "e0": ("box", e0), "e1": ("box", e1), "u0": ("box", u0), "u1": ("box", u1),
-            "status": ("box", status.astype(np.int8)),
+            "status": ("box", status.astype(np.int8, copy=False)),
             "word": ("box", words),
             "reason": ("box", reasons),
-            "step": ("box", np.where(status == K.UNDECIDED, step, 0).astype(np.int64)),
-            "level": ("box", level.astype(np.int8)),
-            "i": ("box", ii.astype(np.int64)), "j": ("box", jj.astype(np.int64)),
+            "step": ("box", np.where(status == K.UNDECIDED, step, 0).astype(np.int64, copy=False)),
+            "level": ("box", level.astype(np.int8, copy=False)),
+            "i": ("box", ii.astype(np.int64, copy=False)), "j": ("box", jj.astype(np.int64, copy=False)),
             "offsets": ("offset", offsets),
             "itinerary": ("itinerary_step", itinerary),
         },
