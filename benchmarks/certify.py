@@ -1,7 +1,7 @@
 """Certified atlases (issue 36): throughput and proven fractions, against baselines in the same process.
 
     python benchmarks/certify.py [--windows fig7,fig5e,fig6,paper] [--depths 10,14] [--repeat 1]
-                                 [--baselines mean-value,threads,naive]
+                                 [--baselines reference,mean-value,threads,naive]
 
 For each window and depth (max_iter 1000):
 
@@ -11,7 +11,9 @@ For each window and depth (max_iter 1000):
   the same process (``--baselines``): the mean-value form (the previous
   default: time, proven area, words), the same call with one thread (the ratio
   is the parallel speed-up; the boxes must be identical) and the naive
-  interval form;
+  interval form; and the reference, the same atlas with the float map's "nonsliding"
+  check taken box by box in the level kernel (the algorithm before the shared check:
+  the boxes must be identical);
 * the proven fractions by status, the undecided area by reason, the number of
   proven words;
 * "the sliding area" and the share of it proven.  The sliding area is the
@@ -31,6 +33,7 @@ The machine is shared: ``uptime`` is printed before and after.
 from __future__ import annotations
 
 import argparse
+import importlib
 import os
 import resource
 import time
@@ -40,6 +43,8 @@ import numpy as np
 
 import stairbounce as sb
 from stairbounce.structure import _kernel as K
+
+C = importlib.import_module("stairbounce.structure.certify")
 
 WINDOWS = {
     "fig7": ((0.155, 0.2138), (0.6, 0.658)),
@@ -59,7 +64,7 @@ def _cpu():
     return r.ru_utime + r.ru_stime
 
 
-def _run(e, u, depth, threads=None, form="corners", repeat=1):
+def _run(e, u, depth, threads=None, form="corners", repeat=1, reference=False):
     evaluated = []
     best = None
     old = numba.get_num_threads()
@@ -69,7 +74,10 @@ def _run(e, u, depth, threads=None, form="corners", repeat=1):
         for _ in range(repeat):
             c = _cpu()
             t = time.perf_counter()
-            a = sb.certify(e=e, u=u, depth=depth, form=form)
+            if reference:  # the "nonsliding" check box by box in the level kernel (the algorithm before)
+                a = C._certify(e, u, depth, 1000, None, 1, form, reference=True)
+            else:
+                a = sb.certify(e=e, u=u, depth=depth, form=form)
             dt = time.perf_counter() - t
             if best is None or dt < best[0]:
                 best = (dt, a, _cpu() - c)
@@ -91,25 +99,23 @@ def _sampled_shares(a, depth, max_iter):
     centres of a g x g grid of sub-boxes of each undecided box (g = min(2^(depth - level), 4);
     a box of the last level is its centre, its pixel)."""
     b = a.boxes
-    und = np.flatnonzero(b["status"].values == K.UNDECIDED)
+    st = b["status"].values
+    und = np.flatnonzero(st == K.UNDECIDED)
     lv = b["level"].values.astype(np.int64)[und]
     g = np.minimum(np.left_shift(1, depth - lv), 4)
-    es, us, owner = [], [], []
-    for k, gk in zip(und, g):
+    e0, e1, u0, u1 = (b[k].values for k in ("e0", "e1", "u0", "u1"))
+    share = np.zeros(st.size)
+    for gk in np.unique(g):
+        sel = und[g == gk]
         t = (np.arange(gk) + 0.5) / gk
-        E = b["e0"].values[k] + (b["e1"].values[k] - b["e0"].values[k]) * t
-        U = b["u0"].values[k] + (b["u1"].values[k] - b["u0"].values[k]) * t
-        EE, UU = np.meshgrid(E, U)
-        es.append(EE.ravel())
-        us.append(UU.ravel())
-        owner.append(np.full(EE.size, k))
-    share = np.zeros(b.sizes["box"])
-    if und.size:
-        e, u, own = np.concatenate(es), np.concatenate(us), np.concatenate(owner)
-        ok = (u > 0) & (e < 1)
-        slid = np.zeros(e.size)
-        slid[ok] = sb.scan_points(e[ok], u[ok], max_iter=max_iter)["status"].values == 0
-        share[und] = np.bincount(own, weights=slid, minlength=share.size)[und] / (g * g)
+        E = e0[sel, None] + (e1[sel] - e0[sel])[:, None] * t[None, :]
+        U = u0[sel, None] + (u1[sel] - u0[sel])[:, None] * t[None, :]
+        EE = np.broadcast_to(E[:, None, :], (sel.size, gk, gk)).ravel()
+        UU = np.broadcast_to(U[:, :, None], (sel.size, gk, gk)).ravel()
+        ok = (UU > 0) & (EE < 1)
+        slid = np.zeros(EE.size)
+        slid[ok] = sb.scan_points(EE[ok], UU[ok], max_iter=max_iter)["status"].values == 0
+        share[sel] = slid.reshape(sel.size, gk * gk).mean(axis=1)
     return share
 
 
@@ -179,7 +185,7 @@ def main():
     p.add_argument("--depths", default="10")
     p.add_argument("--repeat", type=int, default=1)
     p.add_argument("--baselines", default="mean-value,threads,naive",
-                   help="comma-separated: mean-value, threads, naive (or none)")
+                   help="comma-separated: reference, mean-value, threads, naive (or none)")
     args = p.parse_args()
     print(f"numba threads {numba.get_num_threads()}, cpus {os.cpu_count()}, load before {_uptime()}")
     for form in ("corners", "mean-value", "naive"):  # compile / load every kernel (depth 8 reaches them all)
@@ -202,6 +208,13 @@ def main():
             print(f"  sliding area {100 * sliding:.2f}% of the window (scan: {100 * scan_share:.2f}% of pixels); "
                   f"proven {100 * w / sliding:.1f}% of it; scan pixels sliding inside proven non-sliding "
                   f"boxes: {bad}; scan pixels not sliding inside proven word boxes: {word_not}")
+            print(f"  peak RSS of the process so far {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20:.2f} GiB")
+            if "reference" in baselines:
+                dtr, ar, _ = _run(e, u, depth, reference=True)
+                same = ar.boxes.drop_attrs().identical(a.boxes.drop_attrs())
+                print(f"  reference (nonsliding check box by box): {dtr:.2f} s wall, {ar.cpu_seconds:.2f} s CPU; "
+                      f"x{dtr / dt:.2f} in wall, x{ar.cpu_seconds / a.cpu_seconds:.2f} in CPU; same boxes: {same}")
+                del ar
             if "threads" in baselines:
                 dt1, a1, _ = _run(e, u, depth, threads=1)
                 same = a1.boxes.drop_attrs().identical(a.boxes.drop_attrs())

@@ -553,3 +553,70 @@ def test_e_zero_is_a_window_edge_not_a_box():
     assert at_zero.any() and set(b.status.values[at_zero].tolist()) == {sb.structure.certificate.STATUSES.index("undecided")}
     assert set(b.reason.values[at_zero].tolist()) == {"range"}
     assert sb.verify(atlas).ok
+
+
+# ---- the shared "nonsliding" check ----------------------------------------------
+# certify takes the float map's "nonsliding" verdict for all the undecided boxes of a
+# level at once (the scan's lane kernel, each box corner once); the reference takes
+# it box by box in the level kernel (_kernel._any_slides, short-circuiting at the
+# first point that slides), the algorithm before.  The boxes must be the same, bit
+# for bit: a speed-up never changes an answer.
+
+
+@pytest.mark.parametrize("name, depth, tiles", [("fig7", 8, 1), ("fig5e", 7, 2), ("fig6", 7, 1)])
+def test_the_shared_nonsliding_check_gives_the_reference_boxes(name, depth, tiles):
+    import importlib
+
+    C = importlib.import_module("stairbounce.structure.certify")
+    w = WINDOWS[name]
+    fast = sb.certify(depth=depth, tiles=tiles, **w).boxes
+    ref = C._certify(w["e"], w["u"], depth, 1000, None, tiles, "corners", reference=True).boxes
+    assert fast.identical(ref)
+    # the check decided something at both kinds of level: the leaves (centre) and above (centre, corners)
+    ns = fast["reason"].values == "nonsliding"
+    lv = fast["level"].values
+    assert (ns & (lv == depth)).any() and (ns & (lv < depth)).any()
+    # and it is not vacuous: some undecided boxes of those levels were kept from it (their
+    # centre or a corner slides), or every box would be "nonsliding"
+    und = fast["status"].values == K.UNDECIDED
+    assert (und & ~ns & (lv >= depth - 4) & (fast["reason"].values != "range")).any()
+
+
+def test_the_slide_cache_answers_each_corner_as_the_float_map():
+    # the verdict at shared corners, looked up across levels, is the point's own
+    import importlib
+
+    from stairbounce.model import _constants, _slide_or_steps
+
+    C = importlib.import_module("stairbounce.structure.certify")
+    win = np.array([0.155, 0.2138, 0.6, 0.658])
+    cache = C._SlideCache(win, 6, 300)
+    rng = np.random.default_rng(5)
+    for level in (4, 5, 6, 5):
+        gi = rng.integers(0, (1 << level) + 1, 300)
+        gj = rng.integers(0, (1 << level) + 1, 300)
+        got = cache.corners(level, gi, gj)
+        for a, b, g in zip(gi, gj, got):
+            e = K._edge(win[0], win[1] - win[0], win[1], a, level)
+            u = K._edge(win[2], win[3] - win[2], win[3], b, level)
+            T, ratio = _constants(e, u)
+            assert g == (_slide_or_steps(1.0, 0.0, e, T, ratio, 300)[0] > 0)
+    assert 0 < cache.slid.sum() < cache.keys.size and np.all(np.diff(cache.keys) > 0)
+
+
+def test_words_are_spelled_the_same_when_hashes_collide(monkeypatch):
+    # the atlas tells itineraries apart by a hash; boxes whose hashes collide are told
+    # apart by their itineraries' bytes: every hash equal gives the same words
+    import importlib
+
+    C = importlib.import_module("stairbounce.structure.certify")
+    kw = dict(depth=5, **FIG7)
+    good = sb.certify(**kw).boxes
+    monkeypatch.setattr(K, "_itinerary_hashes", lambda itin, off, boxes, out: out.fill(7))
+    bad = sb.certify(**kw).boxes
+    assert len(set(good["word"].values.tolist())) > 5
+    assert good.drop_attrs().identical(bad.drop_attrs())
+    # and each word is the one its itinerary spells
+    o, it = good["offsets"].values, good["itinerary"].values
+    for b in np.flatnonzero(good["status"].values == K.WORD)[::7]:
+        assert good["word"].values[b] == C.word_from_impacts(it[o[b]:o[b + 1]]).format(ascii=True)

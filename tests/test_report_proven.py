@@ -77,10 +77,19 @@ def test_window_rows_are_proven_and_agree(tmp_path):
 
 
 def test_a_window_from_e_0_is_certified_from_the_checkers_domain(tmp_path):
+    # the Fig. 6 window starts at e = 0: it is certified as it is, its boxes on e = 0
+    # undecided ("range", outside the checker's domain 0 < e of a proven box), and
+    # every certificate of the atlas passes the checker, so the rows are proven
     (e, u), _ = F.DIMENSION_WINDOWS["fig6"]
     assert e[0] == 0.0
     certified, area, bracket = _window_rows(tmp_path, "fig6", e, u)
-    assert certified[0].window[0][0] == 2.0 ** -53
+    atlas = certified[0]
+    assert atlas.window[0] == tuple(e)
+    b = atlas.boxes
+    at_zero = b["e0"].values == 0.0
+    assert at_zero.any() and (b["status"].values[at_zero] == F._undecided_code()).all()
+    assert set(b["reason"].values[at_zero].tolist()) == {"range"}
+    assert area.measured.startswith(f"[0, {e[1]:g}] x") and "2^-53" not in area.proof
     assert area.basis == bracket.basis == "proven"
     assert area.verdict == bracket.verdict == "agrees"
 

@@ -337,20 +337,17 @@ def _tongue_proof_row(s, n_max=8):
 def _certified_atlas(s, name, e, u):
     """The certified atlas of a window at :func:`_certify_depth` and the
     checker's verdict on it: ``(atlas, depth, n_proven, basis, proof, override)``.
-    A window from e = 0 starts at e = 2^-53: the checker's domain is 0 < e."""
+    A window from e = 0 is certified as it is: its boxes touching e = 0 are
+    undecided ("range"), outside the checker's domain 0 < e of a proven box."""
     import stairbounce as sb
 
     depth = _certify_depth(s)
-    moved = e[0] < 2.0 ** -53
-    e = (max(e[0], 2.0 ** -53), e[1])
     s.note(f"{name}: certified atlas, depth {depth}")
     atlas = sb.certify(e=e, u=u, depth=depth, max_iter=s.max_iter)
     n_proven = int((atlas.boxes["status"].values != _undecided_code()).sum())
     v = sb.verify(atlas)
     rejected = 0 if v.ok else max(v.rejected, 1)
     basis, proof, override = _proof(n_proven, rejected, v.message)
-    if moved:
-        proof += "; the window starts at e = 2^-53, inside the checker's domain 0 < e"
     return atlas, depth, n_proven, basis, proof, override
 
 

@@ -481,6 +481,80 @@ def _edge(lo, width, hi, i, level):
     return lo + width * (float(i) * (1.0 / n))
 
 
+@njit(cache=True, inline="always")
+def _lift(e):
+    """The e at which the "nonsliding" check runs the float map: e in (0, 2^-53) lifted to 2^-53."""
+    if e > 0.0 and e < 2.0**-53:
+        return 2.0**-53
+    return e
+
+
+@njit(cache=True)
+def _centres(win, level, ii, jj, es, us):
+    """The centres of the boxes ``(ii[b], jj[b])`` of a level, as :func:`_any_slides`
+    computes them (its first point), into ``es, us``."""
+    ew = win[1] - win[0]
+    uw = win[3] - win[2]
+    for b in range(ii.shape[0]):
+        E0 = _edge(win[0], ew, win[1], ii[b], level)
+        E1 = _edge(win[0], ew, win[1], ii[b] + 1, level)
+        U0 = _edge(win[2], uw, win[3], jj[b], level)
+        U1 = _edge(win[2], uw, win[3], jj[b] + 1, level)
+        es[b] = _lift(0.5 * (E0 + E1))
+        us[b] = 0.5 * (U0 + U1)
+
+
+@njit(cache=True)
+def _grid_points(win, level, gi, gj, es, us):
+    """The grid points ``(gi[p], gj[p])`` of a level (box corners, the same floats at
+    every level, :func:`_edge`), as :func:`_any_slides` takes a corner, into ``es, us``."""
+    ew = win[1] - win[0]
+    uw = win[3] - win[2]
+    for p in range(gi.shape[0]):
+        es[p] = _lift(_edge(win[0], ew, win[1], gi[p], level))
+        us[p] = _edge(win[2], uw, win[3], gj[p], level)
+
+
+@njit(cache=True, parallel=True)
+def _box_edges(win, level, ii, jj, e0, e1, u0, u1):
+    """The edges of the boxes ``(level[b], ii[b], jj[b])`` (:func:`_edge`), into ``e0, e1, u0, u1``."""
+    ew = win[1] - win[0]
+    uw = win[3] - win[2]
+    for b in prange(ii.shape[0]):
+        L = level[b]
+        e0[b] = _edge(win[0], ew, win[1], ii[b], L)
+        e1[b] = _edge(win[0], ew, win[1], ii[b] + 1, L)
+        u0[b] = _edge(win[2], uw, win[3], jj[b], L)
+        u1[b] = _edge(win[2], uw, win[3], jj[b] + 1, L)
+
+
+@njit(cache=True)
+def _itinerary_hashes(itin, offsets, boxes, out):
+    """A 64-bit FNV-1a hash of each box's itinerary ``itin[offsets[b]:offsets[b+1]]``,
+    ``b`` in ``boxes`` (to tell itineraries apart; equal ones are checked by
+    :func:`_same_itineraries`)."""
+    for k in range(boxes.shape[0]):
+        b = boxes[k]
+        h = np.uint64(14695981039346656037)
+        for x in itin[offsets[b]:offsets[b + 1]]:
+            h = (h ^ np.uint64(x & 0xFFFFFFFF)) * np.uint64(1099511628211)
+        out[k] = np.int64(h)
+
+
+@njit(cache=True)
+def _same_itineraries(itin, offsets, boxes, rep):
+    """Whether each box ``boxes[k]`` has the itinerary of the box ``rep[k]``."""
+    for k in range(boxes.shape[0]):
+        a, b = boxes[k], rep[k]
+        n = offsets[a + 1] - offsets[a]
+        if n != offsets[b + 1] - offsets[b]:
+            return False
+        for t in range(n):
+            if itin[offsets[a] + t] != itin[offsets[b] + t]:
+                return False
+    return True
+
+
 @njit(cache=True)
 def _any_slides(E0, E1, U0, U1, max_iter, points):
     """Whether the float map slides from (1, 0) within max_iter steps at the
@@ -493,12 +567,20 @@ def _any_slides(E0, E1, U0, U1, max_iter, points):
         else:
             e = E0 if p & 1 else E1
             u = U0 if p & 2 else U1
-        if e > 0.0 and e < 2.0**-53:
-            e = 2.0**-53
+        e = _lift(e)
         T, ratio = _constants(e, u)
         if _slide_or_steps(1.0, 0.0, e, T, ratio, max_iter)[0] > 0:
             return True
     return False
+
+
+@njit(cache=True, nogil=True)
+def _slides_each(es, us, max_iter, out):
+    """Whether the float map slides from (1, 0) within max_iter steps at each point
+    ``(es[p], us[p])`` (as :func:`_any_slides` tests a point), into ``out``."""
+    for p in range(es.shape[0]):
+        T, ratio = _constants(es[p], us[p])
+        out[p] = _slide_or_steps(1.0, 0.0, es[p], T, ratio, max_iter)[0] > 0
 
 
 @njit(cache=True, parallel=True, nogil=True)

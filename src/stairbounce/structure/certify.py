@@ -214,16 +214,6 @@ def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
 # --------------------------------------------------------------------------- #
 
 
-def _edges(lo, hi, level, i):
-    """Box edges as the kernel computes them (:func:`_kernel._edge`), vectorised."""
-    n = 1 << int(level) if np.ndim(level) == 0 else None
-    i = np.asarray(i, dtype=np.int64)
-    if n is None:
-        n = np.left_shift(np.int64(1), np.asarray(level, dtype=np.int64))
-    x = lo + (hi - lo) * (i.astype(np.float64) * (1.0 / n))
-    return np.where(i >= n, hi, x)
-
-
 def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress=None, *, tiles=1,
             form="corners") -> CertifiedAtlas:
     """certify(e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, progress=None, *, tiles=1, form="corners") -> CertifiedAtlas
@@ -267,6 +257,13 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     -------
     CertifiedAtlas
     """
+    return _certify(e, u, depth, max_iter, progress, tiles, form)
+
+
+def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False):
+    """:func:`certify`; with ``reference`` the "nonsliding" check is taken box by box in
+    the level kernel (:func:`_kernel._any_slides`, the algorithm before the shared
+    check of :func:`_mark_nonsliding`; the tests compare the two)."""
     e_lo, e_hi = _check_e(e, window=True)
     u_lo, u_hi = _check_u(u, window=True)
     depth = check_count("depth", depth, 0, _MAX_DEPTH)
@@ -296,23 +293,41 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     if progress is not None:
         progress(0, total)
     parts = []
+    points = _SlideCache(win, depth, max_iter)
     for tj in range(tiles):
         for ti in range(tiles):
             # the tile's boxes of the start level, as one level-wide batch
             gi, gj = np.meshgrid(np.arange(ti * per_tile, (ti + 1) * per_tile),
                                  np.arange(tj * per_tile, (tj + 1) * per_tile))
-            parts += _run_tile(win, depth, start, gi.ravel(), gj.ravel(), max_iter, code, tick)
+            parts += _run_tile(win, depth, start, gi.ravel(), gj.ravel(), max_iter, code, tick,
+                               None if reference else points)
     cols = [np.concatenate([p[k] for p in parts]) for k in range(8)]
+    del parts
     level, ii, jj = cols[:3]
-    order = np.lexsort((ii, jj, level))
-    level, ii, jj, status, reason, step, nsteps, kept = (c[order] for c in cols)
-    ds = _atlas_dataset(win, depth, max_iter, code, level, ii, jj, status, reason, step, nsteps, kept)
+    # by level, then j, then i (np.lexsort((ii, jj, level))'s order) by one int64 key:
+    # i, j < 2^27 at depth <= 26
+    order = np.argsort((level.astype(np.int64) << 56) | (jj << 28) | ii)
+    # the kept rows follow their proven boxes (kept for the proven boxes only, in box order)
+    st = cols[3]
+    keep = ((st == K.WORD) | (st == K.NO_SLIDE_WITHIN)) & (cols[6] <= _KEPT)
+    row = np.full(st.size, -1, np.int64)
+    row[keep] = np.arange(int(keep.sum()))
+    kept = cols[7]
+    level, ii, jj, status, reason, step, nsteps = (c[order] for c in cols[:7])
+    row = row[order]
+    del cols
+    ds = _atlas_dataset(win, depth, max_iter, code, level, ii, jj, status, reason, step, nsteps, kept, row)
     return CertifiedAtlas(ds, seconds=time.perf_counter() - t0)
 
 
-def _run_tile(win, depth, start, gi, gj, max_iter, form, tick):
+def _run_tile(win, depth, start, gi, gj, max_iter, form, tick, points=None):
     """The quadtree below a batch of boxes ``(gi, gj)`` of level ``start``: the final
-    boxes as arrays ``(level, i, j, status, reason, step, nsteps)``, one tuple per level."""
+    boxes as arrays ``(level, i, j, status, reason, step, nsteps, kept)``, one tuple per
+    level (``kept``: the kept itineraries of the proven boxes only, in their order).
+
+    ``points``: a :class:`_SlideCache` (the "nonsliding" check of many boxes at once,
+    its box corners shared, :func:`_mark_nonsliding`), or None for the check box by
+    box in the level kernel (the reference: the same boxes)."""
     from .._interrupt import run_kernel
 
     ii = gi.astype(np.int64)
@@ -330,11 +345,15 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, tick):
             # the leaves' reason by their centre alone (the pixel of a scan at 2^depth); coarser
             # boxes stop as "nonsliding" only when neither the centre nor a corner slides
             ns_points = 0 if level < ns_level else (1 if level == depth else 5)
-            run_kernel(K._certify_level, win, level, ii, jj, max_iter, K.IMPACT_CAP, form, ns_points,
-                       status, reason, step, nsteps, kept)
+            run_kernel(K._certify_level, win, level, ii, jj, max_iter, K.IMPACT_CAP, form,
+                       ns_points if points is None else 0, status, reason, step, nsteps, kept)
+            if ns_points and points is not None:
+                _mark_nonsliding(win, level, depth, ii, jj, status, reason, ns_points, points)
         final = (status != K.UNDECIDED) | (reason == K.NONSLIDING) | (level == depth)
+        keep = final & ((status == K.WORD) | (status == K.NO_SLIDE_WITHIN)) & (nsteps <= _KEPT)
         out.append((np.full(int(final.sum()), level, np.int8), ii[final], jj[final], status[final],
-                    reason[final], step[final], nsteps[final], kept[final]))
+                    reason[final], step[final], nsteps[final], kept[keep]))
+        del kept
         split = ~final
         i2 = 2 * ii[split]
         j2 = 2 * jj[split]
@@ -344,29 +363,103 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, tick):
     return out
 
 
-def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, step, nsteps, kept):
+class _SlideCache:
+    """Whether the float map slides from ``(1, 0)`` within ``max_iter`` steps at grid
+    points of a window's quadtree (box corners: the same floats at every level,
+    :func:`_kernel._edge`), kept by the point's index at the deepest level, so that
+    a corner shared by neighbouring boxes, or by a box and its parent, is iterated once."""
+
+    def __init__(self, win, depth, max_iter):
+        self.win, self.depth, self.max_iter = win, depth, max_iter
+        self.keys = np.zeros(0, np.int64)
+        self.slid = np.zeros(0, bool)
+
+    def slides(self, es, us):
+        """The float map's verdict at the points ``(es, us)`` (:func:`_slides_at`)."""
+        return _slides_at(es, us, self.max_iter)
+
+    def corners(self, level, gi, gj):
+        """The verdict at the grid points ``(gi, gj)`` of ``level``."""
+        sh = self.depth - level
+        keys = (gi << sh) * ((1 << self.depth) + 1) + (gj << sh)
+        new, inverse = np.unique(keys, return_inverse=True)
+        pos = np.minimum(np.searchsorted(self.keys, new), max(self.keys.size - 1, 0))
+        known = (self.keys[pos] == new) if self.keys.size else np.zeros(new.size, bool)
+        slid = np.zeros(new.size, bool)
+        slid[known] = self.slid[pos[known]]
+        todo = np.flatnonzero(~known)
+        if todo.size:
+            n = (1 << self.depth) + 1
+            ti, tj = new[todo] // n >> sh, new[todo] % n >> sh
+            es, us = np.empty(todo.size), np.empty(todo.size)
+            K._grid_points(self.win, level, ti, tj, es, us)
+            slid[todo] = self.slides(es, us)
+            keys_all = np.concatenate([self.keys, new[todo]])
+            order = np.argsort(keys_all, kind="stable")
+            self.keys = keys_all[order]
+            self.slid = np.concatenate([self.slid, slid[todo]])[order]
+        return slid[inverse.ravel()]
+
+
+def _slides_at(es, us, max_iter, chunk=1 << 20):
+    """Whether the float map (``model._slide_or_steps`` from ``(1, 0)``) slides within
+    ``max_iter`` steps at each point: the scan's lane kernel (``plane._run``, pixel by
+    pixel the same iteration, tests/test_plane.py), no pruning, in chunks; fewer points
+    than a unit of the scan's parallel work by :func:`_kernel._slides_each`."""
+    from ..plane import _UNIT_MIN, _run
+
+    out = np.zeros(es.size, bool)
+    if es.size < _UNIT_MIN:  # too few for the lanes' threads to pay: one loop here
+        K._slides_each(es, us, max_iter, out)
+        return out
+    for a in range(0, es.size, chunk):
+        res, _ = _run(es[a:a + chunk], us[a:a + chunk], False, max_iter, 1.0, 0.0, False)
+        out[a:a + chunk] = res["status"] == 0
+    return out
+
+
+def _mark_nonsliding(win, level, depth, ii, jj, status, reason, ns_points, points):
+    """Give the reason "nonsliding" to the undecided boxes of a level (not "range" nor
+    "impacts") at none of whose first ``ns_points`` points (1: the centre; 5: the centre
+    and the corners) the float map slides: the verdict of :func:`_kernel._any_slides`,
+    taken for all the boxes at once, each corner once (``points``, a :class:`_SlideCache`)."""
+    cand = np.flatnonzero((status == K.UNDECIDED) & (reason != K.RANGE) & (reason != K.IMPACTS))
+    if not cand.size:
+        return
+    es, us = np.empty(cand.size), np.empty(cand.size)
+    K._centres(win, level, ii[cand], jj[cand], es, us)
+    rest = cand[~points.slides(es, us)]
+    if ns_points > 1 and rest.size:
+        ci, cj = ii[rest], jj[rest]
+        gi = np.concatenate([ci, ci + 1, ci, ci + 1])
+        gj = np.concatenate([cj, cj, cj + 1, cj + 1])
+        rest = rest[~points.corners(level, gi, gj).reshape(4, -1).any(axis=0)]
+    reason[rest] = K.NONSLIDING
+
+
+def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, step, nsteps, kept, row):
     """The atlas's table: one row per box, with the array form of certificate.py
-    (the itineraries from ``kept`` where they fit, else computed again)."""
+    (the itineraries from ``kept[row[b]]`` where ``row[b] >= 0``, else computed again).
+    Words and reasons are Python strings, one object per distinct text (8 bytes a box)."""
     import xarray as xr
 
     from .._interrupt import run_kernel
     from .._version import __version__
 
-    e0 = _edges(win[0], win[1], level, ii)
-    e1 = _edges(win[0], win[1], level, ii + 1)
-    u0 = _edges(win[2], win[3], level, jj)
-    u1 = _edges(win[2], win[3], level, jj + 1)
+    e0, e1, u0, u1 = (np.empty(level.size) for _ in range(4))
+    K._box_edges(win, level.astype(np.int64), ii, jj, e0, e1, u0, u1)
     proven_path = (status == K.WORD) | (status == K.NO_SLIDE_WITHIN)
     lengths = np.where(proven_path, nsteps, 0)
     offsets = np.zeros(level.size + 1, np.int64)
     np.cumsum(lengths, out=offsets[1:])
     itinerary = np.empty(int(offsets[-1]), np.int64)
-    short = proven_path & (lengths <= _KEPT)
+    short = row >= 0
     if short.any():
-        rows = kept[short]
+        rows = kept[row[short]]
         cols_ = np.arange(_KEPT)
         itinerary[np.repeat(offsets[:-1][short], lengths[short]) + _ranks(lengths[short])] = \
             rows[cols_[None, :] < lengths[short][:, None]]
+        del rows
     sel = np.flatnonzero(proven_path & ~short)
     if sel.size:
         sub_off = np.zeros(sel.size + 1, np.int64)
@@ -376,24 +469,17 @@ def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, st
                    sub_off, buf)
         for k, b in enumerate(sel):
             itinerary[offsets[b]:offsets[b + 1]] = buf[sub_off[k]:sub_off[k + 1]]
-    words = np.full(level.size, "", dtype=object)
-    seen = {}
-    for b in np.flatnonzero(status == K.WORD):
-        key = itinerary[offsets[b]:offsets[b + 1]].tobytes()
-        w = seen.get(key)
-        if w is None:
-            w = seen[key] = word_from_impacts(itinerary[offsets[b]:offsets[b + 1]]).format(ascii=True)
-        words[b] = w
+    words = _word_texts(status, itinerary, offsets)
     reasons = np.array([""] + list(UNDECIDED_REASONS), dtype=object)[np.where(status == K.UNDECIDED, reason + 1, 0)]
     ds = xr.Dataset(
         {
             "e0": ("box", e0), "e1": ("box", e1), "u0": ("box", u0), "u1": ("box", u1),
-            "status": ("box", status.astype(np.int8)),
-            "word": ("box", words.astype(str)),
-            "reason": ("box", reasons.astype(str)),
-            "step": ("box", np.where(status == K.UNDECIDED, step, 0).astype(np.int64)),
-            "level": ("box", level.astype(np.int8)),
-            "i": ("box", ii.astype(np.int64)), "j": ("box", jj.astype(np.int64)),
+            "status": ("box", status.astype(np.int8, copy=False)),
+            "word": ("box", words),
+            "reason": ("box", reasons),
+            "step": ("box", np.where(status == K.UNDECIDED, step, 0).astype(np.int64, copy=False)),
+            "level": ("box", level.astype(np.int8, copy=False)),
+            "i": ("box", ii.astype(np.int64, copy=False)), "j": ("box", jj.astype(np.int64, copy=False)),
             "offsets": ("offset", offsets),
             "itinerary": ("itinerary_step", itinerary),
         },
@@ -406,6 +492,30 @@ def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, st
         },
     )
     return ds
+
+
+def _word_texts(status, itinerary, offsets):
+    """The word (ASCII text, ``""`` unless proven) of every box, spelled once per distinct
+    itinerary (told apart by a hash, the boxes of one hash checked to share the itinerary;
+    where they do not, by the itineraries' bytes)."""
+    words = np.full(status.size, "", dtype=object)
+    wb = np.flatnonzero(status == K.WORD)
+    if not wb.size:
+        return words
+    h = np.empty(wb.size, np.int64)
+    K._itinerary_hashes(itinerary, offsets, wb, h)
+    _, first, inverse = np.unique(h, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    if not K._same_itineraries(itinerary, offsets, wb, wb[first][inverse]):  # a collision: by the bytes
+        keys = [itinerary[offsets[b]:offsets[b + 1]].tobytes() for b in wb]
+        index = {}
+        inverse = np.array([index.setdefault(k, len(index)) for k in keys], np.int64)
+        first = np.zeros(len(index), np.int64)
+        first[inverse[::-1]] = np.arange(wb.size)[::-1]
+    names = np.array([word_from_impacts(itinerary[offsets[b]:offsets[b + 1]]).format(ascii=True)
+                      for b in wb[first]] + [""], dtype=object)[:-1]
+    words[wb] = names[inverse]
+    return words
 
 
 def _ranks(lengths):
@@ -662,7 +772,7 @@ class CertifiedAtlas:
                     ds.attrs[f"{k}_names"] = [str(x) for x in names]
                 ds.to_zarr(tmp, mode="w", consolidated=False)
             else:
-                enc = {k: {"zlib": True, "complevel": 4} for k in ds.data_vars if ds[k].dtype.kind != "U"}
+                enc = {k: {"zlib": True, "complevel": 4} for k in ds.data_vars if ds[k].dtype.kind not in "UO"}
                 ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=enc)
 
     @classmethod
@@ -683,12 +793,17 @@ class CertifiedAtlas:
             raise ValueError(f"cannot read a certified atlas from {path}: {exc}") from None
         if ds.attrs.get("kind") != "stairbounce certified atlas":
             raise ValueError(f"{path} is not a certified atlas written by stairbounce")
+        import pandas as pd
+
         for k in ("word", "reason"):
             if f"{k}_code" in ds:  # a Zarr store (save)
-                names = np.array(list(ds.attrs.pop(f"{k}_names")) or [""], dtype=str)
+                names = np.array([str(x) for x in ds.attrs.pop(f"{k}_names")] or [""], dtype=object)
                 ds[k] = ("box", names[ds[f"{k}_code"].values])
                 ds = ds.drop_vars(f"{k}_code")
-            ds[k] = ds[k].astype(str)
+            # one Python string per distinct text, as certify makes them (8 bytes a box)
+            v = np.asarray(ds[k].values)
+            codes, names = pd.factorize(v if v.dtype.kind == "O" else v.astype(str).astype(object))
+            ds[k] = ("box", np.asarray(names, dtype=object)[codes])
         for k in ("e_range", "u_range"):
             ds.attrs[k] = [float(x) for x in np.atleast_1d(ds.attrs[k])]
         return cls(ds)
