@@ -132,9 +132,13 @@ def proven_slices(view: V.View, slice_work: int | None = None):
             lo, acc = b, 0
         acc += w
     bounds.append((lo, status.size))
+    # the itineraries the level kernel kept, for the proven boxes whose itinerary fits
+    # (certify()'s ``row``: the box's row of ``kept``, -1 to compute it again)
+    fits = ((status == K.WORD) | (status == K.NO_SLIDE_WITHIN)) & (nsteps <= C._KEPT)
     parts = []
     for k, (a, b) in enumerate(bounds):
-        parts.append(C._atlas_dataset(win, depth, max_iter, form, *(c[a:b] for c in cols)))
+        row = np.where(fits[a:b], np.arange(b - a), -1)
+        parts.append(C._atlas_dataset(win, depth, max_iter, form, *(c[a:b] for c in cols), row))
         if k + 1 < len(bounds):
             yield "itineraries", b, status.size
     return C.CertifiedAtlas(_join(parts))
