@@ -86,10 +86,10 @@ from .certificate import STATUSES, Certificate
 
 __all__ = ["CHECKS", "Verdict", "verify", "verify_arrays", "verify_codes", "verify_file", "read_atlas_arrays"]
 
-CHECKS = ("ok", "box", "status", "itinerary", "corollary", "slide", "impact", "no impact", "word")
+CHECKS = ("ok", "box", "status", "itinerary", "corollary", "slide", "impact", "no impact", "word", "trapping")
 """Names of the checks; ``verify_codes`` returns indices into this tuple (0: accepted)."""
 
-_OK, _BOX, _STATUS, _ITIN, _COR, _SLIDE, _IMPACT, _NOIMPACT, _WORD = range(len(CHECKS))
+_OK, _BOX, _STATUS, _ITIN, _COR, _SLIDE, _IMPACT, _NOIMPACT, _WORD, _TRAP = range(len(CHECKS))
 _WORD_S, _NOSLIDING_S, _WITHIN_S, _UNDECIDED_S = (STATUSES.index(s) for s in
                                                    ("word", "no_sliding", "no_slide_within", "undecided"))
 # an interval is a (2, n) array: row 0 the lower bounds, row 1 the upper ones;
@@ -361,6 +361,10 @@ def _arrays_of_certificate(cert):
 
 
 def _verify_certificate(cert):
+    if cert.status == "no_sliding" and cert.reason == "trapping":  # a trapping region (verify_trapping.py)
+        from .verify_trapping import verify_certificate_region
+
+        return verify_certificate_region(cert, Verdict)
     try:
         arrays = _arrays_of_certificate(cert)
         code, step = verify_codes(*arrays)
@@ -427,6 +431,10 @@ def _verify_dataset(data):
     code, step = verify_codes(arrays["e0"], arrays["e1"], arrays["u0"], arrays["u1"], arrays["status"],
                               arrays["max_iter"], arrays["itinerary"], arrays["offsets"])
     _check_words(arrays, code)
+    if "reason" in data.variables:  # no_sliding boxes proven by trapping regions (verify_trapping.py)
+        from .verify_trapping import check_atlas_regions
+
+        check_atlas_regions(data, arrays, code, _TRAP)
     bad = np.flatnonzero(code != _OK)
     n = len(code)
     if not len(bad):
