@@ -346,8 +346,9 @@ def _try(e0, e1, u0, u1, max_iter, tries=_TRIES, max_cells=_MAX_CELLS):
         dv, ds = hull[1] - hull[0], hull[3] - hull[2]
         grid = (hull[0] - pad * dv - 2 * dT, hull[1] + pad * dv + 2 * dT, cells,
                 max(hull[2] - pad * ds - dT, 1.0), hull[3] + pad * ds + dT, cells)
-        i0, i1 = _cell_range(v0, v1, grid[0], grid[1], cells)
-        j0, j1 = _cell_range(s0, s1, grid[3], grid[4], cells)
+        # the seed covers the entry enclosure with a little room (any superset will do)
+        i0, i1 = _cell_range(v0 - 1e-9 * (1 + abs(v0)), v1 + 1e-9 * (1 + abs(v1)), grid[0], grid[1], cells)
+        j0, j1 = _cell_range(s0 - 1e-9 * s0, s1 + 1e-9 * s1, grid[3], grid[4], cells)
         if i0 < 0 or j0 < 0:
             failure = "escape"
             continue
