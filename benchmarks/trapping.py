@@ -41,7 +41,7 @@ def main(depths):
         print(f"  share of the plane: trapped (no_sliding by a region) {100 * by_trap:.3f} %, "
               f"nonsliding left undecided {100 * left:.3f} %, proven share of the non-sliding area below "
               f"the curve {100 * by_trap / max(by_trap + left, 1e-300):.1f} %")
-        print(f"  fractions {trapped.fraction()}")
+        print(f"  fractions {trapped.fraction()}; failures: {ds.attrs['trap_failures']}")
         print(f"  sb.verify: {verdict.message} in {t4 - t3:.1f} s; the load now {os.getloadavg()}")
         np.seterr(all="ignore")
 

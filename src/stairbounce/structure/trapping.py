@@ -399,7 +399,8 @@ def trap_atlas(ds, progress=None):
     become ``no_sliding`` with reason ``"trapping"``, their entry itinerary in
     ``itinerary``/``offsets`` and the region in ``trap_box`` (the box's row),
     ``trap_grid`` (``v_lo, v_hi, nv, s_lo, s_hi, ns``), ``trap_cell_offsets``
-    and ``trap_cells``; ``attrs["trap_seconds"]``, ``attrs["trap_tried"]``."""
+    and ``trap_cells``; ``attrs["trap_seconds"]``, ``attrs["trap_tried"]`` and
+    ``attrs["trap_failures"]`` (why the others failed, :data:`TRAP_FAILURES`)."""
     import time
 
     from ._kernel import NO_SLIDING, UNDECIDED, _U_MIN
@@ -411,12 +412,15 @@ def trap_atlas(ds, progress=None):
     max_iter = int(ds.attrs["max_iter"])
     sel = np.flatnonzero((st == UNDECIDED) & (reason == "nonsliding"))
     found = {}
+    failures = {}
     for n, b in enumerate(sel):
         e0, e1, u0, u1 = (float(c[b]) for c in cols)
         if e0 > 0.0 and e1 < 1.0 and u0 >= _U_MIN:
-            r = _try(e0, e1, u0, u1, max_iter)[0]
+            r, why = _try(e0, e1, u0, u1, max_iter)
             if r is not None:
                 found[int(b)] = r
+            else:
+                failures[why] = failures.get(why, 0) + 1
         if progress is not None and (n + 1) % 256 == 0:
             progress(n + 1, sel.size)
     off = ds["offsets"].values
@@ -445,7 +449,8 @@ def trap_atlas(ds, progress=None):
         trap_cell_offsets=("trap_offset", cell_off),
         trap_cells=("trap_cell", np.concatenate([r.cells for r in regions]) if regions else np.zeros(0, np.int64)),
     )
-    out.attrs = dict(ds.attrs, trap_tried=int(sel.size), trap_seconds=time.perf_counter() - t0)
+    out.attrs = dict(ds.attrs, trap_tried=int(sel.size), trap_seconds=time.perf_counter() - t0,
+                     trap_failures=", ".join(f"{k} {v}" for k, v in sorted(failures.items())))
     return out
 
 
