@@ -112,3 +112,44 @@ def test_bad_input(bad):
         return
     with pytest.raises(ValueError, match="trap"):
         sb.certify(e=(0.29, 0.31), u=(0.4, 0.42), depth=2, trap="yes")
+
+
+def test_kernel_enclosures_against_arb(region):
+    """The fast kernel's claims on the region's cells, against python-flint's Arb
+    balls at random states of random cells and random (e, u) of the box: the state
+    does not slide, its impact number is one the kernel followed, and its image lies
+    in the kernel's enclosure of that branch."""
+    flint = pytest.importorskip("flint")
+    from stairbounce.structure.trapping import _branches
+
+    arb = flint.arb
+    (e0, e1), (u0, u1) = BOX
+    boxes = region.boxes()
+    Tl, Th = np.nextafter(1 / u1, 0), np.nextafter(1 / u0, 2)
+    Rl = np.nextafter((1 + e0) / (1 - e0), 0)
+    out = np.empty((4098, 5))
+    rng = np.random.default_rng(3)
+    for c in rng.integers(0, len(boxes), 60):
+        v0, v1, s0, s1 = boxes[c]
+        n = _branches(v0, v1, s0, s1, e0, e1, Tl, Th, Rl, out)
+        assert n > 0
+        enclosure = {int(out[r, 4]): out[r, :4].copy() for r in range(n)}
+        e, u = arb(rng.uniform(e0, e1)), arb(rng.uniform(u0, u1))
+        v, s = arb(rng.uniform(v0, v1)), arb(rng.uniform(s0, s1))
+        T, ratio = 1 / u, (1 + e) / (1 - e)
+        assert T - v - ratio * s < 0  # (2.4) false: no slide
+        t, w, k = v + s, e * s, 0
+        t_k, w_k = t, w
+        while t <= T:  # impact k + 1 on the step (eq. 2.2), decided by the balls
+            k += 1
+            t_k, w_k = t, w
+            t, w = t + 2 * w, e * w
+        assert t > T  # the last comparison was decided too
+        assert k in enclosure
+        a0, a1, b0, b1 = enclosure[k]
+        if k == 0:
+            vn, sn = v - T, (s * s + 2).sqrt()
+        else:  # after the k-th impact, at t_k with speed w_k
+            vn, sn = w_k - (T - t_k), (w_k * w_k + 2).sqrt()
+        assert a0 <= vn.lower() and vn.upper() <= a1
+        assert b0 <= sn.lower() and sn.upper() <= b1
