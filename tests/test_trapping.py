@@ -75,7 +75,7 @@ def test_no_region_where_every_point_slides():
 
 
 def test_atlas_with_trap():
-    win = dict(e=(0.29, 0.31), u=(0.40, 0.42), depth=4, max_iter=300)
+    win = dict(e=(0.29, 0.31), u=(0.40, 0.42), depth=3, max_iter=300)
     plain = sb.certify(**win)
     atlas = sb.certify(**win, trap=True)
     ds, ds0 = atlas.boxes, plain.boxes
