@@ -19,6 +19,10 @@ What is checked, per box (the first failure is the box's verdict):
 * ``corollary``: a ``no_sliding`` box satisfies Corollary 2.1 over the whole
   box, ``8 e0 u0^2 > (1 - e0)^2`` (that is ``u0 > (1-e0)/(2 sqrt(2 e0))``,
   the bound decreasing in e), enclosed;
+* ``trapping``: a ``no_sliding`` box with reason ``"trapping"`` (certificate or
+  atlas row) is re-verified from its trapping region by
+  ``structure/verify_trapping.py`` (numpy, this module's arithmetic) instead of
+  Corollary 2.1;
 * along the itinerary, from ``(y, v) = (1, 0)``, every decision of every
   listed step proven with the sign the itinerary says: the slide margin
   ``T - (v + ratio s)`` (Prop. 2.1, eq. (2.4)) proven >= 0 on the sliding
