@@ -87,6 +87,7 @@ from .structure.trace import trace_border
 from ._progress import progress_bar
 from .structure import Certificate, CertifiedAtlas, certify, certify_box
 from .structure.labels import prove_labels
+from .structure.trapping import TrappingRegion, trapping_region
 from .structure.tubes import BorderTube, border_tube
 from .structure.verify import Verdict, verify
 from .symbolic import SlidingAnswer, Word, parse_word, sliding_answer, sliding_word
@@ -211,6 +212,8 @@ __all__ = [
     "prove_labels",
     "BorderTube",
     "border_tube",
+    "TrappingRegion",
+    "trapping_region",
     "Verdict",
     "verify",
 ]

@@ -42,8 +42,13 @@ STATUSES = ("word", "no_sliding", "no_slide_within", "undecided")
 * ``word``: every point of the box has the periodic sliding solution through
   (1, 0) with ``word``: the itinerary ends with the slide (-1), and every
   decision on the way is proven.
-* ``no_sliding``: no sliding solution at any point of the box (Corollary 2.1
-  over the whole box: ``u0 > (1 - e0) / (2 sqrt(2 e0))``, enclosed).
+* ``no_sliding``: no periodic sliding solution at any point of the box, proven
+  either by Corollary 2.1 over the whole box (``u0 > (1 - e0) / (2 sqrt(2
+  e0))``, enclosed: no state with ``y >= 1`` slides at all; ``reason`` None) or,
+  with ``reason == "trapping"``, by a trapping region
+  (``structure/trapping.py``: the orbit of (1, 0) never slides, so no
+  periodic sliding solution; ``itinerary`` is the entry, ``region`` the
+  region).
 * ``no_slide_within``: proven that the orbit of (1, 0) does not slide in the
   first ``max_iter`` steps anywhere in the box (a finite claim): the itinerary
   has ``max_iter`` entries, none -1.
@@ -76,6 +81,7 @@ class Certificate:
     itinerary: tuple[int, ...] = ()
     decisions: tuple[str, ...] = ()
     margins: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    region: object | None = None  # structure.trapping.TrappingRegion when reason == "trapping"
 
     @property
     def proven(self) -> bool:
@@ -91,6 +97,7 @@ class Certificate:
             "reason": self.reason, "step": self.step,
             "itinerary": [int(k) for k in self.itinerary], "decisions": list(self.decisions),
             "margins": [[float(lo), float(hi)] for lo, hi in np.asarray(self.margins).reshape(-1, 2)],
+            **({"region": self.region.to_dict()} if self.region is not None else {}),
         }
 
     @classmethod
@@ -106,4 +113,13 @@ class Certificate:
             itinerary=tuple(int(k) for k in d.get("itinerary", ())),
             decisions=tuple(d.get("decisions", ())),
             margins=np.array(d.get("margins", []), dtype=np.float64).reshape(-1, 2),
+            region=_region(d.get("region")),
         )
+
+
+def _region(d):
+    if d is None:
+        return None
+    from .trapping import TrappingRegion
+
+    return TrappingRegion.from_dict(d)

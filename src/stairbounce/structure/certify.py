@@ -215,8 +215,8 @@ def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
 
 
 def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress=None, *, tiles=1,
-            form="corners") -> CertifiedAtlas:
-    """certify(e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, progress=None, *, tiles=1, form="corners") -> CertifiedAtlas
+            form="corners", trap=False) -> CertifiedAtlas:
+    """certify(e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, progress=None, *, tiles=1, form="corners", trap=False) -> CertifiedAtlas
 
     Cover a window of the (e, u) plane with boxes, each certified
     (:func:`certify_box`): an adaptive quadtree down to boxes of
@@ -252,15 +252,21 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
         Tiles a side, certified one after the other (the same boxes).
     form : "corners" (default), "mean-value" or "naive"
         The enclosures (:func:`certify_box`).
+    trap : bool, default False
+        Try a trapping region (:func:`stairbounce.trapping_region`) on every
+        undecided ``"nonsliding"`` box; a box with one becomes ``no_sliding``
+        with reason ``"trapping"`` (proven: the orbit of (1, 0) never slides
+        there, so no periodic sliding solution), its region stored in the
+        table (``trap_*`` variables) for ``sb.verify``.
 
     Returns
     -------
     CertifiedAtlas
     """
-    return _certify(e, u, depth, max_iter, progress, tiles, form)
+    return _certify(e, u, depth, max_iter, progress, tiles, form, trap=trap)
 
 
-def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False):
+def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap=False):
     """:func:`certify`; with ``reference`` the "nonsliding" check is taken box by box in
     the level kernel (:func:`_kernel._any_slides`, the algorithm before the shared
     check of :func:`_mark_nonsliding`; the tests compare the two)."""
@@ -272,6 +278,8 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False):
     code = _check_form(form)
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
+    if not isinstance(trap, (bool, np.bool_)):
+        raise ValueError(f"trap must be True or False, got {trap!r}")
     start = min(_START_LEVEL, depth)
     allowed = [t for t in (1, 2, 4, 8) if t <= 1 << start]
     tiles = check_count("tiles", tiles, 1)
@@ -317,6 +325,10 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False):
     row = row[order]
     del cols
     ds = _atlas_dataset(win, depth, max_iter, code, level, ii, jj, status, reason, step, nsteps, kept, row)
+    if trap:
+        from .trapping import trap_atlas
+
+        ds = trap_atlas(ds)
     return CertifiedAtlas(ds, seconds=time.perf_counter() - t0)
 
 
@@ -650,7 +662,13 @@ class CertifiedAtlas:
         st = ds["status"].values
         itin = _itinerary_buffer(self.max_iter)
         cols = [ds[k].values for k in ("e0", "e1", "u0", "u1")]
+        trapped = ds["reason"].values == "trapping"
         for b in np.flatnonzero(st != K.UNDECIDED):
+            if trapped[b]:  # a trapping region (structure/trapping.py)
+                from .trapping import certificate_of, region_of
+
+                yield certificate_of(region_of(ds, b), self.max_iter)
+                continue
             e0, e1, u0, u1 = (float(c[b]) for c in cols)
             s, rs, sp, it, dec, marg = _run_box(e0, e1, u0, u1, self.max_iter, form, itin)
             yield _certificate(e0, e1, u0, u1, self.max_iter, s, rs, sp, it, dec, marg)

@@ -19,6 +19,10 @@ What is checked, per box (the first failure is the box's verdict):
 * ``corollary``: a ``no_sliding`` box satisfies Corollary 2.1 over the whole
   box, ``8 e0 u0^2 > (1 - e0)^2`` (that is ``u0 > (1-e0)/(2 sqrt(2 e0))``,
   the bound decreasing in e), enclosed;
+* ``trapping``: a ``no_sliding`` box with reason ``"trapping"`` (certificate or
+  atlas row) is re-verified from its trapping region by
+  ``structure/verify_trapping.py`` (numpy, this module's arithmetic) instead of
+  Corollary 2.1;
 * along the itinerary, from ``(y, v) = (1, 0)``, every decision of every
   listed step proven with the sign the itinerary says: the slide margin
   ``T - (v + ratio s)`` (Prop. 2.1, eq. (2.4)) proven >= 0 on the sliding
@@ -86,10 +90,10 @@ from .certificate import STATUSES, Certificate
 
 __all__ = ["CHECKS", "Verdict", "verify", "verify_arrays", "verify_codes", "verify_file", "read_atlas_arrays"]
 
-CHECKS = ("ok", "box", "status", "itinerary", "corollary", "slide", "impact", "no impact", "word")
+CHECKS = ("ok", "box", "status", "itinerary", "corollary", "slide", "impact", "no impact", "word", "trapping")
 """Names of the checks; ``verify_codes`` returns indices into this tuple (0: accepted)."""
 
-_OK, _BOX, _STATUS, _ITIN, _COR, _SLIDE, _IMPACT, _NOIMPACT, _WORD = range(len(CHECKS))
+_OK, _BOX, _STATUS, _ITIN, _COR, _SLIDE, _IMPACT, _NOIMPACT, _WORD, _TRAP = range(len(CHECKS))
 _WORD_S, _NOSLIDING_S, _WITHIN_S, _UNDECIDED_S = (STATUSES.index(s) for s in
                                                    ("word", "no_sliding", "no_slide_within", "undecided"))
 # an interval is a (2, n) array: row 0 the lower bounds, row 1 the upper ones;
@@ -361,6 +365,10 @@ def _arrays_of_certificate(cert):
 
 
 def _verify_certificate(cert):
+    if cert.status == "no_sliding" and cert.reason == "trapping":  # a trapping region (verify_trapping.py)
+        from .verify_trapping import verify_certificate_region
+
+        return verify_certificate_region(cert, Verdict)
     try:
         arrays = _arrays_of_certificate(cert)
         code, step = verify_codes(*arrays)
@@ -427,6 +435,10 @@ def _verify_dataset(data):
     code, step = verify_codes(arrays["e0"], arrays["e1"], arrays["u0"], arrays["u1"], arrays["status"],
                               arrays["max_iter"], arrays["itinerary"], arrays["offsets"])
     _check_words(arrays, code)
+    if "reason" in data.variables:  # no_sliding boxes proven by trapping regions (verify_trapping.py)
+        from .verify_trapping import check_atlas_regions
+
+        check_atlas_regions(data, arrays, code, _TRAP)
     bad = np.flatnonzero(code != _OK)
     n = len(code)
     if not len(bad):

@@ -1,0 +1,50 @@
+"""How much of the Fig. 4 plane's non-sliding area below the Corollary 2.1 curve
+trapping regions prove (issue 36, item 7).
+
+Certifies the paper's plane (e in [0, 1], u in [0, 1.5]) at a depth with and
+without ``trap=True`` (the same process), and prints: the time of each and of
+the trapping pass, the boxes tried and proven, the area proven ``no_sliding``
+by trapping, the area left undecided "nonsliding" (numerical), the share of
+the non-sliding area below the curve that trapping proves (trapping /
+(trapping + nonsliding)), and the checker's verdict and time on the trapped
+boxes.  Usage: ``python benchmarks/trapping.py [depth ...]`` (default 8).
+"""
+
+import os
+import sys
+import time
+
+import numpy as np
+
+import stairbounce as sb
+
+
+def main(depths):
+    print(f"load {os.getloadavg()}")
+    for depth in depths:
+        t0 = time.perf_counter()
+        plain = sb.certify(e=(0.0, 1.0), u=(0.0, 1.5), depth=depth, max_iter=1000)
+        t1 = time.perf_counter()
+        trapped = sb.certify(e=(0.0, 1.0), u=(0.0, 1.5), depth=depth, max_iter=1000, trap=True)
+        t2 = time.perf_counter()
+        ds = trapped.boxes
+        area = (ds["e1"].values - ds["e0"].values) * (ds["u1"].values - ds["u0"].values) / 1.5
+        reason = ds["reason"].values
+        by_trap = float(area[reason == "trapping"].sum())
+        left = float(area[reason == "nonsliding"].sum())
+        t3 = time.perf_counter()
+        verdict = sb.verify(trapped)
+        t4 = time.perf_counter()
+        print(f"depth {depth}: certify {t1 - t0:.1f} s, with trap {t2 - t1:.1f} s "
+              f"(trapping pass {ds.attrs['trap_seconds']:.1f} s, {ds.attrs['trap_tried']} boxes tried, "
+              f"{int((reason == 'trapping').sum())} proven)")
+        print(f"  share of the plane: trapped (no_sliding by a region) {100 * by_trap:.3f} %, "
+              f"nonsliding left undecided {100 * left:.3f} %, proven share of the non-sliding area below "
+              f"the curve {100 * by_trap / max(by_trap + left, 1e-300):.1f} %")
+        print(f"  fractions {trapped.fraction()}; failures: {ds.attrs['trap_failures']}")
+        print(f"  sb.verify: {verdict.message} in {t4 - t3:.1f} s; the load now {os.getloadavg()}")
+        np.seterr(all="ignore")
+
+
+if __name__ == "__main__":
+    main([int(a) for a in sys.argv[1:]] or [8])
