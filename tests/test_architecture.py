@@ -11,7 +11,7 @@ import pytest
 CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "dimension", "atlas",
         "atlas_boxes", "nonsliding", "borders", "regions", "_region_export", "_colours", "_io", "_interrupt",
         "_cache", "structure", "structure.certify", "structure.verify", "structure.labels", "structure.tubes",
-        "cascades"]
+        "cascades", "cascade_families"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

@@ -77,6 +77,7 @@ from .plane import (
 from .plane import scan as _scan_function
 from .borders import bifurcations, border_points, itinerary, word_table
 from .cascades import Cascade, CascadeLaw, cascade, cascade_law, cascades
+from .cascade_families import FareyTest, farey_test, member_count, organising_centres
 from .regions import (
     BorderArc,
     BorderGraph,
@@ -214,6 +215,10 @@ __all__ = [
     "cascade",
     "cascade_law",
     "cascades",
+    "FareyTest",
+    "farey_test",
+    "member_count",
+    "organising_centres",
     "prove_labels",
     "BorderTube",
     "border_tube",
