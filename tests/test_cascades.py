@@ -425,3 +425,18 @@ def test_a_windows_families_at_two_levels():
     # its n = 1 member's accumulation is that family's
     assert one.limit_lo in [c[1] for c in two.limit_curve]
     assert (df.level.diff().fillna(0) >= 0).all()  # level 1 first
+
+
+def test_a_members_tip_is_a_corner_of_its_region():
+    # member 4 of (1^k, 0^inf) ends where its edge (step 3) and chatter (step 4) borders
+    # cross; the line search (member_count, bisection on e) and the region's walk
+    # (pseudo-arclength continuation, word_region) are independent ways to that point
+    ch = sb.member_count("(1^k, 0^inf)", (0.12, 0.14), (0.3, 0.7071), n=2)
+    e4 = float(ch.set_index("k").loc[4, "e_below"])
+    m = sb.cascade("(1^k, 0^inf)", e=e4, u=(0.3, 0.7071), k_max=4).members.set_index("k").loc[4]
+    region = sb.word_region("(1, 1, 1, 1, 0^inf)", e=(0.11, 0.14), u=(0.585, 0.61), resolution=48)
+    oc = sb.organising_centres((0.11, 0.14), (0.585, 0.61), regions=[region], top=3)
+    assert oc.attrs["corners"] == 1 and oc.events[0] == "edge 3; chatter 4"
+    assert math.hypot(oc.e[0] - e4, oc.u[0] - m.lo) < 1e-9
+    with pytest.raises(ValueError, match="top"):
+        sb.organising_centres((0.11, 0.14), (0.585, 0.61), regions=[region], top=0)

@@ -636,7 +636,9 @@ def organising_centres(e, u, patterns=(), *, resolution=64, top=8, lines=5, k_ma
             if c.limit_enclosure is not None:
                 pts.append((float(ev), c.limit_enclosure[0], c.limit_enclosure[1]))
         curves[p] = pts
-    order = np.argsort(-deg, kind="stable")[:top]
+    # the corners inside the window (a node where an arc meets the window's edge is no corner)
+    inner = [i for i, c in enumerate(graph.nodes) if all(ev[0] != "window" for ev in c.events)]
+    order = sorted(inner, key=lambda i: -deg[i])[:top]
     rows = []
     for i in order:
         node = graph.nodes[int(i)]
@@ -660,4 +662,5 @@ def organising_centres(e, u, patterns=(), *, resolution=64, top=8, lines=5, k_ma
     out = pd.DataFrame(rows, columns=["e", "u", "degree", "events", "nearest", "distance", "on_curve"])
     out.attrs["curves"] = curves
     out.attrs["nodes"] = len(graph.nodes)
+    out.attrs["corners"] = len(inner)
     return out
