@@ -425,6 +425,10 @@ def test_a_windows_families_at_two_levels():
     # its n = 1 member's accumulation is that family's
     assert one.limit_lo in [c[1] for c in two.limit_curve]
     assert (df.level.diff().fillna(0) >= 0).all()  # level 1 first
+    with pytest.raises(ValueError, match="words"):
+        sb.cascades(e=(0.018, 0.022), u=(0.679, 0.69), words=["(1, 0^inf)"])
+    with pytest.raises(ValueError, match="resolution"):
+        sb.cascades(e=(0.018, 0.022), u=(0.679, 0.69), resolution=2)
 
 
 def test_a_members_tip_is_a_corner_of_its_region():

@@ -989,6 +989,10 @@ def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_ma
     if _is_pair(e) and _is_pair(u):  # a window: its families at two levels (cascade_families)
         from .cascade_families import window_families
 
+        if words is not None:
+            raise ValueError("words: only for a line (one of e and u a number); a window's words "
+                             "are those of its scan (resolution)")
+
         return window_families(e, u, min_members=min_members, block_max=block_max, k_max=k_max,
                                max_iter=max_iter, resolution=resolution, lines=lines)
     axis, name, lo, hi, fixed = _line_args(e, u)
