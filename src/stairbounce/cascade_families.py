@@ -20,7 +20,6 @@ from typing import Any
 
 import numpy as np
 
-from . import _validate as _v
 from .borders import _shrink_secant, _word_groups
 from .cascades import (
     _FOUND,
