@@ -350,7 +350,10 @@ def test_families_of_families_are_grouped_by_one_free_count():
     # ((1^n, 0)^k, 1^(n+1), 0^inf) for n = 1..4, written out, and a stranger
     fams = [((), (1,) * n + (0,), (1,) * (n + 1)) for n in range(1, 5)] + [((), (1, 0), (2,))]
     out = _level2(fams)
-    assert [(t, [n for n, _ in m]) for t, m in out] == [("((1^n, 0)^k, 1^(n+1), 0^inf)", [1, 2, 3, 4])]
+    assert [(t, [n for n, _ in m]) for t, m, _ in out] == [("((1^n, 0)^k, 1^(n+1), 0^inf)", [1, 2, 3, 4])]
+    # and makes the member family of any n, seen or not
+    make = out[0][2]
+    assert make(6) == ((), (1,) * 6 + (0,), (1,) * 7) and make(0) is None
     # two members are not a family of families
     assert _level2(fams[:2]) == []
 

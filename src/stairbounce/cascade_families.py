@@ -150,11 +150,33 @@ def _level2(fams):
                 body = (f"{block[0]}^k" if len(block) == 1 and "^" not in block[0]
                         else "(" + ", ".join(block) + ")^k")
                 text = "(" + ", ".join([*texts[0], body, *texts[2], "0^inf"]) + ")"
-                out.append((text, sorted(by_n.items())))
+                out.append((text, sorted(by_n.items()), _member_maker(parts, set(mask), n0)))
     return out
 
 
-def window_families(e, u, *, resolution=128, lines=3, min_members=4, block_max=4, k_max=100, max_iter=1000):
+def _member_maker(parts, mask, n0):
+    """The level-1 pattern ``(P, X, S)`` of a family of families at any n: the
+    runs in ``mask`` (flat indices) get count ``n + (c - n0)``; None where a
+    count would be below 1."""
+
+    def make(n):
+        out, at = [], 0
+        for pt in parts:
+            letters = []
+            for a, c in pt:
+                c2 = n + (c - n0) if at in mask else c
+                if c2 < 1:
+                    return None
+                letters.extend([a] * c2)
+                at += 1
+            out.append(tuple(letters))
+        return tuple(out)
+
+    return make
+
+
+def window_families(e, u, *, resolution=128, lines=3, min_members=4, block_max=4, k_max=100, max_iter=1000,
+                    n_max=8):
     """The families of a window, as :func:`stairbounce.cascades` with two ranges
     lists them (see there); here is the work."""
     import pandas as pd
@@ -216,26 +238,27 @@ def window_families(e, u, *, resolution=128, lines=3, min_members=4, block_max=4
                      "limit_curve": tuple(sorted(curve)), "n_values": ()})
         fams.append((p, x, s))
         cascs.append(first)
-    # level 2: families of families, each level-1 family's accumulation point on its own line
-    for text, members in _level2(fams):
+    # level 2: families of families; the level-1 family of every n = 1..n_max located on one
+    # line (the line of the first one seen), its accumulation points' law against n
+    for text, members, make in _level2(fams):
+        line = cascs[members[0][1]].fixed
         ns, pts, curve = [], [], []
-        for n, idx in members:
-            enc = cascs[idx].limit_enclosure
-            if enc is not None:
+        for n in range(1, n_max + 1):
+            pxs = make(n)
+            if pxs is None:
+                continue
+            c = cascade(_pattern_text(*pxs), e=line, u=(u_lo, u_hi), k_max=k_max, max_iter=max_iter)
+            if c.limit_enclosure is not None and len(c.members):
                 ns.append(n)
-                pts.append(0.5 * (enc[0] + enc[1]))
-                curve.append((cascs[idx].fixed, enc[0], enc[1]))
-        lines_ = {c[0] for c in curve}
-        row = {"pattern": text, "level": 2, "seen": len(members), "members": len(members),
-               "k_first": members[0][0], "k_last": members[-1][0],
-               "stop": "", "law": "undecided", "exponent": math.nan, "exponent_lo": math.nan,
+                pts.append(0.5 * (c.limit_enclosure[0] + c.limit_enclosure[1]))
+                curve.append((line, c.limit_enclosure[0], c.limit_enclosure[1]))
+        row = {"pattern": text, "level": 2, "seen": len(members), "members": len(ns),
+               "k_first": ns[0] if ns else -1, "k_last": ns[-1] if ns else -1,
+               "stop": f"n = 1..{n_max} tried on the line e = {line:.17g}", "law": "undecided",
+               "exponent": math.nan, "exponent_lo": math.nan,
                "exponent_hi": math.nan, "ratio": math.nan, "ratio_lo": math.nan, "ratio_hi": math.nan,
-               "limit_lo": math.nan, "limit_hi": math.nan, "limit_name": None,
-               "e_line": curve[0][0] if len(lines_) == 1 else math.nan,
-               "limit_curve": tuple(curve), "n_values": tuple(n for n, _ in members)}
-        if len(lines_) != 1:  # the accumulation points are on different lines: no law along one
-            rows.append(row)
-            continue
+               "limit_lo": math.nan, "limit_hi": math.nan, "limit_name": None, "e_line": line,
+               "limit_curve": tuple(curve), "n_values": tuple(ns)}
         gaps = np.abs(np.diff(pts))
         ok = np.diff(ns) == 1
         if ok.sum() >= 4 and np.all(gaps[ok] > 0):

@@ -975,11 +975,14 @@ def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_ma
     them: the accumulation point as a curve over e).  ``level`` is 1 for
     these; families of families are then found among them (level 2): the
     patterns whose run lengths differ by one free count ``n`` (e.g.
-    ``((1^n, 0)^k, 1^(n+1), 0^inf)`` for n = 1, 2, 3, ...), each listed with
-    ``n_values``, the accumulation points of its level-1 families on one
-    line, and the law of those points against n (:func:`cascade_law` on the
-    gaps between consecutive accumulation points; ``limit_lo``/``limit_hi``
-    the extrapolated accumulation of the accumulation points' interval).
+    ``((1^n, 0)^k, 1^(n+1), 0^inf)`` for n = 1, 2, 3, ..., at least three n
+    seen); the level-1 family of every n = 1..8, seen or not, is then
+    located on one line (that of the first family seen), and the row lists
+    the n whose family has members and an accumulation enclosure there
+    (``n_values``, ``members``), those enclosures (``limit_curve``), and the
+    law of the accumulation points against n (:func:`cascade_law` on the
+    gaps between consecutive ones, at least 5 of them; ``limit_lo`` /
+    ``limit_hi`` the extrapolated accumulation of the accumulation points).
     Members' regions: :meth:`Cascade.regions`.
     """
     import pandas as pd
