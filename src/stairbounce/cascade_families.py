@@ -616,7 +616,7 @@ def organising_centres(e, u, patterns=(), *, resolution=64, top=8, lines=5, k_ma
     the enclosure of the accumulation point (:func:`stairbounce.cascade`) on
     ``lines`` lines e = const across the window, interpolated linearly in e
     at the corner: ``nearest`` (the pattern whose curve passes closest in u),
-    ``distance`` (|u - curve(e)|, NaN outside the curve's e span) and
+    ``distance`` (``abs(u - curve(e))``, NaN outside the curve's e span) and
     ``on_curve`` (the corner's u within the curve's enclosure interval,
     interpolated, widened by the interpolation's change between lines).
     Returns the corners table; ``attrs["curves"]`` holds each pattern's

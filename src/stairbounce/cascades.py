@@ -951,20 +951,6 @@ def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_ma
     The candidates depend on the words seen (a sampled line); the members
     listed do not.
 
-    Parameters
-    ----------
-    e, u : float, or (lo, hi)
-        The line, as in :func:`cascade`.
-    samples : int >= 2, default 2000
-    words : iterable of str or Word, optional
-    min_members : int >= 2, default 4
-    block_max : int >= 1, default 4
-    k_max, max_iter : as in :func:`cascade`.
-    resolution : int >= 8, default 128
-        A window only: pixels per side of the scan whose words are split.
-    lines : int >= 1, default 3
-        A window only: lines e = const each family is located on.
-
     A window (``e`` and ``u`` both ranges): the words are those of a scan of
     ``resolution`` x ``resolution`` pixel centres (the words of
     :func:`stairbounce.word_table` without its border points); each
@@ -984,6 +970,20 @@ def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_ma
     gaps between consecutive ones, at least 5 of them; ``limit_lo`` /
     ``limit_hi`` the extrapolated accumulation of the accumulation points).
     Members' regions: :meth:`Cascade.regions`.
+
+    Parameters
+    ----------
+    e, u : float, or (lo, hi)
+        The line, as in :func:`cascade`.
+    samples : int >= 2, default 2000
+    words : iterable of str or Word, optional
+    min_members : int >= 2, default 4
+    block_max : int >= 1, default 4
+    k_max, max_iter : as in :func:`cascade`.
+    resolution : int >= 8, default 128
+        A window only: pixels per side of the scan whose words are split.
+    lines : int >= 1, default 3
+        A window only: lines e = const each family is located on.
     """
     import pandas as pd
 
