@@ -337,3 +337,113 @@ def test_member_count_follows_the_measured_law_where_it_differs_from_one_over_2e
     # and floor(1/(2e)) disagree (except at 0.125, where e_4 = 0.1333 > 1/8)
     c = sb.cascade("(1^k, 0^inf)", e=e, u=(0.3, 0.7071), k_max=200)
     assert c.last == n == math.floor(1 / (2 * e) + 0.25)
+
+
+# --------------------------------------------------------------------------- #
+# Issue 39, items 3-5: windows, the Farey test, counts against e, centres      #
+# --------------------------------------------------------------------------- #
+
+from stairbounce.cascade_families import _increment, _level2  # noqa: E402
+
+
+def test_families_of_families_are_grouped_by_one_free_count():
+    # ((1^n, 0)^k, 1^(n+1), 0^inf) for n = 1..4, written out, and a stranger
+    fams = [((), (1,) * n + (0,), (1,) * (n + 1)) for n in range(1, 5)] + [((), (1, 0), (2,))]
+    out = _level2(fams)
+    assert [(t, [n for n, _ in m]) for t, m, _ in out] == [("((1^n, 0)^k, 1^(n+1), 0^inf)", [1, 2, 3, 4])]
+    # and makes the member family of any n, seen or not
+    make = out[0][2]
+    assert make(6) == ((), (1,) * 6 + (0,), (1,) * 7) and make(0) is None
+    # two members are not a family of families
+    assert _level2(fams[:2]) == []
+
+
+def test_increment_recognises_one_more_block():
+    assert _increment((1, 0, 1, 1), (1, 0, 1, 0, 1, 1))
+    assert _increment((1, 1, 1), (1, 1))
+    assert not _increment((1, 1), (1, 1, 0, 0, 1, 1))
+    assert not _increment((1, 2), (2, 1))
+
+
+def test_member_count_at_one_e_is_the_cascades_count():
+    assert sb.member_count("(1^k, 0^inf)", 0.125, (0.3, 0.7071)) == 4 == \
+        sb.cascade("(1^k, 0^inf)", e=0.125, u=(0.3, 0.7071), k_max=20).last
+
+
+def test_member_count_over_e_bisects_each_change_to_adjacent_floats():
+    df = sb.member_count("(1^k, 0^inf)", (0.12, 0.2), (0.3, 0.7071), n=4)
+    assert df.k.tolist() == [4, 3] and not df.appears.any()
+    assert (df.count_below - df.count_above).tolist() == [1, 1]
+    for r in df.itertuples():
+        assert r.e_above == np.nextafter(r.e_below, 1.0)
+        # the cascade (its own bracketed search) agrees on both sides
+        assert sb.cascade("(1^k, 0^inf)", e=r.e_below, u=(0.3, 0.7071), k_max=20).last == r.k
+        assert sb.cascade("(1^k, 0^inf)", e=r.e_above, u=(0.3, 0.7071), k_max=20).last == r.k - 1
+        # the measured law (docs/guide/cascades.md): 1/e_k = 2k - 1/2 + delta_k, 0 < delta_k < 0.01
+        assert 0 < 1 / r.e_below - (2 * r.k - 0.5) < 0.01
+    with pytest.raises(ValueError, match="u must be a range"):
+        sb.member_count("(1^k, 0^inf)", 0.1, 0.6)
+
+
+def test_farey_test_on_a_line_counts_pairs_with_exact_adjacency():
+    ft = sb.farey_test(0.02, (0.686, 0.6875), samples=120, gap_samples=16)
+    c, pairs = ft.counts, ft.pairs
+    assert c["pairs"] == len(pairs) == c["mediant"] + c["other"] + c["adjacent"] > 5
+    for r in pairs.itertuples():
+        assert r.det == abs(r.p_a * r.q_b - r.p_b * r.q_a)
+        if r.relation == "mediant":
+            w = sb.parse_word(r.between)
+            assert (len(w.letters), w.period) == (r.p_a + r.p_b, r.q_a + r.q_b)
+        if r.relation == "adjacent":  # independent: nothing else on a grid between the two samples
+            words = {str(sb.sliding_word(0.02, x)) for x in np.linspace(r.u_a, r.u_b, 32)}
+            assert words <= {str(sb.parse_word(r.word_a)), str(sb.parse_word(r.word_b))}
+    assert ("period adding" in ft.verdict) == (2 * c["mediant"] > c["pairs"])
+    imp = sb.farey_test(0.02, (0.686, 0.6875), samples=120, gap_samples=0, label="impacts")
+    assert (imp.pairs.p_a == pairs.p_a - 1).all()
+    with pytest.raises(ValueError, match="label"):
+        sb.farey_test(0.02, (0.686, 0.6875), label="steps")
+
+
+def test_cli_counts_members_at_one_e_and_over_a_range(capsys):
+    code, out, err = _run(["cascade", "(1^k, 0^inf)", "--count", "--e", "0.125", "--u", "0.3:0.7071"], capsys)
+    assert code == 0, err
+    assert out.startswith("4 member(s)")
+    code, out, err = _run(["cascade", "(1^k, 0^inf)", "--count", "--e", "0.12:0.14", "--u", "0.3:0.7071",
+                           "--n", "3"], capsys)
+    assert code == 0, err
+    assert "disappears  4 -> 3" in out and "1 change(s)" in out
+    code, out, err = _run(["cascade", "(1^k, 0^inf)", "--count", "--e", "0.1", "--u", "0.6"], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+
+
+def test_a_windows_families_at_two_levels():
+    # between the tongues 1 and 2 (docs/guide/cascades.md): ((1^n, 0)^k, 1^(n+1), 0^inf)
+    # for n = 1, 2, ... is a family of families
+    df = sb.cascades(e=(0.018, 0.022), u=(0.6790, 0.6905), resolution=32, lines=1, k_max=8)
+    rows = df.set_index("pattern")
+    one = rows.loc["((1, 0)^k, 1, 1, 0^inf)"]
+    assert one.level == 1 and one.members == 9 and one.limit_lo < one.limit_hi  # k = 0..8 (k_max)
+    two = rows.loc["((1^n, 0)^k, 1^(n+1), 0^inf)"]
+    assert two.level == 2 and set(two.n_values) >= {1, 2}
+    # its n = 1 member's accumulation is that family's
+    assert one.limit_lo in [c[1] for c in two.limit_curve]
+    assert (df.level.diff().fillna(0) >= 0).all()  # level 1 first
+    with pytest.raises(ValueError, match="words"):
+        sb.cascades(e=(0.018, 0.022), u=(0.679, 0.69), words=["(1, 0^inf)"])
+    with pytest.raises(ValueError, match="resolution"):
+        sb.cascades(e=(0.018, 0.022), u=(0.679, 0.69), resolution=2)
+
+
+def test_a_members_tip_is_a_corner_of_its_region():
+    # member 4 of (1^k, 0^inf) ends where its edge (step 3) and chatter (step 4) borders
+    # cross; the line search (member_count, bisection on e) and the region's walk
+    # (pseudo-arclength continuation, word_region) are independent ways to that point
+    ch = sb.member_count("(1^k, 0^inf)", (0.12, 0.14), (0.3, 0.7071), n=2)
+    e4 = float(ch.set_index("k").loc[4, "e_below"])
+    m = sb.cascade("(1^k, 0^inf)", e=e4, u=(0.3, 0.7071), k_max=4).members.set_index("k").loc[4]
+    region = sb.word_region("(1, 1, 1, 1, 0^inf)", e=(0.11, 0.14), u=(0.585, 0.61), resolution=48)
+    oc = sb.organising_centres((0.11, 0.14), (0.585, 0.61), regions=[region], top=3)
+    assert oc.attrs["corners"] == 1 and oc.events[0] == "edge 3; chatter 4"
+    assert math.hypot(oc.e[0] - e4, oc.u[0] - m.lo) < 1e-9
+    with pytest.raises(ValueError, match="top"):
+        sb.organising_centres((0.11, 0.14), (0.585, 0.61), regions=[region], top=0)

@@ -84,6 +84,7 @@ from .structure.graph import BorderGraph, border_graph
 from .structure.itinerary import itinerary
 from .structure.regions import BorderArc, Corner, Region, RegionComponent, window_regions, word_region
 from .structure.trace import trace_border
+from .cascade_families import FareyTest, farey_test, member_count, organising_centres
 from ._progress import progress_bar
 from .structure import Certificate, CertifiedAtlas, certify, certify_box
 from .structure.labels import prove_labels
@@ -209,6 +210,10 @@ __all__ = [
     "cascade_law",
     "cascades",
     "family_of",
+    "FareyTest",
+    "farey_test",
+    "member_count",
+    "organising_centres",
     "prove_labels",
     "BorderTube",
     "border_tube",

@@ -305,10 +305,13 @@ def _neighbour(x, f, axis, max_iter):
     return w.format(ascii=True) if w is not None else "none within max_iter"
 
 
+def _is_pair(x):
+    return isinstance(x, (tuple, list, np.ndarray))
+
+
 def _line_args(e, u):
     """Which coordinate varies: ``(axis, name, lo, hi, fixed)``."""
-    e_pair = isinstance(e, (tuple, list, np.ndarray))
-    u_pair = isinstance(u, (tuple, list, np.ndarray))
+    e_pair, u_pair = _is_pair(e), _is_pair(u)
     if e_pair == u_pair:
         raise ValueError("e and u: give one as a range (lo, hi) and the other as a number "
                          f"(a line of the plane), got e={e!r}, u={u!r}")
@@ -682,6 +685,15 @@ class Cascade:
             lines.append(f"accumulation lies on: {self.limit_name} ({self.axis} = {self.limit_curve:.15g})")
         return "\n".join(lines)
 
+    def regions(self, e, u, *, ks=None, resolution=None, max_iter=1000):
+        """The members' regions in the window ``e`` x ``u``, ``{k: Region}``, each
+        from :func:`stairbounce.word_region` (all members, or those in ``ks``)."""
+        from .structure.regions import word_region
+
+        rows = self.members if ks is None else self.members[self.members.k.isin(list(ks))]
+        return {int(r.k): word_region(r.word, e, u, resolution=resolution, max_iter=max_iter)
+                for r in rows.itertuples()}
+
     def __repr__(self) -> str:
         return (f"Cascade({self.pattern!r}, {len(self.members)} members, last k={self.last}, "
                 f"law={self.law.kind})")
@@ -889,16 +901,38 @@ def _attachments(letters, block_max):
     return out
 
 
+def _candidates(seen, min_members, block_max):
+    """The candidate families ``(seen members, P, X, S)`` of a set of words
+    (letter tuples) by block attachment, most members seen first."""
+    families: dict = {}
+    for letters in seen:
+        for key, m in _attachments(letters, block_max):
+            families.setdefault(key, set()).add(m)
+    cands = []
+    for (p, x, s), ks in families.items():
+        # the exponents seen: those of the words' own runs, and k = 0, 1 (no run)
+        pat = _Pattern("", "k", p, x, s)
+        ks = ks | {k for k in (0, 1) if pat.letters(k) in seen}
+        n_seen = len(ks)
+        # the attachment itself (k >= 2) seen at least twice: k = 0, 1 alone are other words
+        if n_seen >= min_members and sum(k >= 2 for k in ks) >= 2:
+            cands.append((n_seen, p, x, s))
+    cands.sort(key=lambda c: (-c[0], len(c[2]), len(c[1]) + len(c[3])))
+    return cands
+
+
 def _pattern_text(prefix, block, suffix, var="k"):
     body = f"{block[0]}^{var}" if len(block) == 1 else "(" + ", ".join(map(str, block)) + f")^{var}"
     return "(" + ", ".join([*map(str, prefix), body, *map(str, suffix), "0^inf"]) + ")"
 
 
-def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_max=100, max_iter=1000):
-    """cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_max=100, max_iter=1000) -> pandas.DataFrame
+def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_max=100, max_iter=1000,
+             resolution=128, lines=3):
+    """cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_max=100, max_iter=1000, resolution=128, lines=3) -> pandas.DataFrame
 
     The families of words on a line of the plane, found by block attachment and
-    then located exactly with :func:`cascade`.
+    then located exactly with :func:`cascade`; with both ``e`` and ``u`` ranges,
+    the families of a window at two levels of nesting (below, "A window").
 
     The words seen on the line (``sliding_word`` at ``samples`` evenly spaced
     points, or ``words``: texts or :class:`stairbounce.Word`, e.g. a
@@ -918,6 +952,26 @@ def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_ma
     The candidates depend on the words seen (a sampled line); the members
     listed do not.
 
+    A window (``e`` and ``u`` both ranges): the words are those of a scan of
+    ``resolution`` x ``resolution`` pixel centres (the words of
+    :func:`stairbounce.word_table` without its border points); each
+    candidate family is located exactly with :func:`cascade` on up to
+    ``lines`` lines e = const through the pixel columns where its members
+    were seen (``e_line`` the one with most members, whose law is given;
+    ``limit_curve`` the accumulation enclosures ``(e, lo, hi)`` on all of
+    them: the accumulation point as a curve over e).  ``level`` is 1 for
+    these; families of families are then found among them (level 2): the
+    patterns whose run lengths differ by one free count ``n`` (e.g.
+    ``((1^n, 0)^k, 1^(n+1), 0^inf)`` for n = 1, 2, 3, ..., at least three n
+    seen); the level-1 family of every n = 1..8, seen or not, is then
+    located on one line (that of the first family seen), and the row lists
+    the n whose family has members and an accumulation enclosure there
+    (``n_values``, ``members``), those enclosures (``limit_curve``), and the
+    law of the accumulation points against n (:func:`cascade_law` on the
+    gaps between consecutive ones, at least 5 of them; ``limit_lo`` /
+    ``limit_hi`` the extrapolated accumulation of the accumulation points).
+    Members' regions: :meth:`Cascade.regions`.
+
     Parameters
     ----------
     e, u : float, or (lo, hi)
@@ -927,11 +981,24 @@ def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_ma
     min_members : int >= 2, default 4
     block_max : int >= 1, default 4
     k_max, max_iter : as in :func:`cascade`.
+    resolution : int >= 8, default 128
+        A window only: pixels per side of the scan whose words are split.
+    lines : int >= 1, default 3
+        A window only: lines e = const each family is located on.
     """
     import pandas as pd
 
     from .symbolic import parse_word
 
+    if _is_pair(e) and _is_pair(u):  # a window: its families at two levels (cascade_families)
+        from .cascade_families import window_families
+
+        if words is not None:
+            raise ValueError("words: only for a line (one of e and u a number); a window's words "
+                             "are those of its scan (resolution)")
+
+        return window_families(e, u, min_members=min_members, block_max=block_max, k_max=k_max,
+                               max_iter=max_iter, resolution=resolution, lines=lines)
     axis, name, lo, hi, fixed = _line_args(e, u)
     samples = check_count("samples", samples, 2, 10**6)
     min_members = check_count("min_members", min_members, 2)
@@ -945,21 +1012,8 @@ def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_ma
                 seen.add(w.letters)
     else:
         seen = {(w if isinstance(w, Word) else parse_word(w)).letters for w in words}
-    families: dict = {}
-    for letters in seen:
-        for key, _ in _attachments(letters, block_max):
-            families.setdefault(key, None)
     rows, done = [], set()
-    cands = []
-    for (p, x, s) in families:
-        pat = _Pattern("", "k", p, x, s)
-        ks = [k for k in range(0, 2 + max(len(w) for w in seen) // len(x)) if pat.letters(k) in seen]
-        n_seen = len(ks)
-        # the attachment itself (k >= 2) seen at least twice: k = 0, 1 alone are other words
-        if n_seen >= min_members and sum(k >= 2 for k in ks) >= 2:
-            cands.append((n_seen, p, x, s))
-    cands.sort(key=lambda c: (-c[0], len(c[2]), len(c[1]) + len(c[3])))
-    for n_seen, p, x, s in cands:
+    for n_seen, p, x, s in _candidates(seen, min_members, block_max):
         text = _pattern_text(p, x, s)
         c = cascade(text, **({"e": line, "u": fixed} if axis == 0 else {"e": fixed, "u": line}),
                     k_max=k_max, max_iter=max_iter)
@@ -1038,7 +1092,7 @@ def family_of(word) -> Family | None:
     Family or None
         A named pair: ``pattern`` (str) and ``k`` (int >= 2).
     """
-    from .regions import _as_word
+    from .structure.regions import _as_word
 
     letters = tuple(int(a) for a in _as_word(word).letters)
     runs = _attachments(letters, len(letters) // 2)

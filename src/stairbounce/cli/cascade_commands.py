@@ -42,6 +42,9 @@ def cascade_(
     law_k: str = typer.Option(None, "--law-k", help="Members the law is fitted on, KLO:KHI (default: the last 8)."),
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps to name the words just outside each edge (>= 1)."),
     rows: int = typer.Option(60, "--rows", help="Members printed (all go to --out)."),
+    count: bool = typer.Option(False, "--count", help="Count the members exactly: at --e (a number), or "
+                               "every e in --e MIN:MAX where the count changes (--u a range, MIN:MAX)."),
+    n: int = typer.Option(32, "--n", help="With --count and a range of e: e values checked before bisecting (>= 2)."),
     out: Path = typer.Option(None, "--out", help="The members as .csv (one row per member)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
@@ -51,6 +54,9 @@ def cascade_(
     from .._io import atomic_path
     from ..cascades import cascade
 
+    if count:
+        _count(pattern, e, u, k_max, n, out, force)
+        return
     ev, uv = _line(e, u)
     k_range = None
     if law_k is not None:
@@ -70,3 +76,40 @@ def cascade_(
         with atomic_path(out, overwrite=force) as tmp:
             c.members.to_csv(tmp, index=False)
         typer.echo(f"wrote {out}")
+
+
+def _count(pattern, e, u, k_max, n, out, force):
+    """``--count``: the member count at one e, or its changes over a range of e."""
+    from .._io import atomic_path
+    from ..cascade_families import member_count
+
+    if ":" not in u:
+        raise CLIError(f"--u must be a range MIN:MAX with --count, got {u!r}")
+    uv = parse_range("u", u)
+    if ":" in e:
+        ev = parse_range("e", e)
+    else:
+        try:
+            ev = float(e)
+        except ValueError:
+            raise CLIError(f"--e must be a number or a range MIN:MAX, got {e!r}") from None
+    if out is not None:
+        if out.suffix.lower() != ".csv":
+            raise CLIError(f"--out must end in .csv, got {str(out)!r}")
+        check_outputs(force, out=out)
+    res = member_count(pattern, ev, uv, k_max=k_max, n=n)
+    if not isinstance(res, int):
+        typer.echo(f"members of {pattern} on lines e = const, u in [{uv[0]:g}, {uv[1]:g}], "
+                   f"e in [{ev[0]:g}, {ev[1]:g}] (exact counts; changes bisected to adjacent floats of e):")
+        typer.echo(f"{'k':>5} {'e below':>22} {'e above':>22}  change      count below -> above")
+        for r in res.itertuples():
+            typer.echo(f"{r.k:>5} {r.e_below:>22.17g} {r.e_above:>22.17g}  "
+                       f"{'appears' if r.appears else 'disappears':<11} {r.count_below} -> {r.count_above}")
+        typer.echo(f"{len(res)} change(s); counts at the {n} values of e checked first: "
+                   + ", ".join(f"{c}" for _, c in res.attrs["counts"]))
+        if out is not None:
+            with atomic_path(out, overwrite=force) as tmp:
+                res.to_csv(tmp, index=False)
+            typer.echo(f"wrote {out}")
+        return
+    typer.echo(f"{res} member(s) of {pattern} on the line e = {ev:g}, u in [{uv[0]:g}, {uv[1]:g}] (exact)")
