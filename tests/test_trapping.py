@@ -96,6 +96,26 @@ def test_atlas_with_trap():
     assert not sb.verify(bad)
 
 
+def test_cli_certify_trap_states_the_trapped_share(tmp_path, capsys):
+    from stairbounce.cli import main
+
+    win = ["--e", "0.29:0.31", "--u", "0.40:0.42", "--depth", "3", "--max-iter", "300"]
+    out = tmp_path / "t.nc"
+    with pytest.raises(SystemExit) as exit_:
+        main(["certify", *win, "--trap", "--out", str(out)])
+    text = capsys.readouterr().out
+    assert exit_.value.code == 0
+    atlas = sb.CertifiedAtlas.load(out)
+    ds = atlas.boxes
+    trapped = (ds["reason"].values == "trapping") & (ds["status"].values == 1)
+    share = float(((ds["e1"] - ds["e0"]) * (ds["u1"] - ds["u0"])).values[trapped].sum()) / (0.02 * 0.02)
+    assert share > 0 and f"no_sliding by a trapping region {100 * share:.2f}%" in text
+    assert sb.verify(atlas)
+    with pytest.raises(SystemExit):  # without --trap: no trapped boxes, no such line
+        main(["certify", *win])
+    assert "trapping region" not in capsys.readouterr().out
+
+
 def test_above_the_curve_unaffected():
     win = dict(e=(0.5, 0.6), u=(1.0, 1.2), depth=3, max_iter=100)
     a, b = sb.certify(**win), sb.certify(**win, trap=True)

@@ -26,6 +26,12 @@ def _verify(path: Path) -> None:
         raise typer.Exit(1)
 
 
+def _box_areas(atlas):
+    """Each box's area."""
+    b = atlas.boxes
+    return (b["e1"].values - b["e0"].values) * (b["u1"].values - b["u0"].values)
+
+
 def _picture(atlas, png: Path, dpi: int, force: bool) -> None:
     """Proven boxes coloured by their word's period, no_sliding grey, undecided by reason."""
     import matplotlib
@@ -102,6 +108,9 @@ def certify_(
                              "undecided boxes by reason."),
     dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
     top: int = typer.Option(10, "--top", help="Proven words listed in the summary (largest proven area first)."),
+    trap: bool = typer.Option(False, "--trap", help="Try a trapping region on every undecided 'nonsliding' box: "
+                              "where one is proven, the orbit of (1, 0) never slides there (status no_sliding, "
+                              "reason 'trapping'). Costs more than the atlas itself."),
     verify: Path = typer.Option(None, "--verify", help="Instead: re-check the certificates of a saved atlas "
                                 "(.nc or .zarr) with the independent checker."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
@@ -112,6 +121,7 @@ def certify_(
     the undecided area by reason."""
     import time
 
+    from ..structure.certificate import STATUSES
     from ..structure.certify import certify
 
     if verify is not None:
@@ -131,7 +141,7 @@ def certify_(
     try:
         atlas = with_row_progress(description="certify levels", rows=1,
                                   run=lambda p: certify(e=(e_lo, e_hi), u=(u_lo, u_hi), depth=depth,
-                                                        max_iter=max_iter, progress=p))
+                                                        max_iter=max_iter, progress=p, trap=trap))
     except ValueError as exc:  # the library names its parameters; the options carry the same names
         raise CLIError(f"--{str(exc).replace('_', '-')}" if str(exc).split()[0] in ("depth", "max_iter")
                        else str(exc)) from None
@@ -150,6 +160,11 @@ def certify_(
                f"window/{1 << depth}), max_iter {max_iter}: {n_box} boxes in {seconds:.2f} s")
     typer.echo("proven: " + ", ".join(f"{k} {100 * f[k]:.2f}%" for k in ("word", "no_sliding", "no_slide_within"))
                + " of the window's area")
+    if trap:
+        rs, st = atlas.boxes["reason"].values, atlas.boxes["status"].values
+        trapped = float(((st == STATUSES.index("no_sliding")) & (rs == "trapping")) @ _box_areas(atlas)) / ((e_hi - e_lo) * (u_hi - u_lo))
+        typer.echo(f"  of which no_sliding by a trapping region {100 * trapped:.2f}% (proven: the orbit of (1, 0) "
+                   "never slides there)")
     typer.echo(f"undecided {100 * f['undecided']:.2f}%: "
                + ", ".join(f"{k} {100 * v:.2f}%" for k, v in r.items() if v > 0)
                + ("  (nonsliding: numerical, the float map does not slide there)" if r.get("nonsliding") else ""))
