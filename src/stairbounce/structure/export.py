@@ -136,6 +136,24 @@ class _Edge:
         self.F, self.slot = F, arc._slot
         self.failed = 0                          # midpoints Newton did not settle (Hermite kept)
         self.max_dev = 0.0
+        self.fresh = np.ones(len(self.P) - 1, dtype=bool)   # chords not yet tested for crossings
+
+    def splittable(self, i):
+        """Whether halving chord ``i`` can help: a border's chord longer than rounding."""
+        if self.kind == "window":
+            return False
+        d = self.P[i + 1] - self.P[i]
+        return math.hypot(d[0], d[1]) > 64.0 * _EPS * float(np.abs(self.P[i]).max())
+
+    def insert(self, idx, X, T):
+        """Insert the points ``X`` (tangents ``T``) after vertices ``idx`` (sorted;
+        within one chord in their order along it); the chords cut are fresh."""
+        order = np.arange(len(idx))
+        fresh = np.insert(self.fresh, idx + 1, True)
+        fresh[idx + order] = True
+        self.P = np.insert(self.P, idx + 1, X, axis=0)
+        self.T = np.insert(self.T, idx + 1, T, axis=0)
+        self.fresh = fresh
 
     def split(self, mask):
         """Halve the chords where ``mask``: Hermite midpoints moved onto the curve."""
@@ -158,9 +176,7 @@ class _Edge:
         F = self.F
         ok = _project(F.ks, F.n, F.win, F.y0, F.v0, self.slot, np.ascontiguousarray(mid), td, 0.5 * L, out, tan)
         self.failed += int((~ok).sum())
-        newP = np.insert(P, idx + 1, out, axis=0)
-        newT = np.insert(T, idx + 1, tan, axis=0)
-        self.P, self.T = newP, newT
+        self.insert(idx, out, tan)
         return idx.size
 
     def densify(self, tol):
@@ -244,12 +260,16 @@ def _cells(S, k, origin, size, cell, seg, m, count_only):
 
 
 @njit(cache=True)
-def _crossings(S, origin, size):
+def _crossings(S, origin, size, active):
     """Indices ``(i, j)``, i < j, of the segments of ``S`` (N x 4) that meet other
-    than at a shared end point: every segment entered in the cells of side
-    ``size`` (from ``origin``) that it passes through, pairs tested within each
-    cell (after their boxes)."""
+    than at a shared end point, one of them ``active``: every segment entered
+    in the cells of side ``size`` (from ``origin``) that it passes through, an
+    active segment tested against the others of its cells (after their boxes)."""
     n = S.shape[0]
+    box = np.empty((n, 4))
+    for k in range(n):
+        box[k, 0], box[k, 1] = min(S[k, 0], S[k, 2]), max(S[k, 0], S[k, 2])
+        box[k, 2], box[k, 3] = min(S[k, 1], S[k, 3]), max(S[k, 1], S[k, 3])
     dummy = np.empty(0, dtype=np.int64)
     total = 0
     for k in range(n):
@@ -268,10 +288,13 @@ def _crossings(S, origin, size):
             stop += 1
         for p in range(start, stop):
             i = seg[order[p]]
-            for q in range(p + 1, stop):
+            if not active[i]:
+                continue
+            for q in range(start, stop):
                 j = seg[order[q]]
-                if min(S[i, 0], S[i, 2]) > max(S[j, 0], S[j, 2]) or min(S[j, 0], S[j, 2]) > max(S[i, 0], S[i, 2]) or \
-                        min(S[i, 1], S[i, 3]) > max(S[j, 1], S[j, 3]) or min(S[j, 1], S[j, 3]) > max(S[i, 1], S[i, 3]):
+                if j == i or (active[j] and q < p):   # an active pair once
+                    continue
+                if box[i, 0] > box[j, 1] or box[j, 0] > box[i, 1] or box[i, 2] > box[j, 3] or box[j, 2] > box[i, 3]:
                     continue
                 if _meet(S[i], S[j]):
                     pairs.append((min(i, j), max(i, j)))
@@ -283,26 +306,85 @@ def _crossings(S, origin, size):
 
 
 def _segments(edges):
-    """Every segment of the edges (N x 4), with its edge and chord index."""
-    S, owner = [], []
+    """Every segment of the edges (N x 4), with its edge and chord index, and
+    whether it is fresh (not yet tested)."""
+    S, owner, fresh = [], [], []
     for k, ed in enumerate(edges):
         P = ed.P
         S.append(np.concatenate([P[:-1], P[1:]], 1))
         owner.append(np.stack([np.full(len(P) - 1, k), np.arange(len(P) - 1)], 1))
+        fresh.append(ed.fresh)
     if not S:
-        return np.empty((0, 4)), np.empty((0, 2), dtype=np.int64)
-    return np.concatenate(S), np.concatenate(owner)
+        return np.empty((0, 4)), np.empty((0, 2), dtype=np.int64), np.empty(0, dtype=bool)
+    return np.concatenate(S), np.concatenate(owner), np.concatenate(fresh)
 
 
-def _find_crossings(edges, window):
-    S, owner = _segments(edges)
-    if len(S) < 2:
+def _find_crossings(edges, window=None):
+    """The segment pairs that meet other than at a shared vertex, one of them
+    fresh (every pair of earlier rounds was tested then); every chord is then
+    marked tested."""
+    S, owner, fresh = _segments(edges)
+    for ed in edges:
+        ed.fresh[:] = False
+    if len(S) < 2 or not fresh.any():
         return np.empty((0, 2), dtype=np.int64), owner
     lo = S.reshape(-1, 2).min(0)
     length = np.hypot(S[:, 2] - S[:, 0], S[:, 3] - S[:, 1])
     size = max(float(np.median(length)), 1e-12 * float(np.abs(S).max()))
-    pairs = _crossings(np.ascontiguousarray(S), lo.astype(float), size)
+    pairs = _crossings(np.ascontiguousarray(S), lo.astype(float), size, fresh)
     return (np.unique(pairs, axis=0) if len(pairs) else pairs), owner
+
+
+def _node(edges, stuck, owner):
+    """Node the segment pairs ``stuck`` (indices into ``owner``): where two
+    segments cross, their intersection point becomes a vertex of both; where
+    an end point of one lies on the other (touching, collinear overlap), it
+    becomes a vertex of the other.  For chords within rounding of each other
+    that halving cannot separate: both faces then pass through the same
+    points (a sliver narrower than rounding is pinched there).  Returns the
+    chords cut in each edge (``{edge: sorted chord indices, one per point}``)."""
+    S, _, _ = _segments(edges)
+    todo = {}
+
+    def add(k, c, p0, p1, x):
+        if (x[0] == p0[0] and x[1] == p0[1]) or (x[0] == p1[0] and x[1] == p1[1]):
+            return
+        d = (p1[0] - p0[0], p1[1] - p0[1])
+        t = ((x[0] - p0[0]) * d[0] + (x[1] - p0[1]) * d[1]) / (d[0] * d[0] + d[1] * d[1])
+        todo.setdefault(k, {})[(int(c), min(max(t, 0.0), 1.0), float(x[0]), float(x[1]))] = d
+
+    for i, j in stuck:
+        (ka, ca), (kb, cb) = owner[i], owner[j]
+        a, b = S[i], S[j]
+        A0, A1, B0, B1 = a[:2], a[2:], b[:2], b[2:]
+        ends = False
+        for seg, (k, c, p0, p1), q in ((a, (ka, ca, A0, A1), B0), (a, (ka, ca, A0, A1), B1),
+                                      (b, (kb, cb, B0, B1), A0), (b, (kb, cb, B0, B1), A1)):
+            if _orient(p0[0], p0[1], p1[0], p1[1], q[0], q[1]) == 0 and \
+                    _on_segment(p0[0], p0[1], p1[0], p1[1], q[0], q[1]):
+                add(k, c, p0, p1, q)
+                ends = True
+        if ends:
+            continue
+        r, s = A1 - A0, B1 - B0
+        den = r[0] * s[1] - r[1] * s[0]
+        if den == 0.0:
+            continue
+        w = B0 - A0
+        t = min(max((w[0] * s[1] - w[1] * s[0]) / den, 0.0), 1.0)
+        x = A0 + t * r
+        add(ka, ca, A0, A1, x)
+        add(kb, cb, B0, B1, x)
+    cut = {}
+    for k, points in todo.items():
+        keys = sorted(points)
+        idx = np.array([c for c, *_ in keys], dtype=np.int64)
+        X = np.array([[x, y] for _, _, x, y in keys])
+        T = np.array([points[key] for key in keys], dtype=float)
+        T /= np.maximum(np.hypot(T[:, 0], T[:, 1]), 1e-300)[:, None]
+        edges[k].insert(idx, X, T)
+        cut[k] = idx
+    return cut
 
 
 def _same_curve(a, b, i, j, slack):
@@ -324,38 +406,47 @@ def _same_curve(a, b, i, j, slack):
 
 def _untangle(edges, window, slack):
     """Halve the segments that meet other than at a shared vertex until none does,
-    the rounds run out or the vertices have doubled; pairs of chords on the
-    same curve (``_same_curve``) are left as they are.  Returns (rounds,
-    crossing pairs left)."""
+    the rounds run out or the vertices have doubled; pairs that halving cannot
+    separate (chords on the same curve to rounding, :func:`_same_curve`, or
+    both too short to halve) are noded instead (:func:`_node`).  Only the
+    chords changed since a round are tested in the next.  Returns (rounds,
+    crossing pairs found in the last round, points noded)."""
     budget = sum(len(ed.P) for ed in edges)
-    added = 0
-    same = set()
+    added = noded = 0
+    pairs = ()
     for rounds in range(_MAX_ROUNDS + 1):
         pairs, owner = _find_crossings(edges, window)
-        marks = {}
-        left = 0
+        if not len(pairs):
+            return rounds, 0, noded
+        marks, stuck = {}, []
+        if rounds == _MAX_ROUNDS or added > budget:
+            break
         for i, j in pairs:
             (ka, ca), (kb, cb) = owner[i], owner[j]
             ka, ca, kb, cb = int(ka), int(ca), int(kb), int(cb)
-            if ka != kb and (ka, kb) in same or _same_curve(edges[ka], edges[kb], ca, cb, slack):
-                same.add((ka, kb))
-                left += 1
+            A, B = edges[ka], edges[kb]
+            if not (A.splittable(ca) or B.splittable(cb)) or _same_curve(A, B, ca, cb, slack):
+                stuck.append((i, j))
                 continue
             marks.setdefault(ka, set()).add(ca)
             marks.setdefault(kb, set()).add(cb)
-        if not marks:
-            return rounds, left
-        if rounds == _MAX_ROUNDS or added > budget:
-            break
+        # node first (the pairs' indices are those of the segments found), then halve
+        # the marked chords at their indices after the points noded before them
+        cut = _node(edges, stuck, owner) if stuck else {}
+        node = sum(len(c) for c in cut.values())
+        noded += node
         split = 0
         for k, chords in marks.items():
+            c = np.array(sorted(chords), dtype=np.int64)
+            if k in cut:
+                c = c + np.searchsorted(cut[k], c, side="left")
             mask = np.zeros(len(edges[k].P) - 1, dtype=bool)
-            mask[list(chords)] = True
+            mask[c] = True
             split += edges[k].split(mask)
         added += split
-        if not split:
+        if not split and not node:
             break
-    return rounds, int(len(pairs))
+    return rounds, int(len(pairs)), noded
 
 
 def _signed_area(R):
@@ -386,8 +477,8 @@ class Partition:
             self.edges.append(_Edge(arc, F, (nodes[a].e, nodes[a].u), (nodes[b].e, nodes[b].u)))
         for ed in self.edges:
             ed.densify(self.tolerance)
-        self.rounds, self.crossings = _untangle(self.edges, self.window, _SAME * max(map(abs, self.window))) \
-            if untangle else (0, None)
+        self.rounds, self.crossings, self.noded = \
+            _untangle(self.edges, self.window, _SAME * max(map(abs, self.window))) if untangle else (0, None, 0)
         self.max_deviation = max((ed.max_dev for ed in self.edges), default=0.0)
         self.failed = sum(ed.failed for ed in self.edges)
 
@@ -431,12 +522,28 @@ def _loops(R):
     return out
 
 
+def _perimeter(R):
+    d = np.diff(R, axis=0)
+    return float(np.hypot(d[:, 0], d[:, 1]).sum())
+
+
 def _polygons(rings):
     """Simple polygons from the rings of one component (outer ring first):
-    every ring cut into loops (:func:`_loops`); the counter-clockwise loops
+    every ring cut into loops (:func:`_loops`), less those that turn against
+    their ring with an area below rounding; the counter-clockwise loops
     are shells, the clockwise ones holes, each in the smallest shell around
     one of its vertices."""
-    loops = [L for R in rings for L in _loops(R)]
+    loops = []
+    for R in rings:
+        sign = _signed_area(R) > 0
+        scale = float(np.abs(R).max())
+        for L in _loops(R):
+            # a loop turning against its ring and thinner than rounding is a sliver
+            # pinched by _node where its sides cross to rounding: no face
+            a = _signed_area(L)
+            if (a > 0) != sign and abs(a) <= _SAME * scale * _perimeter(L):
+                continue
+            loops.append(L)
     shells = [L for L in loops if _signed_area(L) > 0]
     holes = [L for L in loops if _signed_area(L) <= 0]
     shells.sort(key=_signed_area)
@@ -469,6 +576,8 @@ def untraced(part, max_iter=1000):
     distance of 1e-9 of the window's size along the margin's gradient."""
     regions = part.regions
     known = {r.word.format(ascii=True) for r in regions}
+    # itineraries seen (the traced words' own first): a word is built once per itinerary
+    seen = {np.asarray(_rg.itinerary_of_word(r.word), dtype=np.int64).tobytes() for r in regions}
     out = {}
     buf = np.empty(max_iter, dtype=np.int64)
     from ..symbolic import word_from_impacts
@@ -489,7 +598,11 @@ def untraced(part, max_iter=1000):
         k = _rg._itinerary_of(x[0], x[1], 1.0, 0.0, buf.size, buf)
         if k <= 0:
             continue
-        word = word_from_impacts(buf[:k].copy())
+        key = buf[:k].tobytes()
+        if key in seen:
+            continue
+        seen.add(key)
+        word = word_from_impacts(buf[:k].tolist())
         text = word.format(ascii=True)
         if text not in known and text not in out:
             out[text] = (word, [float(x[0]), float(x[1])])
@@ -539,6 +652,7 @@ def build(regions, tolerance=None, resolution=None, max_iter=1000, untangle=True
         "vertices": int(sum(len(ed.P) for ed in part.edges)),
         "newton_failures": part.failed,
         "crossings": part.crossings,
+        "noded": part.noded,
         "seed_resolution": None, "max_iter": max_iter, "sliding_pixels": None,
         "sliding_area": None, "coverage": None,
     }
@@ -717,12 +831,19 @@ def regions_geojson(regions, *, tolerance=None, resolution=None, max_iter=1000) 
     than the tolerance, near a corner where they meet at a small angle) are
     halved again until none does, except chords that lie on each other's
     curve to rounding (256 ulps: the two sides of one border that
-    border_graph left as two edges, or a sliver narrower than rounding),
-    which are left and counted in ``metadata.crossings``.  Where that count
+    border_graph left as two edges, two borders of different words closer
+    than rounding near the tongue tips, or a sliver narrower than rounding)
+    or both too short to halve: their crossing point is made a vertex of
+    both (noded, counted in ``metadata.noded``), and a ring's inverted loop
+    thinner than rounding is dropped.  Pairs still crossing when the vertex
+    budget is spent are counted in ``metadata.crossings``.  Where that count
     is 0, every polygon is simple and two polygons meet only along shared
     edges and at vertices (``shapely.is_valid`` and zero intersection area
-    on the Fig. 5e window and e 0.30-0.36, u 0.32-0.38, numerical:
-    tests/test_regions_export.py).
+    on the Fig. 5e window, with corners too, e 0.30-0.36 x u 0.32-0.38, and
+    the Fig. 4 window seeded at 32: numerical, tests/test_regions_export.py).
+    Not yet everywhere: the Fig. 4 window seeded at 128 leaves crossing
+    pairs at the tongue tips (27 invalid polygons), and e 0.30-0.36 x
+    u 0.32-0.38 seeded at 500 one (docs/guide/regions.md).
 
     Properties of a polygon: ``word``, ``period``, ``impacts``,
     ``component``; ``area``, the traced area of the component (the shoelace
