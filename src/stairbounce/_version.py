@@ -7,4 +7,4 @@ build (``[tool.hatch.version]`` in pyproject.toml).  Each release says what
 changed in CHANGELOG.md.
 """
 
-__version__ = "0.3.0"
+__version__ = "0.4.0"
