@@ -97,7 +97,7 @@ class Certificate:
             "reason": self.reason, "step": self.step,
             "itinerary": [int(k) for k in self.itinerary], "decisions": list(self.decisions),
             "margins": [[float(lo), float(hi)] for lo, hi in np.asarray(self.margins).reshape(-1, 2)],
-            **({"region": self.region.to_dict()} if self.region is not None else {}),
+            **({"region": getattr(self.region, "to_dict")()} if self.region is not None else {}),
         }
 
     @classmethod
