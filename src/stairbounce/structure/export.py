@@ -693,7 +693,9 @@ def _tangles(part):
     gap = 0.5 * _TANGLE_GAP * part.scale
     while True:
         grown = shapely.box(lo[:, 0] - gap, lo[:, 1] - gap, hi[:, 0] + gap, hi[:, 1] + gap)
-        groups = shapely.get_parts(shapely.union_all(grown))
+        # the merged groups' bounding boxes (a box in two of them joins both: they
+        # then overlap and merge in the next pass)
+        groups = shapely.envelope(shapely.get_parts(shapely.union_all(grown)))
         which = shapely.STRtree(groups).query(shapely.points(0.5 * (lo + hi)), predicate="intersects")
         n = len(groups)
         glo = np.full((n, 2), np.inf)
@@ -715,7 +717,7 @@ def _clip(geometry, boxes):
     from shapely.geometry.polygon import orient
 
     v = shapely.make_valid(shape(geometry))
-    g = v.difference(shapely.union_all([shapely.box(b[0], b[2], b[1], b[3]) for b in boxes]))
+    g = v.difference(shapely.MultiPolygon([shapely.box(b[0], b[2], b[1], b[3]) for b in boxes]))
     polys = [orient(p, 1.0) for p in shapely.get_parts(g) if p.geom_type == "Polygon" and p.area > 0]
     if not polys:
         return None, 0.0, float(v.area)
