@@ -943,9 +943,8 @@ def regions_geojson(regions, *, tolerance=None, resolution=None, max_iter=1000) 
     reason: "accumulation of borders ...; not resolved at this
     tolerance"), listed in ``metadata.clipped``: the partition stays
     gap-free and every polygon valid (the Fig. 4 window seeded at 48 and
-    128: numerical).  Not yet everywhere: e 0.30-0.36 x u 0.32-0.38 seeded
-    at 500 leaves one polygon with nested shells, with no pair crossing
-    (docs/guide/regions.md).
+    128, e 0.30-0.36 x u 0.32-0.38 seeded at 500: numerical,
+    docs/guide/regions.md).
 
     Properties of a polygon: ``word``, ``period``, ``impacts``,
     ``component``; ``area``, the traced area of the component (the shoelace
