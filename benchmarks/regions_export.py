@@ -10,9 +10,9 @@ baseline re-tests every pair of segments in every round of the untangling
 the chords changed since the round before.  Printed: CPU seconds of each,
 their ratio, and for the current export the polygons, the invalid ones
 (shapely.is_valid), the pairs of polygons overlapping by more than 1e-15 of the
-window, the union's area against the sum of areas, the crossings left and the
-points noded.  Windows: Fig. 5e [0.04, 0.065] x [0.92, 0.945]; the
-chatter-rich window [0.30, 0.36] x [0.32, 0.38]; Fig. 4 [0, 0.999] x
+window, the union's area against the sum of areas, the crossings left, the
+points noded and the boxes clipped out (metadata.clipped).  Windows: Fig. 5e
+[0.04, 0.065] x [0.92, 0.945]; the chatter-rich window [0.30, 0.36] x [0.32, 0.38]; Fig. 4 [0, 0.999] x
 [0.001, 1.5] (e = 1 and u = 0 left out, as words --regions needs);
 "fig5e-corners" is Fig. 5e with from_corners=True.
 """
@@ -90,10 +90,12 @@ def main():
         gj, now = _export(regs, graph, args.seed)
         n, bad, over, gap = _check(regs, gj)
         m = gj["metadata"]
+        clip = sum((b[1] - b[0]) * (b[3] - b[2]) for b in m["clipped"])
         print(f"  export {now:.2f} s CPU" + (f" (baseline, every pair re-tested: {base:.2f} s; x{base / now:.1f})"
                                             if base else "")
               + f"; {n} polygons, {bad} invalid, {over} overlapping pairs, (sum - union) / window {gap:.1e}, "
-              f"crossings left {m['crossings']}, points noded {m['noded']}, vertices {m['vertices']}", flush=True)
+              f"crossings left {m['crossings']}, points noded {m['noded']}, vertices {m['vertices']}, "
+              f"boxes clipped {len(m['clipped'])} ({clip / m['window_area']:.1e} of the window)", flush=True)
 
 
 if __name__ == "__main__":

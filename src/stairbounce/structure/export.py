@@ -73,6 +73,9 @@ _MAX_ROUNDS = 60
 # two chords closer to each other's curve than this (times the largest coordinate) are on
 # the same curve to rounding (the margins are exact to about 32 ulps of the position)
 _SAME = 256 * _EPS
+# chords still crossing after untangling closer than this (times the window's
+# size) are one tangle, clipped out as one box (regions_geojson)
+_TANGLE_GAP = 0.01
 
 
 @njit(cache=True)
@@ -666,9 +669,85 @@ def build(regions, tolerance=None, resolution=None, max_iter=1000, untangle=True
     return part, faces, missing, meta
 
 
+def _tangles(part):
+    """The boxes ``[e0, e1, u0, u1]`` where chords still cross after untangling
+    (borders of different words within rounding of each other, near the tongue
+    tips): the bounding boxes of every crossing pair's two segments, padded by
+    the tolerance, merged where they overlap (into their common bounding box)."""
+    import shapely
+
+    for ed in part.edges:
+        ed.fresh[:] = True
+    pairs, _ = _find_crossings(part.edges, part.window)
+    if not len(pairs):
+        return []
+    S, _, _ = _segments(part.edges)
+    A, B = S[pairs[:, 0]], S[pairs[:, 1]]
+    lo = np.minimum(np.minimum(A[:, :2], A[:, 2:]), np.minimum(B[:, :2], B[:, 2:])) - part.tolerance
+    hi = np.maximum(np.maximum(A[:, :2], A[:, 2:]), np.maximum(B[:, :2], B[:, 2:])) + part.tolerance
+    w = part.window
+    lo = np.maximum(lo, [w[0], w[2]])
+    hi = np.minimum(hi, [w[1], w[3]])
+    # boxes closer than _TANGLE_GAP of the window's size form one tangle (the
+    # accumulation at one tongue tip): the bounding box of them all
+    gap = 0.5 * _TANGLE_GAP * part.scale
+    while True:
+        grown = shapely.box(lo[:, 0] - gap, lo[:, 1] - gap, hi[:, 0] + gap, hi[:, 1] + gap)
+        # the merged groups' bounding boxes (a box in two of them joins both: they
+        # then overlap and merge in the next pass)
+        groups = shapely.envelope(shapely.get_parts(shapely.union_all(grown)))
+        which = shapely.STRtree(groups).query(shapely.points(0.5 * (lo + hi)), predicate="intersects")
+        n = len(groups)
+        glo = np.full((n, 2), np.inf)
+        ghi = np.full((n, 2), -np.inf)
+        np.minimum.at(glo, which[1], lo[which[0]])
+        np.maximum.at(ghi, which[1], hi[which[0]])
+        if n == len(lo):
+            break
+        lo, hi = glo, ghi
+    return sorted([float(a[0]), float(b[0]), float(a[1]), float(b[1])] for a, b in zip(lo, hi))
+
+
+def _clip(geometry, boxes):
+    """``geometry`` (GeoJSON) less the ``boxes``: its crossings, all inside them,
+    resolved by shapely's make_valid first; outer rings counter-clockwise.
+    Returns (geometry or None, its area, the area clipped)."""
+    import shapely
+    from shapely.geometry import mapping, shape
+    from shapely.geometry.polygon import orient
+
+    v = shapely.make_valid(shape(geometry))
+    g = v.difference(shapely.MultiPolygon([shapely.box(b[0], b[2], b[1], b[3]) for b in boxes]))
+    polys = [orient(p, 1.0) for p in shapely.get_parts(g) if p.geom_type == "Polygon" and p.area > 0]
+    if not polys:
+        return None, 0.0, float(v.area)
+    out = polys[0] if len(polys) == 1 else shapely.MultiPolygon(polys)
+    m = mapping(out)
+    return {"type": m["type"], "coordinates": _lists(m["coordinates"])}, float(out.area), float(v.area - out.area)
+
+
+def _meets(polys, boxes):
+    """Whether the bounding box of the rings ``polys`` meets one of the ``boxes``."""
+    P = np.concatenate([R for rings in polys for R in rings])
+    (e0, u0), (e1, u1) = P.min(0), P.max(0)
+    return any(e0 <= b[1] and b[0] <= e1 and u0 <= b[3] and b[2] <= u1 for b in boxes)
+
+
+def _lists(c):
+    return [_lists(x) for x in c] if isinstance(c, (list, tuple)) and c and isinstance(c[0], (list, tuple)) \
+        else [float(x) for x in c]
+
+
+def _tangle_reason(b):
+    return (f"accumulation of borders in e {b[0]:.6g}..{b[1]:.6g} x u {b[2]:.6g}..{b[3]:.6g}: borders of "
+            "different words closer than rounding whose chords still cross after untangling; clipped "
+            "out of every polygon, not resolved at this tolerance")
+
+
 def geojson(regions, tolerance=None, resolution=None, max_iter=1000, graph=None):
     """regions_geojson's work (see its docstring)."""
     part, faces, missing, meta = build(regions, tolerance, resolution, max_iter, graph=graph)
+    boxes = _tangles(part) if part.crossings else []
     feats = []
     for ri, r in enumerate(part.regions):
         base = {"word": r.word.format(ascii=True), "period": r.word.period, "impacts": r.word.impacts,
@@ -676,24 +755,37 @@ def geojson(regions, tolerance=None, resolution=None, max_iter=1000, graph=None)
         if not r.components:
             feats.append({"type": "Feature", "geometry": None,
                           "properties": dict(base, component=None, area=None, area_error=None,
-                                             polygon_area=0.0, kinds={}, corners=0)})
+                                             polygon_area=0.0, clipped_area=0.0, kinds={}, corners=0)})
             continue
         for ci, comp in enumerate(r.components):
             polys = faces[(ri, ci)]
             coords = [[R.tolist() for R in rings] for rings in polys]
             geometry = ({"type": "Polygon", "coordinates": coords[0]} if len(coords) == 1 else
                         {"type": "MultiPolygon", "coordinates": coords})
+            polygon_area = sum(_signed_area(R) for rings in polys for R in rings)
+            clipped = 0.0
+            if boxes and _meets(polys, boxes):
+                geometry, polygon_area, clipped = _clip(geometry, boxes)
             feats.append({
                 "type": "Feature", "geometry": geometry,
                 "properties": dict(base, component=ci, area=comp.area, area_error=comp.area_error,
-                                   polygon_area=sum(_signed_area(R) for rings in polys for R in rings),
+                                   polygon_area=polygon_area, clipped_area=clipped,
                                    kinds=comp.kinds, corners=len(comp.corners)),
             })
     for text, (word, x) in sorted(missing.items()):
         feats.append({"type": "Feature", "geometry": None, "properties": {
             "word": text, "period": word.period, "impacts": word.impacts, "complete": False,
             "reason": _untraced_reason(), "seen_at": x, "component": None, "area": None,
-            "area_error": None, "polygon_area": 0.0, "kinds": {}, "corners": 0}})
+            "area_error": None, "polygon_area": 0.0, "clipped_area": 0.0, "kinds": {}, "corners": 0}})
+    for b in boxes:
+        ring = [[b[0], b[2]], [b[1], b[2]], [b[1], b[3]], [b[0], b[3]], [b[0], b[2]]]
+        feats.append({"type": "Feature", "geometry": {"type": "Polygon", "coordinates": [ring]}, "properties": {
+            "word": None, "period": None, "impacts": None, "complete": False, "reason": _tangle_reason(b),
+            "component": None, "area": None, "area_error": None,
+            "polygon_area": (b[1] - b[0]) * (b[3] - b[2]), "clipped_area": 0.0, "kinds": {}, "corners": 0}})
+    if boxes:
+        meta["polygon_area"] = sum(f["properties"]["polygon_area"] for f in feats if f["properties"]["word"])
+    meta["clipped"] = boxes
     return {"type": "FeatureCollection", "metadata": meta, "features": feats}
 
 
@@ -841,16 +933,26 @@ def regions_geojson(regions, *, tolerance=None, resolution=None, max_iter=1000) 
     edges and at vertices (``shapely.is_valid`` and zero intersection area
     on the Fig. 5e window, with corners too, e 0.30-0.36 x u 0.32-0.38, and
     the Fig. 4 window seeded at 32: numerical, tests/test_regions_export.py).
-    Not yet everywhere: the Fig. 4 window seeded at 128 leaves crossing
-    pairs at the tongue tips (27 invalid polygons), and e 0.30-0.36 x
-    u 0.32-0.38 seeded at 500 one (docs/guide/regions.md).
+    Where pairs are left (near the tongue tips, e -> 0, where infinitely many
+    borders accumulate and borders of different words come within rounding
+    of each other: the Fig. 4 window seeded at 128), the tangles are
+    clipped: the bounding box of each pair's two segments, padded by the
+    tolerance, boxes closer than 1 % of the window's size merged, is cut out
+    of every polygon (shapely's make_valid, then the difference) and
+    exported as its own feature (``word`` null, ``complete: false``, the
+    reason: "accumulation of borders ...; not resolved at this
+    tolerance"), listed in ``metadata.clipped``: the partition stays
+    gap-free and every polygon valid (the Fig. 4 window seeded at 48 and
+    128, e 0.30-0.36 x u 0.32-0.38 seeded at 500: numerical,
+    docs/guide/regions.md).
 
     Properties of a polygon: ``word``, ``period``, ``impacts``,
     ``component``; ``area``, the traced area of the component (the shoelace
     sum of the dense traced curve plus the cubic Hermite correction of every
     chord: exact to ``area_error``) and ``polygon_area``, the area of the
     exported rings themselves (outer minus holes; it differs from ``area`` by
-    at most about the perimeter times ``tolerance``); ``kinds`` (arcs by
+    at most about the perimeter times ``tolerance``, and the area clipped,
+    ``clipped_area``, besides); ``kinds`` (arcs by
     kind), ``corners``, ``complete`` and ``reason``.  A word whose walks
     failed has ``complete: false`` and the reason on each of its features
     (with a null geometry when no component closed).  Words seen just
@@ -863,7 +965,8 @@ def regions_geojson(regions, *, tolerance=None, resolution=None, max_iter=1000) 
     left (``max_deviation``), the counts (``words``, ``components``,
     ``edges``, ``shared_edges``, ``vertices``), ``incomplete`` and
     ``untraced`` (word lists), ``traced_area`` and ``polygon_area`` (sums),
-    ``crossings`` (segment pairs still meeting: 0) and, with ``resolution``,
+    ``crossings`` (segment pairs still meeting before clipping), ``clipped``
+    (the boxes ``[e0, e1, u0, u1]`` cut out) and, with ``resolution``,
     the window's coverage: ``sliding_area``, the sliding area of a scan of
     ``resolution`` x ``resolution`` pixel centres (the seed scan of
     :func:`window_regions` when given its resolution and ``max_iter``), and
