@@ -66,10 +66,6 @@ def proven_depth(view: V.View) -> int:
     return max(0, int(math.floor(math.log2(min(view.width, view.height) / MIN_BOX_PX))))
 
 
-def _chunks(n, size):
-    return [slice(lo, min(n, lo + size)) for lo in range(0, n, max(1, size))]
-
-
 def proven_slices(view: V.View, slice_work: int | None = None):
     """proven_slices(view, slice_work=SLICE_WORK) -> generator, returning CertifiedAtlas
 
@@ -84,7 +80,6 @@ def proven_slices(view: V.View, slice_work: int | None = None):
     total)``: ``("level", level, depth)`` or ``("itineraries", done, total)``.
     Raises :class:`ValueError` for a window :func:`stairbounce.certify` refuses.
     """
-    from .._interrupt import run_kernel
     from ..structure import _kernel as K
 
     C = importlib.import_module("..structure.certify", __package__)  # the module (the package exports the function)
@@ -96,31 +91,15 @@ def proven_slices(view: V.View, slice_work: int | None = None):
     u_lo, u_hi = C._check_u((view.u_lo, view.u_hi), window=True)
     win = np.array([e_lo, e_hi, u_lo, u_hi])
     form = C._FORM_CODES["corners"]
-    # the quadtree of certify(): its start level, then each level's undecided boxes split in four
+    # certify()'s quadtree (one tile, the check box by box in the level kernel: the same
+    # boxes), each level's kernel calls in batches of bounded work
     start = min(C._START_LEVEL, depth)
     gi, gj = np.meshgrid(np.arange(1 << start), np.arange(1 << start))
-    ii, jj = gi.ravel().astype(np.int64), gj.ravel().astype(np.int64)
-    ns_level = max(0, depth - C._NONSLIDING_LEVELS)
-    per_slice = max(1, slice_work // (BOX_WORK * max_iter))
-    out = []
-    for level in range(start, depth + 1):
-        n = ii.size
-        status, reason = np.empty(n, np.int8), np.empty(n, np.int8)
-        step, nsteps = np.empty(n, np.int64), np.empty(n, np.int64)
-        kept = np.empty((n, C._KEPT), np.int16)
-        ns_points = 0 if level < ns_level else (1 if level == depth else 5)
-        for s in _chunks(n, per_slice):
-            run_kernel(K._certify_level, win, level, ii[s], jj[s], max_iter, K.IMPACT_CAP, form, ns_points,
-                       status[s], reason[s], step[s], nsteps[s], kept[s])
-            yield "level", level, depth
-        final = (status != K.UNDECIDED) | (reason == K.NONSLIDING) | (level == depth)
-        out.append((np.full(int(final.sum()), level, np.int8), ii[final], jj[final], status[final],
-                    reason[final], step[final], nsteps[final], kept[final]))
-        i2, j2 = 2 * ii[~final], 2 * jj[~final]
-        ii, jj = np.concatenate([i2, i2 + 1, i2, i2 + 1]), np.concatenate([j2, j2, j2 + 1, j2 + 1])
-    cols = [np.concatenate([p[k] for p in out]) for k in range(8)]
-    order = np.lexsort((cols[1], cols[2], cols[0]))  # as certify(): by level, then u, then e
-    cols = [c[order] for c in cols]
+    out: list[tuple] = []
+    for level, _ in C._run_tile(win, depth, start, gi.ravel(), gj.ravel(), max_iter, form, out,
+                                batch=max(1, slice_work // (BOX_WORK * max_iter))):
+        yield "level", level, depth
+    cols, kept, row = C._box_table(out)
     # the table, in batches whose itineraries computed again (longer than the
     # level kernel keeps: two corners walked per step) stay within the bound
     status, nsteps = cols[3], cols[6]
@@ -132,13 +111,9 @@ def proven_slices(view: V.View, slice_work: int | None = None):
             lo, acc = b, 0
         acc += w
     bounds.append((lo, status.size))
-    # the itineraries the level kernel kept, for the proven boxes whose itinerary fits
-    # (certify()'s ``row``: the box's row of ``kept``, -1 to compute it again)
-    fits = ((status == K.WORD) | (status == K.NO_SLIDE_WITHIN)) & (nsteps <= C._KEPT)
     parts = []
     for k, (a, b) in enumerate(bounds):
-        row = np.where(fits[a:b], np.arange(b - a), -1)
-        parts.append(C._atlas_dataset(win, depth, max_iter, form, *(c[a:b] for c in cols), row))
+        parts.append(C._atlas_dataset(win, depth, max_iter, form, *(c[a:b] for c in cols), kept, row[a:b]))
         if k + 1 < len(bounds):
             yield "itineraries", b, status.size
     return C.CertifiedAtlas(_join(parts))

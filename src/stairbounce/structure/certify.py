@@ -307,24 +307,13 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap
             # the tile's boxes of the start level, as one level-wide batch
             gi, gj = np.meshgrid(np.arange(ti * per_tile, (ti + 1) * per_tile),
                                  np.arange(tj * per_tile, (tj + 1) * per_tile))
-            parts += _run_tile(win, depth, start, gi.ravel(), gj.ravel(), max_iter, code, tick,
-                               None if reference else points)
-    cols = [np.concatenate([p[k] for p in parts]) for k in range(8)]
+            for _, level_done in _run_tile(win, depth, start, gi.ravel(), gj.ravel(), max_iter, code, parts,
+                                           None if reference else points):
+                if level_done:
+                    tick()
+    cols, kept, row = _box_table(parts)
     del parts
-    level, ii, jj = cols[:3]
-    # by level, then j, then i (np.lexsort((ii, jj, level))'s order) by one int64 key:
-    # i, j < 2^27 at depth <= 26
-    order = np.argsort((level.astype(np.int64) << 56) | (jj << 28) | ii)
-    # the kept rows follow their proven boxes (kept for the proven boxes only, in box order)
-    st = cols[3]
-    keep = ((st == K.WORD) | (st == K.NO_SLIDE_WITHIN)) & (cols[6] <= _KEPT)
-    row = np.full(st.size, -1, np.int64)
-    row[keep] = np.arange(int(keep.sum()))
-    kept = cols[7]
-    level, ii, jj, status, reason, step, nsteps = (c[order] for c in cols[:7])
-    row = row[order]
-    del cols
-    ds = _atlas_dataset(win, depth, max_iter, code, level, ii, jj, status, reason, step, nsteps, kept, row)
+    ds = _atlas_dataset(win, depth, max_iter, code, *cols, kept, row)
     if trap:
         from .trapping import trap_atlas
 
@@ -332,10 +321,14 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap
     return CertifiedAtlas(ds, seconds=time.perf_counter() - t0)
 
 
-def _run_tile(win, depth, start, gi, gj, max_iter, form, tick, points=None):
-    """The quadtree below a batch of boxes ``(gi, gj)`` of level ``start``: the final
-    boxes as arrays ``(level, i, j, status, reason, step, nsteps, kept)``, one tuple per
-    level (``kept``: the kept itineraries of the proven boxes only, in their order).
+def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch=None):
+    """The quadtree below a batch of boxes ``(gi, gj)`` of level ``start``, as a
+    generator: it appends the final boxes to ``out`` as arrays ``(level, i, j, status,
+    reason, step, nsteps, kept)``, one tuple per level (``kept``: the kept itineraries
+    of the proven boxes only, in their order), and yields ``(level, level_done)`` after
+    each kernel call: a level in one call, or with ``batch`` in calls of at most
+    ``batch`` boxes (the explorer's bounded slices; boxes are independent, so the
+    boxes are the same).
 
     ``points``: a :class:`_SlideCache` (the "nonsliding" check of many boxes at once,
     its box corners shared, :func:`_mark_nonsliding`), or None for the check box by
@@ -345,7 +338,6 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, tick, points=None):
     ii = gi.astype(np.int64)
     jj = gj.astype(np.int64)
     ns_level = max(0, depth - _NONSLIDING_LEVELS)
-    out = []
     for level in range(start, depth + 1):
         n = ii.size
         status = np.empty(n, np.int8)
@@ -353,14 +345,18 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, tick, points=None):
         step = np.empty(n, np.int64)
         nsteps = np.empty(n, np.int64)
         kept = np.empty((n, _KEPT), np.int16)
-        if n:
-            # the leaves' reason by their centre alone (the pixel of a scan at 2^depth); coarser
-            # boxes stop as "nonsliding" only when neither the centre nor a corner slides
-            ns_points = 0 if level < ns_level else (1 if level == depth else 5)
-            run_kernel(K._certify_level, win, level, ii, jj, max_iter, K.IMPACT_CAP, form,
-                       ns_points if points is None else 0, status, reason, step, nsteps, kept)
+        # the leaves' reason by their centre alone (the pixel of a scan at 2^depth); coarser
+        # boxes stop as "nonsliding" only when neither the centre nor a corner slides
+        ns_points = 0 if level < ns_level else (1 if level == depth else 5)
+        size = max(1, n if batch is None else batch)
+        for lo in range(0, n, size):
+            s = slice(lo, min(n, lo + size))
+            run_kernel(K._certify_level, win, level, ii[s], jj[s], max_iter, K.IMPACT_CAP, form,
+                       ns_points if points is None else 0, status[s], reason[s], step[s], nsteps[s], kept[s])
             if ns_points and points is not None:
-                _mark_nonsliding(win, level, depth, ii, jj, status, reason, ns_points, points)
+                _mark_nonsliding(win, level, depth, ii[s], jj[s], status[s], reason[s], ns_points, points)
+            if s.stop < n:
+                yield level, False
         final = (status != K.UNDECIDED) | (reason == K.NONSLIDING) | (level == depth)
         keep = final & ((status == K.WORD) | (status == K.NO_SLIDE_WITHIN)) & (nsteps <= _KEPT)
         out.append((np.full(int(final.sum()), level, np.int8), ii[final], jj[final], status[final],
@@ -371,8 +367,25 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, tick, points=None):
         j2 = 2 * jj[split]
         ii = np.concatenate([i2, i2 + 1, i2, i2 + 1])
         jj = np.concatenate([j2, j2, j2 + 1, j2 + 1])
-        tick()
-    return out
+        yield level, True
+
+
+def _box_table(parts):
+    """The final boxes of :func:`_run_tile`'s tuples as the columns ``(level, i, j,
+    status, reason, step, nsteps)`` in the atlas's order (by level, then j, then i), the
+    kept itineraries and each box's row of them (-1: computed again), for
+    :func:`_atlas_dataset`."""
+    cols = [np.concatenate([p[k] for p in parts]) for k in range(8)]
+    level, ii, jj = cols[:3]
+    # by level, then j, then i (np.lexsort((ii, jj, level))'s order) by one int64 key:
+    # i, j < 2^27 at depth <= 26
+    order = np.argsort((level.astype(np.int64) << 56) | (jj << 28) | ii)
+    # the kept rows follow their proven boxes (kept for the proven boxes only, in box order)
+    st = cols[3]
+    keep = ((st == K.WORD) | (st == K.NO_SLIDE_WITHIN)) & (cols[6] <= _KEPT)
+    row = np.full(st.size, -1, np.int64)
+    row[keep] = np.arange(int(keep.sum()))
+    return [c[order] for c in cols[:7]], cols[7], row[order]
 
 
 class _SlideCache:
