@@ -194,6 +194,19 @@ def _entry(E0, E1, U0, U1, max_steps, itin):
 
 
 @njit(cache=True)
+def _enqueue(c, flags, queue, tail):
+    """Put cell ``c`` at ``queue[tail]`` unless it was queued before (``flags``): the
+    new tail, or -1 when the queue (``max_cells`` long) is full."""
+    if flags[c] != 0:
+        return tail
+    if tail >= queue.size:
+        return -1
+    flags[c] = 1
+    queue[tail] = c
+    return tail + 1
+
+
+@njit(cache=True)
 def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, seed, max_cells, flags):
     """Grow the region from the cell rectangle ``seed = (i0, i1, j0, j1)``: the
     cells reachable by the branches' image enclosures (breadth first).
@@ -213,13 +226,10 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, seed, max_cells, flags):
     tail = 0
     for j in range(seed[2], seed[3] + 1):
         for i in range(seed[0], seed[1] + 1):
-            c = j * nv + i
-            if flags[c] == 0:
-                if tail >= max_cells:
-                    return TRAP_CELLS, tail
-                flags[c] = 1
-                queue[tail] = c
-                tail += 1
+            t = _enqueue(j * nv + i, flags, queue, tail)
+            if t < 0:
+                return TRAP_CELLS, tail
+            tail = t
     while head < tail:
         c = queue[head]
         head += 1
@@ -241,13 +251,10 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, seed, max_cells, flags):
                 return TRAP_ESCAPE, tail
             for jj in range(j0, j1 + 1):
                 for ii in range(i0, i1 + 1):
-                    cc = jj * nv + ii
-                    if flags[cc] == 0:
-                        if tail >= max_cells:
-                            return TRAP_CELLS, tail
-                        flags[cc] = 1
-                        queue[tail] = cc
-                        tail += 1
+                    t = _enqueue(jj * nv + ii, flags, queue, tail)
+                    if t < 0:
+                        return TRAP_CELLS, tail
+                    tail = t
     return TRAP_OK, tail
 
 
