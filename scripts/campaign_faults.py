@@ -455,6 +455,24 @@ def _py(code, cwd, timeout=600):
     return subprocess.run([sys.executable, "-c", code], cwd=cwd, capture_output=True, text=True, timeout=timeout)
 
 
+def _refused_for_memory(view, call, cwd):
+    """Run ``call`` on a zero-copy view (the line ``view``) in a fresh interpreter capped at
+    6 GiB of address space: its stdout says REFUSED when a ValueError names the memory, RAN
+    when the call returned (the run, for the case's detail)."""
+    code = f"""
+import resource
+resource.setrlimit(resource.RLIMIT_AS, (6 << 30, 6 << 30))
+import numpy as np, stairbounce as sb
+{view}
+try:
+    {call}
+    print("RAN")
+except ValueError as exc:
+    print("REFUSED" if "memory" in str(exc) else exc)
+"""
+    return _py(code, cwd, timeout=90)
+
+
 def _stop(p):
     if p is not None and p.poll() is None:
         p.send_signal(signal.SIGTERM)
@@ -705,18 +723,7 @@ print("AT 2^-53", sb.poincare_map(0.0, -1e20, 2.0**-53, 0.7)[2])
     calls = {"scan_points": "sb.scan_points(b, b)", "no_sliding_curve": "sb.no_sliding_curve(np.broadcast_to(0.5, (10**10,)))",
              "box_counts": "sb.box_counts(np.broadcast_to(True, (200000, 200000)))"}
     for name, call in calls.items():
-        code = f"""
-import resource
-resource.setrlimit(resource.RLIMIT_AS, (6 << 30, 6 << 30))
-import numpy as np, stairbounce as sb
-b = np.broadcast_to(0.5, (3 * 10**9,))
-try:
-    {call}
-    print("RAN")
-except ValueError as exc:
-    print("REFUSED" if "memory" in str(exc) else exc)
-"""
-        r = _py(code, work, timeout=90)
+        r = _refused_for_memory("b = np.broadcast_to(0.5, (3 * 10**9,))", call, work)
         t.case("numeric", f"{name} of a broadcast view", "REFUSED" in r.stdout, (r.stdout + r.stderr)[-200:])
 
 
@@ -1085,18 +1092,7 @@ def part_round3b(t, work, args):
         line = next((x for x in lines if x.startswith(key)), f"{key} missing")
         t.case("round3b", name, line.endswith("OK"), line)
     for name, call in _R3B_ZERO_COPY.items():
-        code = f"""
-import resource
-resource.setrlimit(resource.RLIMIT_AS, (6 << 30, 6 << 30))
-import numpy as np, stairbounce as sb
-big = np.broadcast_to(0.5, (10**12,))
-try:
-    {call}
-    print("RAN")
-except ValueError as exc:
-    print("REFUSED" if "memory" in str(exc) else exc)
-"""
-        r = _py(code, work, timeout=90)
+        r = _refused_for_memory("big = np.broadcast_to(0.5, (10**12,))", call, work)
         t.case("round3b", f"R8 {name} of a zero-copy view", "REFUSED" in r.stdout, (r.stdout + r.stderr)[-200:])
     d = Path(tempfile.mkdtemp(dir=work))
     deep = ["words", "--regions", "--e", "0.07314063608855005:0.0731406360889329",
