@@ -100,7 +100,8 @@ def _count(pattern, e, u, k_max, n, out, force):
     res = member_count(pattern, ev, uv, k_max=k_max, n=n)
     if not isinstance(res, int):
         typer.echo(f"members of {pattern} on lines e = const, u in [{uv[0]:g}, {uv[1]:g}], "
-                   f"e in [{ev[0]:g}, {ev[1]:g}] (exact counts; changes bisected to adjacent floats of e):")
+                   f"e in [{ev[0]:g}, {ev[1]:g}] (counts to rounding, numerical: each member's existence is a "
+                   "float decision; changes bisected to adjacent floats of e):")
         typer.echo(f"{'k':>5} {'e below':>22} {'e above':>22}  change      count below -> above")
         for r in res.itertuples():
             typer.echo(f"{r.k:>5} {r.e_below:>22.17g} {r.e_above:>22.17g}  "
@@ -112,4 +113,5 @@ def _count(pattern, e, u, k_max, n, out, force):
                 res.to_csv(tmp, index=False)
             typer.echo(f"wrote {out}")
         return
-    typer.echo(f"{res} member(s) of {pattern} on the line e = {ev:g}, u in [{uv[0]:g}, {uv[1]:g}] (exact)")
+    typer.echo(f"{res} member(s) of {pattern} on the line e = {ev:g}, u in [{uv[0]:g}, {uv[1]:g}] "
+               "(to rounding, numerical: each member's existence is a float decision)")
