@@ -229,9 +229,9 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     corners nor centre the float map slides within ``max_iter`` steps stops
     with the reason ``"nonsliding"`` (numerical: the enclosures of a long
     non-sliding orbit widen, and splitting cannot help there), so the atlas
-    tells the undecided area of a border from that of non-sliding motion; an
-    undecided box of the last level is "nonsliding" when its centre does not
-    slide (the pixel of a scan with 2^depth pixels a side).  A
+    tells the undecided area of a border from that of non-sliding motion, at
+    the last level too (the corners are shared between boxes and iterated
+    once).  A
     box touching ``e = 0``, ``e = 1`` or ``u = 0`` is undecided (reason ``"range"``) and
     split down to the last level, so only a strip one box wide stays so.
 
@@ -345,9 +345,9 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch
         step = np.empty(n, np.int64)
         nsteps = np.empty(n, np.int64)
         kept = np.empty((n, _KEPT), np.int16)
-        # the leaves' reason by their centre alone (the pixel of a scan at 2^depth); coarser
-        # boxes stop as "nonsliding" only when neither the centre nor a corner slides
-        ns_points = 0 if level < ns_level else (1 if level == depth else 5)
+        # a box stops as "nonsliding" only when neither its centre nor a corner slides, at
+        # every level from ns_level on, the last included (issue 43: the label's promise)
+        ns_points = 0 if level < ns_level else 5
         size = max(1, n if batch is None else batch)
         for lo in range(0, n, size):
             s = slice(lo, min(n, lo + size))
