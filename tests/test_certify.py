@@ -278,13 +278,13 @@ def test_words_and_their_area_bounds(atlas):
 
 
 def test_border_box_counts_bracket(atlas):
-    df = atlas.border_box_counts()
+    df = atlas.border_box_counts(border="words")  # all borders: each word its own class
     assert list(df["k"]) == list(range(atlas.depth + 1))
     assert (df["lower"] <= df["upper"]).all()
     assert (df["upper"] <= 4.0 ** df["k"]).all()
     # a cell of the finest scale holds one box: two classes only from coarser scales on
     assert df["lower"].iloc[-1] == 0 and df["lower"].iloc[-3] > 0
-    lo, hi = atlas.slope_bracket(3, 6)
+    lo, hi = atlas.slope_bracket(3, 6, border="words")
     assert lo <= hi
 
 
