@@ -95,44 +95,79 @@ def _explorer(view=VIEW):
     return app, sched
 
 
+def _image(app):
+    """The proven overlay's picture as the page has it: (rgba, code, names)."""
+    d = app.proven_src.data
+    return d["image"][0], d["code"][0], app._proven_names.args["names"]
+
+
 def test_overlay_draws_the_atlas_in_the_scan_s_colours_with_its_key():
     app, sched = _explorer()
     sched.run_all()
     atlas = app._proven[1]
-    d = app.proven_src.data
-    assert len(d["left"]) == atlas.boxes.sizes["box"] > 100
+    rgba, code, names = _image(app)
+    assert rgba.shape == code.shape == (VIEW.height, VIEW.width)
+    assert atlas.boxes.sizes["box"] > 100 and (code >= 0).all()  # the atlas covers the view
     assert "proven overlay:" in app.status.object and "undecided (numerical)" in app.status.object
     note = app.proven_note.object
     assert app.proven_note.visible and "Undecided areas are numerical" in note
     assert f"depth {P.proven_depth(VIEW)}" in note and f"at least {P.MIN_BOX_PX} pixels" in note
-    # every pixel centre inside a proven word box has the scan's colour of the box's fill, in every
-    # colouring the overlay follows
-    es, us = app.ds.e.values, app.ds.u.values
-    labels = np.array(d["what"])
+    # every pixel of a proven word box has the scan's colour of that pixel, in every colouring the
+    # overlay follows (the picture is at the view's pixels: pixel (i, j) is the scan's pixel (i, j))
     for var in ("word_length", "period", "status"):
         app.color.value = var
-        d = app.proven_src.data
-        rgba = V.shade(app.ds, var)
-        checked = 0
-        for b in np.flatnonzero(np.char.startswith(labels.astype(str), "proven word")):
-            cols = np.flatnonzero((es > d["left"][b]) & (es < d["right"][b]))
-            rows = np.flatnonzero((us > d["bottom"][b]) & (us < d["top"][b]))
-            if cols.size and rows.size:
-                want = V._rgba32((d["fill"][b],))[0]
-                assert np.all(rgba[np.ix_(rows, cols)] == want), (var, labels[b])
-                checked += rows.size * cols.size
-        assert checked > 200
-    # undecided boxes hatched by reason; the proven non-sliding ones marked
-    kinds = {w.split(": ")[-1] for w in labels if w.startswith("undecided")}
-    assert kinds and kinds <= set(P.STYLES)
-    for w, h in zip(labels, d["hatch"]):
-        key = w.split(": ")[-1] if w.startswith("undecided") else w.split()[1] if w.startswith("proven ") else w
-        key = "word" if w.startswith("proven word") else key
-        assert h == P.STYLES[key][2]
+        rgba, code, names = _image(app)
+        word = np.isin(code, [k for k, w in enumerate(names) if w.startswith("proven word")])
+        assert word.sum() > 200
+        assert np.array_equal(rgba[word], V.shade(app.ds, var)[word]), var
+    # the proven word at each word pixel is the float map's word at its centre, on a sample
+    es, us = app.ds.e.values, app.ds.u.values
+    rows, cols = np.nonzero(word)
+    for k in np.linspace(0, rows.size - 1, 12).astype(int):
+        i, j = rows[k], cols[k]
+        assert names[code[i, j]] == "proven word " + sb.sliding_word(es[j], us[i], VIEW.max_iter).format(ascii=True)
+    # undecided boxes: translucent white with their reason's hatch on top (the map shows through);
+    # every label's pixels carry their style
+    labels = {w: (w.split(": ")[-1] if w.startswith("undecided") else "word" if w.startswith("proven word")
+                  else w.split()[1]) for w in names}
+    assert {k for k in labels.values() if k in ("graze", "edge", "chatter", "nonsliding")}
+    for k, w in enumerate(names):
+        fill, alpha, hatch, hcol, _ = P.STYLES[labels[w]]
+        px = rgba[code == k]
+        hatched = px == V._rgba32((hcol,))[0]
+        if hatch != " ":
+            assert hatched.any() and (~hatched).any(), w
+            assert np.all(px[~hatched] >> 24 == round(255 * alpha)), w
+        if fill is not None:
+            assert np.all(px[~hatched] & 0xFFFFFF == V._rgba32((fill,))[0] & 0xFFFFFF), w
     # off: nothing drawn, no key, no job left
     app.overlays.value = []
-    assert app.proven_src.data["left"] == [] and not app.proven_note.visible
+    assert app.proven_src.data["image"] == [] and not app.proven_note.visible
     assert "proven overlay" not in app.status.object
+
+
+def test_the_picture_s_boxes_meet_without_gaps_and_hatching_runs_on():
+    """proven_image: each box paints exactly the pixels whose centres it
+    contains, a box of any size (the boxes of a quadtree meet on shared
+    edges), and a hatch is the same lattice in every box (it runs on across
+    neighbouring boxes of one reason)."""
+    app, sched = _explorer()
+    sched.run_all()
+    atlas = app._proven[1]
+    pic = P.proven_image(atlas, 50, 37)
+    ds = atlas.boxes
+    (e0, e1), (u0, u1) = atlas.window
+    ce = e0 + (np.arange(50) + 0.5) * (e1 - e0) / 50
+    cu = u0 + (np.arange(37) + 0.5) * (u1 - u0) / 37
+    quads = P.proven_overlay(atlas)
+    for b in range(0, ds.sizes["box"], 7):
+        inside = np.outer((cu > ds["u0"].values[b]) & (cu < ds["u1"].values[b]),
+                          (ce > ds["e0"].values[b]) & (ce < ds["e1"].values[b]))
+        assert np.all(np.asarray(pic["names"])[pic["code"][inside]] == quads["what"][b])
+    masks = P._hatch_masks(37, 50)
+    assert masks["/"][0, 0] and masks["/"][1, 1] and not masks["/"][1, 0]  # rises to the right, row 0 at the bottom
+    with pytest.raises(ValueError, match="width and height"):
+        P.proven_image(atlas, 0, 10)
 
 
 def test_tap_shows_the_certificate_of_the_box_or_why_it_is_undecided():

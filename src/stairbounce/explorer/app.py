@@ -46,6 +46,7 @@ from bokeh.models import (
     LinearColorMapper,
     Range1d,
     Span,
+    TapTool,
 )
 from bokeh.plotting import figure
 from panel.io.state import set_curdoc
@@ -53,7 +54,7 @@ from panel.io.state import set_curdoc
 from .._colours import KIND_COLOURS, kinds_legend
 from .export import export_name, view_netcdf, view_png
 from .preview import REMOVE_JS
-from .proven import MIN_BOX_PX, STYLES, proven_at, proven_depth, proven_overlay, proven_slices, proven_summary
+from .proven import MIN_BOX_PX, STYLES, proven_at, proven_depth, proven_image, proven_slices, proven_summary
 from .scheduler import Scheduler
 from .view import (
     DEFAULT_VIEW,
@@ -149,6 +150,10 @@ ZOOM_SETTLE_MS = 150
 # before it (a wheel turned in notches, on a loaded machine, reports a
 # RangesUpdate every few notches)
 GESTURE_MERGE_S = 1.0
+
+# the proven overlay's picture before an atlas is drawn (nothing), and its hover: the box's label
+_NO_PROVEN_IMAGE = dict(image=[], code=[], x=[], y=[], dw=[], dh=[])
+_PROVEN_HOVER_JS = "return value >= 0 && value < names.length ? names[value] : 'none';"
 
 # the longest trajectory drawn for a tap, in steps (one full period when shorter)
 MAX_TRAJECTORY_STEPS = 2000
@@ -326,7 +331,7 @@ class Explorer:
             y_range=Range1d(v.u_lo, v.u_hi, bounds=(0.0, U_LIMIT)),
             frame_width=v.width,
             frame_height=v.height,
-            tools="pan,wheel_zoom,box_zoom,tap,reset",
+            tools="pan,wheel_zoom,box_zoom,reset",
             active_drag="pan",
             active_scroll="wheel_zoom",
             toolbar_location="above",
@@ -349,14 +354,14 @@ class Explorer:
                  x=[v.e_lo], y=[v.u_lo], dw=[v.e_hi - v.e_lo], dh=[v.u_hi - v.u_lo])
         )
         img = fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.img_src)
-        # the certified atlas (overlay "proven", explorer/proven.py): one quad per box, over the
-        # picture and under the curves; named for the browser tests
-        self.proven_src = ColumnDataSource(dict(left=[], right=[], bottom=[], top=[], fill=[], alpha=[], hatch=[],
-                                                hatch_color=[], what=[]), name="sb-proven-boxes")
-        proven = fig.quad(left="left", right="right", bottom="bottom", top="top", source=self.proven_src,
-                          fill_color="fill", fill_alpha="alpha", line_color=None, hatch_pattern="hatch",
-                          hatch_color="hatch_color", hatch_scale=7, hatch_weight=1.2)
-        fig.add_tools(HoverTool(renderers=[proven], tooltips=[("certified box", "@what")]))
+        # the certified atlas (overlay "proven", explorer/proven.py): one RGBA picture of its boxes with
+        # their hatching (proven.proven_image; a glyph per box froze the browser), over the map and
+        # under the curves; named for the browser tests
+        self.proven_src = ColumnDataSource(_NO_PROVEN_IMAGE, name="sb-proven-image")
+        proven = fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.proven_src)
+        self._proven_names = CustomJSHover(args=dict(names=[]), code=_PROVEN_HOVER_JS)
+        fig.add_tools(HoverTool(renderers=[proven], tooltips=[("certified box", "@code{custom}")],
+                                formatters={"@code": self._proven_names}))
         # the picture sent with the page's HTML (.preview) goes when the session's first pixels come
         self.img_src.js_on_change("data", CustomJS(code=REMOVE_JS))
         self.hover = HoverTool(renderers=[img], formatters={
@@ -404,6 +409,8 @@ class Explorer:
         self.mapper = LinearColorMapper(**mapper)
         self.colorbar = ColorBar(color_mapper=self.mapper, width=14, bar_line_color="black", **bar)
         fig.add_layout(self.colorbar, "right")
+        # a tap selects nothing (Bokeh would fade the other glyphs): it is the Tap event's point
+        fig.add_tools(TapTool(renderers=[]))
         fig.on_event(RangesUpdate, self._locked_event(self._on_ranges))
         fig.on_event(Tap, self._locked_event(self._on_tap))
         self.map_fig = fig
@@ -769,12 +776,14 @@ class Explorer:
     def _show_proven(self, done):
         """Draw the atlas (``(atlas, seconds)``, or None: nothing) and its key."""
         if done is None:
-            self.proven_src.data = dict(left=[], right=[], bottom=[], top=[], fill=[], alpha=[], hatch=[],
-                                        hatch_color=[], what=[])
+            self.proven_src.data = dict(_NO_PROVEN_IMAGE)
             self.proven_note.visible = False
             return
         atlas, seconds = done
-        self.proven_src.data = proven_overlay(atlas, self.view.color)
+        # one picture at the view's pixel size (the atlas's boxes are at least MIN_BOX_PX pixels a side)
+        pic = proven_image(atlas, self.view.width, self.view.height, self.view.color)
+        self._proven_names.args = dict(names=pic.pop("names"))
+        self.proven_src.data = {k: [v] for k, v in pic.items()}
         self.proven_note.object = _proven_key_html(atlas, seconds)
         self.proven_note.visible = True
 

@@ -7,9 +7,11 @@ Pure Python like :mod:`.view` (no Panel, no Bokeh):
 - :func:`proven_slices`: :func:`stairbounce.certify` of the view's window
   (corners form, the view's max_iter) as scheduler slices of bounded work,
   returning the same :class:`~stairbounce.CertifiedAtlas` box for box;
-- :func:`proven_overlay`: the atlas as quads to draw (proven words in the
-  scan's colours, the other statuses and the undecided reasons marked, see
-  :data:`STYLES`), and :func:`proven_summary` (area shares);
+- :func:`proven_overlay`: the atlas's boxes with their marks (proven words in
+  the scan's colours, the other statuses and the undecided reasons marked, see
+  :data:`STYLES`), :func:`proven_image`: the same drawn as one RGBA picture
+  with its hatching (what the page shows: one image, not a glyph per box,
+  issue 46 item 2), and :func:`proven_summary` (area shares);
 - :func:`proven_at`: what a tap shows: the certificate of the atlas's box
   containing the point, re-verified by :func:`stairbounce.verify`, or why the
   box is undecided.
@@ -26,7 +28,7 @@ import xarray as xr
 from . import view as V
 
 __all__ = ["MIN_BOX_PX", "BOX_WORK", "STYLES", "proven_depth", "proven_slices", "proven_overlay",
-           "proven_summary", "proven_at"]
+           "proven_summary", "proven_at", "proven_image", "HATCH_PERIOD"]
 
 MIN_BOX_PX = 2
 """The atlas's smallest boxes are at least this many pixels a side: its depth
@@ -187,6 +189,78 @@ def proven_overlay(atlas, var: str = "word_length") -> dict:
         "hatch": [STYLES[k][2] for k in labels], "hatch_color": [STYLES[k][3] for k in labels],
         "what": what.astype(str).tolist(),
     }
+
+
+HATCH_PERIOD = 7
+"""The hatching's period in pixels of :func:`proven_image` (as Bokeh's
+``hatch_scale`` 7 the quads had)."""
+
+
+def _hatch_masks(height: int, width: int) -> dict:
+    """{hatch character: boolean (height, width) mask of its marks}, in the
+    picture's pixels (row 0 at the bottom, as ``image_rgba`` draws it), so the
+    hatching runs on across neighbouring boxes as Bokeh's did."""
+    y, x = np.ogrid[:height, :width]
+    p = HATCH_PERIOD
+    xm, ym = x % p, y % p
+    up, down = (x - y) % p == 0, (x + y) % p == 0  # "/" rises to the right (rows go up)
+    horizontal, vertical = np.broadcast_to(ym == 0, (height, width)), np.broadcast_to(xm == 0, (height, width))
+    r2 = (xm - p // 2) ** 2 + (ym - p // 2) ** 2
+    return {" ": np.zeros((height, width), bool), ".": (xm < 2) & (ym < 2), "o": (r2 >= 2) & (r2 <= 5),
+            "/": up, "\\": down, "x": up | down, "-": horizontal, "|": vertical, "+": horizontal | vertical}
+
+
+def _edges(lo, hi, v, n):
+    """Pixel indices of the box edges ``v`` on an axis from ``lo`` to ``hi`` of
+    ``n`` pixels: a shared edge gives one index, so neighbouring boxes meet
+    without a gap or an overlap."""
+    return np.clip(np.rint((np.asarray(v) - lo) / (hi - lo) * n), 0, n).astype(np.int64)
+
+
+def proven_image(atlas, width: int, height: int, var: str = "word_length") -> dict:
+    """proven_image(atlas, width, height, var="word_length") -> dict
+
+    The atlas drawn as one RGBA picture of ``width`` x ``height`` pixels over
+    its window: each box filled as :func:`proven_overlay` says (its fill at its
+    alpha) with its hatch over it in the hatch colour (opaque), transparent
+    where no box is.  Keys: ``image`` (uint32 (height, width), Bokeh's
+    ``image_rgba`` byte order, row 0 at the bottom), ``code`` (int16 or int32 (height,
+    width): the index into ``names`` of the pixel's box label, -1 none, for the
+    hover), ``names`` (the distinct labels, :func:`proven_overlay`'s ``what``),
+    ``x``, ``y``, ``dw``, ``dh`` (the window).  Raises :class:`ValueError` for
+    a side below 1."""
+    width, height = int(width), int(height)
+    if width < 1 or height < 1:
+        raise ValueError(f"width and height must be at least 1 pixel, got {width} x {height}")
+    quads = proven_overlay(atlas, var)
+    (e_lo, e_hi), (u_lo, u_hi) = atlas.window
+    c0, c1 = _edges(e_lo, e_hi, quads["left"], width), _edges(e_lo, e_hi, quads["right"], width)
+    r0, r1 = _edges(u_lo, u_hi, quads["bottom"], height), _edges(u_lo, u_hi, quads["top"], height)
+    # each pixel's box (the atlas's boxes do not overlap; finer boxes painted last)
+    owner = np.full((height, width), -1, np.int64)
+    for b in np.argsort(atlas.boxes["level"].values, kind="stable").tolist():
+        owner[r0[b]:r1[b], c0[b]:c1[b]] = b
+    names, code_of_box = np.unique(np.asarray(quads["what"], dtype=object).astype(str), return_inverse=True)
+    fill = V._rgba32(quads["fill"]) if quads["fill"] else np.zeros(0, np.uint32)
+    alpha = np.rint(255 * np.asarray(quads["alpha"], float)).astype(np.uint32)
+    fill = (fill & np.uint32(0x00FFFFFF)) | (alpha << np.uint32(24)) if fill.size else fill
+    hatch_rgba = V._rgba32(quads["hatch_color"]) if quads["hatch_color"] else np.zeros(0, np.uint32)
+    inside = owner >= 0
+    image = np.zeros((height, width), np.uint32)
+    image[inside] = fill[owner[inside]]
+    hatches = np.asarray(quads["hatch"], dtype=object)
+    for ch, mask in _hatch_masks(height, width).items():
+        boxes = np.flatnonzero(hatches == ch)
+        if ch == " " or not boxes.size:
+            continue
+        mine = np.zeros(len(hatches) + 1, bool)
+        mine[boxes] = True
+        on = mask & mine[owner]  # owner -1 reads the extra False
+        image[on] = hatch_rgba[owner[on]]
+    code = np.where(inside, code_of_box[np.maximum(owner, 0)], -1)
+    code = code.astype(np.int16 if names.size < 2**15 else np.int32)  # half the bytes on the websocket
+    return {"image": image, "code": code, "names": names.tolist(), "x": e_lo, "y": u_lo,
+            "dw": e_hi - e_lo, "dh": u_hi - u_lo}
 
 
 def proven_summary(atlas) -> dict:
