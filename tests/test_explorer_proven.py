@@ -201,3 +201,61 @@ def test_a_window_the_certifier_refuses_is_a_message_not_a_traceback():
     app, sched = _explorer(V.View(1e-300, 1e-3, 0.5, 0.6, 16, 16, max_iter=50, overlays=("proven",)))
     sched.run_all()
     assert "certifying the view failed" in app.status.object and "2^-53" in app.status.object
+
+
+def test_a_long_certificate_is_deferred_with_a_message_and_the_worker_stays_free(monkeypatch):
+    """Issue 43 item 3: a tap on a box proven not to slide within a max_iter
+    above TAP_CERTIFICATE_STEPS does not walk its certificate on the shared
+    worker (certify_box and sb.verify are Python loops: 57-133 s at max_iter
+    1e6); the tap says so and gives the Python line that computes it, which
+    does.  A second page on the same scheduler gets its picture, and no
+    certify_box call of the explorer walks more than the bound."""
+    walked = []
+    real = C.certify_box
+
+    def counting(*args, **kw):
+        walked.append(kw.get("max_iter", args[2] if len(args) > 2 else 1000))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(C, "certify_box", counting)
+    max_iter = 4 * P.TAP_CERTIFICATE_STEPS
+    deep = V.View(0.2995, 0.29950000000002, 0.4135, 0.41350000000002, 16, 16, max_iter=max_iter,
+                  overlays=("proven",), point=(0.299500000000006, 0.413500000000006))
+    app, sched = _explorer(deep)
+    from stairbounce.explorer.app import Explorer
+
+    victim = Explorer(V.View(0.0, 1.0, 0.0, 1.5, 32, 32, max_iter=200), scheduler=sched)
+    victim.start()
+    sched.run_all()
+    assert "computed in" in victim.status.object
+    atlas = app._proven[1]
+    c = P.proven_at(atlas, *deep.point, max_steps=P.TAP_CERTIFICATE_STEPS)
+    assert c["status"] == "no_slide_within" and c["deferred"] == max_iter and c["certificate"] is None
+    text = app.point_pane.object
+    assert "not computed here" in text and f"{max_iter:,} steps" in text and "re-verified" not in text
+    assert max(walked, default=0) <= P.TAP_CERTIFICATE_STEPS
+    # the line the page gives computes the certificate of exactly that box, and it verifies
+    import html
+    import re
+
+    code = html.unescape(re.search(r'<code class="sb-cert-code">(.*?)</code>', text).group(1))
+    assert code.startswith("sb.verify(sb.certify_box(") and code.endswith(f"max_iter={max_iter}))")
+    cert = eval(code[len("sb.verify("):-1], {"sb": sb})
+    assert (cert.e, cert.u) == c["box"] and cert.status == "no_slide_within" and sb.verify(cert).ok
+
+
+def test_proven_at_defers_exactly_the_certificates_longer_than_the_bound():
+    app, sched = _explorer()
+    sched.run_all()
+    atlas = app._proven[1]
+    ds = atlas.boxes
+    b = int(np.flatnonzero(ds["status"].values == 0)[0])  # a proven word
+    n = P.certificate_steps(atlas, b)
+    assert n == len(sb.certify_box(e=(float(ds["e0"][b]), float(ds["e1"][b])), u=(float(ds["u0"][b]), float(ds["u1"][b])),
+                                   max_iter=atlas.max_iter).itinerary) > 0
+    e, u = float(ds["e0"][b] + ds["e1"][b]) / 2, float(ds["u0"][b] + ds["u1"][b]) / 2
+    assert P.proven_at(atlas, e, u, max_steps=n)["certificate"].status == "word"
+    late = P.proven_at(atlas, e, u, max_steps=n - 1)
+    assert late["deferred"] == n and late["certificate"] is None and late["word"]
+    with pytest.raises(ValueError, match="max_steps"):
+        P.proven_at(atlas, e, u, max_steps=-1)

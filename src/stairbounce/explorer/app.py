@@ -54,7 +54,7 @@ from panel.io.state import set_curdoc
 from .._colours import KIND_COLOURS, kinds_legend
 from .export import export_name, view_netcdf, view_png
 from .preview import REMOVE_JS
-from .proven import MIN_BOX_PX, STYLES, proven_at, proven_depth, proven_image, proven_slices, proven_summary
+from .proven import MIN_BOX_PX, STYLES, TAP_CERTIFICATE_STEPS, proven_at, proven_depth, proven_image, proven_slices, proven_summary
 from .scheduler import Scheduler
 from .view import (
     DEFAULT_VIEW,
@@ -1204,7 +1204,7 @@ class Explorer:
         details = point_details(e, u, view.max_iter, max_steps=MAX_TRAJECTORY_STEPS)
         yield details
         if atlas is not None:
-            yield {"certificate": proven_at(atlas, e, u), "depth": atlas.depth}
+            yield {"certificate": proven_at(atlas, e, u, max_steps=TAP_CERTIFICATE_STEPS), "depth": atlas.depth}
         if details["word"] is not None:
             text = details["word"].format(ascii=True)
             # in slices of bounded work (their progress tuples are not shown)
@@ -1342,7 +1342,7 @@ def _proven_key(view):
 
 def _certificate_work(atlas, e, u):
     """The certificate of the atlas's box at (e, u), as one scheduler slice."""
-    return {"certificate": proven_at(atlas, e, u), "depth": atlas.depth}
+    return {"certificate": proven_at(atlas, e, u, max_steps=TAP_CERTIFICATE_STEPS), "depth": atlas.depth}
     yield  # a generator: the scheduler's slices
 
 
@@ -1401,6 +1401,12 @@ def _certificate_text(c, depth):
         where = f" at step {c['step']}" if c["step"] else ""
         return (f"certified atlas, {box}: <b>undecided</b> (numerical), reason <b>{html.escape(c['reason'])}</b>"
                 f"{where}: {html.escape(STYLES[c['reason']][4].split(': ', 1)[-1])}")
+    if c.get("deferred") is not None:
+        return (f'certified atlas, {box}, max_iter {c["max_iter"]}: <b class="sb-cert-status">{c["status"]}</b> '
+                f"(the atlas's claim); its certificate is <b>not computed here</b>: it walks "
+                f"{c['deferred']:,} steps, more than one slice of the shared worker allows "
+                f"({TAP_CERTIFICATE_STEPS:,} steps), and would hold every page of this server. "
+                f'Compute and check it in Python: <code class="sb-cert-code">{html.escape(_certificate_code(c))}</code>')
     claim = {"word": f"every point has the periodic sliding solution of the word "
                      f"<b>{html.escape(c['word'] or '')}</b>",
              "no_sliding": "no periodic sliding solution anywhere (Corollary 2.1 over the whole box)",
@@ -1412,6 +1418,14 @@ def _certificate_text(c, depth):
            + html.escape(verdict.message if verdict is not None else "not run"))
     return (f'certified atlas, {box}, max_iter {c["max_iter"]}: <b class="sb-cert-status">{c["status"]}</b>, '
             f"{claim}; {how}")
+
+
+def _certificate_code(c):
+    """The Python line that computes and checks a box's certificate (its edges
+    as hex floats: exactly the box)."""
+    (e0, e1), (u0, u1) = c["box"]
+    return (f"sb.verify(sb.certify_box(e=(float.fromhex('{e0.hex()}'), float.fromhex('{e1.hex()}')), "
+            f"u=(float.fromhex('{u0.hex()}'), float.fromhex('{u1.hex()}')), max_iter={c['max_iter']}))")
 
 
 def _border_key(view):

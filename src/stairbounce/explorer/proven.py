@@ -28,7 +28,8 @@ import xarray as xr
 from . import view as V
 
 __all__ = ["MIN_BOX_PX", "BOX_WORK", "STYLES", "proven_depth", "proven_slices", "proven_overlay",
-           "proven_summary", "proven_at", "proven_image", "HATCH_PERIOD"]
+           "proven_summary", "proven_at", "proven_image", "HATCH_PERIOD", "CERTIFICATE_STEP_WORK",
+           "TAP_CERTIFICATE_STEPS", "certificate_steps"]
 
 MIN_BOX_PX = 2
 """The atlas's smallest boxes are at least this many pixels a side: its depth
@@ -39,6 +40,19 @@ BOX_WORK = 7
 """Potential map steps per box of a level, in units of ``max_iter``: the box's
 two corners walked (the corners form) and up to five points of the float map
 (the "nonsliding" test of the deepest levels)."""
+
+CERTIFICATE_STEP_WORK = 20_000
+"""What one step of a box's certificate costs, in potential map steps (the unit
+of :data:`~stairbounce.explorer.view.SLICE_WORK`): :func:`stairbounce.certify_box`
+and :func:`stairbounce.verify` walk the steps in Python, about 85 us a step
+(measured at load 3.5 on the 2-core machine: 50,000 steps in 4.3 s), against
+a few nanoseconds for a map step of the compiled kernels."""
+
+TAP_CERTIFICATE_STEPS = V.SLICE_WORK // CERTIFICATE_STEP_WORK
+"""The most steps a tap's certificate may walk on the explorer's shared worker
+(5,000: one slice of bounded work, about 0.4 s); a longer one (a box proven
+not to slide within a max_iter of up to 1e6) is deferred: the tap says so and
+how to compute it (issue 43 item 3)."""
 
 STYLES = {
     # status or reason: (fill colour or None for the word's own, fill alpha, hatch, hatch colour, legend)
@@ -274,8 +288,25 @@ def proven_summary(atlas) -> dict:
     return dict(sorted(shares.items(), key=lambda kv: -kv[1]))
 
 
-def proven_at(atlas, e: float, u: float, verify: bool = True) -> dict | None:
-    """proven_at(atlas, e, u, verify=True) -> dict or None
+def certificate_steps(atlas, b: int) -> int:
+    """certificate_steps(atlas, b) -> int: the steps that the certificate of the
+    atlas's box ``b`` walks: ``max_iter`` for a box proven not to slide within
+    them, the length of its itinerary for a proven word, 0 for an undecided box
+    or one Corollary 2.1 settles (no walk)."""
+    from ..structure.certificate import STATUSES
+
+    ds = atlas.boxes
+    status = STATUSES[int(ds["status"].values[b])]
+    if status == "no_slide_within":
+        return int(atlas.max_iter)
+    if status == "word":
+        off = ds["offsets"].values
+        return int(off[b + 1] - off[b])
+    return 0
+
+
+def proven_at(atlas, e: float, u: float, verify: bool = True, max_steps: int | None = None) -> dict | None:
+    """proven_at(atlas, e, u, verify=True, max_steps=None) -> dict or None
 
     What the atlas says at ``(e, u)``: its box containing the point (the
     smallest certified box there: the atlas's boxes do not overlap; on a
@@ -285,8 +316,14 @@ def proven_at(atlas, e: float, u: float, verify: bool = True) -> dict | None:
     :class:`~stairbounce.Certificate` (``certificate``, computed again by
     :func:`stairbounce.certify_box` on the box's edges, the computation the
     atlas made) and, with ``verify``, the verdict of the independent checker
-    :func:`stairbounce.verify` on it (``verdict``).
+    :func:`stairbounce.verify` on it (``verdict``).  With ``max_steps``, a
+    certificate that walks more steps (:func:`certificate_steps`) is not
+    computed: ``deferred`` holds its steps instead (``None`` otherwise), and
+    ``certificate`` and ``verdict`` are ``None``.  Raises :class:`ValueError`
+    for a ``max_steps`` below 0.
     """
+    if max_steps is not None and max_steps < 0:
+        raise ValueError(f"max_steps must be at least 0, got {max_steps}")
     from ..structure.certificate import STATUSES
 
     ds = atlas.boxes
@@ -300,7 +337,11 @@ def proven_at(atlas, e: float, u: float, verify: bool = True) -> dict | None:
            "level": int(ds["level"].values[b]), "status": status,
            "word": str(ds["word"].values[b]) or None, "reason": str(ds["reason"].values[b]) or None,
            "step": int(ds["step"].values[b]) if status == "undecided" else None,
-           "max_iter": atlas.max_iter, "certificate": None, "verdict": None}
+           "max_iter": atlas.max_iter, "certificate": None, "verdict": None, "deferred": None}
+    steps = certificate_steps(atlas, b)
+    if max_steps is not None and steps > max_steps:
+        out["deferred"] = steps
+        return out
     if status != "undecided":
         from ..structure.certify import certify_box
         from ..structure.verify import verify as check
