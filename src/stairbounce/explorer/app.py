@@ -88,7 +88,7 @@ _WARM = threading.Event()
 _OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u = (1-e)/(2\u221a(2e)), Cor. 2.1",
                    "borders": f"exact border points: {kinds_legend()}",
                    "traced": f"traced borders between words: {kinds_legend(('graze', 'edge', 'chatter', 'window'))}",
-                   "proven": "certified atlas: proven boxes solid, undecided hatched (key below the map)"}
+                   "proven": ProvenLayer.legend}
 
 
 # milliseconds without wheel events after which a wheel zoom is taken as done
@@ -123,7 +123,7 @@ if (window.location.search !== query) {
 """
 
 
-class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
+class Explorer(Controls, ScanLayer, BordersLayer, TapPanel):
     """The widgets, figures and render pipeline of one browser session."""
 
     def __init__(self, view: View = DEFAULT_VIEW, messages=(), scheduler: Scheduler | None = None):
@@ -146,10 +146,6 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
         self._borders_gen = 0
         self._trace_text, self._trace_level = "", "busy"
         # the certified atlas last computed: (proven key, CertifiedAtlas, seconds); the one wanted; its line
-        self._proven = None
-        self._proven_want = None
-        self._proven_gen = 0
-        self._proven_text, self._proven_level = "", "busy"
         # the tap's pane: word lines, the certificate's line, the non-sliding motion's table
         self._cert_html, self._motion_html = "", ""
         self._cert_gen = -1  # the tap whose certificate is shown
@@ -160,6 +156,8 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
         self._refused_side = None  # (size widget, value) of the last refused size edit
         self._last_ranges = -math.inf  # time.monotonic() of the last range change
 
+        # the layers composed (layer.Layer): each its glyphs, job, key and tap
+        self.proven = ProvenLayer(self)
         self._build_map()
         self._build_point_figures()
         self._build_widgets(messages)
@@ -200,7 +198,7 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
                 width=310,
             ),
             pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note, self.arcs_note,
-                      self.proven_note),
+                      self.proven.note),
             self.tap_panels,
             flex_wrap="wrap",
             align_items="flex-start",
@@ -240,7 +238,7 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
                  x=[v.e_lo], y=[v.u_lo], dw=[v.e_hi - v.e_lo], dh=[v.u_hi - v.u_lo])
         )
         img = fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.img_src)
-        proven = self._build_proven(fig)
+        proven, = self.proven.build(fig)
         # the picture sent with the page's HTML (.preview) goes when the session's first pixels come
         self.img_src.js_on_change("data", CustomJS(code=REMOVE_JS))
         self.hover = HoverTool(renderers=[img], formatters={
@@ -297,7 +295,7 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
             src.data = dict(xs=list(xs), ys=list(ys))
         if borders:
             self._draw_borders(view)
-            self._draw_proven(view)
+            self.proven.draw(view)
         self.legend.items = [self._overlay_items[n] for n in OVERLAYS if n in view.overlays]
         self.arcs_note.visible = "traced" in view.overlays
         self.legend.visible = bool(view.overlays)
@@ -363,7 +361,7 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
         if gen == self._gen and job.started is False:
             self._message(self._waiting_text(view, job), "busy")
         self._draw_borders(view)  # queued after the render: the picture comes first
-        self._draw_proven(view)
+        self.proven.draw(view)
 
     def _waiting_text(self, view, job):
         what = f"{view.width} x {view.height} pixels, max_iter {view.max_iter}"

@@ -38,8 +38,8 @@ _WINDOW_ARC_COLOR = KIND_COLOURS["window"]
 
 
 class BordersLayer:
-    """A part of :class:`~stairbounce.explorer.app.Explorer` (mixed in: its methods share the page's
-    state): The exact borders layers of the explorer's map: the border points (overlay "borders") and the"""
+    """A part of :class:`~stairbounce.explorer.app.Explorer`, mixed in (its methods share the
+    page's state; see the module's docstring)."""
 
     def _build_borders(self, fig):
         """Its glyphs on the map ``fig``: the border points and the traced arcs; returns their

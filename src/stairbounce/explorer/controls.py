@@ -42,8 +42,8 @@ GESTURE_MERGE_S = 1.0
 
 
 class Controls:
-    """A part of :class:`~stairbounce.explorer.app.Explorer` (mixed in: its methods share the page's
-    state): The explorer's controls and status line: the widgets (colour, max_iter, size, window, overlays),"""
+    """A part of :class:`~stairbounce.explorer.app.Explorer`, mixed in (its methods share the
+    page's state; see the module's docstring)."""
 
     def _build_widgets(self, messages):
         v = self.view
@@ -81,7 +81,6 @@ class Controls:
             "<i>Tap a point of the map for its word; its trajectory and orbit diagram follow.</i>",
             css_classes=["sb-point"], width=700, margin=(0, 5))
         self.key_note = pn.pane.HTML(_key_note(v.color), css_classes=["sb-key-note"], width=700)
-        self.proven_note = pn.pane.HTML("", css_classes=["sb-proven-note"], width=700, visible=False)
         self.arcs_note = pn.pane.HTML(_ARCS_NOTE, css_classes=["sb-arcs-note"], width=700,
                                       visible="traced" in v.overlays)
 
@@ -138,7 +137,7 @@ class Controls:
     def _show_status(self):
         colours = {"info": "#1a5e1a", "busy": "#555555", "error": "#b00020", "warning": "#8a5a00"}
         parts = [(self._status_level, self._status_text, ""), (self._trace_level, self._trace_text, " sb-trace"),
-                 (self._proven_level, self._proven_text, " sb-proven"), ("error", self._error_text, "")]
+                 (self.proven.level, self.proven.text, " sb-proven"), ("error", self._error_text, "")]
         self.status.object = "<br>".join(
             f'<span class="sb-{lv}{extra}" style="color:{colours[lv]}">{html.escape(t)}</span>'
             for lv, t, extra in parts if t

@@ -102,8 +102,8 @@ def _values(ds, var):
 
 
 class ScanLayer:
-    """A part of :class:`~stairbounce.explorer.app.Explorer` (mixed in: its methods share the page's
-    state): The scan layer of the explorer's map: the picture of the view in slices (a coarse preview"""
+    """A part of :class:`~stairbounce.explorer.app.Explorer`, mixed in (its methods share the
+    page's state; see the module's docstring)."""
 
     def _render_work(self, view):
         """The render as scheduler slices: the scan's slices, with a preview
@@ -187,8 +187,7 @@ class ScanLayer:
             # window with them (superseding one in progress without them)
             self._request(self.view, history=None)
         self._set_hover(self.shown or self.view)
-        if self._proven is not None and self._proven[0] == self._proven_want:  # the atlas's words recoloured
-            self._show_proven(self._proven[1:])
+        self.proven.recolour()
 
     def _set_hover(self, view):
         """Hover: e and u to a tenth of a pixel, and the colouring variable's value."""
