@@ -123,7 +123,7 @@ if (window.location.search !== query) {
 """
 
 
-class Explorer(Controls, ScanLayer, BordersLayer, TapPanel):
+class Explorer(Controls, ScanLayer, TapPanel):
     """The widgets, figures and render pipeline of one browser session."""
 
     def __init__(self, view: View = DEFAULT_VIEW, messages=(), scheduler: Scheduler | None = None):
@@ -135,16 +135,8 @@ class Explorer(Controls, ScanLayer, BordersLayer, TapPanel):
         self._gen = 0
         self._tap_gen = 0
         self._point_text = ""  # the tap's word line, the word table row appended below it
-        # the exact borders last drawn: ((grid, max_iter), border_points Dataset), reused by a tap
-        self._borders = None
         # the word table of the last tap's view: ((grid, max_iter), Dataset), reused by the next tap there
         self._word_table = None
-        # the traced borders last computed: ((trace window, max_iter, points' key), traced_overlay dict)
-        self._traced = None
-        # what the borders overlay shows or is computing: (points' key or None, trace key or None)
-        self._borders_want = (None, None)
-        self._borders_gen = 0
-        self._trace_text, self._trace_level = "", "busy"
         # the certified atlas last computed: (proven key, CertifiedAtlas, seconds); the one wanted; its line
         # the tap's pane: word lines, the certificate's line, the non-sliding motion's table
         self._cert_html, self._motion_html = "", ""
@@ -157,7 +149,9 @@ class Explorer(Controls, ScanLayer, BordersLayer, TapPanel):
         self._last_ranges = -math.inf  # time.monotonic() of the last range change
 
         # the layers composed (layer.Layer): each its glyphs, job, key and tap
+        self.borders = BordersLayer(self)
         self.proven = ProvenLayer(self)
+        self.layers = [self.borders, self.proven]  # drawn in this order, their status lines too
         self._build_map()
         self._build_point_figures()
         self._build_widgets(messages)
@@ -197,7 +191,7 @@ class Explorer(Controls, ScanLayer, BordersLayer, TapPanel):
                 self.url_messages,
                 width=310,
             ),
-            pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note, self.arcs_note,
+            pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note, self.borders.note,
                       self.proven.note),
             self.tap_panels,
             flex_wrap="wrap",
@@ -251,7 +245,7 @@ class Explorer(Controls, ScanLayer, BordersLayer, TapPanel):
         tongues = fig.multi_line("xs", "ys", source=self.tongue_src, line_color="#7a7a7a", line_width=1)
         bound = fig.multi_line("xs", "ys", source=self.bound_src, line_color="#d62728", line_width=2,
                                line_dash="dashed")
-        borders, arcs = self._build_borders(fig)
+        borders, arcs = self.borders.build(fig)
         self._overlay_items = {
             "tongues": LegendItem(label=_OVERLAY_LEGEND["tongues"], renderers=[tongues]),
             "no_sliding": LegendItem(label=_OVERLAY_LEGEND["no_sliding"], renderers=[bound]),
@@ -294,10 +288,10 @@ class Explorer(Controls, ScanLayer, BordersLayer, TapPanel):
             xs, ys = curves[name] if name in view.overlays else ([], [])
             src.data = dict(xs=list(xs), ys=list(ys))
         if borders:
-            self._draw_borders(view)
-            self.proven.draw(view)
+            for layer in self.layers:
+                layer.draw(view)
         self.legend.items = [self._overlay_items[n] for n in OVERLAYS if n in view.overlays]
-        self.arcs_note.visible = "traced" in view.overlays
+        self.borders.note.visible = "traced" in view.overlays
         self.legend.visible = bool(view.overlays)
 
     # ----------------------------------------------------------- proven boxes
@@ -360,8 +354,8 @@ class Explorer(Controls, ScanLayer, BordersLayer, TapPanel):
         )
         if gen == self._gen and job.started is False:
             self._message(self._waiting_text(view, job), "busy")
-        self._draw_borders(view)  # queued after the render: the picture comes first
-        self.proven.draw(view)
+        for layer in self.layers:  # queued after the render: the picture comes first
+            layer.draw(view)
 
     def _waiting_text(self, view, job):
         what = f"{view.width} x {view.height} pixels, max_iter {view.max_iter}"
@@ -441,9 +435,9 @@ class Explorer(Controls, ScanLayer, BordersLayer, TapPanel):
         borders (points and traced arcs) as drawn when they are the shown view's."""
         ds, shown = self.ds, self.shown
         drawn = None
-        if shown is not None and self._borders_want[0] is not None and self._borders_want[0] == _border_key(shown):
-            drawn = {"points": {k: list(self.border_src.data[k]) for k in ("e", "u", "kind")},
-                     "arcs": {k: list(self.arc_src.data[k]) for k in ("xs", "ys", "kind")}}
+        if shown is not None and self.borders.want[0] is not None and self.borders.want[0] == _border_key(shown):
+            drawn = {"points": {k: list(self.borders.border_src.data[k]) for k in ("e", "u", "kind")},
+                     "arcs": {k: list(self.borders.arc_src.data[k]) for k in ("xs", "ys", "kind")}}
         data = await asyncio.wrap_future(_EXPORTS.submit(view_png, ds, shown, borders=drawn))
         return io.BytesIO(data)
 

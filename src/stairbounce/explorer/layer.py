@@ -16,11 +16,12 @@ __all__ = ["Layer"]
 
 class Layer:
     """Base of a map layer: ``name`` (its overlay in ``View.overlays``),
-    ``legend`` (its legend label), ``text`` and ``level`` (its line of the
-    page's status: empty for none)."""
+    ``legend`` (its legend label), ``css`` (the class of its status line),
+    ``text`` and ``level`` (its line of the page's status: empty for none)."""
 
     name = ""
     legend = ""
+    css = "sb-layer"  # the CSS class of its status line
 
     def __init__(self, page):
         self.page = page

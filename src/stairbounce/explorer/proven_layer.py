@@ -128,6 +128,7 @@ class ProvenLayer(Layer):
     ``names`` the hover's labels, ``note`` its key under the map."""
 
     name = "proven"
+    css = "sb-proven"
     legend = "certified atlas: proven boxes solid, undecided hatched (key below the map)"
 
     def __init__(self, page):

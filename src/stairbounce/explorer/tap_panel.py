@@ -3,12 +3,12 @@ certificate of its proven box, its trajectory, orbit diagram and Poincare sectio
 
 from __future__ import annotations
 
-from dataclasses import replace
 import html
+from dataclasses import replace
 
+import numpy as np
 from bokeh.models import ColumnDataSource, Range1d, Span
 from bokeh.plotting import figure
-import numpy as np
 
 from ._common import _border_key, _plural
 from .proven_layer import _certificate, _certificate_text
@@ -51,7 +51,6 @@ def _motion_table(m):
                 ("&lambda;<sub>2</sub>", f'{m["lyap2"]:+.4e} = 2&lt;k&gt; log e')]
     return '<table class="sb-motion">' + "".join(
         f"<tr><td><b>{k}</b></td><td>{v}</td></tr>" for k, v in rows) + "</table>"
-
 
 
 class TapPanel:
@@ -125,7 +124,7 @@ class TapPanel:
         self.point_src.data = dict(x=[e], y=[u])
         self.point_pane.object = f"<i>computing the orbit at e = {e!r}, u = {u!r} ...</i>"
         # the exact borders overlay's points of the same grid, when drawn: the row's border counts
-        borders = self._borders
+        borders = self.borders.points
         points = borders[1] if borders is not None and borders[0] == _border_key(view) else None
         cached = self._word_table
         table = cached[1] if cached is not None and cached[0] == _border_key(view) else None
