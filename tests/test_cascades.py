@@ -471,3 +471,108 @@ def test_the_cascade_modules_import_only_those_above_them():
             if isinstance(node, ast.ImportFrom) and node.level == 1:
                 assert node.module in CASCADE_LAYERS[:i], f"cascades/{stem}.py imports .{node.module}"
     assert not (root.parent / "cascade_families.py").exists() and not (root.parent / "cascades.py").exists()
+
+
+# --------------------------------------------------------------------------- #
+# Issue 45, item 2: cascade work bounded, estimated before it starts           #
+# --------------------------------------------------------------------------- #
+
+
+class _TookTooLong(Exception):
+    pass
+
+
+def _within(seconds, fn):
+    """``fn()`` under an alarm: the old code ran these for minutes (round 4, R6);
+    the refusals come from an estimate made before any search, in milliseconds."""
+    import signal
+
+    def alarm(*_):
+        raise _TookTooLong(f"still running after {seconds} s")
+
+    old = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        return fn()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
+@pytest.mark.parametrize("pattern, letters", [
+    ("(" + "1^999999, " * 90 + "2^k, 0^inf)", 89999911),  # 900 characters, 9e7 letters (round 4)
+    ("(1^600000, 1^600000, 2^k, 0^inf)", 1200001),  # each item under the cap, the pattern over it
+    ("((1^600000, 1^600000), 2^k, 0^inf)", 1200000),  # a nested group over it
+])
+def test_the_letter_cap_is_on_the_whole_pattern(pattern, letters):
+    with pytest.raises(ValueError, match=rf"pattern must write at most 1000000 letters in all.*got {letters}"):
+        _within(10, lambda: sb.cascade(pattern, e=E, u=U_RANGE))
+
+
+def test_a_pattern_at_the_letter_cap_is_read():
+    pat = _parse_pattern("(1^999999, 1^k, 0^inf)")  # 999999 letters and the block: 10^6
+    assert len(pat.prefix) == 999999 and pat.block == (1,)
+
+
+@pytest.mark.parametrize("call, names", [
+    (lambda: sb.cascade("((1^999)^999, 2^k, 0^inf)", e=E, u=U_RANGE), "k_max = 100"),
+    (lambda: sb.member_count("((1^999)^999, 2^k, 0^inf)", E, U_RANGE), "k_max = 200"),
+    (lambda: sb.member_count("(((1^99)^99)^99, 2^k, 0^inf)", E, U_RANGE), "k_max = 200"),
+    (lambda: sb.member_count("(1^k, 0^inf)", (0.01, 0.05), U_RANGE, k_max=100, n=100000), "n = 100000"),
+    (lambda: sb.member_count("(1^k, 0^inf)", (0.01, 0.05), U_RANGE, k_max=10**5, n=10**5), "k_max = 100000"),
+    (lambda: sb.cascade("(9999999^k, 0^inf)", e=E, u=U_RANGE), "k_max = 100"),  # one letter, 1e7 steps
+])
+def test_work_above_the_limit_is_refused_before_it_starts(call, names):
+    with pytest.raises(ValueError) as exc:
+        _within(10, call)
+    msg = str(exc.value)
+    assert names in msg and "more than the limit 3e+07" in msg
+
+
+def test_the_work_limit_of_a_cascade_is_the_k_max_it_names():
+    """The refusal names the largest k_max within the limit; that k_max is accepted
+    (the cascade ends long before, at k = 25), one more is not."""
+    with pytest.raises(ValueError, match=r"lower k_max \(at most (\d+) here\)") as exc:
+        sb.cascade("(1^k, 0^inf)", e=E, u=U_RANGE, k_max=10**6)
+    k = int(exc.value.args[0].split("at most ")[1].split(" ")[0])
+    # the estimate: 3 searches of every member (k steps for member k) and of 4 k_max limit steps
+    assert 3 * (k * (k + 1) // 2 + 4 * k) <= 3 * 10**7 < 3 * ((k + 1) * (k + 2) // 2 + 4 * (k + 1))
+    assert sb.cascade("(1^k, 0^inf)", e=E, u=U_RANGE, k_max=k).last == 25
+    with pytest.raises(ValueError, match=f"k_max = {k + 1}"):
+        sb.cascade("(1^k, 0^inf)", e=E, u=U_RANGE, k_max=k + 1)
+
+
+def test_cli_refuses_a_count_over_the_limit_in_one_line(capsys):
+    code, out, err = _within(10, lambda: _run(["cascade", "(1^k, 0^inf)", "--count", "--e", "0.01:0.05",
+                                                "--u", "0.6:0.75", "--n", "100000"], capsys))
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "n = 100000" in err and "limit" in err
+
+
+@pytest.mark.parametrize("pattern", ["(\u0661^k, 0^inf)", "(\uff11^k, 0^inf)", "(1^\u0663, 2^k, 0^inf)",
+                                     "(1^k, \u0660^inf)"])
+def test_digits_other_than_ascii_are_refused(pattern):
+    with pytest.raises(ValueError, match="cannot read"):
+        sb.cascade(pattern, e=E, u=U_RANGE)
+
+
+def test_families_of_a_long_word_are_split_in_linear_time():
+    """A word of 10^5 letters (round 4: past 120 s, the runs were counted before the
+    block was tested) is split at once; one word is no family (min_members 4)."""
+    df = _within(20, lambda: sb.cascades(E, U_RANGE, words=["(" + "1, " * 100000 + "0^inf)"]))
+    assert len(df) == 0
+
+
+def test_words_whose_decompositions_would_copy_too_much_are_refused():
+    # 5000 runs 1, 1 in a word of 15000 letters: 5001 decompositions of 15000 letters each
+    word = "(" + "1, 1, 0, " * 5000 + "1, 0^inf)"
+    with pytest.raises(ValueError, match=r"words: .* more than the limit 5e\+07"):
+        _within(10, lambda: sb.cascades(E, U_RANGE, words=[word]))
+
+
+def test_candidate_families_over_the_work_limit_are_refused_before_any_search():
+    # four members of (P, 1^k, 0^inf) with a prefix of 60000 letters (150000 steps): 3 searches of
+    # 100 members, 4.5e7 steps
+    prefix = "2, 3, " * 30000
+    words = [f"({prefix}" + "1, " * m + "0^inf)" for m in (2, 3, 4, 5)]
+    with pytest.raises(ValueError, match=r"candidate families with k_max = 100.*more than the limit"):
+        _within(10, lambda: sb.cascades(E, U_RANGE, words=words))

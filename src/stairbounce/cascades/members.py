@@ -15,7 +15,8 @@ from ..structure.borders import _event_of, _first_difference
 from ..structure.itinerary import KINDS
 from ..model import check_count, check_e
 from .laws import CascadeLaw, _curve_at, _known_curves, cascade_law
-from .patterns import _lex_before, _parse_pattern, word_impacts
+from .patterns import (_check_work, _lower_k, _lex_before, _member_cost, _parse_pattern,
+                       word_impacts)
 from .search import (_BEHIND, _BEYOND, _FOUND, _edge, _limit_enclosure, _line_args, _neighbour,
                      _search, _side, _window)
 
@@ -113,6 +114,22 @@ class Cascade:
                 f"law={self.law.kind})")
 
 
+# searches per member: the member itself, then each of its two edges
+_SEARCHES = 3
+
+
+def _limit_n(pat, k_max, limit_steps):
+    """Steps of the limit itinerary the enclosure follows (``cascade``'s default
+    at the last member k_max, an upper bound)."""
+    return limit_steps or max(200, 4 * _member_cost(pat, k_max, one=True))
+
+
+def _cascade_work(pat, k_max, limit_steps=None):
+    """The steps :func:`cascade` follows at most (``_check_work``'s unit): three
+    searches of every member up to ``k_max``, three of the limit itinerary."""
+    return _SEARCHES * (_member_cost(pat, k_max) + _limit_n(pat, k_max, limit_steps))
+
+
 def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None, law_k=None):
     """cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None, law_k=None) -> Cascade
 
@@ -169,6 +186,8 @@ def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None, law_k=
         law_k = (check_count("law_k[0]", law_k[0], 1), check_count("law_k[1]", law_k[1], 1))
         if law_k[1] - law_k[0] < 3:
             raise ValueError(f"law_k must span at least 4 members (k_hi >= k_lo + 3), got {law_k!r}")
+    _check_work(f"cascade {pat.text!r} with k_max = {k_max}", _cascade_work(pat, k_max, limit_steps),
+                lambda: _lower_k(lambda k: _cascade_work(pat, k, limit_steps), ""))
     per_k = max(1, sum(pat.block))
     _v.check_memory(f"k_max = {k_max}", 8 * (len(pat.prefix) + len(pat.suffix) + per_k * k_max + 1) * 4)
 
@@ -365,6 +384,13 @@ def member_count(pattern, e, u, *, k_max=200, n=32):
     if not isinstance(u, (tuple, list, np.ndarray)):
         raise ValueError(f"u must be a range (lo, hi) of two numbers, got {u!r}")
     u_lo, u_hi = _window("u", u)
+    # the work before it starts: one search per member at one e; over a range, the counts and
+    # every member's existence at the n values of e (each change found adds about 60 tests of
+    # one member and two counts)
+    grid_n = 2 * n if isinstance(e, (tuple, list, np.ndarray)) else 1
+    what = f"member_count of {pat.text!r} with k_max = {k_max}" + (f", n = {n}" if grid_n > 1 else "")
+    _check_work(what, grid_n * _member_cost(pat, k_max),
+                lambda: _lower_k(lambda k: grid_n * _member_cost(pat, k), " or n" if grid_n > 1 else ""))
     refs = _refs(pat, k_max)
     if not isinstance(e, (tuple, list, np.ndarray)):
         return _count(refs, check_e(e), u_lo, u_hi)[0]

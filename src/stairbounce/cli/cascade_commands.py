@@ -38,7 +38,7 @@ def cascade_(
     pattern: str = typer.Argument(..., help='The family, e.g. "(1^k, 0^inf)" or "((1, 0)^k, 1, 1, 0^inf)".'),
     e: str = typer.Option("0.02", "--e", help=E_HELP),
     u: str = typer.Option("0.6:0.75", "--u", help=U_HELP),
-    k_max: int = typer.Option(100, "--k-max", help="Largest exponent tried (1..1000000)."),
+    k_max: int = typer.Option(100, "--k-max", help="Largest exponent tried (1..1000000, and the work within the limit the guide states: refused before it starts)."),
     law_k: str = typer.Option(None, "--law-k", help="Members the law is fitted on, KLO:KHI (default: the last 8)."),
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps to name the words just outside each edge (>= 1)."),
     rows: int = typer.Option(60, "--rows", help="Members printed (all go to --out)."),
