@@ -71,7 +71,10 @@ class Cascade:
         """The members as a table, then the stop, the law and the accumulation point."""
         other = "u" if self.axis == "e" else "e"
         lines = [f"cascade {self.pattern} at {other} = {self.fixed:g}, {self.axis} in "
-                 f"[{self.range[0]:g}, {self.range[1]:g}]: {len(self.members)} member(s)"]
+                 f"[{self.range[0]:g}, {self.range[1]:g}]: {len(self.members)} member(s)",
+                 "basis: numerical, to rounding (each member and edge is located by float decisions of the "
+                 "orbit, exact but for rounding near a border; Cascade.prove / --prove proves the members' "
+                 "intervals by interval arithmetic)"]
         lines.append(f"{'k':>4} {'period':>6} {self.axis + ' lo':>20} {self.axis + ' hi':>20} "
                      f"{'width':>10}  lo edge            hi edge")
         rows = self.members.itertuples()
@@ -88,10 +91,10 @@ class Cascade:
         if math.isfinite(self.law.limit):
             a, b = self.law.limit_interval
             par = "ratio" if self.law.approach_kind == "geometric" else "exponent"
-            lines.append(f"accumulation (extrapolated): {self.axis} = {self.law.limit:.12g} in "
-                         f"[{a:.12g}, {b:.12g}]; positions approach it {self.law.approach_kind}ally, "
-                         f"{par} {self.law.approach:.4g} in "
-                         f"[{self.law.approach_interval[0]:.4g}, {self.law.approach_interval[1]:.4g}]")
+            lines.append(f"accumulation (extrapolation, numerical, not an enclosure: the local limits of "
+                         f"consecutive members extrapolated to k -> inf): {self.axis} -> {self.law.limit:.12g} in "
+                         f"[{a:.12g}, {b:.12g}]; positions approach it {self.law.approach_kind}ally, local "
+                         f"{par}s {self.law.approach_interval[0]:.4g}..{self.law.approach_interval[1]:.4g}")
         if self.limit_enclosure is not None:
             a, b, n = self.limit_enclosure
             lines.append(f"accumulation (enclosure to rounding, numerical: its ends are float decisions; first {n} steps of the limit itinerary): "
@@ -109,10 +112,57 @@ class Cascade:
         return {int(r.k): word_region(r.word, e, u, resolution=resolution, max_iter=max_iter)
                 for r in rows.itertuples()}
 
+    def prove(self, ks=None, max_iter=None):
+        """prove(ks=None, max_iter=None) -> pandas.DataFrame
+
+        Each member's interval proven with :func:`stairbounce.certify_box`: the
+        segment of the line from ``lo`` to ``hi`` (a box with one side of zero
+        width) is certified, every decision of the orbit of (1, 0) taken by
+        outward-rounded interval arithmetic over all its real points.  Where the
+        whole float interval is not proven (its ends lie within rounding of the
+        borders), the segment shrunk by 1e-9, 1e-6, 1e-3, 1e-2 and 0.1 of the
+        width at each end is tried, in that order.  One row per member (all, or
+        those in ``ks``): ``k``, ``word``, ``proven`` (bool), ``lo`` and ``hi`` (the
+        segment proven, NaN when none), ``share`` (its part of the member's
+        width; 1 for the whole), ``status`` / ``reason`` / ``step`` (of the last
+        certificate tried when none is proven).  ``max_iter`` defaults to each
+        member's period + 1.  A proven row is a theorem about every real point
+        of its segment (at the line's binary float); the members' edges
+        themselves stay numerical (float decisions).
+        """
+        import pandas as pd
+
+        from ..structure.certify import certify_box
+        from ..symbolic import parse_word
+
+        rows = self.members if ks is None else self.members[self.members.k.isin(list(ks))]
+        out = []
+        f = self.fixed
+        for r in rows.itertuples():
+            w = parse_word(r.word)
+            iters = max_iter if max_iter is not None else w.period + 1
+            row = {"k": int(r.k), "word": r.word, "proven": False, "lo": math.nan, "hi": math.nan,
+                   "share": 0.0, "status": "", "reason": "", "step": 0}
+            for pad in _PROVE_PADS:
+                a, b = r.lo + pad * r.width, r.hi - pad * r.width
+                if not a <= b:
+                    continue
+                box = {"e": (f, f), "u": (a, b)} if self.axis == "u" else {"e": (a, b), "u": (f, f)}
+                cert = certify_box(**box, max_iter=iters)
+                row.update(status=cert.status, reason=cert.reason or "", step=int(cert.step or 0))
+                if cert.status == "word" and cert.word == w:
+                    row.update(proven=True, lo=a, hi=b, share=(b - a) / r.width if r.width > 0 else 1.0)
+                    break
+            out.append(row)
+        return pd.DataFrame(out, columns=["k", "word", "proven", "lo", "hi", "share", "status", "reason", "step"])
+
     def __repr__(self) -> str:
         return (f"Cascade({self.pattern!r}, {len(self.members)} members, last k={self.last}, "
                 f"law={self.law.kind})")
 
+
+# Cascade.prove: the parts of each member's width cut from both ends, tried in turn
+_PROVE_PADS = (0.0, 1e-9, 1e-6, 1e-3, 1e-2, 0.1)
 
 # searches per member: the member itself, then each of its two edges
 _SEARCHES = 3
