@@ -686,3 +686,19 @@ def test_cli_prove_lists_the_proven_members(tmp_path, capsys):
     assert "6 of 6 member(s) proven" in out
     csv = pd.read_csv(tmp_path / "c.csv")
     assert csv.proven.all() and (csv.proven_lo >= csv.lo).all() and (csv.proven_hi <= csv.hi).all()
+
+
+@pytest.mark.parametrize("k_max", [100, 200])
+def test_an_infinite_family_accumulating_on_u1_has_both_truths_covered(k_max):
+    """(1^k, 2, 0^inf) at e = 0.02 continues up to k_max; its widths are C/k^2 to leading
+    order and it accumulates on u_1 (the limit itinerary 1, 1, 1, ...; named by cascade
+    from the enclosure).  Eight members at k ~ 200 alone span too little of 1/k: their
+    extrapolation excluded 2 and u_1 before it used the members from k_max/2 on."""
+    c = sb.cascade("(1^k, 2, 0^inf)", e=E, u=U_RANGE, k_max=k_max)
+    assert c.last == k_max and c.law.kind == "algebraic"
+    lo, hi = c.law.exponent_interval
+    assert lo <= 2 <= hi and hi - lo < 1e-3
+    u1 = sb.one_impact_family(1, E)
+    a, b = c.law.limit_interval
+    assert a <= u1 <= b and c.limit_enclosure[0] <= a <= b <= c.limit_enclosure[1]
+    assert "u_1" in c.limit_name

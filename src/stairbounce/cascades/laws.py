@@ -27,7 +27,8 @@ class CascadeLaw:
     ``kind`` is ``"geometric"`` (``w_k ~ C r^k``), ``"algebraic"``
     (``w_k ~ C k^-gamma``) or ``"undecided"`` (neither straight line fits
     ``threshold`` times better than the other, or too few members).  Both
-    parameters are always given, each three ways:
+    parameters are always given, each three ways (the extrapolations use the
+    members from half the last k on, at least those of the law):
 
     - ``ratio`` / ``exponent`` with ``ratio_interval`` / ``exponent_interval``:
       the **asymptotic** value (k -> inf), an *extrapolation* (numerical, not an
@@ -145,8 +146,8 @@ def _extrapolate(ks, values, q=1.0):
         est, d = v2, abs(v2 - v1) + 3.0 * se2
     else:
         est, d = v1, abs(v1 - float(v[-1])) + 3.0 * se1
-    d += 8 * np.finfo(float).eps * scale  # rounding of the values themselves
-    return est, (est - d, est + d)
+    d += 8 * float(np.finfo(float).eps) * scale  # rounding of the values themselves
+    return float(est), (float(est - d), float(est + d))
 
 
 def _line_fit(x, y):
@@ -226,7 +227,9 @@ def cascade_law(k, widths, positions=None, *, tail=8, threshold=3.0):
     they are extrapolated to k -> inf as ``V + c_1/k + c_2/k^2`` (least
     squares), with the interval ``V`` +- (the change from dropping ``c_2`` + 3
     standard errors); the straight lines' slopes and the local values' range
-    are kept (``*_fit``, ``*_local``).  With ``positions`` (an edge of each
+    are kept (``*_fit``, ``*_local``).  The extrapolations use the members from
+    half the last k on (at least the last ``tail``): a few members at large k
+    span too little of 1/k.  With ``positions`` (an edge of each
     member), a local limit is found from each triple of consecutive members
     with the positions' law (decided by the same criterion on their gaps,
     ``approach_kind``: Aitken's delta-squared for geometric,
@@ -280,9 +283,14 @@ def cascade_law(k, widths, positions=None, *, tail=8, threshold=3.0):
     r_loc = (float(loc_r.min()), float(loc_r.max())) if loc_r.size else nan2
     g_loc = (float(loc_g.min()), float(loc_g.max())) if loc_g.size else nan2
     # the asymptotic values: the local ones (between k and k+1, at k + 1/2) extrapolated in 1/k
-    kmid_w = (kt[:-1] + 0.5)[consecutive]
-    ratio, r_int = _extrapolate(kmid_w, loc_r)
-    exponent, g_int = _extrapolate(kmid_w, loc_g)
+    # on the members from half the last k on (at least the law's): eight members at k ~ 200 span
+    # too little of 1/k to extrapolate to 0 (their rounding is amplified hundreds of times)
+    ext = ks >= min(kt[0], ks[-1] / 2)
+    ke, we = ks[ext], w[ext]
+    cons_e = np.diff(ke) == 1
+    kmid_w = (ke[:-1] + 0.5)[cons_e]
+    ratio, r_int = _extrapolate(kmid_w, (we[1:] / we[:-1])[cons_e])
+    exponent, g_int = _extrapolate(kmid_w, (-np.log(we[1:] / we[:-1]) / np.log(ke[1:] / ke[:-1]))[cons_e])
     fits = dict(ratio_fit=ratio_fit, exponent_fit=exponent_fit, ratio_local=r_loc, exponent_local=g_loc)
     floor = 1e-14  # residuals below rounding of log w are ties
     if max(res_g, floor) * threshold < max(res_a, floor):
@@ -314,7 +322,10 @@ def cascade_law(k, widths, positions=None, *, tail=8, threshold=3.0):
     lims, pars, kl = _limits(approach_kind, ks, pos)
     if lims.size == 0:
         return law
-    lt, pt, kl = lims[-tail:], pars[-tail:], kl[-tail:]
+    keep = kl >= min(kt[0] + 1, ks[-1] / 2)  # the triples' middle k, as the widths' range above
+    if keep.sum() < min(tail, kl.size):
+        keep = np.arange(kl.size) >= kl.size - tail
+    lt, pt, kl = lims[keep], pars[keep], kl[keep]
     # the local limits' own corrections: powers of 1/k from beta + 1 on (algebraic approach)
     q = float(pt[-1]) + 1.0 if approach_kind == "algebraic" else 1.0
     limit, l_int = _extrapolate(kl, lt, q)
