@@ -74,3 +74,13 @@ def test_the_perimeter_bracket_is_the_sliding_counts(atlas):
     assert r["basis"] == "proven" and r["lower"] == list(s["lower"][2:6]) and r["upper"] == list(s["upper"][2:6])
     assert r["slope"] == atlas.slope_bracket(2, 5, border="sliding")
     assert "max_iter -> infinity" in r["not_proven"]
+
+
+@pytest.mark.parametrize("ext", ["nc", "zarr"])
+def test_a_saved_atlas_with_class_proofs_verifies(atlas, tmp_path, ext):
+    path = tmp_path / f"a.{ext}"
+    atlas.save(path)
+    v = sb.verify(path)
+    assert v.ok, v
+    back = sb.CertifiedAtlas.load(path).boxes
+    assert (back["status"].values == SLIDING).sum() == (atlas.boxes["status"].values == SLIDING).sum()

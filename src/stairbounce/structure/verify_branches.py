@@ -98,6 +98,20 @@ def follow(e0, e1, u0, u1, max_iter, max_live, max_leaves, cap=4096):
     return ("no_slide_within", set()) if not words else (None, set())
 
 
+def _texts(data, name):
+    """The text column ``name`` of an atlas: stored as text (.nc, in memory) or as codes
+    into a names list (.zarr: ``name_code`` and the attribute ``name_names``); None if absent."""
+    if name in data.variables:
+        return np.asarray(data[name].values).astype(str)
+    if f"{name}_code" in data.variables and f"{name}_names" in data.attrs:
+        names = np.array([str(x) for x in data.attrs[f"{name}_names"]] or [""], dtype=object)
+        codes = np.asarray(data[f"{name}_code"].values)
+        if codes.size and (codes.min() < 0 or codes.max() >= names.size):
+            raise ValueError(f"{name}_code holds codes outside its {name}_names list")
+        return names[codes].astype(str)
+    return None
+
+
 def check_atlas_branches(data, arrays, code, failed_code):
     """Re-verify the atlas rows proven by the branch rule (status ``sliding``, or
     reason ``"branches"``); set ``code`` to ``failed_code`` where the claim fails,
@@ -107,7 +121,7 @@ def check_atlas_branches(data, arrays, code, failed_code):
     status = np.asarray(arrays["status"])
     if status.dtype.kind in "USO":
         status = np.array([STATUSES.index(str(s)) if str(s) in STATUSES else -1 for s in status])
-    reason = np.asarray(data["reason"].values).astype(str) if "reason" in data.variables else None
+    reason = _texts(data, "reason")
     sliding = status == STATUSES.index("sliding")
     within = (status == STATUSES.index("no_slide_within")) & (reason == "branches" if reason is not None else False)
     rows = np.flatnonzero(sliding | within)
@@ -116,7 +130,7 @@ def check_atlas_branches(data, arrays, code, failed_code):
     max_live = int(data.attrs.get("branch_max_live", 0))
     max_leaves = int(data.attrs.get("branch_max_leaves", 0))
     off = np.asarray(arrays["offsets"])
-    words = arrays.get("word")
+    words = _texts(data, "word")
     cols = [np.asarray(arrays[k], dtype=float) for k in ("e0", "e1", "u0", "u1")]
     for b in rows:
         e0, e1, u0, u1 = (float(c[b]) for c in cols)
