@@ -262,7 +262,8 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
 
     classes : bool, default False
         Class-level proofs (:mod:`stairbounce.structure.classes`): an undecided
-        border box (graze, edge, chatter) has both sides of its undecided
+        border box (graze, edge, chatter) of the last level (coarser ones are
+        split on, so the words keep their proven areas) has both sides of its undecided
         decisions followed; it becomes ``sliding`` (every point slides within
         ``max_iter``, its possible words in ``word``, separated by " | ") or
         ``no_slide_within`` (reason ``"branches"``) when that is proven, so what
@@ -371,7 +372,8 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch
             s = slice(lo, min(n, lo + size))
             run_kernel(K._certify_level, win, level, ii[s], jj[s], max_iter, K.IMPACT_CAP, form,
                        ns_points if points is None else 0, status[s], reason[s], step[s], nsteps[s], kept[s])
-            if classes:  # class-level proofs (structure/classes.py)
+            if classes and level == depth:  # class-level proofs (structure/classes.py) on the leaves:
+                # coarser undecided boxes are split on, so the words keep their proven areas
                 from .classes import classify_level
 
                 classify_level(win, level, ii[s], jj[s], max_iter, status[s], reason[s], nsteps[s])
