@@ -175,3 +175,72 @@ def test_no_import_circles():
                     where = a.replace(".", "/").removeprefix("stairbounce/")
                     lines.append(f"    {where}.py line {', '.join(map(str, sorted(set(graph[a][b]))))} imports {b}")
     assert not circles, f"{len(circles)} import circles:\n" + "\n".join(lines)
+
+
+SHIMS = {"fractal": "stairbounce.dimension", "borders": "stairbounce.structure.borders",
+         "regions": "stairbounce.structure.regions", "_region_export": "stairbounce.structure.export"}
+
+
+def test_the_shims_warn_naming_the_new_path_and_the_version_that_removes_them():
+    """Issue 46, item 5: ``import stairbounce`` warns of nothing; each old path
+    warns once, when imported, naming its new module and the version that
+    removes it (a fresh interpreter: a module warns at its first import only)."""
+    code = (
+        "import warnings, importlib\n"
+        "warnings.simplefilter('error')\n"
+        "import stairbounce, stairbounce.figures\n"
+        f"for old in {sorted(SHIMS)!r}:\n"
+        "    with warnings.catch_warnings(record=True) as w:\n"
+        "        warnings.simplefilter('always')\n"
+        "        importlib.import_module('stairbounce.' + old)\n"
+        "    print(old, '|', ' / '.join(f'{x.category.__name__}: {x.message}' for x in w))\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    said = dict(line.split(" | ", 1) for line in r.stdout.splitlines())
+    assert set(said) == set(SHIMS)
+    for old, new in SHIMS.items():
+        assert said[old].count("DeprecationWarning") == 1, said[old]
+        assert f"stairbounce.{old} is deprecated" in said[old] and new in said[old], said[old]
+        assert "removed in 0.6.0" in said[old], said[old]
+
+
+def _shim_imports(path):
+    """The imports of a deprecated shim in ``path`` (ast), as text."""
+    found = []
+    inside = path.resolve().is_relative_to(SRC)
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            found += [a.name for a in node.names if a.name.split(".")[:2] in [["stairbounce", s] for s in SHIMS]]
+        elif isinstance(node, ast.ImportFrom):
+            mod = node.module or ""
+            if not node.level and mod.startswith("stairbounce"):
+                parts = mod.split(".")
+                names = [a.name for a in node.names] if len(parts) == 1 else [parts[1]]
+                found += [f"stairbounce.{n}" for n in names if n in SHIMS]
+            elif node.level and inside:
+                package = path.relative_to(SRC).parent.parts
+                if node.level - 1 == len(package):  # relative to stairbounce itself
+                    names = [mod.split(".")[0]] if mod else [a.name for a in node.names]
+                    found += [f"stairbounce.{n}" for n in names if n in SHIMS]
+    return found
+
+
+def test_our_code_and_tests_import_no_deprecated_shim(tmp_path):
+    """Issue 46, item 5: the package, its tests, benchmarks, scripts and the
+    docs' extension import the new paths; only the shims' own tests
+    (tests/test_structure_layout.py, the warning test above) reach the old ones."""
+    root = SRC.parents[1]
+    own = {SRC / f"{s}.py" for s in SHIMS} | {SRC / "__init__.py", root / "tests" / "test_structure_layout.py"}
+    files = [p for d in ("src/stairbounce", "tests", "benchmarks", "scripts", "docs/_ext")
+             for p in sorted((root / d).rglob("*.py")) if p not in own]
+    bad = {str(p.relative_to(root)): found for p in files if (found := _shim_imports(p))}
+    attr = re.compile(r"\bsb\.(fractal|borders|regions|_region_export)\.")
+    bad.update({str(p.relative_to(root)): ["sb." + m for m in attr.findall(p.read_text())]
+                for p in files if p != Path(__file__).resolve() and attr.search(p.read_text())})
+    assert not bad, bad
+    # the check sees each form of an import of a shim, and structure/borders.py is not the shim
+    probe = tmp_path / "probe.py"
+    probe.write_text("import stairbounce.regions\nfrom stairbounce.fractal import box_counts\n"
+                     "from stairbounce import _region_export, plane\nfrom stairbounce.structure import borders\n")
+    assert _shim_imports(probe) == ["stairbounce.regions", "stairbounce.fractal", "stairbounce._region_export"]
+    assert not _shim_imports(SRC / "structure" / "borders.py")

@@ -10,7 +10,7 @@ import pytest
 from stairbounce import atlas_boxes
 from stairbounce.atlas import scan_to_zarr
 from stairbounce.atlas_boxes import store_box_counts, store_box_dimension
-from stairbounce.fractal import box_counts, box_dimension, boundary, label_boundary
+from stairbounce.dimension import box_counts, box_dimension, boundary, label_boundary
 from stairbounce.plane import load
 
 pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")

@@ -12,7 +12,7 @@ import pytest
 from PIL import Image
 
 from stairbounce.cli import main
-from stairbounce.fractal import boundary, box_dimension, perimeter_dimension
+from stairbounce.dimension import boundary, box_dimension, perimeter_dimension
 
 FIG7 = ["--e", "0.155:0.2138", "--u", "0.6:0.658"]
 
@@ -153,7 +153,7 @@ def test_console_script(tmp_path):
 
 
 def test_uncertainty_is_the_default_for_a_window_and_prints_the_api_result(tmp_path, capsys):
-    from stairbounce.fractal import sliding_classifier, uncertainty_dimension
+    from stairbounce.dimension import sliding_classifier, uncertainty_dimension
 
     png = tmp_path / "u.png"
     code, out, err = run([*FIG7, "--max-iter", "200", "--points", "2000", "--eps", "1e-3:0.1:5",
