@@ -19,6 +19,8 @@ from stairbounce import atlas
 from stairbounce.atlas import downsample, scan_to_zarr, tile_slices, tiles_done
 from stairbounce.plane import load, save, scan
 
+from ._stores import StopAfter, stop_after
+
 # the scheduler's HTTP server (no dashboard) falls back to a free port when 8787 is taken
 pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")
 
@@ -41,20 +43,6 @@ def client():
         n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
     ) as cluster, distributed.Client(cluster) as c:
         yield c
-
-
-class StopAfter(Exception):
-    pass
-
-
-def stop_after(k):
-    """A progress callback that interrupts the scan once k tiles are complete."""
-
-    def progress(done, total):
-        if done >= k:
-            raise StopAfter(done)
-
-    return progress
 
 
 def assert_store_is_scan(ds, reference):

@@ -14,6 +14,8 @@ from PIL import Image
 from stairbounce.cli import main
 from stairbounce.dimension import boundary, box_dimension, perimeter_dimension
 
+from ._stores import StopAfter, stop_after
+
 FIG7 = ["--e", "0.155:0.2138", "--u", "0.6:0.658"]
 
 
@@ -216,16 +218,9 @@ def test_uncertainty_and_store_bad_input_exit_2(tmp_path, capsys, small_store, a
 def test_incomplete_store_exits_2(tmp_path, capsys):
     from stairbounce.atlas import scan_to_zarr
 
-    class Stop(Exception):
-        pass
-
-    def stop(done, total):
-        if done >= 1:
-            raise Stop
-
     path = tmp_path / "part.zarr"
-    with pytest.raises(Stop):
-        scan_to_zarr(path, e=(0.155, 0.2138, 64), u=(0.6, 0.658, 64), max_iter=50, tile=16, progress=stop,
+    with pytest.raises(StopAfter):
+        scan_to_zarr(path, e=(0.155, 0.2138, 64), u=(0.6, 0.658, 64), max_iter=50, tile=16, progress=stop_after(1),
                      numba_threads=2)
     code, out, err = run(["--store", str(path)], capsys)
     assert code == 2 and "is not complete" in err and err.count("\n") == 1

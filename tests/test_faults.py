@@ -37,7 +37,7 @@ from stairbounce.atlas import scan_to_zarr, tiles_done
 from stairbounce.cli import main
 from stairbounce.plane import FILL_VALUES, load, save, scan
 
-from .test_atlas import StopAfter, stop_after
+from ._stores import StopAfter, stop_after
 
 pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")
 
