@@ -14,7 +14,8 @@ CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbit
         "_cache", "structure", "structure.certify", "structure.verify", "structure.labels", "structure.tubes",
         "structure.itinerary", "structure.words", "structure.slices", "structure.borders", "structure.bifurcations",
         "structure.checks", "structure.continuation", "structure.regions", "structure.trace", "structure.graph",
-        "structure.export", "cascades", "cascade_families"]
+        "structure.export", "cascades", "cascades.patterns", "cascades.search", "cascades.laws",
+        "cascades.members", "cascades.families", "cascades.farey"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 import stairbounce as sb
-from stairbounce.cascades import _parse_pattern, word_impacts
+from stairbounce.cascades.patterns import _parse_pattern, word_impacts
 from stairbounce.model import SLIDING
 from stairbounce.symbolic import word_from_impacts
 
@@ -337,7 +337,8 @@ def test_member_count_follows_the_measured_law_where_it_differs_from_one_over_2e
 # Issue 39, items 3-5: windows, the Farey test, counts against e, centres      #
 # --------------------------------------------------------------------------- #
 
-from stairbounce.cascade_families import _increment, _level2  # noqa: E402
+from stairbounce.cascades.families import _level2  # noqa: E402
+from stairbounce.cascades.farey import _increment  # noqa: E402
 
 
 def test_families_of_families_are_grouped_by_one_free_count():
@@ -441,3 +442,26 @@ def test_a_members_tip_is_a_corner_of_its_region():
     assert math.hypot(oc.e[0] - e4, oc.u[0] - m.lo) < 1e-9
     with pytest.raises(ValueError, match="top"):
         sb.organising_centres((0.11, 0.14), (0.585, 0.61), regions=[region], top=0)
+
+
+# --------------------------------------------------------------------------- #
+# Issue 46, item 4: the cascades as a package, its modules in layers           #
+# --------------------------------------------------------------------------- #
+
+CASCADE_LAYERS = ["patterns", "search", "laws", "members", "families", "farey"]
+
+
+def test_the_cascade_modules_import_only_those_above_them():
+    """Every relative import inside stairbounce/cascades/ (at any depth, late imports in
+    functions included) names a module of an earlier layer: no circle, and the old
+    cascades.py <-> cascade_families.py circle cannot come back."""
+    import ast
+    from pathlib import Path
+
+    root = Path(sb.__file__).parent / "cascades"
+    assert sorted(p.stem for p in root.glob("*.py")) == sorted(CASCADE_LAYERS + ["__init__"])
+    for i, stem in enumerate(CASCADE_LAYERS):
+        for node in ast.walk(ast.parse((root / f"{stem}.py").read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level == 1:
+                assert node.module in CASCADE_LAYERS[:i], f"cascades/{stem}.py imports .{node.module}"
+    assert not (root.parent / "cascade_families.py").exists() and not (root.parent / "cascades.py").exists()

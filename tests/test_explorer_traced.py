@@ -230,6 +230,7 @@ def test_traced_mode_keeps_the_points_of_incomplete_words_and_says_when_it_fails
     """A word whose walk gave up keeps its border points and the status names it;
     a trace that fails leaves every point drawn and says so."""
     from stairbounce.explorer import app as A
+    from stairbounce.explorer import borders_layer
 
     real = V.trace_slices
 
@@ -239,7 +240,7 @@ def test_traced_mode_keeps_the_points_of_incomplete_words_and_says_when_it_fails
         regions[0].complete = False  # as if a walk around it had given up
         return regions
 
-    monkeypatch.setattr(A, "trace_slices", incomplete)
+    monkeypatch.setattr(borders_layer, "trace_slices", incomplete)
     app, sched = _app(V.View(*TONGUE1, 60, 50, max_iter=300))
     app.overlays.value = ["traced"]
     sched.run_all()
@@ -251,7 +252,7 @@ def test_traced_mode_keeps_the_points_of_incomplete_words_and_says_when_it_fails
         yield 0, 3
         raise RuntimeError("the walk ran out of the domain")
 
-    monkeypatch.setattr(A, "trace_slices", failing)
+    monkeypatch.setattr(borders_layer, "trace_slices", failing)
     app, sched = _app(V.View(*TONGUE1, 60, 50, max_iter=300))
     app.overlays.value = ["traced"]
     sched.run_all()
@@ -297,6 +298,7 @@ def test_hovering_near_a_traced_arc_reports_its_kind_step_and_both_words():
     from bokeh.models import HoverTool, MultiLine
 
     from stairbounce.explorer import app as A
+    from stairbounce.explorer import borders_layer
 
     from stairbounce.explorer.scheduler import Scheduler
 
@@ -306,10 +308,10 @@ def test_hovering_near_a_traced_arc_reports_its_kind_step_and_both_words():
     assert len(hovers) == 1
     [r] = hovers[0].renderers
     glyph = r.glyph
-    assert isinstance(glyph, MultiLine) and glyph.line_alpha == 0.0 and glyph.line_width == A.ARC_HOVER_PX >= 10
+    assert isinstance(glyph, MultiLine) and glyph.line_alpha == 0.0 and glyph.line_width == borders_layer.ARC_HOVER_PX >= 10
     drawn = [x.glyph for x in app.map_fig.renderers if getattr(x, "data_source", None) is app.arc_src
              and x.glyph.line_alpha != 0.0 and x.glyph.line_color == "color"]
-    assert drawn and all(A.ARC_HOVER_PX >= 5 * g.line_width for g in drawn)  # the pointer may be off the line
+    assert drawn and all(borders_layer.ARC_HOVER_PX >= 5 * g.line_width for g in drawn)  # the pointer may be off the line
     fields = " ".join(v for _, v in hovers[0].tooltips)
     for col in ("@kind", "@step", "@word_low", "@word_high"):
         assert col in fields

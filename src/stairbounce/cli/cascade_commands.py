@@ -81,7 +81,7 @@ def cascade_(
 def _count(pattern, e, u, k_max, n, out, force):
     """``--count``: the member count at one e, or its changes over a range of e."""
     from .._io import atomic_path
-    from ..cascade_families import member_count
+    from ..cascades import member_count
 
     if ":" not in u:
         raise CLIError(f"--u must be a range MIN:MAX with --count, got {u!r}")
