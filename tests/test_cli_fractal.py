@@ -11,19 +11,17 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from stairbounce.cli import main
 from stairbounce.dimension import boundary, box_dimension, perimeter_dimension
 
+from ._cli import run_cli
 from ._stores import StopAfter, stop_after
 
 FIG7 = ["--e", "0.155:0.2138", "--u", "0.6:0.658"]
 
 
 def run(argv, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(["dimension", *argv])
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
+    """``stairbounce dimension ARGV`` in this process."""
+    return run_cli(["dimension", *argv], capsys)
 
 
 def number(pattern, text):
