@@ -1185,16 +1185,16 @@ def test_exact_borders_overlay_shows_the_views_border_points(explorer):
     from stairbounce.plot.borders import KIND_COLORS
 
     app, _ = explorer
-    assert "borders" not in app.view.overlays and app.border_src.data["e"] == []
+    assert "borders" not in app.view.overlays and app.borders.border_src.data["e"] == []
     app.overlays.value = ["borders"]
-    data = app.border_src.data
+    data = app.borders.border_src.data
     ref = V.border_overlay(app.view)
     assert len(data["e"]) > 10 and data["e"] == ref["e"] and data["word_high"] == ref["word_high"]
     assert data["color"] == [KIND_COLORS[k] for k in ref["kind"]]
     assert [i.label.value for i in app.legend.items] == [_OVERLAY_LEGEND()["borders"]]
     assert "overlays=borders" in app.history_out.text
     app.overlays.value = []
-    assert app.border_src.data["e"] == []
+    assert app.borders.border_src.data["e"] == []
 
 
 def _row_of(tab, text):
@@ -1252,7 +1252,7 @@ def test_tap_reports_the_words_row_of_the_views_word_table(explorer, monkeypatch
     assert f"graze {ref['graze']}, edge {ref['edge']}, chatter {ref['chatter']}" in app.point_pane.object
     app._word_table = None
     app.overlays.value = ["borders"]
-    assert app._borders[0] == (V.border_grid(app.view), 300)
+    assert app.borders.points[0] == (V.border_grid(app.view), 300)
     app._on_tap(SimpleNamespace(x=0.05, y=0.8))
     assert f"graze {ref['graze']}, edge {ref['edge']}, chatter {ref['chatter']}" in app.point_pane.object
     # a point that does not slide within max_iter: no row

@@ -97,20 +97,20 @@ def _explorer(view=VIEW):
 
 def _image(app):
     """The proven overlay's picture as the page has it: (rgba, code, names)."""
-    d = app.proven_src.data
-    return d["image"][0], d["code"][0], app._proven_names.args["names"]
+    d = app.proven.src.data
+    return d["image"][0], d["code"][0], app.proven.names.args["names"]
 
 
 def test_overlay_draws_the_atlas_in_the_scan_s_colours_with_its_key():
     app, sched = _explorer()
     sched.run_all()
-    atlas = app._proven[1]
+    atlas = app.proven.done[1]
     rgba, code, names = _image(app)
     assert rgba.shape == code.shape == (VIEW.height, VIEW.width)
     assert atlas.boxes.sizes["box"] > 100 and (code >= 0).all()  # the atlas covers the view
     assert "proven overlay:" in app.status.object and "undecided (numerical)" in app.status.object
-    note = app.proven_note.object
-    assert app.proven_note.visible and "Undecided areas are numerical" in note
+    note = app.proven.note.object
+    assert app.proven.note.visible and "Undecided areas are numerical" in note
     assert f"depth {P.proven_depth(VIEW)}" in note and f"at least {P.MIN_BOX_PX} pixels" in note
     # every pixel of a proven word box has the scan's colour of that pixel, in every colouring the
     # overlay follows (the picture is at the view's pixels: pixel (i, j) is the scan's pixel (i, j))
@@ -142,7 +142,7 @@ def test_overlay_draws_the_atlas_in_the_scan_s_colours_with_its_key():
             assert np.all(px[~hatched] & 0xFFFFFF == V._rgba32((fill,))[0] & 0xFFFFFF), w
     # off: nothing drawn, no key, no job left
     app.overlays.value = []
-    assert app.proven_src.data["image"] == [] and not app.proven_note.visible
+    assert app.proven.src.data["image"] == [] and not app.proven.note.visible
     assert "proven overlay" not in app.status.object
 
 
@@ -153,7 +153,7 @@ def test_the_picture_s_boxes_meet_without_gaps_and_hatching_runs_on():
     neighbouring boxes of one reason)."""
     app, sched = _explorer()
     sched.run_all()
-    atlas = app._proven[1]
+    atlas = app.proven.done[1]
     pic = P.proven_image(atlas, 50, 37)
     ds = atlas.boxes
     (e0, e1), (u0, u1) = atlas.window
@@ -176,7 +176,7 @@ def test_tap_shows_the_certificate_of_the_box_or_why_it_is_undecided():
     sched.run_all()
     e, u = app.view.point
     text = app.point_pane.object
-    c = P.proven_at(app._proven[1], e, u)
+    c = P.proven_at(app.proven.done[1], e, u)
     assert c["status"] == "word" and c["verdict"].ok
     (e0, e1), (u0, u1) = c["box"]
     assert e0 <= e <= e1 and u0 <= u <= u1
@@ -187,7 +187,7 @@ def test_tap_shows_the_certificate_of_the_box_or_why_it_is_undecided():
     # the word's family by its form: (1, 1, 1, 2) is member 3 of (1^k, 2, 0^inf)
     assert "family (1^k, 2, 0^inf), member k = 3" in text
     # an undecided box: its reason, and no claim of proof
-    boxes = app._proven[1].boxes
+    boxes = app.proven.done[1].boxes
     b = int(np.flatnonzero((boxes["reason"].values == "graze"))[0])
     pe, pu = (float(boxes[a].values[b] + boxes[c_].values[b]) / 2 for a, c_ in (("e0", "e1"), ("u0", "u1")))
     app._on_tap(SimpleNamespace(x=pe, y=pu))
@@ -228,7 +228,7 @@ def test_a_long_certificate_is_deferred_with_a_message_and_the_worker_stays_free
     victim.start()
     sched.run_all()
     assert "computed in" in victim.status.object
-    atlas = app._proven[1]
+    atlas = app.proven.done[1]
     c = P.proven_at(atlas, *deep.point, max_steps=P.TAP_CERTIFICATE_STEPS)
     assert c["status"] == "no_slide_within" and c["deferred"] == max_iter and c["certificate"] is None
     text = app.point_pane.object
@@ -247,7 +247,7 @@ def test_a_long_certificate_is_deferred_with_a_message_and_the_worker_stays_free
 def test_proven_at_defers_exactly_the_certificates_longer_than_the_bound():
     app, sched = _explorer()
     sched.run_all()
-    atlas = app._proven[1]
+    atlas = app.proven.done[1]
     ds = atlas.boxes
     b = int(np.flatnonzero(ds["status"].values == 0)[0])  # a proven word
     n = P.certificate_steps(atlas, b)

@@ -25,11 +25,22 @@ import numpy as np
 from ..model import check_count
 from ..symbolic import Word, sliding_word
 from .laws import cascade_law
-from .members import cascade
-from .patterns import _Pattern, _candidates, _parse_pattern, _pattern_text
+from .members import _cascade_work, cascade
+from .patterns import (_MAX_LETTERS, _Pattern, _candidates, _check_work, _lower_k, _parse_pattern,
+                       _pattern_text)
 from .search import _centres, _is_pair, _line_args, _window, _words_at
 
 __all__ = ["cascades", "organising_centres", "window_families"]
+
+
+def _check_families_work(cands, k_max, lines):
+    """Refuse, before any search, candidate families whose cascades (each on
+    ``lines`` lines, up to ``k_max``) would together pass ``_MAX_WORK``."""
+    pats = [_Pattern("", "k", p, x, s) for _, p, x, s in cands]
+    work = lines * sum(_cascade_work(pat, k_max) for pat in pats)
+    _check_work(f"the {len(pats)} candidate families with k_max = {k_max}"
+                + (f" on {lines} lines each" if lines > 1 else ""), work,
+                lambda: _lower_k(lambda k: lines * sum(_cascade_work(q, k) for q in pats), " or give fewer words"))
 
 
 def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_max=100, max_iter=1000,
@@ -116,10 +127,15 @@ def cascades(e, u, *, samples=2000, words=None, min_members=4, block_max=4, k_ma
                 seen.add(w.letters)
     else:
         seen = {(w if isinstance(w, Word) else parse_word(w)).letters for w in words}
+        longest = max(map(len, seen), default=0)
+        if longest > _MAX_LETTERS:
+            raise ValueError(f"words must have at most {_MAX_LETTERS} letters each, got one of {longest}")
     rows, done = [], set()
-    for n_seen, p, x, s in _candidates(seen, min_members, block_max):
+    cands = _candidates(seen, min_members, block_max)
+    _check_families_work(cands, k_max, 1)
+    for n_seen, p, x, s in cands:
         text = _pattern_text(p, x, s)
-        c = cascade(text, **({"e": line, "u": fixed} if axis == 0 else {"e": fixed, "u": line}),
+        c = cascade(_Pattern(text, "k", p, x, s), **({"e": line, "u": fixed} if axis == 0 else {"e": fixed, "u": line}),
                     k_max=k_max, max_iter=max_iter)
         key = frozenset(c.members.word)
         if len(key) < min_members or key in done:
@@ -264,7 +280,9 @@ def window_families(e, u, *, resolution=128, lines=3, min_members=4, block_max=4
         seen_cols[row] = np.flatnonzero((cols == w).any(axis=0))
     seen = set(letters)
     rows, done, fams, cascs = [], set(), [], []
-    for n_seen, p, x, s in _candidates(seen, min_members, block_max):
+    cands = _candidates(seen, min_members, block_max)
+    _check_families_work(cands, k_max, lines)
+    for n_seen, p, x, s in cands:
         pat = _Pattern("", "k", p, x, s)
         text = _pattern_text(p, x, s)
         # the e columns where members were seen, by how many members each shows
@@ -282,7 +300,7 @@ def window_families(e, u, *, resolution=128, lines=3, min_members=4, block_max=4
         picks = list(dict.fromkeys(picks))[:lines]
         found, curve, first = set(), [], None
         for c in picks:
-            cc = cascade(text, e=float(es[c]), u=(u_lo, u_hi), k_max=k_max, max_iter=max_iter)
+            cc = cascade(_Pattern(text, "k", p, x, s), e=float(es[c]), u=(u_lo, u_hi), k_max=k_max, max_iter=max_iter)
             found.update(cc.members.word)
             if first is None:
                 first = cc
@@ -314,7 +332,7 @@ def window_families(e, u, *, resolution=128, lines=3, min_members=4, block_max=4
             pxs = make(n)
             if pxs is None:
                 continue
-            c = cascade(_pattern_text(*pxs), e=line, u=(u_lo, u_hi), k_max=k_max, max_iter=max_iter)
+            c = cascade(_Pattern(_pattern_text(*pxs), "k", *pxs), e=line, u=(u_lo, u_hi), k_max=k_max, max_iter=max_iter)
             if c.limit_enclosure is not None and len(c.members):
                 ns.append(n)
                 pts.append(0.5 * (c.limit_enclosure[0] + c.limit_enclosure[1]))

@@ -15,7 +15,8 @@ from ..structure.borders import _event_of, _first_difference
 from ..structure.itinerary import KINDS
 from ..model import check_count, check_e
 from .laws import CascadeLaw, _curve_at, _known_curves, cascade_law
-from .patterns import _lex_before, _parse_pattern, word_impacts
+from .patterns import (_check_work, _lower_k, _lex_before, _member_cost, _parse_pattern,
+                       word_impacts)
 from .search import (_BEHIND, _BEYOND, _FOUND, _edge, _limit_enclosure, _line_args, _neighbour,
                      _search, _side, _window)
 
@@ -70,7 +71,10 @@ class Cascade:
         """The members as a table, then the stop, the law and the accumulation point."""
         other = "u" if self.axis == "e" else "e"
         lines = [f"cascade {self.pattern} at {other} = {self.fixed:g}, {self.axis} in "
-                 f"[{self.range[0]:g}, {self.range[1]:g}]: {len(self.members)} member(s)"]
+                 f"[{self.range[0]:g}, {self.range[1]:g}]: {len(self.members)} member(s)",
+                 "basis: numerical, to rounding (each member and edge is located by float decisions of the "
+                 "orbit, exact but for rounding near a border; Cascade.prove / --prove proves the members' "
+                 "intervals by interval arithmetic)"]
         lines.append(f"{'k':>4} {'period':>6} {self.axis + ' lo':>20} {self.axis + ' hi':>20} "
                      f"{'width':>10}  lo edge            hi edge")
         rows = self.members.itertuples()
@@ -87,10 +91,10 @@ class Cascade:
         if math.isfinite(self.law.limit):
             a, b = self.law.limit_interval
             par = "ratio" if self.law.approach_kind == "geometric" else "exponent"
-            lines.append(f"accumulation (extrapolated): {self.axis} = {self.law.limit:.12g} in "
-                         f"[{a:.12g}, {b:.12g}]; positions approach it {self.law.approach_kind}ally, "
-                         f"{par} {self.law.approach:.4g} in "
-                         f"[{self.law.approach_interval[0]:.4g}, {self.law.approach_interval[1]:.4g}]")
+            lines.append(f"accumulation (extrapolation, numerical, not an enclosure: the local limits of "
+                         f"consecutive members extrapolated to k -> inf): {self.axis} -> {self.law.limit:.12g} in "
+                         f"[{a:.12g}, {b:.12g}]; positions approach it {self.law.approach_kind}ally, local "
+                         f"{par}s {self.law.approach_interval[0]:.4g}..{self.law.approach_interval[1]:.4g}")
         if self.limit_enclosure is not None:
             a, b, n = self.limit_enclosure
             lines.append(f"accumulation (enclosure to rounding, numerical: its ends are float decisions; first {n} steps of the limit itinerary): "
@@ -108,9 +112,72 @@ class Cascade:
         return {int(r.k): word_region(r.word, e, u, resolution=resolution, max_iter=max_iter)
                 for r in rows.itertuples()}
 
+    def prove(self, ks=None, max_iter=None):
+        """prove(ks=None, max_iter=None) -> pandas.DataFrame
+
+        Each member's interval proven with :func:`stairbounce.certify_box`: the
+        segment of the line from ``lo`` to ``hi`` (a box with one side of zero
+        width) is certified, every decision of the orbit of (1, 0) taken by
+        outward-rounded interval arithmetic over all its real points.  Where the
+        whole float interval is not proven (its ends lie within rounding of the
+        borders), the segment shrunk by 1e-9, 1e-6, 1e-3, 1e-2 and 0.1 of the
+        width at each end is tried, in that order.  One row per member (all, or
+        those in ``ks``): ``k``, ``word``, ``proven`` (bool), ``lo`` and ``hi`` (the
+        segment proven, NaN when none), ``share`` (its part of the member's
+        width; 1 for the whole), ``status`` / ``reason`` / ``step`` (of the last
+        certificate tried when none is proven).  ``max_iter`` defaults to each
+        member's period + 1.  A proven row is a theorem about every real point
+        of its segment (at the line's binary float); the members' edges
+        themselves stay numerical (float decisions).
+        """
+        import pandas as pd
+
+        from ..structure.certify import certify_box
+        from ..symbolic import parse_word
+
+        rows = self.members if ks is None else self.members[self.members.k.isin(list(ks))]
+        out = []
+        f = self.fixed
+        for r in rows.itertuples():
+            w = parse_word(r.word)
+            iters = max_iter if max_iter is not None else w.period + 1
+            row = {"k": int(r.k), "word": r.word, "proven": False, "lo": math.nan, "hi": math.nan,
+                   "share": 0.0, "status": "", "reason": "", "step": 0}
+            for pad in _PROVE_PADS:
+                a, b = r.lo + pad * r.width, r.hi - pad * r.width
+                if not a <= b:
+                    continue
+                box = {"e": (f, f), "u": (a, b)} if self.axis == "u" else {"e": (a, b), "u": (f, f)}
+                cert = certify_box(**box, max_iter=iters)
+                row.update(status=cert.status, reason=cert.reason or "", step=int(cert.step or 0))
+                if cert.status == "word" and cert.word == w:
+                    row.update(proven=True, lo=a, hi=b, share=(b - a) / r.width if r.width > 0 else 1.0)
+                    break
+            out.append(row)
+        return pd.DataFrame(out, columns=["k", "word", "proven", "lo", "hi", "share", "status", "reason", "step"])
+
     def __repr__(self) -> str:
         return (f"Cascade({self.pattern!r}, {len(self.members)} members, last k={self.last}, "
                 f"law={self.law.kind})")
+
+
+# Cascade.prove: the parts of each member's width cut from both ends, tried in turn
+_PROVE_PADS = (0.0, 1e-9, 1e-6, 1e-3, 1e-2, 0.1)
+
+# searches per member: the member itself, then each of its two edges
+_SEARCHES = 3
+
+
+def _limit_n(pat, k_max, limit_steps):
+    """Steps of the limit itinerary the enclosure follows (``cascade``'s default
+    at the last member k_max, an upper bound)."""
+    return limit_steps or max(200, 4 * _member_cost(pat, k_max, one=True))
+
+
+def _cascade_work(pat, k_max, limit_steps=None):
+    """The steps :func:`cascade` follows at most (``_check_work``'s unit): three
+    searches of every member up to ``k_max``, three of the limit itinerary."""
+    return _SEARCHES * (_member_cost(pat, k_max) + _limit_n(pat, k_max, limit_steps))
 
 
 def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None, law_k=None):
@@ -169,6 +236,8 @@ def cascade(pattern, e, u, *, k_max=100, max_iter=1000, limit_steps=None, law_k=
         law_k = (check_count("law_k[0]", law_k[0], 1), check_count("law_k[1]", law_k[1], 1))
         if law_k[1] - law_k[0] < 3:
             raise ValueError(f"law_k must span at least 4 members (k_hi >= k_lo + 3), got {law_k!r}")
+    _check_work(f"cascade {pat.text!r} with k_max = {k_max}", _cascade_work(pat, k_max, limit_steps),
+                lambda: _lower_k(lambda k: _cascade_work(pat, k, limit_steps), ""))
     per_k = max(1, sum(pat.block))
     _v.check_memory(f"k_max = {k_max}", 8 * (len(pat.prefix) + len(pat.suffix) + per_k * k_max + 1) * 4)
 
@@ -365,6 +434,13 @@ def member_count(pattern, e, u, *, k_max=200, n=32):
     if not isinstance(u, (tuple, list, np.ndarray)):
         raise ValueError(f"u must be a range (lo, hi) of two numbers, got {u!r}")
     u_lo, u_hi = _window("u", u)
+    # the work before it starts: one search per member at one e; over a range, the counts and
+    # every member's existence at the n values of e (each change found adds about 60 tests of
+    # one member and two counts)
+    grid_n = 2 * n if isinstance(e, (tuple, list, np.ndarray)) else 1
+    what = f"member_count of {pat.text!r} with k_max = {k_max}" + (f", n = {n}" if grid_n > 1 else "")
+    _check_work(what, grid_n * _member_cost(pat, k_max),
+                lambda: _lower_k(lambda k: grid_n * _member_cost(pat, k), " or n" if grid_n > 1 else ""))
     refs = _refs(pat, k_max)
     if not isinstance(e, (tuple, list, np.ndarray)):
         return _count(refs, check_e(e), u_lo, u_hi)[0]

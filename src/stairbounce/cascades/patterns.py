@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -14,10 +15,19 @@ from ..symbolic import Word
 
 __all__ = ["Family", "family_of", "word_impacts"]
 
-# longest pattern text read, and most letters a member may have (memory and time
-# grow with them; a million letters is far beyond any cascade on a line)
+# longest pattern text read, and most letters a pattern may write: every item, nested
+# groups expanded, the free block once (memory and time grow with them; a million
+# letters is far beyond any cascade on a line; issue 45 item 2: on the whole pattern,
+# not per item)
 _MAX_PATTERN_TEXT = 1000
 _MAX_LETTERS = 10**6
+# most work one call may do, in steps followed by its searches: each search bisects a
+# line (about 60 trials), every trial following the member's steps and impacts, so one
+# unit is one step of a member searched once (about 2 microseconds on one core: the
+# limit is about a minute at worst); estimated before the work starts (_check_work)
+_MAX_WORK = 3 * 10**7
+# most letters the decompositions of the words seen may copy (memory: 8 bytes each)
+_MAX_COPIES = 5 * 10**7
 # impact number standing for "slides" in the lexicographic order
 _SLIDE_RANK = np.iinfo(np.int64).max
 
@@ -36,6 +46,19 @@ class _Pattern:
     prefix: tuple[int, ...]
     block: tuple[int, ...]
     suffix: tuple[int, ...]
+
+    @cached_property
+    def costs(self) -> tuple[int, int]:
+        """:func:`_cost` of the prefix and suffix together, and of the block."""
+        return _cost(self.prefix) + _cost(self.suffix), _cost(self.block)
+
+    @cached_property
+    def k_first(self) -> int:
+        """The first exponent whose letters make a word: 0, or 1 where member 0
+        has no letters or a leading zero (as :meth:`word` decides, without
+        building it)."""
+        fixed = self.prefix + self.suffix
+        return 0 if fixed and fixed[0] >= 1 else 1
 
     def letters(self, k: int) -> tuple[int, ...]:
         letters = list(self.prefix + self.block * k + self.suffix)
@@ -63,11 +86,15 @@ class _Pattern:
         return np.asarray(steps[:-1][:n], dtype=np.int64)
 
 
-_TOKEN = re.compile(r"\s*(?:(\d+)|(inf|\u221e)|([A-Za-z_]\w*)|([(),^]))")
+_TOKEN = re.compile(r"\s*(?:([0-9]+)|(inf|\u221e)|([A-Za-z_]\w*)|([(),^]))", re.ASCII)
 
 
 def _parse_pattern(text) -> _Pattern:
-    """Read a pattern such as ``((1, 0)^k, 1, 1, 0^inf)``; ValueError otherwise."""
+    """Read a pattern such as ``((1, 0)^k, 1, 1, 0^inf)``; ValueError otherwise.
+    A :class:`_Pattern` (the families' candidates, whose text may pass
+    ``_MAX_PATTERN_TEXT``) is returned as it is."""
+    if isinstance(text, _Pattern):
+        return text
     rule = "pattern must be a word with one block raised to a free exponent, like (1^k, 0^inf) or ((1, 0)^k, 1, 1, 0^inf)"
     if not isinstance(text, str):
         raise ValueError(f"{rule}, got {text!r}")
@@ -104,7 +131,7 @@ def _parse_pattern(text) -> _Pattern:
         items = []
         while True:
             if peek() == "(":
-                letters = tuple(a for item in seq(False) for a in _expand(item, text, rule))
+                letters = _expand_all(seq(False), text, rule)
             else:
                 letters = (take("int"),)
             exp = 1
@@ -133,21 +160,85 @@ def _parse_pattern(text) -> _Pattern:
     if len(free) != 1:
         raise ValueError(f"{rule}: exactly one block needs a free exponent such as ^k, got {text!r}")
     i = free[0]
-    prefix = tuple(a for item in items[:i] for a in _expand(item, text, rule))
-    suffix = tuple(a for item in items[i + 1:] for a in _expand(item, text, rule))
     block = items[i][0]
+    _letter_count(items[:i] + [(block, 1)] + items[i + 1:], text)  # the whole pattern, before expanding
+    prefix = _expand_all(items[:i], text, rule)
+    suffix = _expand_all(items[i + 1:], text, rule)
     if not block:
         raise ValueError(f"{rule}: the raised block is empty, got {text!r}")
     return _Pattern(text.strip(), items[i][1], prefix, block, suffix)
 
 
-def _expand(item, text, rule):
-    letters, exp = item
-    if isinstance(exp, str):
-        raise ValueError(f"{rule}: exactly one free exponent, at the top level, got {text!r}")
-    if len(letters) * exp > _MAX_LETTERS:
-        raise ValueError(f"pattern must expand to at most {_MAX_LETTERS} letters, got {text!r}")
-    return letters * exp
+def _letter_count(items, text):
+    """The letters ``items`` ((letters, exponent) pairs) write, refused above
+    ``_MAX_LETTERS`` before anything is expanded."""
+    n = sum(len(letters) * exp for letters, exp in items if not isinstance(exp, str))
+    if n > _MAX_LETTERS:
+        shown = text if len(text) <= 80 else text[:77] + "..."
+        raise ValueError(f"pattern must write at most {_MAX_LETTERS} letters in all (every item, nested "
+                         f"groups expanded, the free block once), got {n} in {shown!r}")
+    return n
+
+
+def _expand_all(items, text, rule):
+    """The letters of ``items``, one tuple, after the whole count is checked."""
+    for _, exp in items:
+        if isinstance(exp, str):
+            raise ValueError(f"{rule}: exactly one free exponent, at the top level, got {text!r}")
+    _letter_count(items, text)
+    return tuple(a for letters, exp in items for a in letters * exp)
+
+
+def _cost(letters) -> int:
+    """Steps and impacts a trial follows along ``letters``: a jump ``a`` flies over
+    ``a`` steps, a zero adds one impact."""
+    return sum(max(int(a), 1) for a in letters)
+
+
+def _member_cost(pat, k_max, *, one=False) -> int:
+    """:func:`_cost` of members ``k_first..k_max`` of ``pat`` summed (of member
+    ``k_max`` alone with ``one``), in closed form (a member's trailing zeros,
+    dropped into the tail, are counted: an upper bound)."""
+    c_fixed, c_block = pat.costs
+    if one:
+        return c_fixed + c_block * k_max
+    k0 = pat.k_first
+    if k_max < k0:
+        return 0
+    n = k_max - k0 + 1
+    return n * c_fixed + c_block * (k0 + k_max) * n // 2
+
+
+def _check_work(what, work, hint):
+    """Refuse a call whose estimated work (steps followed by its searches,
+    ``_MAX_WORK``) is above the limit, naming ``what`` (its arguments); ``hint``
+    a callable giving what to change."""
+    if work > _MAX_WORK:
+        hint = hint()
+        raise ValueError(f"{what}: its searches would follow about {work:.2g} steps (each member's steps "
+                         f"and impacts once per search), more than the limit {_MAX_WORK:.0e} (about a "
+                         f"minute); {hint}")
+    return work
+
+
+def _lower_k(work_of, other):
+    """What to change: the largest k_max within the limit, or that none is."""
+    k = _largest_k(work_of)
+    return (f"lower k_max (at most {k} here){other}" if k >= 1 else
+            f"no k_max >= 1 is within it: shorten the pattern's letters{other}")
+
+
+def _largest_k(work_of) -> int:
+    """The largest k_max (0: none) whose work ``work_of(k_max)`` (non-decreasing
+    in k_max) stays within ``_MAX_WORK``, by bisection."""
+    lo, hi = 0, 10**7
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if work_of(mid) <= _MAX_WORK:
+            lo = mid
+        else:
+            hi = mid - 1
+    return lo
 
 
 def _steps(letters) -> list[int]:
@@ -196,32 +287,48 @@ def _primitive(block) -> bool:
     return not any(b % d == 0 and block == block[:d] * (b // d) for d in range(1, b))
 
 
-def _attachments(letters, block_max):
-    """The decompositions ``P + X^m + S`` of one word with ``m >= 2``, ``X``
-    primitive with a jump, each run taken once (from its first letter)."""
+def _attachment_spans(letters, block_max):
+    """``(i, b, m)`` of each run ``X^m`` (``X = letters[i:i + b]``) that
+    :func:`_attachments` lists, without copying the letters."""
     out = []
     n = len(letters)
     for b in range(1, block_max + 1):
         i = 0
         while i + 2 * b <= n:
             x = letters[i:i + b]
+            if not (_primitive(x) and any(x)):  # before counting the run: linear, not quadratic, in n
+                i += 1
+                continue
             m = 1
             while letters[i + m * b:i + (m + 1) * b] == x:
                 m += 1
-            if m >= 2 and _primitive(x) and any(x):
-                out.append(((letters[:i], x, letters[i + m * b:]), m))
+            if m >= 2:
+                out.append((i, b, m))
                 i += m * b
             else:
                 i += 1
     return out
 
 
+def _attachments(letters, block_max, spans=None):
+    """The decompositions ``P + X^m + S`` of one word with ``m >= 2``, ``X``
+    primitive with a jump, each run taken once (from its first letter)."""
+    spans = _attachment_spans(letters, block_max) if spans is None else spans
+    return [((letters[:i], letters[i:i + b], letters[i + m * b:]), m) for i, b, m in spans]
+
+
 def _candidates(seen, min_members, block_max):
     """The candidate families ``(seen members, P, X, S)`` of a set of words
     (letter tuples) by block attachment, most members seen first."""
     families: dict = {}
+    spans = {letters: _attachment_spans(letters, block_max) for letters in seen}
+    # every decomposition copies its word's letters: the copies counted before they are made
+    copies = sum(len(sp) * len(letters) for letters, sp in spans.items())
+    if copies > _MAX_COPIES:
+        raise ValueError(f"words: their decompositions P + X^m + S would copy {copies:.2g} letters, more "
+                         f"than the limit {_MAX_COPIES:.0e}; give fewer or shorter words (or a smaller block_max)")
     for letters in seen:
-        for key, m in _attachments(letters, block_max):
+        for key, m in _attachments(letters, block_max, spans[letters]):
             families.setdefault(key, set()).add(m)
     cands = []
     for (p, x, s), ks in families.items():

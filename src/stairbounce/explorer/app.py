@@ -88,7 +88,7 @@ _WARM = threading.Event()
 _OVERLAY_LEGEND = {"tongues": "tongues (n, 0^\u221e), Thm 3.1", "no_sliding": "u = (1-e)/(2\u221a(2e)), Cor. 2.1",
                    "borders": f"exact border points: {kinds_legend()}",
                    "traced": f"traced borders between words: {kinds_legend(('graze', 'edge', 'chatter', 'window'))}",
-                   "proven": "certified atlas: proven boxes solid, undecided hatched (key below the map)"}
+                   "proven": ProvenLayer.legend}
 
 
 # milliseconds without wheel events after which a wheel zoom is taken as done
@@ -123,7 +123,7 @@ if (window.location.search !== query) {
 """
 
 
-class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
+class Explorer(Controls, ScanLayer, TapPanel):
     """The widgets, figures and render pipeline of one browser session."""
 
     def __init__(self, view: View = DEFAULT_VIEW, messages=(), scheduler: Scheduler | None = None):
@@ -135,21 +135,9 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
         self._gen = 0
         self._tap_gen = 0
         self._point_text = ""  # the tap's word line, the word table row appended below it
-        # the exact borders last drawn: ((grid, max_iter), border_points Dataset), reused by a tap
-        self._borders = None
         # the word table of the last tap's view: ((grid, max_iter), Dataset), reused by the next tap there
         self._word_table = None
-        # the traced borders last computed: ((trace window, max_iter, points' key), traced_overlay dict)
-        self._traced = None
-        # what the borders overlay shows or is computing: (points' key or None, trace key or None)
-        self._borders_want = (None, None)
-        self._borders_gen = 0
-        self._trace_text, self._trace_level = "", "busy"
         # the certified atlas last computed: (proven key, CertifiedAtlas, seconds); the one wanted; its line
-        self._proven = None
-        self._proven_want = None
-        self._proven_gen = 0
-        self._proven_text, self._proven_level = "", "busy"
         # the tap's pane: word lines, the certificate's line, the non-sliding motion's table
         self._cert_html, self._motion_html = "", ""
         self._cert_gen = -1  # the tap whose certificate is shown
@@ -160,6 +148,10 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
         self._refused_side = None  # (size widget, value) of the last refused size edit
         self._last_ranges = -math.inf  # time.monotonic() of the last range change
 
+        # the layers composed (layer.Layer): each its glyphs, job, key and tap
+        self.borders = BordersLayer(self)
+        self.proven = ProvenLayer(self)
+        self.layers = [self.borders, self.proven]  # drawn in this order, their status lines too
         self._build_map()
         self._build_point_figures()
         self._build_widgets(messages)
@@ -199,8 +191,8 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
                 self.url_messages,
                 width=310,
             ),
-            pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note, self.arcs_note,
-                      self.proven_note),
+            pn.Column(self.status, self.point_pane, pn.pane.Bokeh(self.map_fig), self.key_note, self.borders.note,
+                      self.proven.note),
             self.tap_panels,
             flex_wrap="wrap",
             align_items="flex-start",
@@ -240,7 +232,7 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
                  x=[v.e_lo], y=[v.u_lo], dw=[v.e_hi - v.e_lo], dh=[v.u_hi - v.u_lo])
         )
         img = fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.img_src)
-        proven = self._build_proven(fig)
+        proven, = self.proven.build(fig)
         # the picture sent with the page's HTML (.preview) goes when the session's first pixels come
         self.img_src.js_on_change("data", CustomJS(code=REMOVE_JS))
         self.hover = HoverTool(renderers=[img], formatters={
@@ -253,7 +245,7 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
         tongues = fig.multi_line("xs", "ys", source=self.tongue_src, line_color="#7a7a7a", line_width=1)
         bound = fig.multi_line("xs", "ys", source=self.bound_src, line_color="#d62728", line_width=2,
                                line_dash="dashed")
-        borders, arcs = self._build_borders(fig)
+        borders, arcs = self.borders.build(fig)
         self._overlay_items = {
             "tongues": LegendItem(label=_OVERLAY_LEGEND["tongues"], renderers=[tongues]),
             "no_sliding": LegendItem(label=_OVERLAY_LEGEND["no_sliding"], renderers=[bound]),
@@ -296,10 +288,10 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
             xs, ys = curves[name] if name in view.overlays else ([], [])
             src.data = dict(xs=list(xs), ys=list(ys))
         if borders:
-            self._draw_borders(view)
-            self._draw_proven(view)
+            for layer in self.layers:
+                layer.draw(view)
         self.legend.items = [self._overlay_items[n] for n in OVERLAYS if n in view.overlays]
-        self.arcs_note.visible = "traced" in view.overlays
+        self.borders.note.visible = "traced" in view.overlays
         self.legend.visible = bool(view.overlays)
 
     # ----------------------------------------------------------- proven boxes
@@ -362,8 +354,8 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
         )
         if gen == self._gen and job.started is False:
             self._message(self._waiting_text(view, job), "busy")
-        self._draw_borders(view)  # queued after the render: the picture comes first
-        self._draw_proven(view)
+        for layer in self.layers:  # queued after the render: the picture comes first
+            layer.draw(view)
 
     def _waiting_text(self, view, job):
         what = f"{view.width} x {view.height} pixels, max_iter {view.max_iter}"
@@ -443,9 +435,9 @@ class Explorer(Controls, ScanLayer, BordersLayer, ProvenLayer, TapPanel):
         borders (points and traced arcs) as drawn when they are the shown view's."""
         ds, shown = self.ds, self.shown
         drawn = None
-        if shown is not None and self._borders_want[0] is not None and self._borders_want[0] == _border_key(shown):
-            drawn = {"points": {k: list(self.border_src.data[k]) for k in ("e", "u", "kind")},
-                     "arcs": {k: list(self.arc_src.data[k]) for k in ("xs", "ys", "kind")}}
+        if shown is not None and self.borders.want[0] is not None and self.borders.want[0] == _border_key(shown):
+            drawn = {"points": {k: list(self.borders.border_src.data[k]) for k in ("e", "u", "kind")},
+                     "arcs": {k: list(self.borders.arc_src.data[k]) for k in ("xs", "ys", "kind")}}
         data = await asyncio.wrap_future(_EXPORTS.submit(view_png, ds, shown, borders=drawn))
         return io.BytesIO(data)
 

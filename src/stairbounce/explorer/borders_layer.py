@@ -1,15 +1,17 @@
 """The exact borders layers of the explorer's map: the border points (overlay "borders") and the
-traced arcs (overlay "traced"), one "borders" job of the scheduler (issue 46 item 1)."""
+traced arcs (overlay "traced"), one "borders" job of the scheduler (issue 46 item 1).  A :class:`~stairbounce.explorer.layer.Layer`."""
 
 from __future__ import annotations
 
 import time
 
-from bokeh.models import ColumnDataSource, HoverTool
 import numpy as np
+import panel as pn
+from bokeh.models import ColumnDataSource, HoverTool
 
 from .._colours import KIND_COLOURS, kinds_legend
 from ._common import _TRACE_PROGRESS_EVERY, _border_key, _plural
+from .layer import Layer
 from .view import (
     TRACE_SIDE,
     border_overlay,
@@ -36,12 +38,27 @@ _ARCS_NOTE = ('<span style="font-size:12px">Traced arcs: the exact borders betwe
 _WINDOW_ARC_COLOR = KIND_COLOURS["window"]
 
 
+class BordersLayer(Layer):
+    """The "borders" and "traced" overlays (one layer: one job computes both,
+    the arcs replacing the points they pass through): ``points`` the border
+    points last computed ``((grid, max_iter), Dataset)`` (a tap's word row
+    reuses them), ``traced`` the traced overlay last computed, ``want`` what
+    is drawn or being computed, ``border_src`` and ``arc_src`` their data on
+    the map, ``note`` the arcs' note under the map."""
 
-class BordersLayer:
-    """A part of :class:`~stairbounce.explorer.app.Explorer` (mixed in: its methods share the page's
-    state): The exact borders layers of the explorer's map: the border points (overlay "borders") and the"""
+    name = "borders"
+    css = "sb-trace"
 
-    def _build_borders(self, fig):
+    def __init__(self, page):
+        super().__init__(page)
+        self.points = None  # ((grid, max_iter), border_points Dataset)
+        self.traced = None  # ((trace window, max_iter, points' key), traced_overlay dict)
+        self.want = (None, None)  # (points' key or None, trace key or None)
+        self.gen = 0
+        self.note = pn.pane.HTML(_ARCS_NOTE, css_classes=["sb-arcs-note"], width=700,
+                                 visible="traced" in page.view.overlays)
+
+    def build(self, fig):
         """Its glyphs on the map ``fig``: the border points and the traced arcs; returns their
         renderers (for the legend)."""
         self.border_src = ColumnDataSource(dict(e=[], u=[], kind=[], step=[], word_low=[],
@@ -62,9 +79,9 @@ class BordersLayer:
         fig.add_tools(HoverTool(renderers=[near], line_policy="nearest", tooltips=[
             ("traced border arc", "@kind at step @step"), ("word below / left", "@word_low"),
             ("word above / right", "@word_high")]))
-        return borders, arcs
+        return [borders, arcs]
 
-    def _draw_borders(self, view):
+    def draw(self, view):
         """The exact borders of the view, when the "borders" or "traced" overlay
         is on: its border points (view.border_overlay) and, with "traced", the
         traced arcs (view.trace_slices, view.traced_overlay), which replace the
@@ -72,40 +89,41 @@ class BordersLayer:
         the scheduler (points first, then one word's region per slice); a
         view with other borders supersedes (cancels) the job under way, and
         what is already computed for the view is drawn at once."""
+        page = self.page
         traced = "traced" in view.overlays
         key = _border_key(view) if traced or "borders" in view.overlays else None
         tkey = (trace_window(view), view.max_iter, key) if traced else None
-        if (key, tkey) == self._borders_want:
+        if (key, tkey) == self.want:
             return  # drawn, or being computed
-        self._borders_want = (key, tkey)
-        self._borders_gen += 1
-        gen = self._borders_gen
-        pts = self._borders[1] if key is not None and self._borders is not None and self._borders[0] == key else None
-        done = self._traced[1] if tkey is not None and self._traced is not None and self._traced[0] == tkey else None
-        self._show_borders(pts, done)
+        self.want = (key, tkey)
+        self.gen += 1
+        gen = self.gen
+        pts = self.points[1] if key is not None and self.points is not None and self.points[0] == key else None
+        done = self.traced[1] if tkey is not None and self.traced is not None and self.traced[0] == tkey else None
+        self._show(pts, done)
         if key is None or (pts is not None and (tkey is None or done is not None)):
-            self._sched.cancel(self, "borders")
-            self._trace_message("" if done is None else self._traced_text(done, None),
-                                "warning" if done is not None and done["incomplete"] else "info")
+            page._sched.cancel(page, "borders")
+            self.message("" if done is None else self._traced_text(done, None),
+                         "warning" if done is not None and done["incomplete"] else "info")
             return
-        self._trace_message("locating the border points ..." if pts is None else
-                            f"tracing borders: finding the words ({TRACE_SIDE} x {TRACE_SIDE} seeds) ...", "busy")
+        self.message("locating the border points ..." if pts is None else
+                     f"tracing borders: finding the words ({TRACE_SIDE} x {TRACE_SIDE} seeds) ...", "busy")
         last = [0.0]  # when progress was last sent (worker thread)
 
         def on_slice(value):
             now = time.monotonic()
             if value[0] == "points" or value[1] in (0, value[2]) or now - last[0] >= _TRACE_PROGRESS_EVERY:
                 last[0] = now
-                self._next_tick(self._borders_progress, gen, key, value)
+                page._next_tick(self._progress, gen, key, value)
 
-        self._sched.submit(
-            self, "borders", self._borders_work(view, pts, traced),
+        page._sched.submit(
+            page, "borders", self._work(view, pts, traced),
             on_slice=on_slice,
-            on_done=lambda result, error, job: self._next_tick(self._borders_done, gen, key, tkey, result, error, job),
-            alive=self._alive,
+            on_done=lambda result, error, job: page._next_tick(self._done, gen, key, tkey, result, error, job),
+            alive=page._alive,
         )
 
-    def _borders_work(self, view, pts, traced):
+    def _work(self, view, pts, traced):
         """Slices of the "borders" job, each of bounded work (view.SLICE_WORK map
         steps, issue 38 R1; a traced word is one slice): the view's border
         points (unless given: their grid's scan, then the pairs), then, for
@@ -133,7 +151,7 @@ class BordersLayer:
                 return pts, stop.value
             yield "sides", done, total
 
-    def _show_borders(self, pts, traced):
+    def _show(self, pts, traced):
         """Draw border points (a view_border_points Dataset or None) and the
         traced overlay (or None): the points a traced arc passes through are
         left out."""
@@ -153,47 +171,47 @@ class BordersLayer:
         arcs["color"] = [KIND_COLORS.get(k, _WINDOW_ARC_COLOR) for k in arcs["kind"]]
         self.arc_src.data = arcs
 
-    def _borders_progress(self, gen, key, value):
-        if gen != self._borders_gen:
+    def _progress(self, gen, key, value):
+        if gen != self.gen:
             return
         if value[0] == "points":
-            self._borders = (key, value[1])
-            self._show_borders(value[1], None)
-            if "traced" in self.view.overlays:
-                self._trace_message(f"tracing borders: finding the words ({TRACE_SIDE} x {TRACE_SIDE} seeds) ...")
+            self.points = (key, value[1])
+            self._show(value[1], None)
+            if "traced" in self.page.view.overlays:
+                self.message(f"tracing borders: finding the words ({TRACE_SIDE} x {TRACE_SIDE} seeds) ...")
             return
         stage, done, total = value
         if stage in ("scan", "pairs"):
             what = "the grid's rows" if stage == "scan" else "the pairs of pixels"
-            self._trace_message(f"locating the border points: {done} of {total} of {what} ...")
+            self.message(f"locating the border points: {done} of {total} of {what} ...")
             return
         if stage == "sides":
-            self._trace_message(f"tracing borders: the words beside the arcs, {done} of {_plural(total, 'arc')} ...")
+            self.message(f"tracing borders: the words beside the arcs, {done} of {_plural(total, 'arc')} ...")
             return
         if total is None:
-            self._trace_message(f"tracing borders: finding the words ({TRACE_SIDE} x {TRACE_SIDE} seeds) ...")
+            self.message(f"tracing borders: finding the words ({TRACE_SIDE} x {TRACE_SIDE} seeds) ...")
             return
-        self._trace_message(f"tracing borders: {done} of {_plural(total, 'word')} ({TRACE_SIDE} x {TRACE_SIDE} "
-                            f"seeds) ..." if done < total else
-                            f"tracing borders: {total} of {_plural(total, 'word')}, joining the arcs ...")
+        self.message(f"tracing borders: {done} of {_plural(total, 'word')} ({TRACE_SIDE} x {TRACE_SIDE} "
+                     f"seeds) ..." if done < total else
+                     f"tracing borders: {total} of {_plural(total, 'word')}, joining the arcs ...")
 
-    def _borders_done(self, gen, key, tkey, result, error, job):
-        if gen != self._borders_gen:
+    def _done(self, gen, key, tkey, result, error, job):
+        if gen != self.gen:
             return
         if error is not None:
-            pts = self._borders[1] if self._borders is not None and self._borders[0] == key else None
+            pts = self.points[1] if self.points is not None and self.points[0] == key else None
             what = "tracing borders" if pts is not None else "locating the border points"
-            self._trace_message(f"{what} failed: {error}" + ("; the border points are shown" if pts is not None
-                                                               else ""), "error")
+            self.message(f"{what} failed: {error}" + ("; the border points are shown" if pts is not None
+                                                       else ""), "error")
             return
         pts, traced = result
-        self._borders = (key, pts)
-        self._show_borders(pts, traced)
+        self.points = (key, pts)
+        self._show(pts, traced)
         if traced is None:
-            self._trace_message("", "info")
+            self.message("", "info")
             return
-        self._traced = (tkey, traced)
-        self._trace_message(self._traced_text(traced, job), "warning" if traced["incomplete"] else "info")
+        self.traced = (tkey, traced)
+        self.message(self._traced_text(traced, job), "warning" if traced["incomplete"] else "info")
 
     @staticmethod
     def _traced_text(traced, job):

@@ -3,13 +3,12 @@ their events and the pan/zoom ranges, each turned into a request of the page (is
 
 from __future__ import annotations
 
-from dataclasses import replace
 import html
 import time
+from dataclasses import replace
 
 import panel as pn
 
-from .borders_layer import _ARCS_NOTE
 from .scan_layer import _key_note
 from .view import (
     DEFAULT_VIEW,
@@ -40,10 +39,9 @@ _OVERLAY_OPTIONS = {"tongues (n, 0^\u221e), Thm 3.1": "tongues", "no-sliding bou
 GESTURE_MERGE_S = 1.0
 
 
-
 class Controls:
-    """A part of :class:`~stairbounce.explorer.app.Explorer` (mixed in: its methods share the page's
-    state): The explorer's controls and status line: the widgets (colour, max_iter, size, window, overlays),"""
+    """A part of :class:`~stairbounce.explorer.app.Explorer`, mixed in (its methods share the
+    page's state; see the module's docstring)."""
 
     def _build_widgets(self, messages):
         v = self.view
@@ -81,9 +79,6 @@ class Controls:
             "<i>Tap a point of the map for its word; its trajectory and orbit diagram follow.</i>",
             css_classes=["sb-point"], width=700, margin=(0, 5))
         self.key_note = pn.pane.HTML(_key_note(v.color), css_classes=["sb-key-note"], width=700)
-        self.proven_note = pn.pane.HTML("", css_classes=["sb-proven-note"], width=700, visible=False)
-        self.arcs_note = pn.pane.HTML(_ARCS_NOTE, css_classes=["sb-arcs-note"], width=700,
-                                      visible="traced" in v.overlays)
 
         self.color.param.watch(self._locked(self._on_color), "value")
         for w in (self.max_iter, self.width_in, self.height_in):
@@ -137,17 +132,12 @@ class Controls:
 
     def _show_status(self):
         colours = {"info": "#1a5e1a", "busy": "#555555", "error": "#b00020", "warning": "#8a5a00"}
-        parts = [(self._status_level, self._status_text, ""), (self._trace_level, self._trace_text, " sb-trace"),
-                 (self._proven_level, self._proven_text, " sb-proven"), ("error", self._error_text, "")]
+        parts = [(self._status_level, self._status_text, ""),
+                 *((lay.level, lay.text, f" {lay.css}") for lay in self.layers), ("error", self._error_text, "")]
         self.status.object = "<br>".join(
             f'<span class="sb-{lv}{extra}" style="color:{colours[lv]}">{html.escape(t)}</span>'
             for lv, t, extra in parts if t
         )
-
-    def _trace_message(self, text, level="busy"):
-        """The traced borders' line of the status (empty: none)."""
-        self._trace_text, self._trace_level = text, level
-        self._show_status()
 
     def _refuse(self, exc):
         """A refused request: say why, and put widgets and plot back to the view."""

@@ -181,7 +181,8 @@ def _word_colours(words, var):
 def proven_overlay(atlas, var: str = "word_length") -> dict:
     """proven_overlay(atlas, var="word_length") -> dict of columns
 
-    The boxes of a :class:`~stairbounce.CertifiedAtlas` as quads: ``left``,
+    The boxes of a :class:`~stairbounce.CertifiedAtlas` and their marks, one
+    entry per box (what :func:`proven_image` paints): ``left``,
     ``right``, ``bottom``, ``top``, ``fill``, ``alpha``, ``hatch``,
     ``hatch_color`` (:data:`STYLES`; a proven word in the scan's colour of
     that word for the colouring variable ``var``), ``what`` (the box's status,

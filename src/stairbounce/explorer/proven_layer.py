@@ -1,15 +1,17 @@
 """The proven layer of the explorer's map: the view's certified atlas (explorer/proven.py) as one
 "proven" job of the scheduler, drawn as one picture, its key, and the certificate line of a tap
-(issue 46 item 1)."""
+(issue 46 item 1).  A :class:`~stairbounce.explorer.layer.Layer`."""
 
 from __future__ import annotations
 
 import html
 import time
 
+import panel as pn
 from bokeh.models import ColumnDataSource, CustomJSHover, HoverTool
 
 from ._common import _TRACE_PROGRESS_EVERY
+from .layer import Layer
 from .proven import (MIN_BOX_PX, STYLES, TAP_CERTIFICATE_STEPS, proven_at, proven_depth, proven_image, proven_slices,
                      proven_summary)
 
@@ -26,9 +28,15 @@ def _proven_key(view):
     return view.e_lo, view.e_hi, view.u_lo, view.u_hi, proven_depth(view), view.max_iter
 
 
+def _certificate(atlas, e, u):
+    """What a tap shows of the atlas at (e, u): the certificate of its box
+    (proven.proven_at, deferred beyond TAP_CERTIFICATE_STEPS) and the depth."""
+    return {"certificate": proven_at(atlas, e, u, max_steps=TAP_CERTIFICATE_STEPS), "depth": atlas.depth}
+
+
 def _certificate_work(atlas, e, u):
     """The certificate of the atlas's box at (e, u), as one scheduler slice."""
-    return {"certificate": proven_at(atlas, e, u, max_steps=TAP_CERTIFICATE_STEPS), "depth": atlas.depth}
+    return _certificate(atlas, e, u)
     yield  # a generator: the scheduler's slices
 
 
@@ -114,97 +122,121 @@ def _certificate_code(c):
             f"u=(float.fromhex('{u0.hex()}'), float.fromhex('{u1.hex()}')), max_iter={c['max_iter']}))")
 
 
+class ProvenLayer(Layer):
+    """The "proven" overlay: ``done`` is the certified atlas last computed
+    ``(key, CertifiedAtlas, seconds)``, ``src`` its picture on the map,
+    ``names`` the hover's labels, ``note`` its key under the map."""
 
-class ProvenLayer:
-    """A part of :class:`~stairbounce.explorer.app.Explorer` (mixed in: its methods share the page's
-    state): The proven layer of the explorer's map: the view's certified atlas (explorer/proven.py) as one"""
+    name = "proven"
+    css = "sb-proven"
+    legend = "certified atlas: proven boxes solid, undecided hatched (key below the map)"
 
-    def _build_proven(self, fig):
-        """Its glyph on the map ``fig``; returns the renderer (for the legend)."""
+    def __init__(self, page):
+        super().__init__(page)
+        self.done = None  # (proven key, CertifiedAtlas, seconds)
+        self.want = None  # the key drawn or being computed (None: off)
+        self.gen = 0
+        self.note = pn.pane.HTML("", css_classes=["sb-proven-note"], width=700, visible=False)
+
+    def build(self, fig):
         # the certified atlas (overlay "proven", explorer/proven.py): one RGBA picture of its boxes with
         # their hatching (proven.proven_image; a glyph per box froze the browser), over the map and
         # under the curves; named for the browser tests
-        self.proven_src = ColumnDataSource(_NO_PROVEN_IMAGE, name="sb-proven-image")
-        proven = fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.proven_src)
-        self._proven_names = CustomJSHover(args=dict(names=[]), code=_PROVEN_HOVER_JS)
+        self.src = ColumnDataSource(_NO_PROVEN_IMAGE, name="sb-proven-image")
+        proven = fig.image_rgba(image="image", x="x", y="y", dw="dw", dh="dh", source=self.src)
+        self.names = CustomJSHover(args=dict(names=[]), code=_PROVEN_HOVER_JS)
         fig.add_tools(HoverTool(renderers=[proven], tooltips=[("certified box", "@code{custom}")],
-                                formatters={"@code": self._proven_names}))
-        return proven
+                                formatters={"@code": self.names}))
+        return [proven]
 
-    def _draw_proven(self, view):
+    def draw(self, view):
         """The certified atlas of the view when the "proven" overlay is on
         (proven.proven_slices: sb.certify of the view's window, boxes at
         least MIN_BOX_PX pixels a side, the view's max_iter), one "proven"
         job on the scheduler in bounded slices; a view with another atlas
         supersedes the job under way, one already computed is drawn at once."""
+        page = self.page
         key = _proven_key(view) if "proven" in view.overlays else None
-        if key == self._proven_want:
+        if key == self.want:
             return  # drawn, or being computed
-        self._proven_want = key
-        self._proven_gen += 1
-        gen = self._proven_gen
-        done = self._proven if key is not None and self._proven is not None and self._proven[0] == key else None
-        self._show_proven(None if done is None else done[1:])
+        self.want = key
+        self.gen += 1
+        gen = self.gen
+        done = self.done if key is not None and self.done is not None and self.done[0] == key else None
+        self._show(None if done is None else done[1:])
         if key is None or done is not None:
-            self._sched.cancel(self, "proven")
-            self._proven_message("" if done is None else _proven_line(*done[1:]), "info")
+            page._sched.cancel(page, "proven")
+            self.message("" if done is None else _proven_line(*done[1:]), "info")
             return
         depth = proven_depth(view)
-        self._proven_message(f"certifying the view: quadtree to depth {depth} ...", "busy")
+        self.message(f"certifying the view: quadtree to depth {depth} ...", "busy")
         last = [0.0]  # when progress was last sent (worker thread)
 
         def on_slice(value):
             now = time.monotonic()
             if now - last[0] >= _TRACE_PROGRESS_EVERY:
                 last[0] = now
-                self._next_tick(self._proven_progress, gen, value)
+                page._next_tick(self._progress, gen, value)
 
-        self._sched.submit(
-            self, "proven", proven_slices(view), on_slice=on_slice,
-            on_done=lambda result, error, job: self._next_tick(self._proven_done, gen, key, result, error, job),
-            alive=self._alive,
+        page._sched.submit(
+            page, "proven", proven_slices(view), on_slice=on_slice,
+            on_done=lambda result, error, job: page._next_tick(self._done, gen, key, result, error, job),
+            alive=page._alive,
         )
 
-    def _proven_message(self, text, level="busy"):
-        self._proven_text, self._proven_level = text, level
-        self._show_status()
-
-    def _proven_progress(self, gen, value):
-        if gen != self._proven_gen:
+    def _progress(self, gen, value):
+        if gen != self.gen:
             return
         stage, done, total = value
-        self._proven_message(f"certifying the view: level {done} of {total} of the quadtree ..." if stage == "level"
-                             else f"certifying the view: the itineraries of {done} of {total} boxes ...")
+        self.message(f"certifying the view: level {done} of {total} of the quadtree ..." if stage == "level"
+                     else f"certifying the view: the itineraries of {done} of {total} boxes ...")
 
-    def _proven_done(self, gen, key, atlas, error, job):
-        if gen != self._proven_gen:
+    def _done(self, gen, key, atlas, error, job):
+        if gen != self.gen:
             return
         if error is not None:
-            self._proven_message(f"certifying the view failed: {error}", "error")
+            self.message(f"certifying the view failed: {error}", "error")
             return
-        self._proven = (key, atlas, job.attained)
-        self._show_proven((atlas, job.attained))
-        self._proven_message(_proven_line(atlas, job.attained), "info")
-        point = self.view.point
-        if point is not None and "proven" in self.view.overlays:
+        page = self.page
+        self.done = (key, atlas, job.attained)
+        self._show((atlas, job.attained))
+        self.message(_proven_line(atlas, job.attained), "info")
+        point = page.view.point
+        if point is not None and "proven" in page.view.overlays:
             # the tap waiting for the atlas: its certificate now
-            gen_tap, view = self._tap_gen, self.view
-            self._sched.submit(
-                self, "certificate", _certificate_work(atlas, *point),
-                on_done=lambda d, err, _job: None if err is not None else self._next_tick(
-                    self._show_certificate, gen_tap, view, d),
-                alive=self._alive)
+            gen_tap, view = page._tap_gen, page.view
+            page._sched.submit(
+                page, "certificate", _certificate_work(atlas, *point),
+                on_done=lambda d, err, _job: None if err is not None else page._next_tick(
+                    page._show_certificate, gen_tap, view, d),
+                alive=page._alive)
 
-    def _show_proven(self, done):
+    def _show(self, done):
         """Draw the atlas (``(atlas, seconds)``, or None: nothing) and its key."""
         if done is None:
-            self.proven_src.data = dict(_NO_PROVEN_IMAGE)
-            self.proven_note.visible = False
+            self.src.data = dict(_NO_PROVEN_IMAGE)
+            self.note.visible = False
             return
         atlas, seconds = done
+        view = self.page.view
         # one picture at the view's pixel size (the atlas's boxes are at least MIN_BOX_PX pixels a side)
-        pic = proven_image(atlas, self.view.width, self.view.height, self.view.color)
-        self._proven_names.args = dict(names=pic.pop("names"))
-        self.proven_src.data = {k: [v] for k, v in pic.items()}
-        self.proven_note.object = _proven_key_html(atlas, seconds)
-        self.proven_note.visible = True
+        pic = proven_image(atlas, view.width, view.height, view.color)
+        self.names.args = dict(names=pic.pop("names"))
+        self.src.data = {k: [v] for k, v in pic.items()}
+        self.note.object = _proven_key_html(atlas, seconds)
+        self.note.visible = True
+
+    def recolour(self):
+        if self.done is not None and self.done[0] == self.want:  # the atlas's words recoloured
+            self._show(self.done[1:])
+
+    def atlas_of(self, view):
+        """The certified atlas of ``view`` when computed and the overlay is on, else None."""
+        p = self.done
+        return p[1] if "proven" in view.overlays and p is not None and p[0] == _proven_key(view) else None
+
+    def at(self, view, e, u):
+        """The certificate of the atlas's box at the point (deferred beyond
+        TAP_CERTIFICATE_STEPS), or None without an atlas of the view."""
+        atlas = self.atlas_of(view)
+        return None if atlas is None else _certificate(atlas, e, u)

@@ -3,11 +3,11 @@ first), its colour bar, key note and hover (issue 46 item 1: one module per laye
 
 from __future__ import annotations
 
-from dataclasses import replace
 import time
+from dataclasses import replace
 
-from bokeh.models import CustomJSHover, FixedTicker
 import numpy as np
+from bokeh.models import CustomJSHover, FixedTicker
 
 from .export import export_name
 from .view import (
@@ -100,10 +100,9 @@ def _values(ds, var):
     return v.astype(np.int16 if v.max(initial=0) < 2**15 else np.int32)
 
 
-
 class ScanLayer:
-    """A part of :class:`~stairbounce.explorer.app.Explorer` (mixed in: its methods share the page's
-    state): The scan layer of the explorer's map: the picture of the view in slices (a coarse preview"""
+    """A part of :class:`~stairbounce.explorer.app.Explorer`, mixed in (its methods share the
+    page's state; see the module's docstring)."""
 
     def _render_work(self, view):
         """The render as scheduler slices: the scan's slices, with a preview
@@ -187,8 +186,8 @@ class ScanLayer:
             # window with them (superseding one in progress without them)
             self._request(self.view, history=None)
         self._set_hover(self.shown or self.view)
-        if self._proven is not None and self._proven[0] == self._proven_want:  # the atlas's words recoloured
-            self._show_proven(self._proven[1:])
+        for layer in self.layers:
+            layer.recolour()
 
     def _set_hover(self, view):
         """Hover: e and u to a tenth of a pixel, and the colouring variable's value."""

@@ -3,16 +3,15 @@ certificate of its proven box, its trajectory, orbit diagram and Poincare sectio
 
 from __future__ import annotations
 
-from dataclasses import replace
 import html
+from dataclasses import replace
 
+import numpy as np
 from bokeh.models import ColumnDataSource, Range1d, Span
 from bokeh.plotting import figure
-import numpy as np
 
 from ._common import _border_key, _plural
-from .proven import TAP_CERTIFICATE_STEPS, proven_at
-from .proven_layer import _certificate_text, _proven_key
+from .proven_layer import _certificate, _certificate_text
 from .view import U_LIMIT, BORDER_SIDE, border_grid, orbit_along_u, pixel_of, point_details, word_row_slices
 
 
@@ -54,10 +53,9 @@ def _motion_table(m):
         f"<tr><td><b>{k}</b></td><td>{v}</td></tr>" for k, v in rows) + "</table>"
 
 
-
 class TapPanel:
-    """A part of :class:`~stairbounce.explorer.app.Explorer` (mixed in: its methods share the page's
-    state): The tap panel of the explorer: a tapped point's word, its row of the word table, the"""
+    """A part of :class:`~stairbounce.explorer.app.Explorer`, mixed in (its methods share the
+    page's state; see the module's docstring)."""
 
     def _build_point_figures(self):
         t = figure(height=340, sizing_mode="stretch_width", min_width=360, match_aspect=True, tools="pan,wheel_zoom,reset",
@@ -126,7 +124,7 @@ class TapPanel:
         self.point_src.data = dict(x=[e], y=[u])
         self.point_pane.object = f"<i>computing the orbit at e = {e!r}, u = {u!r} ...</i>"
         # the exact borders overlay's points of the same grid, when drawn: the row's border counts
-        borders = self._borders
+        borders = self.borders.points
         points = borders[1] if borders is not None and borders[0] == _border_key(view) else None
         cached = self._word_table
         table = cached[1] if cached is not None and cached[0] == _border_key(view) else None
@@ -157,7 +155,7 @@ class TapPanel:
         details = point_details(e, u, view.max_iter, max_steps=MAX_TRAJECTORY_STEPS)
         yield details
         if atlas is not None:
-            yield {"certificate": proven_at(atlas, e, u, max_steps=TAP_CERTIFICATE_STEPS), "depth": atlas.depth}
+            yield _certificate(atlas, e, u)
         if details["word"] is not None:
             text = details["word"].format(ascii=True)
             # in slices of bounded work (their progress tuples are not shown)
@@ -247,8 +245,7 @@ class TapPanel:
 
     def _atlas_of(self, view):
         """The certified atlas of ``view`` when computed and the overlay is on, else None."""
-        p = self._proven
-        return p[1] if "proven" in view.overlays and p is not None and p[0] == _proven_key(view) else None
+        return self.proven.atlas_of(view)
 
     def _show_orbit(self, gen, view, orbit, error):
         if gen != self._tap_gen:
