@@ -135,7 +135,7 @@ def test_proven_boxes_agree_with_the_float_package_at_points_inside(window, requ
         for _ in range(3):
             e = rng.uniform(*c.e)
             u = rng.uniform(*c.u)
-            found = sb.sliding_word(e, u, max_steps=c.max_iter)
+            found = sb.sliding_word(e, u, max_iter=c.max_iter)
             if c.status == "word":
                 assert found == c.word, (c.e, c.u, e, u)
             else:
