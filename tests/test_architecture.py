@@ -10,7 +10,7 @@ import pytest
 
 CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "dimension", "atlas",
         "atlas_boxes", "nonsliding", "borders", "regions", "_region_export", "_colours", "_io", "_interrupt",
-        "_cache", "structure", "structure.certify", "structure.verify", "structure.labels", "structure.tubes",
+        "_cache", "structure", "structure.certify", "structure.verify", "structure.verdict", "structure.labels", "structure.tubes",
         "structure.itinerary", "structure.words", "structure.borders", "structure.bifurcations",
         "structure.checks", "structure.continuation", "structure.regions", "structure.trace", "structure.graph",
         "structure.export", "cascades", "cascade_families"]
@@ -77,3 +77,60 @@ def test_cli_modules_import_each_other_one_way():
             if node not in seen:
                 seen.add(node)
                 todo.extend(graph.get(node, ()))
+
+
+def _module_graph():
+    """Which modules of the package import which (relative imports, lazy ones inside
+    functions included), by dotted name below ``stairbounce``."""
+    names = {".".join(p.relative_to(SRC).with_suffix("").parts[:-1] if p.name == "__init__.py"
+                      else p.relative_to(SRC).with_suffix("").parts): p for p in SRC.rglob("*.py")}
+    graph = {}
+    for name, path in names.items():
+        package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
+        out = set()
+        for level, module, imported in _relative_imports(path):
+            base = package[:len(package) - (level - 1)] if level > 1 else list(package)
+            stem = base + (module.split(".") if module else [])
+            for n in imported:  # `from . import x` names a module; `from .m import f` the module m
+                full = ".".join(stem + [n])
+                out.add(full if full in names else ".".join(stem))
+        graph[name] = {m for m in out if m in names and m != name and m != ""}
+    return graph
+
+
+def _cycle_through(graph, start):
+    """A list of modules leading from ``start`` back to it, or None."""
+    parent, todo = {}, [start]
+    while todo:
+        node = todo.pop()
+        for nxt in graph.get(node, ()):
+            if nxt == start:
+                path = [node]
+                while path[-1] != start:
+                    path.append(parent[path[-1]])
+                return [start] + path[::-1][1:] + [start] if node != start else [start, start]
+            if nxt not in parent:
+                parent[nxt] = node
+                todo.append(nxt)
+    return None
+
+
+# circles issue 46 item 4 still has to break (each listed by one of its modules)
+_KNOWN_CIRCLES = {"structure.borders", "structure.regions", "cascades", "cascade_families"}
+
+
+@pytest.mark.parametrize("module", ["structure.certify", "structure.certificate", "structure.trapping",
+                                    "structure.verify", "structure.verify_trapping", "structure.verdict"])
+def test_the_certifier_and_the_checker_import_in_layers(module):
+    # certify -> trapping -> certificate and verdict -> verify_trapping -> verify: what two
+    # modules share lives in the lower one (issue 46 item 4)
+    graph = _module_graph()
+    assert module in graph
+    assert _cycle_through(graph, module) is None, _cycle_through(graph, module)
+
+
+def test_no_new_import_circle():
+    graph = _module_graph()
+    circles = {m: _cycle_through(graph, m) for m in graph}
+    new = {m: c for m, c in circles.items() if c and m not in _KNOWN_CIRCLES}
+    assert not new, new

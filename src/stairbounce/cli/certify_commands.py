@@ -16,10 +16,10 @@ _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
 def _verify(path: Path) -> None:
     try:
-        from ..structure.verify import verify_file
+        from ..structure.verdict import verify_file
     except ImportError:
         raise CLIError("--verify is not available: this stairbounce has no independent checker "
-                       "(stairbounce.structure.verify)") from None
+                       "(stairbounce.structure.verdict)") from None
     n_checked, n_rejected = verify_file(path)
     typer.echo(f"{path}: {n_checked} certificates checked, {n_rejected} rejected")
     if n_rejected:

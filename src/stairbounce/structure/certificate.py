@@ -36,6 +36,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import _validate as _v
+
 STATUSES = ("word", "no_sliding", "no_slide_within", "undecided")
 """What a certificate states about its box (index = the status code in arrays).
 
@@ -120,6 +122,102 @@ class Certificate:
 def _region(d):
     if d is None:
         return None
-    from .trapping import TrappingRegion
-
     return TrappingRegion.from_dict(d)
+
+
+def _cell_edge(lo, width, hi, i, n):
+    """The ``i``-th of the ``n + 1`` edges of a grid axis ``[lo, hi]``."""
+    if i >= n:
+        return hi
+    return lo + width * (float(i) * (1.0 / n))
+
+
+@dataclass(frozen=True)
+class TrappingRegion:
+    """A proven trapping region of the box ``e x u`` (:func:`trapping_region`).
+
+    ``itinerary``: the entry, the impact numbers of the decided steps of the
+    orbit of (1, 0) before it is in the region; ``grid = (v_lo, v_hi, nv,
+    s_lo, s_hi, ns)``: the rectangle of the ``(v, s)`` plane cut into
+    ``nv x ns`` cells, cell ``(i, j)`` being ``[edge_v(i), edge_v(i+1)] x
+    [edge_s(j), edge_s(j+1)]`` with ``edge(i) = lo + (hi - lo) * (i * (1/n))``
+    (``hi`` for ``i = n``), floats; ``cells``: the region, the cells' indices
+    ``j * nv + i``, sorted; ``entry``: the enclosure ``(v0, v1, s0, s1)`` of the
+    state after the entry.
+    """
+
+    e: tuple[float, float]
+    u: tuple[float, float]
+    itinerary: tuple[int, ...]
+    grid: tuple[float, float, int, float, float, int]
+    cells: np.ndarray
+    entry: tuple[float, float, float, float]
+
+    def boxes(self):
+        """The region's cells as an ``(n, 4)`` array of ``(v0, v1, s0, s1)``."""
+        v_lo, v_hi, nv, s_lo, s_hi, ns = self.grid
+        i = self.cells % nv
+        j = self.cells // nv
+        ev = np.array([_cell_edge(v_lo, v_hi - v_lo, v_hi, k, nv) for k in range(nv + 1)])
+        es = np.array([_cell_edge(s_lo, s_hi - s_lo, s_hi, k, ns) for k in range(ns + 1)])
+        return np.stack([ev[i], ev[i + 1], es[j], es[j + 1]], axis=1)
+
+    def to_dict(self):
+        """The region as plain JSON types (floats exact by ``json``'s repr)."""
+        return {"e": list(map(float, self.e)), "u": list(map(float, self.u)),
+                "itinerary": [int(k) for k in self.itinerary],
+                "grid": [float(self.grid[0]), float(self.grid[1]), int(self.grid[2]),
+                         float(self.grid[3]), float(self.grid[4]), int(self.grid[5])],
+                "cells": [int(c) for c in self.cells], "entry": list(map(float, self.entry))}
+
+    @classmethod
+    def from_dict(cls, d):
+        """The region of :meth:`to_dict` (nothing re-checked: see ``sb.verify``)."""
+        g = d["grid"]
+        return cls(e=(float(d["e"][0]), float(d["e"][1])), u=(float(d["u"][0]), float(d["u"][1])),
+                   itinerary=tuple(int(k) for k in d["itinerary"]),
+                   grid=(float(g[0]), float(g[1]), int(g[2]), float(g[3]), float(g[4]), int(g[5])),
+                   cells=np.asarray(d["cells"], dtype=np.int64), entry=tuple(map(float, d["entry"])))
+
+
+# --------------------------------------------------------------------------- #
+# The arguments of a box and of a window                                      #
+# --------------------------------------------------------------------------- #
+
+
+def _pair(name, value):
+    if isinstance(value, (str, bytes)) or not isinstance(value, (tuple, list, np.ndarray)) or len(value) != 2:
+        raise ValueError(f"{name} must be a pair ({name}0, {name}1) of real numbers, got {_v._show(value)}")
+    return _v.real(f"{name}0", value[0]), _v.real(f"{name}1", value[1])
+
+
+def _check_e(e, window=False):
+    """``(e0, e1)`` with ``0 < e0 <= e1 < 1`` (a box) or ``0 <= e0 < e1 <= 1`` (a
+    window, whose boxes touching e = 0 or e = 1 are undecided "range"), each 0 or
+    >= 2^-53."""
+    e0, e1 = _pair("e", e)
+    top = "<= 1" if window else "< 1"
+    rule = f"e must be a pair (e0, e1) with 0 {'<=' if window else '<'} e0 {'<' if window else '<='} e1 {top}"
+    if not ((0.0 <= e0 if window else 0.0 < e0) and (e1 <= 1.0 if window else e1 < 1.0)):
+        raise ValueError(f"{rule} (restitution coefficients), got ({e0}, {e1})")
+    if not (e0 < e1 if window else e0 <= e1):
+        raise ValueError(f"{rule}: {'an empty' if e0 == e1 else 'a reversed'} range, got ({e0}, {e1})")
+    for x in (e0, e1):
+        if _v.e_too_small(x):
+            raise ValueError(f"{_v.E_TINY_RULE}, got {x} in e = ({e0}, {e1})")
+    return e0, e1
+
+
+def _check_u(u, window=False):
+    """``(u0, u1)`` within ``[1e-150, 1e150]`` (``u0 = 0`` allowed for a window)."""
+    u0, u1 = _pair("u", u)
+    low = 0.0 if window else _v.U_MIN
+    rule = (f"u must be a pair (u0, u1) with {'0 <=' if window else f'{_v.U_MIN:g} <='} u0 "
+            f"{'<' if window else '<='} u1 <= {_v.U_MAX:g} (horizontal speeds, the valid numeric range)")
+    if not (u0 >= low and u1 <= _v.U_MAX and (u0 > 0.0 or window)):
+        raise ValueError(f"{rule}, got ({u0}, {u1})")
+    if window and 0.0 < u0 < _v.U_MIN:
+        raise ValueError(f"{rule}, got ({u0}, {u1})")
+    if not (u0 < u1 if window else u0 <= u1):
+        raise ValueError(f"{rule}: {'an empty' if u0 == u1 else 'a reversed'} range, got ({u0}, {u1})")
+    return u0, u1

@@ -20,7 +20,7 @@ from .. import _validate as _v
 from ..model import check_count
 from ..symbolic import Word, word_from_impacts
 from . import _kernel as K
-from .certificate import STATUSES, Certificate
+from .certificate import STATUSES, Certificate, _check_e, _check_u
 
 __all__ = ["certify_box", "certify", "CertifiedAtlas", "UNDECIDED_REASONS"]
 
@@ -55,44 +55,6 @@ _KEPT = 32
 # --------------------------------------------------------------------------- #
 # Validation                                                                  #
 # --------------------------------------------------------------------------- #
-
-
-def _pair(name, value):
-    if isinstance(value, (str, bytes)) or not isinstance(value, (tuple, list, np.ndarray)) or len(value) != 2:
-        raise ValueError(f"{name} must be a pair ({name}0, {name}1) of real numbers, got {_v._show(value)}")
-    return _v.real(f"{name}0", value[0]), _v.real(f"{name}1", value[1])
-
-
-def _check_e(e, window=False):
-    """``(e0, e1)`` with ``0 < e0 <= e1 < 1`` (a box) or ``0 <= e0 < e1 <= 1`` (a
-    window, whose boxes touching e = 0 or e = 1 are undecided "range"), each 0 or
-    >= 2^-53."""
-    e0, e1 = _pair("e", e)
-    top = "<= 1" if window else "< 1"
-    rule = f"e must be a pair (e0, e1) with 0 {'<=' if window else '<'} e0 {'<' if window else '<='} e1 {top}"
-    if not ((0.0 <= e0 if window else 0.0 < e0) and (e1 <= 1.0 if window else e1 < 1.0)):
-        raise ValueError(f"{rule} (restitution coefficients), got ({e0}, {e1})")
-    if not (e0 < e1 if window else e0 <= e1):
-        raise ValueError(f"{rule}: {'an empty' if e0 == e1 else 'a reversed'} range, got ({e0}, {e1})")
-    for x in (e0, e1):
-        if _v.e_too_small(x):
-            raise ValueError(f"{_v.E_TINY_RULE}, got {x} in e = ({e0}, {e1})")
-    return e0, e1
-
-
-def _check_u(u, window=False):
-    """``(u0, u1)`` within ``[1e-150, 1e150]`` (``u0 = 0`` allowed for a window)."""
-    u0, u1 = _pair("u", u)
-    low = 0.0 if window else _v.U_MIN
-    rule = (f"u must be a pair (u0, u1) with {'0 <=' if window else f'{_v.U_MIN:g} <='} u0 "
-            f"{'<' if window else '<='} u1 <= {_v.U_MAX:g} (horizontal speeds, the valid numeric range)")
-    if not (u0 >= low and u1 <= _v.U_MAX and (u0 > 0.0 or window)):
-        raise ValueError(f"{rule}, got ({u0}, {u1})")
-    if window and 0.0 < u0 < _v.U_MIN:
-        raise ValueError(f"{rule}, got ({u0}, {u1})")
-    if not (u0 < u1 if window else u0 <= u1):
-        raise ValueError(f"{rule}: {'an empty' if u0 == u1 else 'a reversed'} range, got ({u0}, {u1})")
-    return u0, u1
 
 
 def _check_form(form):
