@@ -221,3 +221,120 @@ def _check_u(u, window=False):
     if not (u0 < u1 if window else u0 <= u1):
         raise ValueError(f"{rule}: {'an empty' if u0 == u1 else 'a reversed'} range, got ({u0}, {u1})")
     return u0, u1
+
+
+# --------------------------------------------------------------------------- #
+# An atlas's table, decoded                                                   #
+# --------------------------------------------------------------------------- #
+
+ATLAS_REASONS = ("", "graze", "edge", "chatter", "impacts", "nonsliding", "range", "trapping")
+"""The reasons an atlas's box may carry: ``""`` (a proven box), the undecided
+reasons (``structure/certify.py``, ``UNDECIDED_REASONS``) and ``"trapping"`` (a
+``no_sliding`` box proven by a trapping region)."""
+
+
+def _names(ds, key):
+    """The names list ``{key}_names`` of a Zarr store's ``{key}_code`` (save)."""
+    if f"{key}_names" not in ds.attrs:
+        raise ValueError(f"atlas: {key}_code is stored without its names list (the attribute {key}_names)")
+    names = ds.attrs[f"{key}_names"]
+    names = [names] if isinstance(names, str) else list(np.atleast_1d(names))
+    if not all(isinstance(x, str) for x in names):
+        raise ValueError(f"atlas: {key}_names must be a list of texts, got {names!r}")
+    return names
+
+
+def _codes(name, codes, what, n):
+    """Integer ``codes`` each in ``[0, n)`` (indices into ``what``), else ValueError."""
+    codes = np.asarray(codes)
+    if codes.dtype.kind not in "iu":
+        raise ValueError(f"atlas: {name} must hold integers, got dtype {codes.dtype}")
+    bad = (codes < 0) | (codes >= n)
+    if bad.any():
+        raise ValueError(f"atlas: {name} {int(codes[bad][0])} at box {int(np.flatnonzero(bad)[0])} is outside "
+                         f"{what} (0 to {n - 1})")
+    return codes
+
+
+def decode_atlas(ds):
+    """decode_atlas(ds) -> xarray.Dataset
+
+    An atlas's table with its texts decoded, as :meth:`CertifiedAtlas.load` and the
+    checker (``sb.verify``) read it, from an ``.nc`` file, a ``.zarr`` store or memory:
+    ``status`` as int8 codes into :data:`STATUSES` (names are looked up), ``word`` and
+    ``reason`` as Python strings (one object per distinct text), read from a Zarr
+    store's ``word_code``/``reason_code`` and its ``word_names``/``reason_names``
+    attributes.  Refused with ValueError, by name: a code without its names list, a
+    code out of the list's range, a status name or code not in :data:`STATUSES`, a
+    reason not in :data:`ATLAS_REASONS`, and a ``word_code`` or ``reason_code`` beside a
+    ``word`` or ``reason`` (two answers).  Other variables are kept as they are.
+    """
+    import pandas as pd
+
+    ds = ds.copy()
+    ds.attrs = dict(ds.attrs)
+    for key in ("word", "reason"):
+        if f"{key}_code" in ds.variables:
+            if key in ds.variables:
+                raise ValueError(f"atlas: both {key} and {key}_code are stored; one of them must go")
+            names = _names(ds, key)
+            codes = _codes(f"{key}_code", ds[f"{key}_code"].values, f"its names list {key}_names", len(names))
+            table = np.array(names + [""], dtype=object)[:-1] if names else np.zeros(0, dtype=object)
+            ds[key] = (ds[f"{key}_code"].dims, table[codes])
+            ds = ds.drop_vars(f"{key}_code")
+            del ds.attrs[f"{key}_names"]
+        elif f"{key}_names" in ds.attrs:
+            raise ValueError(f"atlas: {key}_names is stored without {key}_code")
+        if key in ds.variables:
+            # one Python string per distinct text (8 bytes a box)
+            v = np.asarray(ds[key].values)
+            codes, names = pd.factorize(v if v.dtype.kind == "O" else v.astype(str).astype(object))
+            names = np.array([str(x) for x in names] + [""], dtype=object)
+            if codes.size and codes.min() < 0:
+                raise ValueError(f"atlas: {key} holds a missing value at box {int(np.flatnonzero(codes < 0)[0])}")
+            ds[key] = (ds[key].dims, names[codes])
+    if "reason" in ds.variables:
+        known = set(ATLAS_REASONS)
+        strange = [r for r in np.unique(ds["reason"].values.astype(str)) if r not in known]
+        if strange:
+            raise ValueError(f"atlas: reason {strange[0]!r} is not one of {', '.join(map(repr, ATLAS_REASONS))}")
+    if "statuses" in ds.attrs and str(ds.attrs["statuses"]) != ",".join(STATUSES):
+        raise ValueError(f"atlas: its status names (attribute statuses) {ds.attrs['statuses']!r} are not "
+                         f"{','.join(STATUSES)!r}")
+    if "status" in ds.variables:
+        st = np.asarray(ds["status"].values)
+        if st.dtype.kind in "USO":
+            index = {s: k for k, s in enumerate(STATUSES)}
+            text = st.astype(str)
+            bad = np.array([s not in index for s in text], dtype=bool)
+            if bad.any():
+                raise ValueError(f"atlas: status {text[bad][0]!r} at box {int(np.flatnonzero(bad)[0])} is not one "
+                                 f"of {', '.join(STATUSES)}")
+            ds["status"] = (ds["status"].dims, np.array([index[s] for s in text], dtype=np.int8))
+        else:
+            st = _codes("status code", st, f"the statuses ({', '.join(STATUSES)})", len(STATUSES))
+            ds["status"] = (ds["status"].dims, st.astype(np.int8))
+    return ds
+
+
+def read_atlas_file(path):
+    """read_atlas_file(path) -> xarray.Dataset: the table of an atlas file (``.nc`` or
+    ``.zarr``) read into memory as stored (:func:`decode_atlas` decodes it); a path of
+    another kind, or a file that cannot be read, refused with ValueError."""
+    from pathlib import Path
+
+    import xarray as xr
+
+    s = str(path).rstrip("/")
+    if not (s.endswith(".nc") or s.endswith(".zarr")):
+        raise ValueError(f"path must be an atlas file ending in .nc or .zarr, got {str(path)!r}")
+    if not Path(s).exists():
+        raise ValueError(f"cannot read a certified atlas from {path}: no such file")
+    try:
+        if s.endswith(".zarr"):
+            with xr.open_zarr(s, consolidated=False) as f:
+                return f.load()
+        with xr.open_dataset(s, engine="netcdf4") as f:
+            return f.load()
+    except (OSError, KeyError, ValueError) as exc:
+        raise ValueError(f"cannot read a certified atlas from {path}: {exc}") from None

@@ -17,10 +17,15 @@ from pathlib import Path
 import numpy as np
 
 from ..symbolic import Word, parse_word, word_from_impacts
-from .certificate import STATUSES, Certificate
-from .verify import _OK, _TRAP, _WORD, _WORD_S, CHECKS, verify_codes
+from .certificate import ATLAS_REASONS, STATUSES, Certificate, decode_atlas, read_atlas_file
+from .tiling import AreaBook, tiling
+from .verify import _COR, _OK, _TRAP, _WORD, _WORD_S, CHECKS, verify_codes
+from .verify_trapping import check_atlas_regions, verify_certificate_region
 
 __all__ = ["Verdict", "verify", "verify_file", "read_atlas_arrays"]
+
+# the checks of a whole table beyond verify.CHECKS (codes after its own)
+_REASON, _PLACE, _OVERLAP = len(CHECKS), len(CHECKS) + 1, len(CHECKS) + 2
 
 
 @dataclass(frozen=True)
@@ -30,6 +35,19 @@ class Verdict:
     For an atlas or a file, ``checked`` and ``rejected`` count its boxes and
     ``check``/``step`` describe the first rejected one.  True in a boolean
     context exactly when ``ok``.
+
+    ``atlas``: the table is an atlas (its attribute ``kind``), so its boxes were
+    also checked as the quadtree of its window (checks ``place``: a box is not the
+    box ``(level, i, j)`` of the window at the depth, edges bit for bit;
+    ``overlap``: it shares area with another box); ``complete``: they cover the
+    window.  ``numbers``: for an atlas whose every box is verified, the derived
+    numbers, proven from the verified boxes by outward rounding
+    (``structure/tiling.py``), each a ``(lower, upper)`` pair: ``status`` and
+    ``reason`` (the undecided boxes' reasons) area shares, ``words`` each proven
+    word's area bounds (:meth:`CertifiedAtlas.word_area_bounds`), ``window_area``,
+    ``covered_area``, ``uncovered_area``, ``of`` ("the window", or "the covered
+    part" when the boxes do not cover it: the shares are then of the covered part)
+    and ``basis``.
     """
 
     ok: bool
@@ -38,6 +56,9 @@ class Verdict:
     message: str = ""
     checked: int = 1
     rejected: int = 0
+    atlas: bool = False
+    complete: bool | None = None
+    numbers: dict | None = None
 
     def __bool__(self) -> bool:
         return self.ok
@@ -53,8 +74,6 @@ def _arrays_of_certificate(cert):
 
 def _verify_certificate(cert):
     if cert.status == "no_sliding" and cert.reason == "trapping":  # a trapping region (verify_trapping.py)
-        from .verify_trapping import verify_certificate_region
-
         return verify_certificate_region(cert, Verdict)
     try:
         arrays = _arrays_of_certificate(cert)
@@ -83,69 +102,157 @@ def read_atlas_arrays(data):
 
     From an xarray Dataset with dimension ``box`` and variables ``e0, e1, u0,
     u1, status`` (int8 codes into STATUSES, or strings), ``itinerary`` (its own
-    dimension), ``offsets`` (box + 1) and the attribute ``max_iter``.
+    dimension), ``offsets`` (box + 1) and the attribute ``max_iter``; texts and
+    codes decoded by :func:`~stairbounce.structure.certificate.decode_atlas`.
     """
     need = ("e0", "e1", "u0", "u1", "status", "itinerary", "offsets")
     missing = [name for name in need if name not in data.variables]
     if missing or "max_iter" not in data.attrs:
         raise ValueError(f"atlas must hold the variables {', '.join(need)} and the attribute max_iter; "
                          f"missing: {', '.join(missing + ([] if 'max_iter' in data.attrs else ['max_iter']))}")
+    data = decode_atlas(data)
     out = {name: np.asarray(data[name].values) for name in need}
     out["max_iter"] = int(data.attrs["max_iter"])
-    if "word" in data.variables:
-        out["word"] = np.asarray(data["word"].values)
+    for key in ("word", "reason"):
+        if key in data.variables:
+            out[key] = np.asarray(data[key].values)
     return out
 
 
 def _check_words(arrays, code):
-    """Where a stored word text disagrees with the word its itinerary spells."""
+    """Where a stored word text disagrees with the word its itinerary spells, or a box
+    that is not proven ``word`` states a word."""
     words = arrays.get("word")
     if words is None:
         return
-    status = np.asarray(arrays["status"])
-    if status.dtype.kind in "USO":
-        is_word = np.array([str(s) == "word" for s in status])
-    else:
-        is_word = status == _WORD_S
+    is_word = np.asarray(arrays["status"]) == _WORD_S
     itin, off = np.asarray(arrays["itinerary"], dtype=np.int64), np.asarray(arrays["offsets"], dtype=np.int64)
+    spelled = {}
     for i in np.flatnonzero(is_word & (code == _OK)):
+        key = itin[off[i]:off[i + 1]].tobytes()
+        if key not in spelled:
+            try:
+                spelled[key] = word_from_impacts(itin[off[i]:off[i + 1]])
+            except ValueError:
+                spelled[key] = None
         try:
-            same = parse_word(str(words[i])) == word_from_impacts(itin[off[i]:off[i + 1]])
+            same = spelled[key] is not None and parse_word(str(words[i])) == spelled[key]
         except ValueError:
             same = False
         if not same:
             code[i] = _WORD
+    texts = words.astype(str) if words.dtype.kind != "O" else np.array([str(w) for w in words])
+    code[(code == _OK) & ~is_word & (texts != "")] = _WORD
+
+
+# what reasons each status may carry in an atlas ("" for a proven box; trapping: a region)
+_REASONS_OF = {"word": {""}, "no_sliding": {"", "trapping"}, "no_slide_within": {""},
+               "undecided": set(ATLAS_REASONS) - {"", "trapping"}}
+
+
+def _check_reasons(arrays, code):
+    """Where a box's reason does not go with its status (:data:`_REASONS_OF`)."""
+    reasons = arrays.get("reason")
+    if reasons is None:
+        return
+    status = np.asarray(arrays["status"])
+    texts = np.array([str(r) for r in reasons], dtype=object)
+    for k, name in enumerate(STATUSES):
+        sel = (status == k) & (code == _OK)
+        if sel.any():
+            fits = np.isin(texts[sel], sorted(_REASONS_OF[name]))
+            code[np.flatnonzero(sel)[~fits]] = _REASON
+
+
+def _window(data):
+    """An atlas's window and depth from its attributes, refused by name."""
+    for key in ("e_range", "u_range", "depth"):
+        if key not in data.attrs:
+            raise ValueError(f"atlas: the attribute {key} is missing (a certified atlas states its window and depth)")
+    for key in ("level", "i", "j"):
+        if key not in data.variables:
+            raise ValueError(f"atlas: the variable {key} is missing (each box's place in the window's quadtree)")
+    pairs = []
+    for key in ("e_range", "u_range"):
+        v = np.atleast_1d(np.asarray(data.attrs[key], dtype=np.float64))
+        if v.size != 2:
+            raise ValueError(f"atlas: the attribute {key} must be a pair (lo, hi), got {data.attrs[key]!r}")
+        pairs.append((float(v[0]), float(v[1])))
+    depth = data.attrs["depth"]
+    if isinstance(depth, np.ndarray) and depth.size == 1:
+        depth = depth.item()
+    if not isinstance(depth, (int, np.integer)):
+        raise ValueError(f"atlas: the attribute depth must be an int, got {depth!r}")
+    return tuple(pairs), int(depth)
+
+
+def _numbers(data, arrays, window, complete):
+    """The derived numbers of a verified atlas (:class:`Verdict`'s ``numbers``)."""
+    from ..symbolic import parse_word
+
+    book = AreaBook(arrays["e0"], arrays["e1"], arrays["u0"], arrays["u1"], window, complete)
+    status = np.asarray(arrays["status"])
+    reasons = np.array([str(r) for r in arrays.get("reason", np.full(status.size, ""))], dtype=object)
+    words = np.array([str(w) for w in arrays.get("word", np.full(status.size, ""))], dtype=object)
+    undecided = status == STATUSES.index("undecided")
+    wlo, whi = book.window
+    clo, chi = book.covered
+    return {
+        "basis": "proven: sums of the verified boxes' exact areas, rounded outward (structure/tiling.py)",
+        "of": book.of,
+        "window_area": book.window, "covered_area": book.covered,
+        "uncovered_area": (0.0, 0.0) if complete else (max(float(np.nextafter(wlo - chi, -np.inf)), 0.0),
+                                                       float(np.nextafter(whi - clo, np.inf))),
+        "status": {name: book.share(status == k) for k, name in enumerate(STATUSES)},
+        "reason": {r: book._ratio(*a) for r, a in book.groups(reasons, undecided).items()},
+        "words": book.word_bounds(status, words, arrays["max_iter"], lambda w: parse_word(w).period),
+    }
 
 
 def _verify_dataset(data):
     arrays = read_atlas_arrays(data)
+    data = decode_atlas(data)
     code, step = verify_codes(arrays["e0"], arrays["e1"], arrays["u0"], arrays["u1"], arrays["status"],
                               arrays["max_iter"], arrays["itinerary"], arrays["offsets"])
     _check_words(arrays, code)
+    _check_reasons(arrays, code)
     if "reason" in data.variables:  # no_sliding boxes proven by trapping regions (verify_trapping.py)
-        from .verify_trapping import check_atlas_regions
-
+        # a region stands in for Corollary 2.1 only: a box that failed another check stays rejected
+        prior = code.copy()
         check_atlas_regions(data, arrays, code, _TRAP)
+        keep = (prior != _OK) & (prior != _COR)
+        code[keep] = prior[keep]
+    is_atlas = data.attrs.get("kind") == "stairbounce certified atlas"
+    complete = None
+    names = CHECKS + ("reason", "place", "overlap")
+    if is_atlas:
+        window, depth = _window(data)
+        t = tiling(window, depth, data["level"].values, data["i"].values, data["j"].values,
+                   arrays["e0"], arrays["e1"], arrays["u0"], arrays["u1"])
+        code[~t.placed] = _PLACE
+        code[t.overlapping & t.placed] = _OVERLAP
+        step[~t.placed | t.overlapping] = 0
+        complete = t.complete
     bad = np.flatnonzero(code != _OK)
     n = len(code)
-    if not len(bad):
-        return Verdict(True, None, None, f"{n} boxes re-verified", checked=n, rejected=0)
-    i = int(bad[0])
-    st = int(step[i])
-    return Verdict(False, CHECKS[code[i]], st or None,
-                   f"{len(bad)} of {n} boxes rejected; the first, box {i}, failed check '{CHECKS[code[i]]}'"
-                   + (f" at step {st}" if st else ""), checked=n, rejected=len(bad))
-
-
-def _open(path):
-    import xarray as xr
-
-    path = Path(path)
-    if path.suffix == ".zarr":
-        return xr.open_zarr(path)
-    if path.suffix == ".nc":
-        return xr.open_dataset(path)
-    raise ValueError(f"path must be an atlas file ending in .nc or .zarr, got {str(path)!r}")
+    if len(bad):
+        i = int(bad[0])
+        st = int(step[i])
+        return Verdict(False, names[code[i]], st or None,
+                       f"{len(bad)} of {n} boxes rejected; the first, box {i}, failed check '{names[code[i]]}'"
+                       + (f" at step {st}" if st else ""), checked=n, rejected=len(bad), atlas=is_atlas,
+                       complete=complete)
+    if not is_atlas:
+        return Verdict(True, None, None, f"{n} boxes re-verified (a table of certificates, not an atlas: no "
+                       "window stated, no derived numbers)", checked=n, rejected=0)
+    numbers = _numbers(data, arrays, window, complete)
+    cover = ("they cover the window" if complete else
+             f"they do not cover the window ({t.missing} of {4 ** depth} cells of the deepest level missing, "
+             f"uncovered area in [{numbers['uncovered_area'][0]:.6g}, {numbers['uncovered_area'][1]:.6g}]); "
+             "every derived number is of the covered part")
+    return Verdict(True, None, None, f"{n} boxes re-verified, each the quadtree box of the window it states, "
+                   f"none overlapping; {cover}", checked=n, rejected=0, atlas=True, complete=complete,
+                   numbers=numbers)
 
 
 def verify_file(path):
@@ -155,8 +262,7 @@ def verify_file(path):
     :func:`read_atlas_arrays`) with :func:`verify_arrays`; a stored ``word``
     text must be the word its itinerary spells.
     """
-    with _open(path) as data:
-        verdict = _verify_dataset(data.load())
+    verdict = _verify_dataset(read_atlas_file(path))
     return verdict.checked, verdict.rejected
 
 
@@ -173,8 +279,7 @@ def verify(obj):
     if isinstance(obj, Certificate):
         return _verify_certificate(obj)
     if isinstance(obj, (str, Path)):
-        with _open(obj) as data:
-            return _verify_dataset(data.load())
+        return _verify_dataset(read_atlas_file(obj))
     data = getattr(obj, "boxes", obj)
     if hasattr(data, "variables") and hasattr(data, "attrs"):
         return _verify_dataset(data)
