@@ -10,7 +10,7 @@ import pytest
 
 CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "dimension", "atlas",
         "atlas_boxes", "nonsliding", "borders", "regions", "_region_export", "_colours", "_io", "_interrupt",
-        "_cache", "structure", "structure.certify", "structure.verify", "structure.verdict", "structure.labels", "structure.tubes",
+        "_cache", "structure", "structure.certify", "structure.verify", "structure.verdict", "structure.tiling", "structure.labels", "structure.tubes",
         "structure.itinerary", "structure.words", "structure.borders", "structure.bifurcations",
         "structure.checks", "structure.continuation", "structure.regions", "structure.trace", "structure.graph",
         "structure.export", "cascades", "cascade_families"]

@@ -390,3 +390,28 @@ def test_shares_are_outward_bounds_of_the_exact_shares(plain):
     ok = df["lower"].to_numpy() > 0
     slope = np.log2(df["lower"].to_numpy(float)[1:] / df["upper"].to_numpy(float)[:-1])
     assert (df["slope_lo"].to_numpy()[1:][ok[1:]] < slope[ok[1:]]).all()
+
+
+def test_malformed_trapping_variables_and_max_iter_are_refused_by_name(trapped, tmp_path):
+    raw = _raw(trapped, tmp_path, ".nc")
+    off = raw["trap_cell_offsets"].values.copy()
+    off[-1] += 5  # past the end of trap_cells: a region would silently lose cells
+    bad = raw.assign(trap_cell_offsets=(raw["trap_cell_offsets"].dims, off))
+    with pytest.raises(ValueError, match="trap_cell_offsets must run from 0 to len"):
+        sb.verify(_write(bad, tmp_path, ".nc", "off"))
+    grid = raw["trap_grid"].values.copy()
+    grid[0, 2] = np.nan
+    bad = raw.assign(trap_grid=(raw["trap_grid"].dims, grid))
+    with pytest.raises(ValueError, match="trap_grid's cell counts"):
+        sb.verify(_write(bad, tmp_path, ".nc", "grid"))
+    bad = raw.copy()
+    bad.attrs = dict(raw.attrs, max_iter="abc")
+    with pytest.raises(ValueError, match="the attribute max_iter must be an integer"):
+        sb.verify(_write(bad, tmp_path, ".nc", "mi"))
+
+
+def test_an_atlas_without_word_texts_has_its_words_spelled_by_the_checker(plain, tmp_path):
+    raw = _raw(plain, tmp_path, ".nc").drop_vars("word")
+    v = sb.verify(_write(raw, tmp_path, ".nc", "nowords"))
+    assert v.ok and v.complete
+    assert v.numbers["words"] == sb.verify(plain).numbers["words"]

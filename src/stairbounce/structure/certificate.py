@@ -328,13 +328,14 @@ def read_atlas_file(path):
     s = str(path).rstrip("/")
     if not (s.endswith(".nc") or s.endswith(".zarr")):
         raise ValueError(f"path must be an atlas file ending in .nc or .zarr, got {str(path)!r}")
-    if not Path(s).exists():
-        raise ValueError(f"cannot read a certified atlas from {path}: no such file")
+    if not (Path(s).is_dir() if s.endswith(".zarr") else Path(s).is_file()):
+        what = "a directory" if s.endswith(".zarr") else "a regular file"
+        raise ValueError(f"cannot read a certified atlas from {path}: not {what}")
     try:
         if s.endswith(".zarr"):
             with xr.open_zarr(s, consolidated=False) as f:
                 return f.load()
         with xr.open_dataset(s, engine="netcdf4") as f:
             return f.load()
-    except (OSError, KeyError, ValueError) as exc:
+    except (OSError, KeyError, ValueError, RuntimeError, TypeError) as exc:  # RuntimeError: a garbled chunk
         raise ValueError(f"cannot read a certified atlas from {path}: {exc}") from None

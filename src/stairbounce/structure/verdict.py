@@ -112,7 +112,12 @@ def read_atlas_arrays(data):
                          f"missing: {', '.join(missing + ([] if 'max_iter' in data.attrs else ['max_iter']))}")
     data = decode_atlas(data)
     out = {name: np.asarray(data[name].values) for name in need}
-    out["max_iter"] = int(data.attrs["max_iter"])
+    m = data.attrs["max_iter"]
+    m = m.item() if isinstance(m, np.ndarray) and m.size == 1 else m
+    if isinstance(m, (bool, np.bool_)) or not isinstance(m, (int, np.integer, float, np.floating)) \
+            or not np.isfinite(m) or m != int(m):
+        raise ValueError(f"atlas: the attribute max_iter must be an integer >= 1, got {m!r}")
+    out["max_iter"] = int(m)
     for key in ("word", "reason"):
         if key in data.variables:
             out[key] = np.asarray(data[key].values)
@@ -164,6 +169,39 @@ def _check_reasons(arrays, code):
             code[np.flatnonzero(sel)[~fits]] = _REASON
 
 
+def _check_trap_layout(data):
+    """The trapping regions' variables laid out as ``trap_atlas`` writes them (else
+    ValueError naming the variable): ``trap_box`` rows of the table, each once;
+    ``trap_grid`` six numbers a region, its cell counts whole and >= 1;
+    ``trap_cell_offsets`` from 0 to ``len(trap_cells)``, never decreasing."""
+    names = ("trap_box", "trap_grid", "trap_cell_offsets", "trap_cells")
+    have = [k for k in names if k in data.variables]
+    if not have:
+        return
+    if len(have) < len(names):
+        raise ValueError(f"atlas: the trapping regions need {', '.join(names)}; missing: "
+                         f"{', '.join(k for k in names if k not in have)}")
+    n = data.sizes.get("box", 0)
+    box = np.asarray(data["trap_box"].values)
+    grid = np.asarray(data["trap_grid"].values)
+    off = np.asarray(data["trap_cell_offsets"].values)
+    cells = np.asarray(data["trap_cells"].values)
+    if box.dtype.kind not in "iu" or np.any((box < 0) | (box >= n)) or np.unique(box).size != box.size:
+        raise ValueError(f"atlas: trap_box must hold distinct rows of the table (0 to {n - 1})")
+    if grid.shape != (box.size, 6) or grid.dtype.kind != "f":
+        raise ValueError(f"atlas: trap_grid must hold six numbers (v_lo, v_hi, nv, s_lo, s_hi, ns) for each of the "
+                         f"{box.size} regions, got shape {grid.shape}")
+    counts = grid[:, [2, 5]] if grid.size else np.ones((0, 2))
+    if not (np.all(np.isfinite(counts)) and np.all(counts >= 1) and np.all(counts == np.floor(counts))):
+        raise ValueError("atlas: trap_grid's cell counts nv and ns must be whole numbers >= 1")
+    if (off.dtype.kind not in "iu" or off.shape != (box.size + 1,) or off[0] != 0 or off[-1] != cells.size
+            or np.any(np.diff(off) < 0)):
+        raise ValueError(f"atlas: trap_cell_offsets must run from 0 to len(trap_cells) = {cells.size}, one entry per "
+                         "region plus one, never decreasing")
+    if cells.dtype.kind not in "iu":
+        raise ValueError(f"atlas: trap_cells must hold integers, got dtype {cells.dtype}")
+
+
 def _window(data):
     """An atlas's window and depth from its attributes, refused by name."""
     for key in ("e_range", "u_range", "depth"):
@@ -193,7 +231,16 @@ def _numbers(data, arrays, window, complete):
     book = AreaBook(arrays["e0"], arrays["e1"], arrays["u0"], arrays["u1"], window, complete)
     status = np.asarray(arrays["status"])
     reasons = np.array([str(r) for r in arrays.get("reason", np.full(status.size, ""))], dtype=object)
-    words = np.array([str(w) for w in arrays.get("word", np.full(status.size, ""))], dtype=object)
+    words = arrays.get("word")
+    if words is None:  # no texts stored: each verified word box's word as its itinerary spells it
+        words = np.full(status.size, "", dtype=object)
+        itin, off, spelled = arrays["itinerary"], arrays["offsets"], {}
+        for b in np.flatnonzero(status == _WORD_S):
+            key = itin[off[b]:off[b + 1]].tobytes()
+            if key not in spelled:
+                spelled[key] = word_from_impacts(itin[off[b]:off[b + 1]]).format(ascii=True)
+            words[b] = spelled[key]
+    words = np.array([str(w) for w in words], dtype=object)
     undecided = status == STATUSES.index("undecided")
     wlo, whi = book.window
     clo, chi = book.covered
@@ -216,6 +263,7 @@ def _verify_dataset(data):
                               arrays["max_iter"], arrays["itinerary"], arrays["offsets"])
     _check_words(arrays, code)
     _check_reasons(arrays, code)
+    _check_trap_layout(data)
     if "reason" in data.variables:  # no_sliding boxes proven by trapping regions (verify_trapping.py)
         # a region stands in for Corollary 2.1 only: a box that failed another check stays rejected
         prior = code.copy()
