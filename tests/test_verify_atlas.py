@@ -415,3 +415,32 @@ def test_an_atlas_without_word_texts_has_its_words_spelled_by_the_checker(plain,
     v = sb.verify(_write(raw, tmp_path, ".nc", "nowords"))
     assert v.ok and v.complete
     assert v.numbers["words"] == sb.verify(plain).numbers["words"]
+
+
+def test_cli_verify_prints_the_checker_s_numbers_with_their_basis(plain, tmp_path, capsys):
+    from stairbounce.cli import main
+
+    path = tmp_path / "a.zarr"
+    plain.save(path)
+    with pytest.raises(SystemExit) as exit_:
+        main(["certify", "--verify", str(path)])
+    out = capsys.readouterr().out
+    assert exit_.value.code == 0 and "0 rejected" in out and "they cover the window" in out
+    assert "the checker's numbers (proven: sums of the verified boxes' exact areas, rounded outward" in out
+    lo, hi = plain.fraction(bound="both")["word"]
+    shown = out.split("word [")[1].split("]")[0].replace("%", "").split(", ")
+    assert Fraction(shown[0]) <= 100 * Fraction(lo) and 100 * Fraction(hi) <= Fraction(shown[1])
+    raw = _raw(plain, tmp_path, ".zarr")
+    bad = _write(_tamper("reversed word_names", raw, ".zarr", plain), tmp_path, ".zarr")
+    with pytest.raises(SystemExit) as exit_:
+        main(["certify", "--verify", str(bad)])
+    out = capsys.readouterr().out
+    assert exit_.value.code == 1 and "failed check 'word'" in out and "checker's numbers" not in out
+    c = raw.copy(deep=True)
+    codes = c["word_code"].values.copy()
+    codes[0] = -1
+    c["word_code"] = ("box", codes)
+    with pytest.raises(SystemExit) as exit_:
+        main(["certify", "--verify", str(_write(c, tmp_path, ".zarr", "neg"))])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and "word_code -1 at box 0" in err and len(err.strip().splitlines()) == 1
