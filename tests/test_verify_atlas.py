@@ -444,3 +444,23 @@ def test_cli_verify_prints_the_checker_s_numbers_with_their_basis(plain, tmp_pat
         main(["certify", "--verify", str(_write(c, tmp_path, ".zarr", "neg"))])
     err = capsys.readouterr().err
     assert exit_.value.code == 2 and "word_code -1 at box 0" in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_checker_s_edges_are_the_certifier_s_bit_for_bit():
+    from stairbounce.structure import _kernel as K
+    from stairbounce.structure.tiling import box_edges
+
+    rng = np.random.default_rng(43)
+    for _ in range(40):
+        lo = float(rng.choice([0.0, rng.uniform(0, 1), rng.uniform(0, 1e-3), 1e-150]))
+        hi = lo + float(rng.choice([1.0, rng.uniform(1e-12, 1.0), rng.uniform(0, 1e-9)])) * (1 - lo if lo < 1 else 1)
+        if not hi > lo:
+            continue
+        level = rng.integers(0, 27, 500)
+        k = (rng.random(500) * (2.0 ** level)).astype(np.int64)
+        win = np.array([lo, hi, lo, hi])
+        e0, e1, u0, u1 = (np.empty(500) for _ in range(4))
+        K._box_edges(win, level, k, k, e0, e1, u0, u1)
+        assert (box_edges(lo, hi, level, k).view(np.int64) == e0.view(np.int64)).all()
+        assert (box_edges(lo, hi, level, k + 1).view(np.int64) == e1.view(np.int64)).all()
+        assert (lo <= e0).all() and (e0 <= e1).all() and (e1 <= hi).all()

@@ -618,7 +618,7 @@ class CertifiedAtlas:
 
         Proven (``structure/tiling.py``): ``bound="lower"`` (default) a lower bound on
         each share, ``"upper"`` an upper bound, ``"both"`` the pair ``(lower, upper)``:
-        the exact share of the boxes' area lies between them (a relative 1e-16 apart).
+        the exact share of the boxes' area lies between them (a relative 1e-15 or so apart).
         Of the covered part when the boxes do not cover the window (:meth:`area_basis`).
         """
         if bound not in ("lower", "upper", "both"):

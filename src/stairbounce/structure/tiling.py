@@ -121,6 +121,8 @@ def tiling(window, depth, level, i, j, e0, e1, u0, u1):
 
     ok &= same(e0, box_edges(e_lo, e_hi, safe, ii)) & same(e1, box_edges(e_lo, e_hi, safe, ii + 1))
     ok &= same(u0, box_edges(u_lo, u_hi, safe, jj)) & same(u1, box_edges(u_lo, u_hi, safe, jj + 1))
+    with np.errstate(invalid="ignore"):  # inside the window (NaN edges fail)
+        ok &= (e_lo <= e0) & (e0 <= e1) & (e1 <= e_hi) & (u_lo <= u0) & (u0 <= u1) & (u1 <= u_hi)
     overlapping = np.zeros(n_box, dtype=bool)
     sel = np.flatnonzero(ok)
     shift = 2 * (depth - level[sel])
