@@ -105,13 +105,24 @@ def read_atlas_arrays(data):
     dimension), ``offsets`` (box + 1) and the attribute ``max_iter``; texts and
     codes decoded by :func:`~stairbounce.structure.certificate.decode_atlas`.
     """
-    need = ("e0", "e1", "u0", "u1", "status", "itinerary", "offsets")
-    missing = [name for name in need if name not in data.variables]
+    _need(data)
+    return _arrays(decode_atlas(data))
+
+
+_NEED = ("e0", "e1", "u0", "u1", "status", "itinerary", "offsets")
+
+
+def _need(data):
+    """The variables and attribute the array form needs, or ValueError naming the missing."""
+    missing = [name for name in _NEED if name not in data.variables]
     if missing or "max_iter" not in data.attrs:
-        raise ValueError(f"atlas must hold the variables {', '.join(need)} and the attribute max_iter; "
+        raise ValueError(f"atlas must hold the variables {', '.join(_NEED)} and the attribute max_iter; "
                          f"missing: {', '.join(missing + ([] if 'max_iter' in data.attrs else ['max_iter']))}")
-    data = decode_atlas(data)
-    out = {name: np.asarray(data[name].values) for name in need}
+
+
+def _arrays(data):
+    """:func:`read_atlas_arrays` of a decoded table."""
+    out = {name: np.asarray(data[name].values) for name in _NEED}
     m = data.attrs["max_iter"]
     m = m.item() if isinstance(m, np.ndarray) and m.size == 1 else m
     if isinstance(m, (bool, np.bool_)) or not isinstance(m, (int, np.integer, float, np.floating)) \
@@ -132,19 +143,23 @@ def _check_words(arrays, code):
         return
     is_word = np.asarray(arrays["status"]) == _WORD_S
     itin, off = np.asarray(arrays["itinerary"], dtype=np.int64), np.asarray(arrays["offsets"], dtype=np.int64)
-    spelled = {}
+    spelled, parsed, same = {}, {}, {}  # each itinerary spelled once, each text parsed once
     for i in np.flatnonzero(is_word & (code == _OK)):
-        key = itin[off[i]:off[i + 1]].tobytes()
-        if key not in spelled:
-            try:
-                spelled[key] = word_from_impacts(itin[off[i]:off[i + 1]])
-            except ValueError:
-                spelled[key] = None
-        try:
-            same = spelled[key] is not None and parse_word(str(words[i])) == spelled[key]
-        except ValueError:
-            same = False
-        if not same:
+        key = (itin[off[i]:off[i + 1]].tobytes(), words[i])
+        if key not in same:
+            if key[0] not in spelled:
+                try:
+                    spelled[key[0]] = word_from_impacts(itin[off[i]:off[i + 1]])
+                except ValueError:
+                    spelled[key[0]] = None
+            text = str(words[i])
+            if text not in parsed:
+                try:
+                    parsed[text] = parse_word(text)
+                except ValueError:
+                    parsed[text] = None
+            same[key] = spelled[key[0]] is not None and parsed[text] == spelled[key[0]]
+        if not same[key]:
             code[i] = _WORD
     texts = words.astype(str) if words.dtype.kind != "O" else np.array([str(w) for w in words])
     code[(code == _OK) & ~is_word & (texts != "")] = _WORD
@@ -257,8 +272,9 @@ def _numbers(data, arrays, window, complete):
 
 
 def _verify_dataset(data):
-    arrays = read_atlas_arrays(data)
+    _need(data)
     data = decode_atlas(data)
+    arrays = _arrays(data)
     code, step = verify_codes(arrays["e0"], arrays["e1"], arrays["u0"], arrays["u1"], arrays["status"],
                               arrays["max_iter"], arrays["itinerary"], arrays["offsets"])
     _check_words(arrays, code)
