@@ -464,3 +464,21 @@ def test_the_checker_s_edges_are_the_certifier_s_bit_for_bit():
         assert (box_edges(lo, hi, level, k).view(np.int64) == e0.view(np.int64)).all()
         assert (box_edges(lo, hi, level, k + 1).view(np.int64) == e1.view(np.int64)).all()
         assert (lo <= e0).all() and (e0 <= e1).all() and (e1 <= hi).all()
+
+
+def test_an_atlas_whose_boxes_are_moved_has_its_numbers_refused(plain):
+    # the newcomer's case: a box moved onto another box of the same word counted its area twice
+    ds = plain.boxes.copy(deep=True)
+    st, words = ds["status"].values, ds["word"].values
+    i, j = np.flatnonzero((st == 0) & (words == words[np.flatnonzero(st == 0)[0]]))[:2]
+    for k in ("e0", "e1", "u0", "u1"):
+        x = ds[k].values.copy()
+        x[i] = x[j]
+        ds[k] = ("box", x)
+    moved = sb.CertifiedAtlas(ds)
+    v = sb.verify(moved)
+    assert not v and v.check == "place" and v.numbers is None
+    for f in (moved.fraction, moved.words, moved.border_box_counts, lambda: moved.word_area_bounds(words[i])):
+        with pytest.raises(ValueError, match="not its window's quadtree"):
+            f()
+    assert "numbers refused" in repr(moved)

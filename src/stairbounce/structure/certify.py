@@ -595,6 +595,10 @@ class CertifiedAtlas:
             ds = self.boxes
             cols = [ds[k].values for k in ("e0", "e1", "u0", "u1")]
             t = tiling(self.window, self.depth, ds["level"].values, ds["i"].values, ds["j"].values, *cols)
+            bad = int(np.count_nonzero(~t.placed | t.overlapping))
+            if bad:
+                raise ValueError(f"the atlas's boxes are not its window's quadtree ({bad} boxes misplaced or "
+                                 "overlapping; sb.verify says which): its derived numbers are refused")
             self._areas = AreaBook(*cols, self.window, t.complete)
         return self._areas
 
@@ -861,7 +865,10 @@ class CertifiedAtlas:
                                "max_iter": self.max_iter, "coordinates": "(e, u)"}}
 
     def __repr__(self):
-        f = self.fraction()
         n = self.boxes.sizes["box"]
+        try:
+            f = self.fraction()
+        except ValueError:
+            return f"CertifiedAtlas({n} boxes, depth {self.depth}: not its window's quadtree, numbers refused)"
         parts = ", ".join(f"{k} {100 * v:.1f}%" for k, v in f.items())
         return f"CertifiedAtlas({n} boxes, depth {self.depth}: {parts})"
