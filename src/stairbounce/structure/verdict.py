@@ -339,6 +339,16 @@ def verify(obj):
     whose ``boxes`` is the Dataset of :func:`read_atlas_arrays`, or that
     Dataset) or the path of an atlas file.  The verdict is true when every
     claim is re-verified, and says otherwise which check failed first.
+
+    An atlas (a table whose attribute ``kind`` says so) is verified as a whole
+    too: its texts decoded by :func:`~stairbounce.structure.certificate.decode_atlas`
+    (a code out of range or a missing names list: ValueError), each stored word the
+    one its itinerary spells, each reason one its status may carry, each trapping
+    region re-verified, each box the quadtree box ``(level, i, j)`` of the stated
+    window at the stated depth (edges bit for bit) and inside it, no two boxes
+    overlapping (``structure/tiling.py``); the verdict says whether they cover the
+    window and carries the derived numbers proven from the verified boxes
+    (:class:`Verdict`'s ``numbers``, of the covered part when they do not).
     """
     if isinstance(obj, Certificate):
         return _verify_certificate(obj)
