@@ -11,7 +11,8 @@ import pytest
 
 CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "dimension", "atlas",
         "atlas_boxes", "nonsliding", "borders", "regions", "_region_export", "_colours", "_io", "_interrupt",
-        "_cache", "structure", "structure.certify", "structure.verify", "structure.labels", "structure.tubes",
+        "_cache", "structure", "structure.certify", "structure.verify", "structure.verdict", "structure.tiling",
+        "structure.labels", "structure.tubes",
         "structure.itinerary", "structure.words", "structure.slices", "structure.borders", "structure.bifurcations",
         "structure.checks", "structure.continuation", "structure.regions", "structure.trace", "structure.graph",
         "structure.export", "cascades", "cascades.patterns", "cascades.search", "cascades.laws",
@@ -305,3 +306,18 @@ def test_the_kernels_are_cached_on_disk_and_the_cache_serves_another_process(tmp
                                     env=env).stdout.split() for _ in range(2))
     assert first == ["0", "1"]  # an empty cache: compiled and written
     assert second == ["1", "0"]  # the next process: read back, not compiled
+
+
+@pytest.mark.parametrize("module", ["structure.certify", "structure.certificate", "structure.trapping",
+                                    "structure.verify", "structure.verify_trapping", "structure.verdict"])
+def test_the_certifier_and_the_checker_import_in_layers(module):
+    # certify -> trapping -> certificate and verdict -> verify_trapping -> verify: what two
+    # modules share lives in the lower one (issue 46 item 4)
+    graph = _import_graph()
+    name = f"stairbounce.{module}"
+    assert name in graph
+    assert not [c for c in _circles(graph) if name in c]
+    layers = {"structure.trapping": "structure.certificate", "structure.certify": "structure.trapping",
+              "structure.verify_trapping": "structure.verify", "structure.verdict": "structure.verify_trapping"}
+    if module in layers:  # the arrow goes down, and not back
+        assert f"stairbounce.{layers[module]}" in graph[name]

@@ -90,7 +90,7 @@ from .structure import Certificate, CertifiedAtlas, certify, certify_box
 from .structure.labels import prove_labels
 from .structure.trapping import TrappingRegion, trapping_region
 from .structure.tubes import BorderTube, border_tube
-from .structure.verify import Verdict, verify
+from .structure.verdict import Verdict, verify
 from .symbolic import SlidingAnswer, Word, parse_word, sliding_answer, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, physical_speed, time_scale
