@@ -10,7 +10,6 @@ import typer
 
 from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, save_figure, with_row_progress
 
-_OUT_SUFFIXES = (".nc", ".zarr", ".geojson")
 _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
 
@@ -121,18 +120,19 @@ def certify_(
     the undecided area by reason."""
     import time
 
+    from .._io import suffix_of
     from ..structure.certificate import STATUSES
-    from ..structure.certify import certify
+    from ..structure.certify import ATLAS_SUFFIXES, certify
 
     if verify is not None:
         _verify(verify)
         return
     e_lo, e_hi = parse_range("e", e)
     u_lo, u_hi = parse_range("u", u)
-    if out is not None and out.suffix.lower() not in _OUT_SUFFIXES:
-        raise CLIError(f"--out must end in .nc, .zarr or .geojson, got {str(out)!r}")
-    if png is not None and png.suffix.lower() not in _FIGURE_SUFFIXES:
-        raise CLIError(f"--png must end in .png, .pdf or .svg, got {str(png)!r}")
+    if out is not None:
+        suffix_of(out, ATLAS_SUFFIXES, "--out")   # the rule of CertifiedAtlas.save, before the work
+    if png is not None:
+        suffix_of(png, _FIGURE_SUFFIXES, "--png")
     if top < 0:
         raise CLIError(f"--top must be >= 0, got {top}")
     check_dpi(dpi)

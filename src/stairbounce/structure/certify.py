@@ -35,6 +35,19 @@ centre, so the box is taken for non-sliding motion and not split further) and
 the open range 0 < e < 1, u > 0 of a certified box; it is split down to the last
 level like a border)."""
 
+def _check_atlas_variables(ds, path):
+    """ValueError naming the variables and attributes a loaded atlas lacks (the text
+    columns as ``word`` or ``word_code``, ``reason`` or ``reason_code``)."""
+    need = ["e0", "e1", "u0", "u1", "status", "level", "i", "j", "offsets", "itinerary"]
+    missing = [k for k in need if k not in ds.variables]
+    missing += [k for k in ("word", "reason") if k not in ds.variables and f"{k}_code" not in ds.variables]
+    missing += [k for k in ("e_range", "u_range", "depth", "max_iter", "form") if k not in ds.attrs]
+    if missing:
+        raise ValueError(f"{path} is not a whole certified atlas: it lacks {', '.join(missing)}")
+
+
+# what CertifiedAtlas.save writes, picked by the path's suffix (case ignored: _io.suffix_of)
+ATLAS_SUFFIXES = (".nc", ".zarr", ".geojson")
 FORMS = ("corners", "mean-value", "naive")
 """The enclosures a box can be certified with (the first is the default;
 :func:`certify_box`)."""
@@ -782,20 +795,19 @@ class CertifiedAtlas:
         (:func:`stairbounce._io.atomic_path`)."""
         import json
 
-        from .._io import atomic_path
+        from .._io import atomic_path, check_output, suffix_of
 
-        s = str(path).rstrip("/")
-        if s.endswith(".geojson"):
-            text = json.dumps(self.geojson())
+        suffix = suffix_of(path, ATLAS_SUFFIXES)   # case ignored: the CLI's rule, checked first
+        check_output(path, overwrite)
+        if suffix == ".geojson":
+            text = json.dumps(self.geojson(), allow_nan=False)
             with atomic_path(path, overwrite=overwrite) as tmp:
                 tmp.write_text(text)
             return
-        if not (s.endswith(".nc") or s.endswith(".zarr")):
-            raise ValueError(f"path must end in .nc, .zarr or .geojson, got {str(path)!r}")
         ds = self.boxes.copy()
         ds.attrs = {k: (list(v) if isinstance(v, tuple) else v) for k, v in ds.attrs.items()}
         with atomic_path(path, overwrite=overwrite) as tmp:
-            if s.endswith(".zarr"):
+            if suffix == ".zarr":
                 # Zarr v3 specifies no string type: each text column as codes into a list kept in attrs
                 for k in ("word", "reason"):
                     names, codes = np.unique(ds[k].values, return_inverse=True)
@@ -809,21 +821,12 @@ class CertifiedAtlas:
     @classmethod
     def load(cls, path):
         """load(path) -> CertifiedAtlas: read an atlas written by :meth:`save` (.nc or .zarr)."""
-        import xarray as xr
+        from .._io import read_dataset
 
-        s = str(path).rstrip("/")
-        try:
-            if s.endswith(".zarr"):
-                ds = xr.open_zarr(path, consolidated=False).load()
-            elif s.endswith(".nc"):
-                with xr.open_dataset(path, engine="netcdf4") as f:
-                    ds = f.load()
-            else:
-                raise ValueError(f"path must end in .nc or .zarr, got {str(path)!r}")
-        except (OSError, KeyError) as exc:
-            raise ValueError(f"cannot read a certified atlas from {path}: {exc}") from None
+        ds = read_dataset(path, "a certified atlas")
         if ds.attrs.get("kind") != "stairbounce certified atlas":
             raise ValueError(f"{path} is not a certified atlas written by stairbounce")
+        _check_atlas_variables(ds, path)
         import pandas as pd
 
         for k in ("word", "reason"):

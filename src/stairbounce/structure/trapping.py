@@ -397,6 +397,9 @@ def trapping_region(e, u, max_iter=1000):
     e0, e1 = _check_e(e)
     u0, u1 = _check_u(u)
     max_iter = check_count("max_iter", max_iter, 1)
+    from .certify import _itinerary_buffer
+
+    _itinerary_buffer(max_iter)  # refuses by name a max_iter whose entry record cannot fit
     return _try(e0, e1, u0, u1, max_iter)[0]
 
 

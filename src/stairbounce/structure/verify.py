@@ -86,7 +86,7 @@ import numpy as np
 
 from .. import _validate as _v
 from ..symbolic import Word, parse_word, word_from_impacts
-from .certificate import STATUSES, Certificate
+from .certificate import STATUSES, Certificate, check_certificate_fields
 
 __all__ = ["CHECKS", "Verdict", "verify", "verify_arrays", "verify_codes", "verify_file", "read_atlas_arrays"]
 
@@ -451,14 +451,11 @@ def _verify_dataset(data):
 
 
 def _open(path):
-    import xarray as xr
+    """The atlas file ``path`` (.nc or .zarr) read whole; a read failure is a
+    ValueError naming it (:func:`stairbounce._io.read_dataset`)."""
+    from .._io import read_dataset
 
-    path = Path(path)
-    if path.suffix == ".zarr":
-        return xr.open_zarr(path)
-    if path.suffix == ".nc":
-        return xr.open_dataset(path)
-    raise ValueError(f"path must be an atlas file ending in .nc or .zarr, got {str(path)!r}")
+    return read_dataset(path, "a certified atlas")
 
 
 def verify_file(path):
@@ -484,6 +481,7 @@ def verify(obj):
     claim is re-verified, and says otherwise which check failed first.
     """
     if isinstance(obj, Certificate):
+        check_certificate_fields(obj)
         return _verify_certificate(obj)
     if isinstance(obj, (str, Path)):
         with _open(obj) as data:
