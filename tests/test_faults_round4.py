@@ -290,3 +290,35 @@ def test_r11_force_never_replaces_a_symlink_to_a_folder_we_did_not_write(small_a
     link2.symlink_to(ours, target_is_directory=True)
     small_atlas.save(link2, overwrite=True)
     assert not link2.is_symlink() and sb.verify(link2) and sb.verify(ours)
+
+
+# --------------------------------------------------------------------------- #
+# F12: one vocabulary                                                         #
+# --------------------------------------------------------------------------- #
+
+
+def test_f12_word_prints_0_inf_as_every_command_does(capsys, monkeypatch):
+    # the report: `word` printed 0^∞ where certify and cascade print 0^inf
+    from stairbounce.cli import model_commands
+
+    monkeypatch.setattr(model_commands, "terminal_can_print_infinity", lambda *a: True)
+    code, out, _ = _run_cli(["word", "--e", "0.05", "--u", "0.93"], capsys)
+    assert code == 0 and "word:    (2, 2, 2, 0^inf)" in out and "∞" not in out
+    code, out, _ = _run_cli(["word", "--e", "0.05", "--u", "0.93", "--unicode"], capsys)
+    assert code == 0 and "0^∞" in out
+    monkeypatch.setattr(model_commands, "terminal_can_print_infinity", lambda *a: False)
+    code, out, _ = _run_cli(["word", "--e", "0.05", "--u", "0.93", "--unicode"], capsys)
+    assert code == 0 and "0^inf" in out
+
+
+def test_f12_every_default_window_is_named_by_its_figure(capsys):
+    # one documented rule: the window of the figure the command reproduces, in its --help
+    import re
+    from pathlib import Path
+
+    for cmd, fig in [("scan", "Fig. 4"), ("words", "Fig. 4"), ("borders", "Fig. 4"), ("certify", "Fig. 7"),
+                     ("dimension", "Fig. 6")]:
+        code, out, _ = _run_cli([cmd, "--help"], capsys)
+        assert code == 0 and fig in " ".join(out.split()), cmd
+    rule = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "cli.md").read_text()
+    assert re.search(r"\*\*Default windows\*\*", rule) and "Fig. 7" in rule and "`word --unicode`" in rule
