@@ -322,3 +322,65 @@ def test_f12_every_default_window_is_named_by_its_figure(capsys):
         assert code == 0 and fig in " ".join(out.split()), cmd
     rule = (Path(__file__).resolve().parents[1] / "docs" / "guide" / "cli.md").read_text()
     assert re.search(r"\*\*Default windows\*\*", rule) and "Fig. 7" in rule and "`word --unicode`" in rule
+
+
+# --------------------------------------------------------------------------- #
+# Issue 43 item 5: what a researcher needs to cite a proof                     #
+# --------------------------------------------------------------------------- #
+
+
+@pytest.fixture(scope="module")
+def trapped_atlas():
+    return sb.certify(e=(0.29, 0.31), u=(0.40, 0.42), depth=4, trap=True)
+
+
+def test_certified_geojson_is_rfc7946_with_metadata_and_trapping_apart(trapped_atlas, tmp_path):
+    # the newcomer (F11): 2849 of 2853 outer rings clockwise, no metadata, trapping merged
+    # with Corollary 2.1, the undecided area absent without a note
+    atlas = trapped_atlas
+    gj = _strict(json.dumps(atlas.geojson(), allow_nan=False))
+    meta = gj["metadata"]
+    assert meta["generator"].startswith("stairbounce ") and meta["version"] == sb.__version__
+    assert "a view, not a certificate" in meta["verify"] and meta["source"] is None
+    for f in gj["features"]:
+        g = shape(f["geometry"])
+        assert g.is_valid
+        for p in getattr(g, "geoms", [g]):
+            assert p.exterior.is_ccw
+            assert all(not r.is_ccw for r in p.interiors)
+    kinds = {(f["properties"]["status"], f["properties"]["reason"]) for f in gj["features"]}
+    st, rs = atlas.boxes["status"].values, atlas.boxes["reason"].values
+    assert (("no_sliding", "trapping") in kinds) == bool(((st == 1) & (rs == "trapping")).any())
+    assert ("no_sliding", "trapping") in kinds     # this window has trapping regions
+    W = meta["window_area"]
+    drawn = sum(f["properties"]["area"] for f in gj["features"])
+    assert math.isclose(drawn + meta["undecided_area"], W, rel_tol=1e-9)
+    assert math.isclose(sum(meta["undecided_by_reason"].values()), meta["undecided_area"], rel_tol=1e-12)
+    assert meta["undecided_area"] > 0
+
+
+def test_a_loaded_atlas_s_geojson_names_its_source_and_checksum(small_atlas, tmp_path):
+    import hashlib
+
+    small_atlas.save(tmp_path / "a.nc")
+    meta = sb.CertifiedAtlas.load(tmp_path / "a.nc").geojson()["metadata"]
+    assert meta["source"] == str(tmp_path / "a.nc")
+    assert meta["source_sha256"] == hashlib.sha256((tmp_path / "a.nc").read_bytes()).hexdigest()
+    assert f"stairbounce certify --verify {tmp_path / 'a.nc'}" in meta["verify"]
+
+
+@pytest.mark.parametrize("suffix", [".nc", ".zarr"])
+def test_atlas_files_carry_cf_attributes(small_atlas, tmp_path, suffix):
+    import xarray as xr
+
+    path = tmp_path / f"a{suffix}"
+    small_atlas.save(path)
+    ds = xr.open_zarr(path, consolidated=False) if suffix == ".zarr" else xr.open_dataset(path)
+    with ds:
+        assert list(ds["status"].attrs["flag_values"]) == [0, 1, 2, 3]
+        assert ds["status"].attrs["flag_meanings"].split() == list(sb.STATUSES) if hasattr(sb, "STATUSES") \
+            else ds["status"].attrs["flag_meanings"] == "word no_sliding no_slide_within undecided"
+        for v in ("e0", "e1", "u0", "u1", "level", "itinerary"):
+            assert ds[v].attrs["long_name"] and ds[v].attrs["units"] == "1"
+    assert sb.verify(path)
+    assert sb.CertifiedAtlas.load(path).fraction() == small_atlas.fraction()

@@ -278,6 +278,23 @@ def check_input(path, allowed, name="path"):
     return suffix
 
 
+def checksum(path):
+    """checksum(path) -> str: the SHA-256 (hex) of a file, or of a folder's files
+    (each one's path relative to the folder, then its bytes, in sorted order)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    path = Path(path)
+    files = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
+    for f in files:
+        if f != path:
+            h.update(f.relative_to(path).as_posix().encode() + b"\0")
+        with open(f, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                h.update(block)
+    return h.hexdigest()
+
+
 def read_dataset(path, what, allowed=(".nc", ".zarr")):
     """read_dataset(path, what, allowed=(".nc", ".zarr")) -> xarray.Dataset, loaded
 
