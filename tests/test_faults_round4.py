@@ -384,3 +384,23 @@ def test_atlas_files_carry_cf_attributes(small_atlas, tmp_path, suffix):
             assert ds[v].attrs["long_name"] and ds[v].attrs["units"] == "1"
     assert sb.verify(path)
     assert sb.CertifiedAtlas.load(path).fraction() == small_atlas.fraction()
+
+
+def test_every_reason_is_explained_where_users_look(capsys):
+    # the newcomer (F10): `range` and `impacts` were explained only in design.md
+    from pathlib import Path
+
+    from stairbounce.structure.certify import UNDECIDED_REASONS
+
+    root = Path(__file__).resolve().parents[1]
+    guide = (root / "docs" / "guide" / "proven.md").read_text()
+    code, out, _ = _run_cli(["certify", "--help"], capsys)
+    helptext = " ".join(out.split())
+    for reason in (*UNDECIDED_REASONS, "trapping"):
+        assert f"| `{reason}` |" in guide, reason
+        if reason != "trapping":
+            assert f"{reason} (" in helptext, reason
+    assert "binary floats of the typed decimals" in helptext
+    citing = (root / "docs" / "citing.md").read_text()
+    for needed in ("stairbounce --version", "float.hex", "stairbounce certify --verify", "view, not a certificate"):
+        assert needed in citing

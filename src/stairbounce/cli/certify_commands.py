@@ -117,7 +117,15 @@ def certify_(
     """Cover a window of the (e, u) plane with boxes on which interval arithmetic proves
     the periodic sliding solution's word, or no sliding (Corollary 2.1), or leaves the
     box undecided with its reason; print the proven area by status, the proven words and
-    the undecided area by reason."""
+    the undecided area by reason.
+
+    Reasons of undecided boxes: graze (the first impact lands on the step at some points
+    of the box, flies over at others), edge (a later impact, likewise), chatter (the
+    slide test (2.4) differs across the box), impacts (over 4096 impacts on one step),
+    nonsliding (every decision proven, but the float map does not slide within
+    --max-iter: numerical; --trap tries to prove it), range (the box touches e = 0,
+    e = 1 or u = 0).  A box is the binary floats of the typed decimals; see
+    docs/citing.md for citing a proven box."""
     import time
 
     from .._io import suffix_of
