@@ -404,3 +404,28 @@ def test_every_reason_is_explained_where_users_look(capsys):
     citing = (root / "docs" / "citing.md").read_text()
     for needed in ("stairbounce --version", "float.hex", "stairbounce certify --verify", "view, not a certificate"):
         assert needed in citing
+
+
+def test_certify_png_names_its_window_and_share_colours_word_length_and_marks_trapping(tmp_path, capsys,
+                                                                                       monkeypatch):
+    # the newcomer (F9): title "certified atlas, depth 10" only, no colour bar, words by period,
+    # trapping drawn in Corollary 2.1's grey
+    import matplotlib.figure
+
+    seen = {}
+    real = matplotlib.figure.Figure.savefig
+
+    def spy(fig, *a, **k):
+        ax, bar = fig.axes[0], fig.axes[1]
+        seen.update(title=ax.get_title(), bar=bar.get_ylabel(),
+                    legend=[t.get_text() for t in ax.get_legend().get_texts()])
+        return real(fig, *a, **k)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", spy)
+    code, _, err = _run_cli(["certify", "--e", "0.29:0.31", "--u", "0.40:0.42", "--depth", "4", "--trap",
+                             "--png", tmp_path / "t.png"], capsys)
+    assert code == 0, err
+    assert "e 0.29..0.31 x u 0.4..0.42" in seen["title"] and "proven" in seen["title"] and "%" in seen["title"]
+    assert "word's length" in seen["bar"]
+    assert any("trapping" in t for t in seen["legend"])
+    assert not any(t == "no sliding (Cor. 2.1)" and "trapping" in t for t in seen["legend"])
