@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-STATUSES = ("word", "no_sliding", "no_slide_within", "undecided")
+STATUSES = ("word", "no_sliding", "no_slide_within", "undecided", "sliding")
 """What a certificate states about its box (index = the status code in arrays).
 
 * ``word``: every point of the box has the periodic sliding solution through
@@ -52,6 +52,9 @@ STATUSES = ("word", "no_sliding", "no_slide_within", "undecided")
 * ``no_slide_within``: proven that the orbit of (1, 0) does not slide in the
   first ``max_iter`` steps anywhere in the box (a finite claim): the itinerary
   has ``max_iter`` entries, none -1.
+* ``sliding`` (atlases with ``classes=True``, ``structure/classes.py``): every
+  point of the box slides within ``max_iter`` steps, with one of the listed words
+  (both sides of the undecided decisions followed); no single itinerary.
 * ``undecided``: ``reason`` says which decision could not be proven at
   ``step`` (1-based): ``"chatter"`` (the slide test), ``"graze"`` (the first
   impact, margin of impact 1), ``"edge"`` (a later impact), or another reason

@@ -100,6 +100,7 @@ _MAX_DEPTH = 26
 # longer itineraries are computed again at the end (64 bytes a box of a level, about
 # twice what the rest of a level holds)
 _KEPT = 32
+_SLIDING_STATUS = STATUSES.index("sliding")
 
 
 # --------------------------------------------------------------------------- #
@@ -265,7 +266,7 @@ def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
 
 
 def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress=None, *, tiles=1,
-            form="corners", trap=False) -> CertifiedAtlas:
+            form="corners", trap=False, classes=False) -> CertifiedAtlas:
     """certify(e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, progress=None, *, tiles=1, form="corners", trap=False) -> CertifiedAtlas
 
     Cover a window of the (e, u) plane with boxes, each certified
@@ -279,9 +280,9 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     corners nor centre the float map slides within ``max_iter`` steps stops
     with the reason ``"nonsliding"`` (numerical: the enclosures of a long
     non-sliding orbit widen, and splitting cannot help there), so the atlas
-    tells the undecided area of a border from that of non-sliding motion; an
-    undecided box of the last level is "nonsliding" when its centre does not
-    slide (the pixel of a scan with 2^depth pixels a side).  A
+    tells the undecided area of a border from that of non-sliding motion, at
+    the last level too (the corners are shared between boxes and iterated
+    once).  A
     box touching ``e = 0``, ``e = 1`` or ``u = 0`` is undecided (reason ``"range"``) and
     split down to the last level, so only a strip one box wide stays so.
 
@@ -309,14 +310,26 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
         there, so no periodic sliding solution), its region stored in the
         table (``trap_*`` variables) for ``sb.verify``.
 
+    classes : bool, default False
+        Class-level proofs (:mod:`stairbounce.structure.classes`): an undecided
+        border box (graze, edge, chatter) of the last level (coarser ones are
+        split on, so the words keep their proven areas) has both sides of its undecided
+        decisions followed; it becomes ``sliding`` (every point slides within
+        ``max_iter``, its possible words in ``word``, separated by " | ") or
+        ``no_slide_within`` (reason ``"branches"``) when that is proven, so what
+        stays undecided is the border of the region sliding within ``max_iter``.
+        A box meeting the Corollary 2.1 curve is split down to the last level
+        rather than stopped as "nonsliding".  ``sb.verify`` re-checks them
+        (``structure/verify_branches.py``).
+
     Returns
     -------
     CertifiedAtlas
     """
-    return _certify(e, u, depth, max_iter, progress, tiles, form, trap=trap)
+    return _certify(e, u, depth, max_iter, progress, tiles, form, trap=trap, classes=classes)
 
 
-def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap=False):
+def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap=False, classes=False):
     """:func:`certify`; with ``reference`` the "nonsliding" check is taken box by box in
     the level kernel (:func:`_kernel._any_slides`, the algorithm before the shared
     check of :func:`_mark_nonsliding`; the tests compare the two)."""
@@ -330,6 +343,8 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap
         raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
     if not isinstance(trap, (bool, np.bool_)):
         raise ValueError(f"trap must be True or False, got {trap!r}")
+    if not isinstance(classes, (bool, np.bool_)):
+        raise ValueError(f"classes must be True or False, got {classes!r}")
     start = min(_START_LEVEL, depth)
     allowed = [t for t in (1, 2, 4, 8) if t <= 1 << start]
     tiles = check_count("tiles", tiles, 1)
@@ -358,12 +373,16 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap
             gi, gj = np.meshgrid(np.arange(ti * per_tile, (ti + 1) * per_tile),
                                  np.arange(tj * per_tile, (tj + 1) * per_tile))
             for _, level_done in _run_tile(win, depth, start, gi.ravel(), gj.ravel(), max_iter, code, parts,
-                                           None if reference else points):
+                                           None if reference else points, classes=classes):
                 if level_done:
                     tick()
     cols, kept, row = _box_table(parts)
     del parts
     ds = _atlas_dataset(win, depth, max_iter, code, *cols, kept, row)
+    if classes:
+        from .classes import mark_atlas
+
+        mark_atlas(ds)
     if trap:
         from .trapping import trap_atlas
 
@@ -371,7 +390,7 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap
     return CertifiedAtlas(ds, seconds=time.perf_counter() - t0)
 
 
-def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch=None):
+def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch=None, classes=False):
     """The quadtree below a batch of boxes ``(gi, gj)`` of level ``start``, as a
     generator: it appends the final boxes to ``out`` as arrays ``(level, i, j, status,
     reason, step, nsteps, kept)``, one tuple per level (``kept``: the kept itineraries
@@ -395,16 +414,22 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch
         step = np.empty(n, np.int64)
         nsteps = np.empty(n, np.int64)
         kept = np.empty((n, _KEPT), np.int16)
-        # the leaves' reason by their centre alone (the pixel of a scan at 2^depth); coarser
-        # boxes stop as "nonsliding" only when neither the centre nor a corner slides
-        ns_points = 0 if level < ns_level else (1 if level == depth else 5)
+        # a box stops as "nonsliding" only when neither its centre nor a corner slides, at
+        # every level from ns_level on, the last included (issue 43: the label's promise)
+        ns_points = 0 if level < ns_level else 5
         size = max(1, n if batch is None else batch)
         for lo in range(0, n, size):
             s = slice(lo, min(n, lo + size))
             run_kernel(K._certify_level, win, level, ii[s], jj[s], max_iter, K.IMPACT_CAP, form,
                        ns_points if points is None else 0, status[s], reason[s], step[s], nsteps[s], kept[s])
+            if classes and level == depth:  # class-level proofs (structure/classes.py) on the leaves:
+                # coarser undecided boxes are split on, so the words keep their proven areas
+                from .classes import classify_level
+
+                classify_level(win, level, ii[s], jj[s], max_iter, status[s], reason[s], nsteps[s])
             if ns_points and points is not None:
-                _mark_nonsliding(win, level, depth, ii[s], jj[s], status[s], reason[s], ns_points, points)
+                _mark_nonsliding(win, level, depth, ii[s], jj[s], status[s], reason[s], ns_points, points,
+                                 keep_curve=classes and level < depth)
             if s.stop < n:
                 yield level, False
         final = (status != K.UNDECIDED) | (reason == K.NONSLIDING) | (level == depth)
@@ -493,12 +518,14 @@ def _slides_at(es, us, max_iter, chunk=1 << 20):
     return out
 
 
-def _mark_nonsliding(win, level, depth, ii, jj, status, reason, ns_points, points):
+def _mark_nonsliding(win, level, depth, ii, jj, status, reason, ns_points, points, keep_curve=False):
     """Give the reason "nonsliding" to the undecided boxes of a level (not "range" nor
     "impacts") at none of whose first ``ns_points`` points (1: the centre; 5: the centre
     and the corners) the float map slides: the verdict of :func:`_kernel._any_slides`,
     taken for all the boxes at once, each corner once (``points``, a :class:`_SlideCache`)."""
     cand = np.flatnonzero((status == K.UNDECIDED) & (reason != K.RANGE) & (reason != K.IMPACTS))
+    if keep_curve and cand.size:  # boxes meeting the Corollary 2.1 curve are split on
+        cand = cand[~_meets_curve(win, level, ii[cand], jj[cand])]
     if not cand.size:
         return
     es, us = np.empty(cand.size), np.empty(cand.size)
@@ -510,6 +537,16 @@ def _mark_nonsliding(win, level, depth, ii, jj, status, reason, ns_points, point
         gj = np.concatenate([cj, cj, cj + 1, cj + 1])
         rest = rest[~points.corners(level, gi, gj).reshape(4, -1).any(axis=0)]
     reason[rest] = K.NONSLIDING
+
+
+def _meets_curve(win, level, ii, jj):
+    """Whether part of each box ``(ii, jj)`` of a level is above the Corollary 2.1 curve
+    (proven at its corner ``(e1, u1)``: a child there would be ``no_sliding``)."""
+    e0, e1, u0, u1 = (np.empty(ii.size) for _ in range(4))
+    K._box_edges(win, np.full(ii.size, level, np.int64), ii, jj, e0, e1, u0, u1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        bound = (1.0 - e1) / (2.0 * np.sqrt(2.0 * e1))
+    return (e1 < 1.0) & (u1 > bound * (1.0 + 1e-12))
 
 
 def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, step, nsteps, kept, row):
@@ -603,6 +640,24 @@ def _area(ds):
     return (ds["e1"].values - ds["e0"].values) * (ds["u1"].values - ds["u0"].values)
 
 
+def _border_classes(st, words, border):
+    """The class of each box for :meth:`CertifiedAtlas.border_box_counts`: -2 undecided,
+    -1 not sliding (``no_sliding``, ``no_slide_within``), >= 0 sliding (``"sliding"``:
+    one class, 0; ``"words"``: one class per proven word, ``sliding`` boxes undecided)."""
+    if border not in ("sliding", "words"):
+        raise ValueError(f"border must be one of sliding, words, got {border!r}")
+    cls = np.full(st.size, -1, np.int64)
+    w = st == K.WORD
+    if border == "sliding":
+        cls[w | (st == _SLIDING_STATUS)] = 0
+    else:
+        if w.any():
+            cls[w] = np.unique(words[w], return_inverse=True)[1]
+        cls[st == _SLIDING_STATUS] = -2
+    cls[st == K.UNDECIDED] = -2
+    return cls
+
+
 class CertifiedAtlas:
     """A window of the (e, u) plane covered by certified boxes (:func:`certify`).
 
@@ -690,6 +745,7 @@ class CertifiedAtlas:
         words = self.boxes["word"].values
         mine = (st == K.WORD) & (words == text)
         other = ((st == K.WORD) & ~mine) | (st == K.NO_SLIDING)
+        other |= (st == _SLIDING_STATUS) & np.array([text not in str(x).split(" | ") for x in words], bool)
         if w.period <= self.max_iter:
             other |= st == K.NO_SLIDE_WITHIN
         return float(area[mine].sum()), float(self._window_area() - area[other].sum())
@@ -726,7 +782,8 @@ class CertifiedAtlas:
         itin = _itinerary_buffer(self.max_iter)
         cols = [ds[k].values for k in ("e0", "e1", "u0", "u1")]
         trapped = ds["reason"].values == "trapping"
-        for b in np.flatnonzero(st != K.UNDECIDED):
+        branches = ds["reason"].values == "branches"  # no single itinerary: sb.verify(atlas) checks them
+        for b in np.flatnonzero((st != K.UNDECIDED) & ~branches):
             if trapped[b]:  # a trapping region (structure/trapping.py)
                 from .trapping import certificate_of, region_of
 
@@ -736,11 +793,21 @@ class CertifiedAtlas:
             s, rs, sp, it, dec, marg = _run_box(e0, e1, u0, u1, self.max_iter, form, itin)
             yield _certificate(e0, e1, u0, u1, self.max_iter, s, rs, sp, it, dec, marg)
 
-    def border_box_counts(self):
-        """border_box_counts() -> pandas.DataFrame: for each scale s = window/2^k
-        (k = 0 .. depth) proven bounds on N(s), the number of s-boxes of the
-        window's grid that meet the border between classes (each word one class,
-        ``no_sliding`` and ``no_slide_within`` together "not sliding").
+    def border_box_counts(self, border="words"):
+        """border_box_counts(border="words") -> pandas.DataFrame: for each scale
+        s = window/2^k (k = 0 .. depth) proven bounds on N(s), the number of s-boxes
+        of the window's grid that meet a border between classes of boxes.
+
+        ``border="sliding"`` (the paper's perimeter, Figs. 6 and 7; not yet the
+        default, the report's row reads the default and cannot take a zero lower
+        count, which this border has wherever the non-sliding side is unproven): two classes,
+        the points whose orbit of (1, 0) slides within ``max_iter`` steps (boxes
+        ``word`` and ``sliding``) and those where it does not (``no_sliding``,
+        ``no_slide_within``): the border of the region sliding within
+        ``max_iter``.  ``border="words"``: each word its own class (``sliding``
+        boxes, with several possible words, count as undecided there),
+        ``no_sliding`` and ``no_slide_within`` together "not sliding": the union
+        of all borders.
 
         ``lower``: s-boxes holding proven boxes of two classes (a segment
         between them, inside the s-box, crosses the border).  ``upper``:
@@ -749,6 +816,10 @@ class CertifiedAtlas:
         point lies in an undecided box).  ``slope_lo, slope_hi``: the bracket
         on the finite-scale box-counting slope ``log2(N(s_k)/N(s_{k-1}))``
         between this scale and the one before.
+
+        What it does not prove: the border of the region sliding *at all* (the
+        limit ``max_iter -> infinity``), nor the dimension (the limit of small
+        scales): the bounds hold at the scales listed.
         """
         import pandas as pd
 
@@ -757,12 +828,7 @@ class CertifiedAtlas:
         ii = ds["i"].values
         jj = ds["j"].values
         st = ds["status"].values
-        words = ds["word"].values
-        cls = np.full(st.size, -1, np.int64)  # -1: not sliding; -2: undecided
-        w = st == K.WORD
-        if w.any():
-            cls[w] = np.unique(words[w], return_inverse=True)[1]
-        cls[st == K.UNDECIDED] = -2
+        cls = _border_classes(st, ds["word"].values, border)
         rows = []
         for k in range(self.depth + 1):
             n = 1 << k
@@ -814,15 +880,36 @@ class CertifiedAtlas:
         df["slope_hi"] = np.concatenate([[np.nan], slope_hi])
         return df
 
-    def slope_bracket(self, k1, k2):
-        """slope_bracket(k1, k2) -> (lo, hi): proven bracket on the box-counting
-        slope ``log2(N(s_k2)/N(s_k1)) / (k2 - k1)`` between two scales."""
-        df = self.border_box_counts()
+    def slope_bracket(self, k1, k2, border="words"):
+        """slope_bracket(k1, k2, border="words") -> (lo, hi): proven bracket on the
+        box-counting slope ``log2(N(s_k2)/N(s_k1)) / (k2 - k1)`` between two scales
+        of the border :meth:`border_box_counts` counts."""
+        df = self.border_box_counts(border)
         k1 = check_count("k1", k1, 0, self.depth)
         k2 = check_count("k2", k2, k1 + 1, self.depth)
         L, U = df["lower"].to_numpy(float), df["upper"].to_numpy(float)
         with np.errstate(divide="ignore"):
             return (float(np.log2(L[k2] / U[k1]) / (k2 - k1)), float(np.log2(U[k2] / L[k1]) / (k2 - k1)))
+
+    def perimeter_bracket(self, k1, k2):
+        """perimeter_bracket(k1, k2) -> dict: what a report row "proven" on the paper's
+        perimeter states: the counts of :meth:`border_box_counts` with
+        ``border="sliding"`` at the scales ``k1 .. k2`` (``lower``, ``upper``
+        lists), the slope bracket between them (``slope``, ``(lo, hi)``; ``-inf``
+        when a lower count is 0), ``basis`` ``"proven"`` with ``proof`` (by what)
+        and ``not_proven`` (what it does not prove)."""
+        k1 = check_count("k1", k1, 0, self.depth)
+        k2 = check_count("k2", k2, k1 + 1, self.depth)
+        df = self.border_box_counts("sliding")
+        sel = (df["k"] >= k1) & (df["k"] <= k2)
+        return {"k1": k1, "k2": k2, "lower": [int(x) for x in df["lower"][sel]],
+                "upper": [int(x) for x in df["upper"][sel]], "slope": self.slope_bracket(k1, k2, "sliding"),
+                "basis": "proven",
+                "proof": (f"certified boxes (interval arithmetic, depth {self.depth}, max_iter {self.max_iter}); "
+                          "the counts bound the number of window/2^k cells meeting the border of the region "
+                          "sliding within max_iter"),
+                "not_proven": ("the border of the region sliding at all (the limit max_iter -> infinity), and "
+                               "the dimension (the limit of small scales)")}
 
     # -- files -------------------------------------------------------------
 

@@ -19,6 +19,9 @@ What is checked, per box (the first failure is the box's verdict):
 * ``corollary``: a ``no_sliding`` box satisfies Corollary 2.1 over the whole
   box, ``8 e0 u0^2 > (1 - e0)^2`` (that is ``u0 > (1-e0)/(2 sqrt(2 e0))``,
   the bound decreasing in e), enclosed;
+* ``branches``: a ``sliding`` box, or a ``no_slide_within`` box with reason
+  ``"branches"`` (atlas rows), is re-verified by following every branch of its
+  undecided decisions (``structure/verify_branches.py``);
 * ``trapping``: a ``no_sliding`` box with reason ``"trapping"`` (certificate or
   atlas row) is re-verified from its trapping region by
   ``structure/verify_trapping.py`` (numpy, this module's arithmetic) instead of
@@ -90,10 +93,12 @@ from .certificate import STATUSES, Certificate, check_certificate_fields
 
 __all__ = ["CHECKS", "Verdict", "verify", "verify_arrays", "verify_codes", "verify_file", "read_atlas_arrays"]
 
-CHECKS = ("ok", "box", "status", "itinerary", "corollary", "slide", "impact", "no impact", "word", "trapping")
+CHECKS = ("ok", "box", "status", "itinerary", "corollary", "slide", "impact", "no impact", "word", "trapping",
+          "branches")
 """Names of the checks; ``verify_codes`` returns indices into this tuple (0: accepted)."""
 
-_OK, _BOX, _STATUS, _ITIN, _COR, _SLIDE, _IMPACT, _NOIMPACT, _WORD, _TRAP = range(len(CHECKS))
+_OK, _BOX, _STATUS, _ITIN, _COR, _SLIDE, _IMPACT, _NOIMPACT, _WORD, _TRAP, _BRANCHES = range(len(CHECKS))
+_SLIDING_S = STATUSES.index("sliding")
 _WORD_S, _NOSLIDING_S, _WITHIN_S, _UNDECIDED_S = (STATUSES.index(s) for s in
                                                    ("word", "no_sliding", "no_slide_within", "undecided"))
 # an interval is a (2, n) array: row 0 the lower bounds, row 1 the upper ones;
@@ -205,6 +210,9 @@ def _structure(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
     bad_itin |= (status == _WORD_S) & ~ends_slide
     bad_itin |= (status == _WITHIN_S) & ((length != max_iter) | ends_slide)
     bad_itin |= ((status == _NOSLIDING_S) | (status == _UNDECIDED_S)) & ends_slide
+    # a class-level proof (status sliding) has no single itinerary: only the branch
+    # checker (verify_branches.py) accepts it, from an atlas
+    bad_itin |= status == _SLIDING_S
     code[(code == 0) & bad_itin] = _ITIN
     return code, step
 
@@ -439,6 +447,9 @@ def _verify_dataset(data):
         from .verify_trapping import check_atlas_regions
 
         check_atlas_regions(data, arrays, code, _TRAP)
+    from .verify_branches import check_atlas_branches  # class-level proofs (structure/classes.py)
+
+    check_atlas_branches(data, arrays, code, _BRANCHES)
     bad = np.flatnonzero(code != _OK)
     n = len(code)
     if not len(bad):
