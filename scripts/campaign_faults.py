@@ -62,6 +62,13 @@ Round 3 (issue 38, report ``reliability-round3.md``):
   address-space limit (R8); ``words --regions --png`` refused (R12); traced points
   inside their window (R13).
 
+Round 4 (issue 45, reports ``reliability-round4.md``, ``newcomer-round5.md``):
+
+- ``round4``: the regions export at tiny windows (R6), read failures of
+  ``certify --verify`` named as reads, a FIFO refused, malformed certificates
+  refused by name (R9, R10), one suffix rule and symlinked folders (R11),
+  ``word``'s 0^inf (F12).
+
 Prints one line per case and a table of counts per part.  Exit status 1 when
 any defect was found.
 """
@@ -1106,6 +1113,163 @@ def part_round3b(t, work, args):
            and not (d / "r.geojson").exists() and not (d / "r.png").exists(), f"exit {r.returncode}: {r.stderr[-200:]}")
 
 
+# --------------------------------------------------------------------------- #
+# Round 4 (issue 45, reports reliability-round4.md and newcomer-round5.md)     #
+# --------------------------------------------------------------------------- #
+
+_R4_EXPORT = r"""
+import json, sys
+import shapely
+from shapely.geometry import shape
+def bad(token):
+    raise ValueError(token)
+doc = json.loads(open(sys.argv[1]).read(), parse_constant=bad)
+geoms = [shape(f["geometry"]) for f in doc["features"] if f["geometry"] is not None]
+invalid = sum(not g.is_valid for g in geoms)
+worst = 0.0
+for i in range(len(geoms)):
+    for j in range(i + 1, len(geoms)):
+        over = geoms[i].intersection(geoms[j]).area
+        bound = doc["metadata"]["max_deviation"] * (geoms[i].length + geoms[j].length)
+        worst = max(worst, over / bound if bound else (1.0 if over else 0.0))
+print("EXPORT", len(geoms), invalid, "overlap_bound" in doc["metadata"], worst <= 1.0)
+"""
+
+_R4_API = r"""
+import dataclasses
+import stairbounce as sb
+from stairbounce.structure.trapping import certificate_of
+cert = sb.certify_box(e=(0.05, 0.0501), u=(0.93, 0.9301))
+region = sb.trapping_region(e=(0.299, 0.30), u=(0.413, 0.414))
+cases = {
+    "Certificate.from_dict({})": lambda: sb.Certificate.from_dict({}),
+    "verify(replace(cert, e=(0.05,)))": lambda: sb.verify(dataclasses.replace(cert, e=(0.05,))),
+    "verify(replace(cert, u=None))": lambda: sb.verify(dataclasses.replace(cert, u=None)),
+    "trapping_region(max_iter=10**12)": lambda: sb.trapping_region(e=(0.299, 0.30), u=(0.413, 0.414),
+                                                                   max_iter=10**12),
+}
+for name, call in cases.items():
+    try:
+        call()
+        print("ACCEPTED", name)
+    except ValueError as exc:
+        print("REFUSED", name, "|", exc)
+    except BaseException as exc:
+        print("RAISED", name, type(exc).__name__)
+for n in (10**6, 10**9):
+    grid = region.grid[:2] + (n,) + region.grid[3:5] + (n,)
+    try:
+        v = sb.verify(certificate_of(dataclasses.replace(region, grid=grid), 1000))
+        ok = (not v) and f"grid of {n} x {n} cells" in v.message
+        print("REFUSED" if ok else "ACCEPTED", f"trapping grid {n} x {n}", "|", v.message)
+    except BaseException as exc:
+        print("RAISED", f"trapping grid {n} x {n}", type(exc).__name__)
+"""
+
+
+def _r4_read_case(t, name, r, read=True):
+    t.case("round4", f"R10 certify --verify {name}: one line, a read",
+           r.returncode == 2 and one_line(r.stderr) and not traceback_in(r.stderr)
+           and (("cannot read" in r.stderr and "cannot write" not in r.stderr) or not read),
+           f"exit {r.returncode}: {r.stderr[-200:]}")
+
+
+def part_round4(t, work, args):
+    """Round 4: R6 (the regions export at 1e-13..3e-15 windows: strict JSON, valid
+    polygons; the whole plane at 24: the stated overlap bound holds), R9/R10
+    (``certify --verify`` of a missing, truncated, flipped, empty or PNG file, a
+    folder or a Zarr store named .nc, a FIFO, a garbled Zarr chunk: one line
+    naming a read; the API's malformed certificates, trapping max_iter and grids
+    refused by name), R11 (``--out X.GEOJSON`` accepted; ``--force`` refuses a
+    symlink to a folder we did not write), F12 (``word`` prints 0^inf), and
+    cases the round found held (a bad depth, a symlink to a file).  Left to
+    the helpers of issue 43 and issue 45 items 2, 5 (certify), 7: tampered
+    atlases (R1-R3), the checker's speed (R4, R5), cascade work (R6 cascades),
+    certify's memory estimate, Ctrl-C latency and progress (R7, R8, F13)."""
+    d = Path(tempfile.mkdtemp(dir=work))
+    windows = {"1e-14 square": ("0.05:0.05000000000001", "0.93:0.93000000000001"),
+               "1e-13 square": ("0.05:0.0500000000001", "0.93:0.9300000000001"),
+               "3e-15 square": ("0.05:0.050000000000003", "0.93:0.930000000000003"),
+               "1e-14 at the chatter window": ("0.33:0.33000000000001", "0.35:0.35000000000001"),
+               "whole plane at 24": ("0:1", "0:1.5")}
+    for name, (e, u) in windows.items():
+        out = d / f"{name.replace(' ', '_')}.geojson"
+        r = sb(["words", "--regions", "--e", e, "--u", u, "--size", "24x24", "--out", out], d)
+        c = subprocess.run([sys.executable, "-c", _R4_EXPORT, str(out)], capture_output=True, text=True) \
+            if r.returncode == 0 else r
+        line = next((x for x in c.stdout.splitlines() if x.startswith("EXPORT")), "EXPORT none")
+        parts = line.split()
+        t.case("round4", f"R6 words --regions {name}: strict JSON, valid polygons, overlap within the bound",
+               r.returncode == 0 and len(parts) == 5 and parts[2] == "0" and parts[3] == parts[4] == "True",
+               f"exit {r.returncode}: {line} {r.stderr[-200:]} {c.stderr[-200:]}")
+    r = sb(["certify", "--e", "0.04:0.065", "--u", "0.92:0.945", "--depth", "3", "--out", "a.nc"], d)
+    sb(["certify", "--e", "0.04:0.065", "--u", "0.92:0.945", "--depth", "3", "--out", "a.zarr"], d)
+    data = (d / "a.nc").read_bytes() if (d / "a.nc").exists() else b""
+    _r4_read_case(t, "missing.nc", sb(["certify", "--verify", "missing.nc"], d))
+    (d / "trunc.nc").write_bytes(data[: len(data) // 3])
+    _r4_read_case(t, "a truncated file", sb(["certify", "--verify", "trunc.nc"], d))
+    (d / "empty.nc").write_bytes(b"")
+    _r4_read_case(t, "an empty file", sb(["certify", "--verify", "empty.nc"], d))
+    (d / "png.nc").write_bytes(b"\x89PNG\r\n\x1a\n" + b"\0" * 64)
+    _r4_read_case(t, "a PNG named .nc", sb(["certify", "--verify", "png.nc"], d))
+    (d / "dir.nc").mkdir()
+    _r4_read_case(t, "a folder named .nc", sb(["certify", "--verify", "dir.nc"], d))
+    if (d / "a.zarr").is_dir():
+        shutil.copytree(d / "a.zarr", d / "store.nc")
+        _r4_read_case(t, "a Zarr store named .nc", sb(["certify", "--verify", "store.nc"], d))
+        shutil.copytree(d / "a.zarr", d / "g.zarr")
+        chunk = d / "g.zarr" / "e0" / "c" / "0"
+        b = bytearray(chunk.read_bytes())
+        b[5:20] = b"x" * 15
+        chunk.write_bytes(bytes(b))
+        _r4_read_case(t, "a garbled Zarr chunk", sb(["certify", "--verify", "g.zarr"], d))
+    b = bytearray(data)
+    for k in range(200, len(b), 97):
+        b[k] ^= 0xFF
+    (d / "flip.nc").write_bytes(bytes(b))
+    r = sb(["certify", "--verify", "flip.nc"], d)
+    t.case("round4", "R10 certify --verify a flipped file: one line naming a read, or rejected",
+           (r.returncode == 2 and one_line(r.stderr) and "cannot read" in r.stderr)
+           or (r.returncode == 1 and "rejected" in r.stdout), f"exit {r.returncode}: {r.stderr[-200:]}")
+    os.mkfifo(d / "fifo.nc")
+    try:
+        r = sb(["certify", "--verify", "fifo.nc"], d, timeout=60)
+        _r4_read_case(t, "a FIFO (refused, not waited on)", r)
+    except subprocess.TimeoutExpired:
+        t.case("round4", "R10 certify --verify a FIFO (refused, not waited on)", False, "still waiting after 60 s")
+    r = _py(_R4_API, work)
+    lines = r.stdout.splitlines()
+    for x in lines:
+        t.case("round4", f"R9 {x.split(' | ')[0].split(' ', 1)[1]}: refused by name", x.startswith("REFUSED"), x)
+    if not lines:
+        t.case("round4", "R9 API cases", False, r.stderr[-300:])
+    r = sb(["certify", "--e", "0.04:0.065", "--u", "0.92:0.945", "--depth", "2", "--out", "X.GEOJSON"], d)
+    t.case("round4", "R11 certify --out X.GEOJSON: one suffix rule with save", r.returncode == 0
+           and (d / "X.GEOJSON").is_file(), f"exit {r.returncode}: {r.stderr[-200:]}")
+    theirs = d / "theirs"
+    theirs.mkdir()
+    (theirs / "keep.txt").write_text("important")
+    (d / "link.zarr").symlink_to(theirs, target_is_directory=True)
+    r = sb(["certify", "--e", "0.04:0.065", "--u", "0.92:0.945", "--depth", "2", "--out", "link.zarr", "--force"], d)
+    t.case("round4", "R11 --force refuses a symlink to a folder stairbounce did not write",
+           r.returncode == 2 and one_line(r.stderr) and (d / "link.zarr").is_symlink()
+           and (theirs / "keep.txt").read_text() == "important", f"exit {r.returncode}: {r.stderr[-200:]}")
+    r = sb(["word", "--e", "0.05", "--u", "0.93"], d, env={**os.environ, "PYTHONIOENCODING": "utf-8",
+                                                          "LANG": "C.UTF-8", "LC_ALL": "C.UTF-8"})
+    t.case("round4", "F12 word prints 0^inf as every command does", r.returncode == 0 and "0^inf" in r.stdout
+           and "\u221e" not in r.stdout, r.stdout[-200:])
+    # held in the round: a bad depth refused in one line; a symlink to a file kept without --force
+    r = sb(["certify", "--depth", "27"], d)
+    t.case("round4", "held: certify --depth 27 refused in one line", r.returncode == 2 and one_line(r.stderr),
+           f"exit {r.returncode}: {r.stderr[-200:]}")
+    (d / "target.nc").write_bytes(b"theirs")
+    (d / "flink.nc").symlink_to(d / "target.nc")
+    r = sb(["certify", "--e", "0.04:0.065", "--u", "0.92:0.945", "--depth", "2", "--out", "flink.nc"], d)
+    t.case("round4", "held: a symlink to a file is not replaced without --force",
+           r.returncode == 2 and one_line(r.stderr) and (d / "target.nc").read_bytes() == b"theirs",
+           f"exit {r.returncode}: {r.stderr[-200:]}")
+
+
 PARTS = {
     "overwrite": part_overwrite,
     "unwritable": part_unwritable,
@@ -1123,6 +1287,7 @@ PARTS = {
     "round3a": part_round3a,
     "dask": part_dask,
     "round3b": part_round3b,
+    "round4": part_round4,
 }
 
 

@@ -22,7 +22,8 @@ device and inode (``flock`` on the folder): every name of it (a bind mount, a
 symlink, a hard link) is the same inode, so a second writer is refused
 whatever name it uses (report round 3, R11).
 
-Nothing here imports more than the standard library.
+Nothing here imports more than the standard library (but :func:`read_dataset`,
+which imports xarray when called).
 """
 
 from __future__ import annotations
@@ -49,6 +50,9 @@ __all__ = [
     "StoreLockedError",
     "StoreReplacedError",
     "clean_stale_temporaries",
+    "check_input",
+    "read_dataset",
+    "suffix_of",
 ]
 
 
@@ -229,6 +233,97 @@ def check_store_metadata(path, what="a scan"):
 
 
 # --------------------------------------------------------------------------- #
+# Names and inputs                                                            #
+# --------------------------------------------------------------------------- #
+
+
+def suffix_of(path, allowed, name="path"):
+    """suffix_of(path, allowed, name="path") -> str
+
+    The suffix of ``path`` among ``allowed`` (lower-case, with the dot), case
+    ignored (``X.GEOJSON`` is ``.geojson``; a trailing ``/`` of a store folder
+    ignored): the one rule of every writer and reader that picks its format by
+    the name, checked before any work.  ``ValueError`` naming ``name`` and the
+    suffixes allowed otherwise.
+    """
+    suffix = Path(str(path).rstrip("/") or str(path)).suffix.lower()
+    if suffix not in allowed:
+        choices = ", ".join(allowed[:-1]) + f" or {allowed[-1]}" if len(allowed) > 1 else allowed[0]
+        raise ValueError(f"{name} must end in {choices}, got {str(path)!r}")
+    return suffix
+
+
+def check_input(path, allowed, name="path"):
+    """check_input(path, allowed, name="path") -> str: the suffix
+
+    Refuse, before opening it, an input that cannot be read as its suffix
+    says (:func:`suffix_of`): a missing path, anything that is not a regular
+    file or a folder (a FIFO would block the reader forever, a device read
+    without end), a folder named as a file format (``.nc``) or a file named
+    as a store (``.zarr``).  ``ValueError`` naming the path and the reason.
+    """
+    import stat
+
+    suffix = suffix_of(path, allowed, name)
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as exc:
+        raise ValueError(f"cannot read {path}: {(exc.strerror or str(exc)).lower()}") from None
+    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        raise ValueError(f"cannot read {path}: not a regular file or a folder")
+    if suffix == ".zarr" and not stat.S_ISDIR(mode):
+        raise ValueError(f"cannot read {path}: a file, not a Zarr store (a folder)")
+    if suffix != ".zarr" and stat.S_ISDIR(mode):
+        raise ValueError(f"cannot read {path}: a folder, not a {suffix} file")
+    return suffix
+
+
+def checksum(path):
+    """checksum(path) -> str: the SHA-256 (hex) of a file, or of a folder's files
+    (each one's path relative to the folder, then its bytes, in sorted order)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    path = Path(path)
+    files = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
+    for f in files:
+        if f != path:
+            h.update(f.relative_to(path).as_posix().encode() + b"\0")
+        with open(f, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                h.update(block)
+    return h.hexdigest()
+
+
+def read_dataset(path, what, allowed=(".nc", ".zarr")):
+    """read_dataset(path, what, allowed=(".nc", ".zarr")) -> xarray.Dataset, loaded
+
+    Read a netCDF file or a Zarr store whole (checked first by
+    :func:`check_input`; a store's lost metadata by
+    :func:`check_store_metadata`), the file closed again.  Every failure of
+    the reading libraries (a truncated or flipped file, a garbled chunk,
+    another format under the name) is a ``ValueError`` "cannot read PATH as
+    WHAT: reason", one line: never "cannot write", never a traceback.
+    """
+    import xarray as xr
+
+    suffix = check_input(path, allowed)
+    if suffix == ".zarr":
+        check_store_metadata(path, what)
+    try:
+        if suffix == ".zarr":
+            with xr.open_zarr(path, consolidated=False) as f:
+                return f.load()
+        with xr.open_dataset(path, engine="netcdf4") as f:
+            return f.load()
+    except MemoryError:
+        raise
+    except Exception as exc:  # the libraries' own errors: OSError, RuntimeError (codecs), ValueError, KeyError
+        reason = " ".join(str(exc).split())[:300] or type(exc).__name__
+        raise ValueError(f"cannot read {path} as {what}: {reason}") from None
+
+
+# --------------------------------------------------------------------------- #
 # Checks before the work                                                      #
 # --------------------------------------------------------------------------- #
 
@@ -273,12 +368,13 @@ def check_output(path, overwrite=False, option=None):
     if not folder.is_dir():
         raise ValueError(f"cannot write {where}{path}: folder {folder} does not exist")
     if os.path.lexists(path):
-        if path.is_dir() and not path.is_symlink():
-            if not is_our_output(path):
-                raise OutputExistsError(
-                    f"{where}{path} is an existing folder that stairbounce did not write: "
-                    "it is never replaced; choose another path"
-                )
+        if path.is_dir() and not is_our_output(os.path.realpath(path)):
+            # a folder, or a symlink to one, that is not one of our stores
+            link = " (a symlink to a folder)" if path.is_symlink() else ""
+            raise OutputExistsError(
+                f"{where}{path} is an existing folder{link} that stairbounce did not write: "
+                "it is never replaced; choose another path"
+            )
         if path.is_dir():  # a store, or a symlink to one: its writer's lock (resolved)
             holder = lock_holder(path)
             if holder is not None:

@@ -26,7 +26,7 @@ from ._app import (
 
 _DATA_SUFFIXES = (".nc", ".csv")
 _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
-E_HELP = "Window along e, MIN:MAX: the image edges, within [0, 1]; default 0:1."
+E_HELP = "Window along e, MIN:MAX: the image edges, within [0, 1]; default 0:1, Fig. 4's window."
 U_HELP = "Window along u, MIN:MAX (normalised): the image edges, MIN >= 0. Or --speed with --step-height, --step-length."
 SPEED_HELP = "Window along the ball's horizontal speed in m/s, MIN:MAX (instead of --u)."
 
@@ -91,7 +91,7 @@ def _figure(png, dpi, force, draw):
 @app.command("borders", short_help="Borders between pixels located to rounding, by event.")
 def borders_(
     e: str = typer.Option(None, "--e", help=E_HELP),
-    u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5."),
+    u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5, Fig. 4's window."),
     speed: str = st.speed_option(SPEED_HELP),
     step_height: float = st.step_height_option(),
     step_length: float = st.step_length_option(),
@@ -139,7 +139,7 @@ def borders_(
 @app.command("words", short_help="The distinct words of a window and N(p), or regions.")
 def words_(
     e: str = typer.Option(None, "--e", help=E_HELP),
-    u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5."),
+    u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5, Fig. 4's window."),
     speed: str = st.speed_option(SPEED_HELP),
     step_height: float = st.step_height_option(),
     step_length: float = st.step_length_option(),

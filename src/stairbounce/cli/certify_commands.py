@@ -10,7 +10,6 @@ import typer
 
 from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, save_figure, with_row_progress
 
-_OUT_SUFFIXES = (".nc", ".zarr", ".geojson")
 _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
 
@@ -51,28 +50,38 @@ def _verify(path: Path) -> None:
 
 
 def _picture(atlas, png: Path, dpi: int, force: bool) -> None:
-    """Proven boxes coloured by their word's period, no_sliding grey, undecided by reason."""
+    """Proven boxes coloured by their word's length in the scans' colours (one
+    colour bar), no_sliding by Corollary 2.1 and by a trapping region apart,
+    undecided boxes by reason; the window and the proven share in the title."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
-    from matplotlib.colors import ListedColormap
+    from matplotlib.colors import BoundaryNorm, ListedColormap, to_rgba
     from matplotlib.patches import Patch
 
+    from .._colours import KIND_COLOURS
+    from ..plot.plane import class_bounds, color_key
     from ..structure import _kernel as K
     from ..symbolic import parse_word
 
     b = atlas.boxes
     n = 1 << min(atlas.depth, 11)
     shift = atlas.depth - min(atlas.depth, 11)
-    img = np.zeros((n, n), np.float64)
+    img = np.ones((n, n, 4))
     lv = b["level"].values.astype(np.int64)
     st = b["status"].values
-    reasons = list(atlas.fraction("reason"))
-    periods = {w: parse_word(w).period for w in np.unique(b["word"].values[st == K.WORD])}
-    # codes: 1 no_sliding, 2 no_slide_within, 3.. undecided by reason, 10+ words by period (log)
-    pmax = max(periods.values(), default=1)
+    rs = b["reason"].values
+    reasons = [r for r, v in atlas.fraction("reason").items() if v > 0]
+    key = color_key("word_length")
+    bounds = class_bounds("word_length")
+    lengths = {w: len(parse_word(w)) for w in np.unique(b["word"].values[st == K.WORD])}
+    # fixed colours outside the word-length palette: Corollary 2.1 grey, trapping blue-grey,
+    # no slide within dark grey, the border events as the borders picture and the explorer
+    # colour them (violet, pink, dark green), nonsliding white
+    fixed = {"cor": "#808080", "trap": "#7f9fcf", "within": "#404040", **KIND_COLOURS,
+             "impacts": "#8b4513", "nonsliding": "#ffffff", "range": "#f0e68c"}
     for k in range(b.sizes["box"]):
         L = lv[k]
         if L <= atlas.depth - shift:
@@ -84,32 +93,38 @@ def _picture(atlas, png: Path, dpi: int, force: bool) -> None:
             i0, j0 = int(b["i"].values[k]) >> g, int(b["j"].values[k]) >> g
             i1, j1 = i0 + 1, j0 + 1
         if st[k] == K.WORD:
-            code = 10 + 10 * np.log(periods[b["word"].values[k]]) / np.log(max(pmax, 2))
-        elif st[k] == K.UNDECIDED:
-            code = 3 + reasons.index(str(b["reason"].values[k]))
+            c = key.colors[int(np.searchsorted(bounds, lengths[b["word"].values[k]], side="right")) - 1]
+        elif st[k] == K.NO_SLIDING:
+            c = fixed["trap" if rs[k] == "trapping" else "cor"]
+        elif st[k] == K.NO_SLIDE_WITHIN:
+            c = fixed["within"]
         else:
-            code = st[k]
-        img[j0:j1, i0:i1] = code
-    # reasons (graze, edge, chatter, impacts, nonsliding, range): warm colours, white for
-    # the non-sliding motion; words: viridis without its yellow end
-    fixed = ["#808080", "#505050", "#ff69b4", "#ff8c00", "#dc143c", "#8b4513", "#ffffff", "#000000"]
-    words_cm = plt.get_cmap("viridis", 64)
-    colours = ["#000000"] + fixed + ["#000000"] + [words_cm(0.8 * i / 63) for i in range(64)]
-    levels = np.concatenate([[0, 1, 2], 3 + np.arange(len(reasons)), [9], 10 + np.arange(64) * 10 / 63])
-    idx = np.searchsorted(levels, img, side="right") - 1
-    fig, ax = plt.subplots(figsize=(8, 6.5))
+            c = fixed.get(str(rs[k]), "#ffffff")
+        img[j0:j1, i0:i1] = to_rgba(c)
+    fig, ax = plt.subplots(figsize=(8.5, 6.5))
     (e0, e1), (u0, u1) = atlas.window
-    ax.imshow(idx, origin="lower", extent=(e0, e1, u0, u1), aspect="auto", interpolation="nearest",
-              cmap=ListedColormap(colours), vmin=-0.5, vmax=len(colours) - 0.5)
-    handles = [Patch(color=fixed[0], label="no sliding (Cor. 2.1)"), Patch(color=fixed[1], label="no slide within max_iter")]
-    handles += [Patch(color=fixed[2 + i], label=f"undecided: {r}") for i, r in enumerate(reasons)
-                if atlas.fraction("reason")[r] > 0]
-    handles += [Patch(color=words_cm(0.0), label="proven word, short period"),
-                Patch(color=words_cm(0.8), label=f"proven word, period {pmax}")]
+    ax.imshow(img, origin="lower", extent=(e0, e1, u0, u1), aspect="auto", interpolation="nearest")
+    f = atlas.fraction()
+    trapped = (st == K.NO_SLIDING) & (rs == "trapping")
+    handles = [Patch(color=fixed["cor"], label="no sliding (Cor. 2.1)")] if ((st == K.NO_SLIDING) & ~trapped).any() \
+        else []
+    if trapped.any():
+        handles.append(Patch(color=fixed["trap"], label="no sliding (trapping region: never slides)"))
+    if (st == K.NO_SLIDE_WITHIN).any():
+        handles.append(Patch(color=fixed["within"], label="no slide within max_iter"))
+    handles += [Patch(facecolor=fixed.get(r, "#ffffff"), edgecolor="0.6", label=f"undecided: {r}")
+                for r in reasons if r != "trapping"]
     ax.legend(handles=handles, fontsize=7, loc="upper right")
-    ax.set_xlabel("e")
-    ax.set_ylabel("u")
-    ax.set_title(f"certified atlas, depth {atlas.depth}")
+    sm = plt.cm.ScalarMappable(cmap=ListedColormap(key.colors),
+                               norm=BoundaryNorm(np.arange(len(key.colors) + 1) - 0.5, len(key.colors)))
+    bar = fig.colorbar(sm, ax=ax, ticks=key.ticks)
+    bar.ax.set_yticklabels([key.labels[i] for i in key.ticks], fontsize=7)
+    bar.set_label("proven word's length (the scans' colours)")
+    ax.set_xlabel("e (restitution coefficient)")
+    ax.set_ylabel("u (normalised horizontal speed)")
+    proven = 1.0 - f["undecided"]
+    ax.set_title(f"certified atlas, e {e0:g}..{e1:g} x u {u0:g}..{u1:g}, depth {atlas.depth}: "
+                 f"proven {100 * proven:.1f}% of the window (word {100 * f['word']:.1f}%)", fontsize=9)
     fig.tight_layout()
     save_figure(fig, png, dpi, force)
 
@@ -122,8 +137,8 @@ def certify_(
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps followed before 'no slide within' (>= 1)."),
     out: Path = typer.Option(None, "--out", help="The atlas: .nc or .zarr (every box, its itinerary), "
                              ".geojson (proven boxes merged per word)."),
-    png: Path = typer.Option(None, "--png", help="Picture (.png, .pdf or .svg): proven words by period, "
-                             "undecided boxes by reason."),
+    png: Path = typer.Option(None, "--png", help="Picture (.png, .pdf or .svg): proven words by length (the scans' "
+                             "colours), trapping apart, undecided boxes by reason."),
     dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
     top: int = typer.Option(10, "--top", help="Proven words listed in the summary (largest proven area first)."),
     trap: bool = typer.Option(False, "--trap", help="Try a trapping region on every undecided 'nonsliding' box: "
@@ -136,21 +151,30 @@ def certify_(
     """Cover a window of the (e, u) plane with boxes on which interval arithmetic proves
     the periodic sliding solution's word, or no sliding (Corollary 2.1), or leaves the
     box undecided with its reason; print the proven area by status, the proven words and
-    the undecided area by reason."""
+    the undecided area by reason.
+
+    Reasons of undecided boxes: graze (the first impact lands on the step at some points
+    of the box, flies over at others), edge (a later impact, likewise), chatter (the
+    slide test (2.4) differs across the box), impacts (over 4096 impacts on one step),
+    nonsliding (every decision proven, but the float map does not slide within
+    --max-iter: numerical; --trap tries to prove it), range (the box touches e = 0,
+    e = 1 or u = 0).  A box is the binary floats of the typed decimals; see
+    docs/citing.md for citing a proven box."""
     import time
 
+    from .._io import suffix_of
     from ..structure.certificate import STATUSES
-    from ..structure.certify import certify
+    from ..structure.certify import ATLAS_SUFFIXES, certify
 
     if verify is not None:
         _verify(verify)
         return
     e_lo, e_hi = parse_range("e", e)
     u_lo, u_hi = parse_range("u", u)
-    if out is not None and out.suffix.lower() not in _OUT_SUFFIXES:
-        raise CLIError(f"--out must end in .nc, .zarr or .geojson, got {str(out)!r}")
-    if png is not None and png.suffix.lower() not in _FIGURE_SUFFIXES:
-        raise CLIError(f"--png must end in .png, .pdf or .svg, got {str(png)!r}")
+    if out is not None:
+        suffix_of(out, ATLAS_SUFFIXES, "--out")   # the rule of CertifiedAtlas.save, before the work
+    if png is not None:
+        suffix_of(png, _FIGURE_SUFFIXES, "--png")
     if top < 0:
         raise CLIError(f"--top must be >= 0, got {top}")
     check_dpi(dpi)

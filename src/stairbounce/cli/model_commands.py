@@ -31,6 +31,8 @@ def word(
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps to iterate before giving up (>= 1)."),
     max_steps: int = typer.Option(None, "--max-steps", hidden=True,
                                   help="The old name of --max-iter (deprecated)."),
+    unicode: bool = typer.Option(False, "--unicode", help="Write the tail 0^∞ (where the terminal can "
+                                 "print it) instead of 0^inf, the spelling of every command."),
 ):
     """Print the word of the periodic sliding solution through (1, 0), its period and impacts."""
     max_iter = renamed_option("--max-steps", max_steps, "--max-iter", max_iter, 1000)
@@ -45,7 +47,7 @@ def word(
         typer.echo(f"e = {e:g}, u = {u:g}: {answer.text()}")
         typer.echo(_basis(answer))
         return
-    text = w.format(ascii=not terminal_can_print_infinity())
+    text = w.format(ascii=not (unicode and terminal_can_print_infinity()))
     typer.echo(f"e = {e:g}, u = {u:g}")
     typer.echo(f"word:    {text}")
     typer.echo(f"length:  {len(w)}")

@@ -42,11 +42,11 @@ _CLI_BYTES_PER_PIXEL = 140
 def scan_(
     e: str = typer.Option(
         None, "--e",
-        help="Window along e, MIN:MAX: the image edges, within [0, 1] (pixel centres lie inside, < 1); default 0:1.",
+        help="Window along e, MIN:MAX: the image edges, within [0, 1] (pixel centres lie inside, < 1); default 0:1, Fig. 4's window.",
     ),
     u: str = typer.Option(
         None, "--u",
-        help="Window along u, MIN:MAX: the image edges, MIN >= 0 (pixel centres lie inside, > 0); default 0:1.5.",
+        help="Window along u, MIN:MAX: the image edges, MIN >= 0 (pixel centres lie inside, > 0); default 0:1.5, Fig. 4's window.",
     ),
     speed: str = st.speed_option(
         "Window along the ball's speed in m/s, MIN:MAX (with --step-height and --step-length; instead "

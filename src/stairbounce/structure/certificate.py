@@ -107,19 +107,82 @@ class Certificate:
 
     @classmethod
     def from_dict(cls, d: dict) -> Certificate:
-        """The certificate of :meth:`to_dict` (nothing is re-checked: see the checker)."""
+        """The certificate of :meth:`to_dict` (nothing is re-checked: see the
+        checker).  ``ValueError`` naming the member that is missing or not of
+        its form (``e``, ``u``: two numbers; ``max_iter``: an integer;
+        ``status``: text; ``itinerary``: integers; ``margins``: pairs)."""
         from ..symbolic import Word
 
+        if not isinstance(d, dict):
+            raise ValueError(f"a certificate dict is needed, got {type(d).__name__}")
+        missing = [k for k in ("e", "u", "max_iter", "status") if k not in d]
+        if missing:
+            raise ValueError(f"certificate dict lacks {', '.join(missing)} (needs e, u, max_iter, status)")
+        try:
+            word = None if d.get("word") is None else Word(tuple(d["word"]))
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"certificate word must be a list of impact counts, got {d['word']!r} ({exc})") from None
         return cls(
-            e=(float(d["e"][0]), float(d["e"][1])), u=(float(d["u"][0]), float(d["u"][1])),
-            max_iter=int(d["max_iter"]), status=str(d["status"]),
-            word=None if d.get("word") is None else Word(tuple(d["word"])),
-            reason=d.get("reason"), step=d.get("step"),
-            itinerary=tuple(int(k) for k in d.get("itinerary", ())),
+            e=_pair("e", d["e"]), u=_pair("u", d["u"]),
+            max_iter=_integer("max_iter", d["max_iter"]), status=_text("status", d["status"]),
+            word=word, reason=d.get("reason"), step=d.get("step"),
+            itinerary=_integers("itinerary", d.get("itinerary", ())),
             decisions=tuple(d.get("decisions", ())),
-            margins=np.array(d.get("margins", []), dtype=np.float64).reshape(-1, 2),
+            margins=_margins(d.get("margins", [])),
             region=_region(d.get("region")),
         )
+
+
+def _pair(name, v):
+    """``(lo, hi)``: two numbers (not text), or ValueError naming ``name``."""
+    try:
+        if isinstance(v, (str, bytes)) or len(v) != 2:
+            raise TypeError
+        lo, hi = (float(x) for x in v)
+    except (TypeError, ValueError):
+        raise ValueError(f"certificate {name} must be a pair (lo, hi) of numbers, got {v!r}") from None
+    return (lo, hi)
+
+
+def _integer(name, v):
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)):
+        raise ValueError(f"certificate {name} must be an integer, got {v!r}")
+    return int(v)
+
+
+def _text(name, v):
+    if not isinstance(v, str):
+        raise ValueError(f"certificate {name} must be text, got {v!r}")
+    return v
+
+
+def _integers(name, v):
+    try:
+        a = np.asarray(v)
+        if a.ndim != 1 or (a.size and a.dtype.kind not in "iu"):
+            raise TypeError
+    except (TypeError, ValueError):
+        raise ValueError(f"certificate {name} must be a list of integers, got {str(v)[:80]}") from None
+    return tuple(int(k) for k in a)
+
+
+def _margins(v):
+    try:
+        return np.array(v, dtype=np.float64).reshape(-1, 2)
+    except (TypeError, ValueError):
+        raise ValueError(f"certificate margins must be pairs (lo, hi) of numbers, got {str(v)[:80]}") from None
+
+
+def check_certificate_fields(cert) -> None:
+    """check_certificate_fields(cert) -> None: ``ValueError`` naming the field of
+    ``cert`` that is not of its form (``e``, ``u`` two numbers, ``max_iter`` an
+    integer, ``status`` text): what the checker needs before it can judge the
+    claim (a claim of the right form but false is a rejected verdict, not an
+    error)."""
+    _pair("e", cert.e)
+    _pair("u", cert.u)
+    _integer("max_iter", cert.max_iter)
+    _text("status", cert.status)
 
 
 def _region(d):
@@ -323,22 +386,8 @@ def decode_atlas(ds):
 def read_atlas_file(path):
     """read_atlas_file(path) -> xarray.Dataset: the table of an atlas file (``.nc`` or
     ``.zarr``) read into memory as stored (:func:`decode_atlas` decodes it); a path of
-    another kind, or a file that cannot be read, refused with ValueError."""
-    from pathlib import Path
+    another kind, something that is not a regular file or a folder, or a file that
+    cannot be read, refused with a one-line ValueError (:func:`stairbounce._io.read_dataset`)."""
+    from .._io import read_dataset
 
-    import xarray as xr
-
-    s = str(path).rstrip("/")
-    if not (s.endswith(".nc") or s.endswith(".zarr")):
-        raise ValueError(f"path must be an atlas file ending in .nc or .zarr, got {str(path)!r}")
-    if not (Path(s).is_dir() if s.endswith(".zarr") else Path(s).is_file()):
-        what = "a directory" if s.endswith(".zarr") else "a regular file"
-        raise ValueError(f"cannot read a certified atlas from {path}: not {what}")
-    try:
-        if s.endswith(".zarr"):
-            with xr.open_zarr(s, consolidated=False) as f:
-                return f.load()
-        with xr.open_dataset(s, engine="netcdf4") as f:
-            return f.load()
-    except (OSError, KeyError, ValueError, RuntimeError, TypeError) as exc:  # RuntimeError: a garbled chunk
-        raise ValueError(f"cannot read a certified atlas from {path}: {exc}") from None
+    return read_dataset(path, "a certified atlas")

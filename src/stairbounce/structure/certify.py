@@ -35,6 +35,56 @@ centre, so the box is taken for non-sliding motion and not split further) and
 the open range 0 < e < 1, u > 0 of a certified box; it is split down to the last
 level like a border)."""
 
+def _check_atlas_variables(ds, path):
+    """ValueError naming the variables and attributes a loaded atlas lacks (the text
+    columns as ``word`` or ``word_code``, ``reason`` or ``reason_code``)."""
+    need = ["e0", "e1", "u0", "u1", "status", "level", "i", "j", "offsets", "itinerary"]
+    missing = [k for k in need if k not in ds.variables]
+    missing += [k for k in ("word", "reason") if k not in ds.variables and f"{k}_code" not in ds.variables]
+    missing += [k for k in ("e_range", "u_range", "depth", "max_iter", "form") if k not in ds.attrs]
+    if missing:
+        raise ValueError(f"{path} is not a whole certified atlas: it lacks {', '.join(missing)}")
+
+
+# CF attributes of the saved atlas's variables (long_name, units; status as CF flags)
+_CF = {
+    "e0": ("restitution coefficient e at the box's lower edge (a binary float)", "1"),
+    "e1": ("restitution coefficient e at the box's upper edge (a binary float)", "1"),
+    "u0": ("normalised horizontal speed u at the box's lower edge (a binary float)", "1"),
+    "u1": ("normalised horizontal speed u at the box's upper edge (a binary float)", "1"),
+    "status": ("what is proven over the box", None),
+    "word": ("the proven word of the periodic sliding solution through (1, 0) (status word)", None),
+    "word_code": ("index into the attribute word_names of the proven word (status word)", None),
+    "reason": ("why the box is undecided, or 'trapping' (no_sliding by a trapping region)", None),
+    "reason_code": ("index into the attribute reason_names", None),
+    "step": ("the step (1-based) of the undecided decision, 0 where decided", "1"),
+    "level": ("quadtree level of the box (its side is the window's / 2^level)", "1"),
+    "i": ("column of the box in its level's grid (along e)", "1"),
+    "j": ("row of the box in its level's grid (along u)", "1"),
+    "offsets": ("box b's itinerary is itinerary[offsets[b]:offsets[b + 1]]", "1"),
+    "itinerary": ("impact numbers of the decided steps, every box's in turn (-1: the slide)", "1"),
+}
+
+
+def _with_cf_attributes(ds):
+    """``ds`` with CF attributes on its variables (:data:`_CF`): ``long_name``,
+    ``units`` ("1": dimensionless), and for ``status`` ``flag_values`` /
+    ``flag_meanings`` (the codes of STATUSES)."""
+    ds = ds.copy()
+    for name, (long_name, units) in _CF.items():
+        if name in ds.variables:
+            ds[name].attrs["long_name"] = long_name
+            if units is not None:
+                ds[name].attrs["units"] = units
+    if "status" in ds.variables and ds["status"].dtype.kind in "iu":
+        ds["status"].attrs["flag_values"] = np.arange(len(STATUSES), dtype=np.int8)
+        ds["status"].attrs["flag_meanings"] = " ".join(STATUSES)
+    ds.attrs.setdefault("Conventions", "CF-1.10")
+    return ds
+
+
+# what CertifiedAtlas.save writes, picked by the path's suffix (case ignored: _io.suffix_of)
+ATLAS_SUFFIXES = (".nc", ".zarr", ".geojson")
 FORMS = ("corners", "mean-value", "naive")
 """The enclosures a box can be certified with (the first is the default;
 :func:`certify_box`)."""
@@ -882,24 +932,24 @@ class CertifiedAtlas:
         (:func:`stairbounce._io.atomic_path`)."""
         import json
 
-        from .._io import atomic_path
+        from .._io import atomic_path, check_output, suffix_of
 
-        s = str(path).rstrip("/")
-        if s.endswith(".geojson"):
-            text = json.dumps(self.geojson())
+        suffix = suffix_of(path, ATLAS_SUFFIXES)   # case ignored: the CLI's rule, checked first
+        check_output(path, overwrite)
+        if suffix == ".geojson":
+            text = json.dumps(self.geojson(), allow_nan=False)
             with atomic_path(path, overwrite=overwrite) as tmp:
                 tmp.write_text(text)
             return
-        if not (s.endswith(".nc") or s.endswith(".zarr")):
-            raise ValueError(f"path must end in .nc, .zarr or .geojson, got {str(path)!r}")
-        ds = self.boxes.copy()
+        ds = _with_cf_attributes(self.boxes)
         ds.attrs = {k: (list(v) if isinstance(v, tuple) else v) for k, v in ds.attrs.items()}
         with atomic_path(path, overwrite=overwrite) as tmp:
-            if s.endswith(".zarr"):
+            if suffix == ".zarr":
                 # Zarr v3 specifies no string type: each text column as codes into a list kept in attrs
                 for k in ("word", "reason"):
                     names, codes = np.unique(ds[k].values, return_inverse=True)
                     ds = ds.drop_vars(k).assign({f"{k}_code": ("box", codes.astype(np.int32))})
+                    ds[f"{k}_code"].attrs["long_name"] = _CF[f"{k}_code"][0]
                     ds.attrs[f"{k}_names"] = [str(x) for x in names]
                 ds.to_zarr(tmp, mode="w", consolidated=False)
             else:
@@ -914,39 +964,97 @@ class CertifiedAtlas:
         ds = read_atlas_file(path)
         if ds.attrs.get("kind") != "stairbounce certified atlas":
             raise ValueError(f"{path} is not a certified atlas written by stairbounce")
+        _check_atlas_variables(ds, path)
         ds = decode_atlas(ds)
         for k in ("e_range", "u_range"):
             ds.attrs[k] = [float(x) for x in np.atleast_1d(ds.attrs[k])]
-        return cls(ds)
+        atlas = cls(ds)
+        from .._io import checksum
+
+        atlas._source = (str(path), checksum(path))   # named by the geojson view
+        return atlas
 
     def geojson(self):
-        """geojson() -> dict: a GeoJSON FeatureCollection in (e, u) coordinates:
-        the proven boxes merged per word (valid polygons, by shapely's union),
-        and those proven ``no_sliding`` and ``no_slide_within``, one feature each."""
+        """geojson() -> dict: a GeoJSON FeatureCollection (RFC 7946) in (e, u)
+        coordinates: the proven boxes merged per word (valid polygons, by
+        shapely's union, outer rings counter-clockwise and holes clockwise),
+        and one feature each for ``no_sliding`` by Corollary 2.1 (``reason``
+        null), ``no_sliding`` by a trapping region (``reason`` "trapping": the
+        orbit of (1, 0) never slides there, a different theorem) and
+        ``no_slide_within``; the undecided boxes are not drawn, their area
+        (and by reason) is in the metadata.
+
+        The top-level member ``metadata`` (a foreign member, as in the regions
+        file): ``generator`` and ``version``, the window, depth, max_iter,
+        ``proven`` (what each feature states), the area proven and undecided
+        (``undecided_area``, ``undecided_by_reason``: float sums,
+        numerical), and ``verify``: this file is a view, not a certificate
+        (it holds no itineraries); for an atlas read by :meth:`load` it names
+        that ``source`` file and its SHA-256 ``source_sha256`` and says how to
+        re-verify it (``stairbounce certify --verify SOURCE``).
+        """
         from shapely.geometry import box as shp_box
         from shapely.geometry import mapping
+        from shapely.geometry.polygon import orient
         from shapely.ops import unary_union
+
+        from .._version import __version__
 
         ds = self.boxes
         st = ds["status"].values
         words = ds["word"].values
+        trapped = ds["reason"].values == "trapping"
         cols = [ds[k].values for k in ("e0", "u0", "e1", "u1")]
         area = _area(ds)
-        groups = [(str(w), (st == K.WORD) & (words == w)) for w in np.unique(words[st == K.WORD])]
-        groups += [(name, st == code) for name, code in (("no_sliding", K.NO_SLIDING),
-                                                          ("no_slide_within", K.NO_SLIDE_WITHIN))]
+        groups = [(str(w), "word", None, (st == K.WORD) & (words == w)) for w in np.unique(words[st == K.WORD])]
+        groups += [(None, "no_sliding", None, (st == K.NO_SLIDING) & ~trapped),
+                   (None, "no_sliding", "trapping", (st == K.NO_SLIDING) & trapped),
+                   (None, "no_slide_within", None, st == K.NO_SLIDE_WITHIN)]
         features = []
-        for name, sel in groups:
+        for word, status, reason, sel in groups:
             idx = np.flatnonzero(sel)
             if not idx.size:
                 continue
             geom = unary_union([shp_box(cols[0][b], cols[1][b], cols[2][b], cols[3][b]) for b in idx])
-            props = {"status": name if name in STATUSES else "word",
-                     "word": None if name in STATUSES else name, "boxes": int(idx.size),
+            parts = [orient(p, 1.0) for p in getattr(geom, "geoms", [geom])]
+            geom = parts[0] if len(parts) == 1 else type(geom)(parts)
+            props = {"status": status, "word": word, "reason": reason, "boxes": int(idx.size),
                      "area": float(area[idx].sum())}
             features.append({"type": "Feature", "geometry": mapping(geom), "properties": props})
         (e_lo, e_hi), (u_lo, u_hi) = self.window
-        return {"type": "FeatureCollection", "features": features,
+        window_area = self._window_area()
+        und = st == K.UNDECIDED
+        reasons = {str(r): float(area[und & (ds["reason"].values == r)].sum())
+                   for r in np.unique(ds["reason"].values[und])}
+        source = getattr(self, "_source", None)
+        meta = {
+            "generator": f"stairbounce {__version__} CertifiedAtlas.geojson",
+            "version": __version__,
+            "coordinates": "[e, u]: restitution coefficient and normalised horizontal speed "
+                           "(not longitude and latitude; a GIS reads them as EPSG:4326 degrees: "
+                           "ignore its areas' units)",
+            "window": {"e": [e_lo, e_hi], "u": [u_lo, u_hi]}, "window_area": window_area,
+            "depth": self.depth, "max_iter": self.max_iter,
+            "proven": {
+                "word": "every point of the box has the periodic sliding solution through (1, 0) "
+                        "with this word (interval arithmetic)",
+                "no_sliding": "no periodic sliding solution at any point (Corollary 2.1 over the box)",
+                "no_sliding, reason trapping": "the orbit of (1, 0) never slides (a trapping region), "
+                                               "so no periodic sliding solution",
+                "no_slide_within": "the orbit of (1, 0) does not slide within max_iter steps",
+            },
+            "proven_area": float(area[~und].sum()),
+            "undecided_area": float(area[und].sum()),
+            "undecided_by_reason": reasons,
+            "areas": "float sums of the boxes' areas (numerical)",
+            "verify": ("a view, not a certificate: it holds no itineraries and cannot be re-verified; "
+                       + (f"re-verify its source with: stairbounce certify --verify {source[0]}"
+                          if source else "save the atlas as .nc or .zarr and re-verify that file with "
+                                         "stairbounce certify --verify FILE")),
+            "source": source[0] if source else None,
+            "source_sha256": source[1] if source else None,
+        }
+        return {"type": "FeatureCollection", "metadata": meta, "features": features,
                 "properties": {"e": [e_lo, e_hi], "u": [u_lo, u_hi], "depth": self.depth,
                                "max_iter": self.max_iter, "coordinates": "(e, u)"}}
 

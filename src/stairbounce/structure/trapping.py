@@ -346,6 +346,10 @@ def trapping_region(e, u, max_iter=1000):
     e0, e1 = _check_e(e)
     u0, u1 = _check_u(u)
     max_iter = check_count("max_iter", max_iter, 1)
+    from .. import _validate
+
+    # refuses by name a max_iter whose entry record (8 bytes a step) cannot fit
+    _validate.check_memory(f"max_iter = {max_iter}", 8 * max_iter)
     return _try(e0, e1, u0, u1, max_iter)[0]
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..symbolic import Word, parse_word, word_from_impacts
-from .certificate import ATLAS_REASONS, STATUSES, Certificate, decode_atlas, read_atlas_file
+from .certificate import ATLAS_REASONS, STATUSES, Certificate, check_certificate_fields, decode_atlas, read_atlas_file
 from .tiling import AreaBook, tiling
 from .verify import _BRANCHES, _COR, _ITIN, _OK, _TRAP, _WORD, _WORD_S, CHECKS, verify_codes
 from .verify_branches import check_atlas_branches
@@ -361,6 +361,7 @@ def verify(obj):
     (:class:`Verdict`'s ``numbers``, of the covered part when they do not).
     """
     if isinstance(obj, Certificate):
+        check_certificate_fields(obj)
         return _verify_certificate(obj)
     if isinstance(obj, (str, Path)):
         return _verify_dataset(read_atlas_file(obj))

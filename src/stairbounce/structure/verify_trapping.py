@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import _validate as _v
 from .verify import (_OUTWARD, _add, _coefficients, _div_pos, _mul_pos, _out, _point, _sqrt, _sub,
                      verify_codes)
 
@@ -111,6 +112,9 @@ def verify_region(e0, e1, u0, u1, max_iter, itinerary, grid, cells):
     code, _ = verify_codes([e0], [e1], [u0], [u1], ["undecided"], max_iter, itinerary, [0, len(itinerary)])
     if code[0] != 0:
         return "entry"
+    # the cell flags and their two-dimensional prefix sums: 24 bytes a cell, refused by
+    # name before they are made (a grid of 1e9 x 1e9 cells in a file is no MemoryError)
+    _v.check_memory(f"the trapping region's grid of {nv} x {ns} cells", 24 * (nv + 1) * (ns + 1))
     ev, es = _edges(float(v_lo), float(v_hi), nv), _edges(float(s_lo), float(s_hi), ns)
     flags = np.zeros(nv * ns, np.int64)
     flags[cells] = 1
