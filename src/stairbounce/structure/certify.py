@@ -1009,7 +1009,8 @@ class CertifiedAtlas:
         groups = [(str(w), "word", None, (st == K.WORD) & (words == w)) for w in np.unique(words[st == K.WORD])]
         groups += [(None, "no_sliding", None, (st == K.NO_SLIDING) & ~trapped),
                    (None, "no_sliding", "trapping", (st == K.NO_SLIDING) & trapped),
-                   (None, "no_slide_within", None, st == K.NO_SLIDE_WITHIN)]
+                   (None, "no_slide_within", None, st == K.NO_SLIDE_WITHIN),
+                   (None, "sliding", None, st == _SLIDING_STATUS)]
         features = []
         for word, status, reason, sel in groups:
             idx = np.flatnonzero(sel)
@@ -1022,7 +1023,8 @@ class CertifiedAtlas:
                      "area": float(area[idx].sum())}
             features.append({"type": "Feature", "geometry": mapping(geom), "properties": props})
         (e_lo, e_hi), (u_lo, u_hi) = self.window
-        window_area = self._window_area()
+        window_area = float((e_hi - e_lo) * (u_hi - u_lo))
+        book = self._book()
         und = st == K.UNDECIDED
         reasons = {str(r): float(area[und & (ds["reason"].values == r)].sum())
                    for r in np.unique(ds["reason"].values[und])}
@@ -1042,11 +1044,19 @@ class CertifiedAtlas:
                 "no_sliding, reason trapping": "the orbit of (1, 0) never slides (a trapping region), "
                                                "so no periodic sliding solution",
                 "no_slide_within": "the orbit of (1, 0) does not slide within max_iter steps",
+                "sliding": "every point of the box has a periodic sliding solution through (1, 0), "
+                           "its word one of a list (a class-level proof, certify(classes=True))",
             },
             "proven_area": float(area[~und].sum()),
             "undecided_area": float(area[und].sum()),
             "undecided_by_reason": reasons,
-            "areas": "float sums of the boxes' areas (numerical)",
+            "areas": "window_area, proven_area, undecided_area and the features' areas: float sums "
+                     "of the boxes' areas (numerical); proven bounds [lower, upper], sums of the boxes' "
+                     "exact areas rounded outward, in window_area_bounds, proven_area_bounds and "
+                     "undecided_area_bounds",
+            "window_area_bounds": list(book.window),
+            "proven_area_bounds": list(book.area(~und)),
+            "undecided_area_bounds": list(book.area(und)),
             "verify": ("a view, not a certificate: it holds no itineraries and cannot be re-verified; "
                        + (f"re-verify its source with: stairbounce certify --verify {source[0]}"
                           if source else "save the atlas as .nc or .zarr and re-verify that file with "
