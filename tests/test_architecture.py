@@ -11,9 +11,10 @@ import pytest
 CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "dimension", "atlas",
         "atlas_boxes", "nonsliding", "borders", "regions", "_region_export", "_colours", "_io", "_interrupt",
         "_cache", "structure", "structure.certify", "structure.verify", "structure.labels", "structure.tubes",
-        "structure.itinerary", "structure.words", "structure.borders", "structure.bifurcations",
+        "structure.itinerary", "structure.words", "structure.slices", "structure.borders", "structure.bifurcations",
         "structure.checks", "structure.continuation", "structure.regions", "structure.trace", "structure.graph",
-        "structure.export", "cascades", "cascade_families"]
+        "structure.export", "cascades", "cascades.patterns", "cascades.search", "cascades.laws",
+        "cascades.members", "cascades.families", "cascades.farey"]
 FORBIDDEN = ["matplotlib", "typer", "rich", "bokeh", "panel", "dask", "distributed"]
 
 
@@ -77,3 +78,101 @@ def test_cli_modules_import_each_other_one_way():
             if node not in seen:
                 seen.add(node)
                 todo.extend(graph.get(node, ()))
+
+
+def _module_name(path):
+    parts = list(path.relative_to(SRC.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _import_graph():
+    """The package's import graph read from the code (ast): ``{module: {imported
+    module: [line, ...]}}`` over every stairbounce module, counting imports at
+    module level and inside functions alike (a function's late import is an
+    arrow all the same: it only hides the circle from the import system).
+    ``from .x import name`` points at the submodule ``x.name`` when there is
+    one, else at ``x``."""
+    modules = {_module_name(p): p for p in SRC.rglob("*.py")}
+    graph = {}
+    for name, path in modules.items():
+        package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
+        out = graph.setdefault(name, {})
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names if a.name.split(".")[0] == "stairbounce"]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = ".".join(package[: len(package) - (node.level - 1)] + ([node.module] if node.module else []))
+                elif (node.module or "").split(".")[0] == "stairbounce":
+                    base = node.module
+                else:
+                    continue
+                targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base for a in node.names]
+            else:
+                continue
+            for target in targets:
+                while target not in modules and "." in target:
+                    target = target.rsplit(".", 1)[0]
+                if target in modules and target != name:
+                    out.setdefault(target, []).append(node.lineno)
+    return graph
+
+
+def _circles(graph):
+    """The strongly connected components of more than one module (Tarjan)."""
+    index, low, stack, on, found = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = set()
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.add(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                found.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_the_circle_finder_finds_a_circle_and_only_circles():
+    graph = {"a": {"b": [1]}, "b": {"c": [2]}, "c": {"a": [3]}, "d": {"a": [4]}, "e": {}}
+    assert _circles(graph) == [["a", "b", "c"]]
+    del graph["c"]["a"]
+    assert _circles(graph) == []
+    real = _import_graph()
+    # the graph is read from the code: the figures' registry imports the recipes
+    assert "stairbounce.figures.plane" in real["stairbounce.figures.recipes"]
+    assert "stairbounce.structure.slices" in real["stairbounce.structure.regions"]
+
+
+def test_no_import_circles():
+    """Issue 46, item 4: the modules' imports form layers, at module level and
+    inside functions: no two modules import each other, directly or round a
+    longer circle.  Each circle found is printed with the imports that make it
+    (file:line)."""
+    graph = _import_graph()
+    circles = _circles(graph)
+    lines = []
+    for comp in circles:
+        lines.append(" <-> ".join(comp) + ":")
+        for a in comp:
+            for b in comp:
+                if b in graph[a]:
+                    where = a.replace(".", "/").removeprefix("stairbounce/")
+                    lines.append(f"    {where}.py line {', '.join(map(str, sorted(set(graph[a][b]))))} imports {b}")
+    assert not circles, f"{len(circles)} import circles:\n" + "\n".join(lines)

@@ -657,14 +657,16 @@ def test_explorer_border_overlay_is_the_library_points():
 def test_figures_borders_option_draws_the_exact_borders(tmp_path, monkeypatch):
     from stairbounce import figures as F
 
+    from ._figures import patch_figures
+
     figs = {}
-    real = F._save
+    real = F.settings._save
 
     def keep(fig, settings, name):
         figs[name] = fig
         return real(fig, settings, name)
 
-    monkeypatch.setattr(F, "_save", keep)
+    patch_figures(monkeypatch, "_save", keep)
     settings = F.Settings(out=tmp_path, scale=0.1, dpi=30, borders=True)
     (res,) = F.make_figures(settings, only=["fig5e"])
     assert res.error is None and "located to rounding" in res.caption

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 import stairbounce as sb
-from stairbounce.cascades import _parse_pattern, word_impacts
+from stairbounce.cascades.patterns import _parse_pattern, word_impacts
 from stairbounce.cli import main
 from stairbounce.model import SLIDING
 from stairbounce.symbolic import word_from_impacts
@@ -343,7 +343,8 @@ def test_member_count_follows_the_measured_law_where_it_differs_from_one_over_2e
 # Issue 39, items 3-5: windows, the Farey test, counts against e, centres      #
 # --------------------------------------------------------------------------- #
 
-from stairbounce.cascade_families import _increment, _level2  # noqa: E402
+from stairbounce.cascades.families import _level2  # noqa: E402
+from stairbounce.cascades.farey import _increment  # noqa: E402
 
 
 def test_families_of_families_are_grouped_by_one_free_count():
@@ -447,3 +448,257 @@ def test_a_members_tip_is_a_corner_of_its_region():
     assert math.hypot(oc.e[0] - e4, oc.u[0] - m.lo) < 1e-9
     with pytest.raises(ValueError, match="top"):
         sb.organising_centres((0.11, 0.14), (0.585, 0.61), regions=[region], top=0)
+
+
+# --------------------------------------------------------------------------- #
+# Issue 46, item 4: the cascades as a package, its modules in layers           #
+# --------------------------------------------------------------------------- #
+
+CASCADE_LAYERS = ["patterns", "search", "laws", "members", "families", "farey"]
+
+
+def test_the_cascade_modules_import_only_those_above_them():
+    """Every relative import inside stairbounce/cascades/ (at any depth, late imports in
+    functions included) names a module of an earlier layer: no circle, and the old
+    cascades.py <-> cascade_families.py circle cannot come back."""
+    import ast
+    from pathlib import Path
+
+    root = Path(sb.__file__).parent / "cascades"
+    assert sorted(p.stem for p in root.glob("*.py")) == sorted(CASCADE_LAYERS + ["__init__"])
+    for i, stem in enumerate(CASCADE_LAYERS):
+        for node in ast.walk(ast.parse((root / f"{stem}.py").read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level == 1:
+                assert node.module in CASCADE_LAYERS[:i], f"cascades/{stem}.py imports .{node.module}"
+    assert not (root.parent / "cascade_families.py").exists() and not (root.parent / "cascades.py").exists()
+
+
+# --------------------------------------------------------------------------- #
+# Issue 45, item 2: cascade work bounded, estimated before it starts           #
+# --------------------------------------------------------------------------- #
+
+
+class _TookTooLong(Exception):
+    pass
+
+
+def _within(seconds, fn):
+    """``fn()`` under an alarm: the old code ran these for minutes (round 4, R6);
+    the refusals come from an estimate made before any search, in milliseconds."""
+    import signal
+
+    def alarm(*_):
+        raise _TookTooLong(f"still running after {seconds} s")
+
+    old = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        return fn()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
+@pytest.mark.parametrize("pattern, letters", [
+    ("(" + "1^999999, " * 90 + "2^k, 0^inf)", 89999911),  # 900 characters, 9e7 letters (round 4)
+    ("(1^600000, 1^600000, 2^k, 0^inf)", 1200001),  # each item under the cap, the pattern over it
+    ("((1^600000, 1^600000), 2^k, 0^inf)", 1200000),  # a nested group over it
+])
+def test_the_letter_cap_is_on_the_whole_pattern(pattern, letters):
+    with pytest.raises(ValueError, match=rf"pattern must write at most 1000000 letters in all.*got {letters}"):
+        _within(10, lambda: sb.cascade(pattern, e=E, u=U_RANGE))
+
+
+def test_a_pattern_at_the_letter_cap_is_read():
+    pat = _parse_pattern("(1^999999, 1^k, 0^inf)")  # 999999 letters and the block: 10^6
+    assert len(pat.prefix) == 999999 and pat.block == (1,)
+
+
+@pytest.mark.parametrize("call, names", [
+    (lambda: sb.cascade("((1^999)^999, 2^k, 0^inf)", e=E, u=U_RANGE), "k_max = 100"),
+    (lambda: sb.member_count("((1^999)^999, 2^k, 0^inf)", E, U_RANGE), "k_max = 200"),
+    (lambda: sb.member_count("(((1^99)^99)^99, 2^k, 0^inf)", E, U_RANGE), "k_max = 200"),
+    (lambda: sb.member_count("(1^k, 0^inf)", (0.01, 0.05), U_RANGE, k_max=100, n=100000), "n = 100000"),
+    (lambda: sb.member_count("(1^k, 0^inf)", (0.01, 0.05), U_RANGE, k_max=10**5, n=10**5), "k_max = 100000"),
+    (lambda: sb.cascade("(9999999^k, 0^inf)", e=E, u=U_RANGE), "k_max = 100"),  # one letter, 1e7 steps
+])
+def test_work_above_the_limit_is_refused_before_it_starts(call, names):
+    with pytest.raises(ValueError) as exc:
+        _within(10, call)
+    msg = str(exc.value)
+    assert names in msg and "more than the limit 3e+07" in msg
+
+
+def test_the_work_limit_of_a_cascade_is_the_k_max_it_names():
+    """The refusal names the largest k_max within the limit; that k_max is accepted
+    (the cascade ends long before, at k = 25), one more is not."""
+    with pytest.raises(ValueError, match=r"lower k_max \(at most (\d+) here\)") as exc:
+        sb.cascade("(1^k, 0^inf)", e=E, u=U_RANGE, k_max=10**6)
+    k = int(exc.value.args[0].split("at most ")[1].split(" ")[0])
+    # the estimate: 3 searches of every member (k steps for member k) and of 4 k_max limit steps
+    assert 3 * (k * (k + 1) // 2 + 4 * k) <= 3 * 10**7 < 3 * ((k + 1) * (k + 2) // 2 + 4 * (k + 1))
+    assert sb.cascade("(1^k, 0^inf)", e=E, u=U_RANGE, k_max=k).last == 25
+    with pytest.raises(ValueError, match=f"k_max = {k + 1}"):
+        sb.cascade("(1^k, 0^inf)", e=E, u=U_RANGE, k_max=k + 1)
+
+
+def test_cli_refuses_a_count_over_the_limit_in_one_line(capsys):
+    code, out, err = _within(10, lambda: _run(["cascade", "(1^k, 0^inf)", "--count", "--e", "0.01:0.05",
+                                                "--u", "0.6:0.75", "--n", "100000"], capsys))
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "n = 100000" in err and "limit" in err
+
+
+@pytest.mark.parametrize("pattern", ["(\u0661^k, 0^inf)", "(\uff11^k, 0^inf)", "(1^\u0663, 2^k, 0^inf)",
+                                     "(1^k, \u0660^inf)"])
+def test_digits_other_than_ascii_are_refused(pattern):
+    with pytest.raises(ValueError, match="cannot read"):
+        sb.cascade(pattern, e=E, u=U_RANGE)
+
+
+def test_families_of_a_long_word_are_split_in_linear_time():
+    """A word of 10^5 letters (round 4: past 120 s, the runs were counted before the
+    block was tested) is split at once; one word is no family (min_members 4)."""
+    df = _within(20, lambda: sb.cascades(E, U_RANGE, words=["(" + "1, " * 100000 + "0^inf)"]))
+    assert len(df) == 0
+
+
+def test_words_whose_decompositions_would_copy_too_much_are_refused():
+    # 5000 runs 1, 1 in a word of 15000 letters: 5001 decompositions of 15000 letters each
+    word = "(" + "1, 1, 0, " * 5000 + "1, 0^inf)"
+    with pytest.raises(ValueError, match=r"words: .* more than the limit 5e\+07"):
+        _within(10, lambda: sb.cascades(E, U_RANGE, words=[word]))
+
+
+def test_candidate_families_over_the_work_limit_are_refused_before_any_search():
+    # four members of (P, 1^k, 0^inf) with a prefix of 60000 letters (150000 steps): 3 searches of
+    # 100 members, 4.5e7 steps
+    prefix = "2, 3, " * 30000
+    words = [f"({prefix}" + "1, " * m + "0^inf)" for m in (2, 3, 4, 5)]
+    with pytest.raises(ValueError, match=r"candidate families with k_max = 100.*more than the limit"):
+        _within(10, lambda: sb.cascades(E, U_RANGE, words=words))
+
+
+# --------------------------------------------------------------------------- #
+# Issue 43, item 4: asymptotic laws, intervals that cover the known truths     #
+# --------------------------------------------------------------------------- #
+
+
+@pytest.mark.parametrize("k_lo, k_hi", [(5, 12), (20, 59), (53, 60), (93, 100)])
+def test_the_asymptotic_exponent_of_a_parabolic_accumulation_covers_2(k_lo, k_hi):
+    """g(x) = x / (1 - x): widths 1/((k+1)(k+2)) exactly (closed form, the escape
+    members located by bisection); the local exponents are 2 - 1/k + ..., every one
+    below 2 (the old interval was their range: 1.983 [1.982, 1.984] on 53..60)."""
+    ks = np.arange(k_lo, k_hi + 1)
+    lo, w = _escape_members(lambda x: x / (1.0 - x), 0.5, ks)
+    law = sb.cascade_law(ks, w, lo, tail=ks.size)
+    assert law.kind == "algebraic"
+    assert law.exponent_local[1] < 2  # the finite-k values exclude the truth ...
+    assert law.exponent_interval[0] <= 2 <= law.exponent_interval[1]  # ... the extrapolation covers it
+    assert law.exponent_interval[1] - law.exponent_interval[0] < (0.1 if k_lo < 20 else 0.01)
+    # the positions 1/(k+2) accumulate on 0
+    assert law.limit_interval[0] <= 0 <= law.limit_interval[1]
+
+
+@pytest.mark.parametrize("r, a", [(0.6, 0.5), (0.3, -2.0), (0.9, 1.0)])
+def test_the_asymptotic_ratio_of_a_geometric_law_with_corrections_covers_it(r, a):
+    # w_k = r^k (1 + a/k): local ratios r (1 + a/(k+1)) / (1 + a/k) -> r like 1/k^2
+    ks = np.arange(5, 13).astype(float)
+    w = r**ks * (1 + a / ks)
+    law = sb.cascade_law(ks, w, 1 - np.cumsum(w), tail=ks.size)
+    assert law.kind == "geometric"
+    assert not law.ratio_local[0] <= r <= law.ratio_local[1]
+    assert law.ratio_interval[0] <= r <= law.ratio_interval[1]
+    # the positions 1 - sum w accumulate on 1 - sum over all k (closed form: a geometric tail
+    # and a / k r^k summed, -log(1 - r) a)
+    tail = r**5 / (1 - r) + a * (-math.log(1 - r) - sum(r**j / j for j in range(1, 5)))
+    assert law.limit_interval[0] <= 1 - tail <= law.limit_interval[1]
+
+
+def test_the_geometric_map_ratio_is_covered():
+    lam = 1.7
+    ks = np.arange(3, 25)
+    lo, w = _escape_members(lambda x: lam * x, 1.0, ks)
+    law = sb.cascade_law(ks, w, lo)
+    assert law.ratio_interval[0] <= 1 / lam <= law.ratio_interval[1]
+    assert law.ratio_interval[1] - law.ratio_interval[0] < 1e-6
+
+
+@pytest.mark.parametrize("law_k", [None, (5, 12), (10, 20)])
+def test_the_extrapolated_limit_of_ones_contains_u1(law_k):
+    """(1^k, 0^inf) at e = 0.02 accumulates on the neutral one-impact family
+    u_1 = sqrt((1 - e) / (2 (1 + e))) (sb.one_impact_family: the orbit landing once per
+    step forever, the limit itinerary 1, 1, 1, ...; the enclosure, exact to rounding,
+    contains it, and cascade names it).  The old interval [0.69310377, 0.69310426]
+    (default law_k) excluded it."""
+    c = sb.cascade("(1^k, 0^inf)", e=E, u=U_RANGE, law_k=law_k)
+    u1 = sb.one_impact_family(1, E)
+    assert u1 == pytest.approx(math.sqrt((1 - E) / (2 * (1 + E))), rel=1e-15)
+    lo, hi, _ = c.limit_enclosure
+    assert lo <= u1 <= hi and c.limit_name.startswith("neutral one-impact family u_1")
+    a, b = c.law.limit_interval
+    assert a <= u1 <= b and b - a < 2e-7
+    assert not (min(c.law.limit_local, a) <= u1 <= max(c.law.limit_local, a) and c.law.limit_local == a)
+
+
+def test_the_text_names_the_extrapolation_and_the_enclosure():
+    c = sb.cascade("(1^k, 0^inf)", e=E, u=U_RANGE)
+    text = c.text()
+    assert "accumulation (extrapolation, numerical, not an enclosure" in text
+    assert "accumulation (enclosure to rounding, numerical" in text
+    law = sb.cascade_law(np.arange(53, 61), 1.0 / (np.arange(53, 61) * np.arange(54, 62.0)))
+    lo, hi = law.exponent_interval
+    assert lo <= 2 <= hi
+    assert f"exponent -> {law.exponent:.6g} in [{lo:.6g}, {hi:.6g}] (extrapolated to k -> inf, numerical)" in law.text()
+    assert "local exponents [1.98" in law.text()
+
+
+# --------------------------------------------------------------------------- #
+# Issue 43, item 4: the members proven (cascade --prove, Cascade.prove)        #
+# --------------------------------------------------------------------------- #
+
+
+def test_prove_proves_each_member_on_a_segment_inside_its_float_interval():
+    c = sb.cascade("(1^k, 0^inf)", e=E, u=U_RANGE, k_max=8)
+    proofs = c.prove()
+    assert proofs.k.tolist() == c.members.k.tolist() and proofs.proven.all()
+    for p, m in zip(proofs.itertuples(), c.members.itertuples()):
+        assert m.lo <= p.lo < p.hi <= m.hi and 0.8 <= p.share <= 1.0
+        assert p.share == pytest.approx((p.hi - p.lo) / m.width)
+        # the proven segment's own certificate, and the float map inside it, give the word
+        cert = sb.certify_box(e=(E, E), u=(p.lo, p.hi), max_iter=m.period + 1)
+        assert cert.status == "word" and cert.word == sb.parse_word(m.word)
+        assert sb.sliding_word(E, 0.5 * (p.lo + p.hi)) == sb.parse_word(m.word)
+
+
+def test_prove_says_when_a_member_is_not_proven():
+    c = sb.cascade("(1^k, 0^inf)", e=E, u=U_RANGE, k_max=6)
+    proofs = c.prove(ks=[5, 6], max_iter=2)  # periods 5 and 6: two steps decide nothing
+    assert proofs.k.tolist() == [5, 6] and not proofs.proven.any()
+    assert (proofs.status == "no_slide_within").all() and proofs.lo.isna().all() and (proofs.share == 0).all()
+
+
+def test_cli_prove_lists_the_proven_members(tmp_path, capsys):
+    code, out, err = _run(["cascade", "(1^k, 0^inf)", "--e", "0.02", "--u", "0.6:0.75", "--k-max", "6",
+                           "--prove", "--out", str(tmp_path / "c.csv")], capsys)
+    assert code == 0, err
+    assert "basis: numerical, to rounding" in out
+    assert "proven members (basis: proven, sb.certify_box" in out
+    assert "6 of 6 member(s) proven" in out
+    csv = pd.read_csv(tmp_path / "c.csv")
+    assert csv.proven.all() and (csv.proven_lo >= csv.lo).all() and (csv.proven_hi <= csv.hi).all()
+
+
+@pytest.mark.parametrize("k_max", [100, 200])
+def test_an_infinite_family_accumulating_on_u1_has_both_truths_covered(k_max):
+    """(1^k, 2, 0^inf) at e = 0.02 continues up to k_max; its widths are C/k^2 to leading
+    order and it accumulates on u_1 (the limit itinerary 1, 1, 1, ...; named by cascade
+    from the enclosure).  Eight members at k ~ 200 alone span too little of 1/k: their
+    extrapolation excluded 2 and u_1 before it used the members from k_max/2 on."""
+    c = sb.cascade("(1^k, 2, 0^inf)", e=E, u=U_RANGE, k_max=k_max)
+    assert c.last == k_max and c.law.kind == "algebraic"
+    lo, hi = c.law.exponent_interval
+    assert lo <= 2 <= hi and hi - lo < 1e-3
+    u1 = sb.one_impact_family(1, E)
+    a, b = c.law.limit_interval
+    assert a <= u1 <= b and c.limit_enclosure[0] <= a <= b <= c.limit_enclosure[1]
+    assert "u_1" in c.limit_name

@@ -515,7 +515,7 @@ def test_colour_key_says_what_white_means(explorer):
 
 
 def test_every_colour_variable_is_offered():
-    from stairbounce.explorer.app import _COLOR_OPTIONS, _OVERLAY_OPTIONS
+    from stairbounce.explorer.controls import _COLOR_OPTIONS, _OVERLAY_OPTIONS
 
     assert sorted(_COLOR_OPTIONS.values()) == sorted(V.COLOR_VARS)
     assert sorted(_OVERLAY_OPTIONS.values()) == sorted(V.OVERLAYS)
@@ -713,6 +713,7 @@ def test_render_sends_a_preview_only_when_the_render_takes_time(monkeypatch):
     repaint); a longer one sends the coarse pass first.  The final picture is
     the same either way."""
     from stairbounce.explorer import app as A
+    from stairbounce.explorer import scan_layer
 
     view = V.View(0.3, 0.4, 0.3, 0.45, 200, 200, max_iter=3000)  # 1.2e8 steps: over one slice
 
@@ -726,9 +727,9 @@ def test_render_sends_a_preview_only_when_the_render_takes_time(monkeypatch):
                 return previews, stop.value
             previews.append((fraction, None if rgba is None else rgba.shape))
 
-    monkeypatch.setattr(A, "_PREVIEW_AFTER", 1e9)
+    monkeypatch.setattr(scan_layer, "_PREVIEW_AFTER", 1e9)
     never, (ds1, rgba1, _) = run()
-    monkeypatch.setattr(A, "_PREVIEW_AFTER", 0.0)
+    monkeypatch.setattr(scan_layer, "_PREVIEW_AFTER", 0.0)
     at_once, (ds2, rgba2, _) = run()
     assert len(never) >= 1 and all(shape is None for _, shape in never)
     assert at_once[0][1] is not None and at_once[0][0] < 1  # the coarse pass, shown first
@@ -1184,16 +1185,16 @@ def test_exact_borders_overlay_shows_the_views_border_points(explorer):
     from stairbounce.plot.borders import KIND_COLORS
 
     app, _ = explorer
-    assert "borders" not in app.view.overlays and app.border_src.data["e"] == []
+    assert "borders" not in app.view.overlays and app.borders.border_src.data["e"] == []
     app.overlays.value = ["borders"]
-    data = app.border_src.data
+    data = app.borders.border_src.data
     ref = V.border_overlay(app.view)
     assert len(data["e"]) > 10 and data["e"] == ref["e"] and data["word_high"] == ref["word_high"]
     assert data["color"] == [KIND_COLORS[k] for k in ref["kind"]]
     assert [i.label.value for i in app.legend.items] == [_OVERLAY_LEGEND()["borders"]]
     assert "overlays=borders" in app.history_out.text
     app.overlays.value = []
-    assert app.border_src.data["e"] == []
+    assert app.borders.border_src.data["e"] == []
 
 
 def _row_of(tab, text):
@@ -1251,7 +1252,7 @@ def test_tap_reports_the_words_row_of_the_views_word_table(explorer, monkeypatch
     assert f"graze {ref['graze']}, edge {ref['edge']}, chatter {ref['chatter']}" in app.point_pane.object
     app._word_table = None
     app.overlays.value = ["borders"]
-    assert app._borders[0] == (V.border_grid(app.view), 300)
+    assert app.borders.points[0] == (V.border_grid(app.view), 300)
     app._on_tap(SimpleNamespace(x=0.05, y=0.8))
     assert f"graze {ref['graze']}, edge {ref['edge']}, chatter {ref['chatter']}" in app.point_pane.object
     # a point that does not slide within max_iter: no row
@@ -1305,10 +1306,11 @@ def test_a_quick_run_of_zooms_is_one_history_entry(explorer, monkeypatch):
     loaded machine; those within GESTURE_MERGE_S of each other are one
     gesture, one history entry, so Back returns to the start view."""
     import stairbounce.explorer.app as A
+    from stairbounce.explorer import controls
 
     app, ex = explorer
     clock = [100.0]
-    monkeypatch.setattr(A.time, "monotonic", lambda: clock[0])
+    monkeypatch.setattr(controls.time, "monotonic", lambda: clock[0])
     modes = []
     for k in range(6):  # notches 0.2 s apart
         clock[0] += 0.2
@@ -1316,6 +1318,6 @@ def test_a_quick_run_of_zooms_is_one_history_entry(explorer, monkeypatch):
         modes.append(app.history_out.text.split(" ")[0])
     assert modes == ["push"] + ["replace"] * 5
     assert app.history_out.text.startswith("replace ?e=0.12:0.28&")
-    clock[0] += A.GESTURE_MERGE_S + 0.01  # a later zoom is a gesture of its own
+    clock[0] += controls.GESTURE_MERGE_S + 0.01  # a later zoom is a gesture of its own
     app._on_ranges(SimpleNamespace(x0=0.15, x1=0.25, y0=0.3, y1=1.1))
     assert app.history_out.text.startswith("push ?e=0.15:0.25&")

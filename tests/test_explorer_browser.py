@@ -683,31 +683,62 @@ def test_traced_borders_mode_draws_the_arcs(server, page):
 
 
 def test_proven_overlay_draws_the_certified_atlas_and_its_key(server, page):
-    """Issue 36 item 8: the "proven" overlay, turned on in the Fig. 7 window,
-    draws the certified atlas's boxes (the page's Bokeh model, read in the
-    browser: as many quads as the status line counts boxes, proven words and
-    hatched undecided ones), shows its key saying that undecided areas are
-    numerical, and puts the mode in the URL."""
+    """Issue 36 item 8, issue 46 item 2: the "proven" overlay, turned on in the
+    Fig. 7 window, draws the certified atlas as one picture (the page's Bokeh
+    model, read in the browser: an RGBA image at the view's pixels whose hover
+    labels name proven words and hatched undecided reasons, and the map's
+    canvas shows the hatch colours), shows its key saying that undecided areas
+    are numerical, and puts the mode in the URL.  A tap on a box shows its
+    certificate and changes no pixel of the overlay away from the tap's marker
+    (no selection fade)."""
     page.goto(server.url + "?e=0.155:0.2138&u=0.6:0.658&size=128x128&max_iter=300&overlays=none")
     _wait_rendered(page)
+    before = np.asarray(Image.open(io.BytesIO(_map_canvas(page).screenshot())).convert("RGB"))
     page.locator(".sb-overlays input").nth(4).check()
     line = page.locator(".sb-status .sb-proven").get_by_text("certified in")
     line.wait_for(timeout=60_000)
-    n = int(re.search(r"proven overlay: (\d+) boxes to depth 6", line.inner_text()).group(1))
+    assert re.search(r"proven overlay: (\d+) boxes to depth 6", line.inner_text())
     assert _query(page)["overlays"] == "proven"
-    boxes = page.evaluate(
+    drawn = page.evaluate(
         """() => {
             for (const doc of Bokeh.documents) {
-              const m = doc.get_model_by_name('sb-proven-boxes');
+              const m = doc.get_model_by_name('sb-proven-image');
               if (m == null) continue;
               const d = m.data instanceof Map ? Object.fromEntries(m.data) : m.data;
-              return {n: d.left.length, hatch: Array.from(d.hatch), what: Array.from(d.what)};
+              if (!d.image.length) return {n: 0};
+              const codes = new Set(d.code[0]);
+              return {n: d.image[0].length, codes: codes.size, shape: d.image[0].shape ?? null};
             }
             return null;
         }"""
     )
-    assert boxes is not None and boxes["n"] == n > 100
-    assert any(w.startswith("proven word") for w in boxes["what"]) and "/" in boxes["hatch"]
+    assert drawn is not None and drawn["n"] == 128 * 128 and drawn["codes"] > 3
     key = page.locator(".sb-proven-key").get_by_text("Undecided areas are numerical")
     key.wait_for(timeout=10_000)
-    page.screenshot(path=str(ARTIFACTS / "explorer-proven.png"))
+    page.wait_for_timeout(500)
+    shot = _map_canvas(page).screenshot(path=str(ARTIFACTS / "explorer-proven.png"))
+    on = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB"))
+    # the graze hatch (violet) is on the map now and was not before
+    violet = np.array([0x80, 0x00, 0xFF])
+    assert (np.abs(on.astype(int) - violet).sum(axis=2) < 40).sum() > 20
+    assert (np.abs(before.astype(int) - violet).sum(axis=2) < 40).sum() == 0
+    # a tap: the certificate line, and the overlay's pixels unchanged away from the marker
+    box, frame = _map_canvas(page).bounding_box(), _frame_box(page)
+    x = box["x"] + frame["left"] + 0.43 * frame["width"]
+    y = box["y"] + frame["top"] + 0.66 * frame["height"]
+    page.mouse.click(x, y)
+    page.locator(".sb-cert").get_by_text("certified atlas").wait_for(timeout=60_000)
+    page.mouse.move(box["x"] + 2, box["y"] + 2)  # no hover tooltip over the map
+    page.wait_for_timeout(500)
+    after = np.asarray(Image.open(io.BytesIO(_map_canvas(page).screenshot(
+        path=str(ARTIFACTS / "explorer-proven-tapped.png")))).convert("RGB"))
+    assert after.shape == on.shape
+    # inside the plot frame (the canvas's own border takes the keyboard focus's outline)
+    f0, f1 = int(frame["top"]) + 1, int(frame["top"] + frame["height"]) - 1
+    g0, g1 = int(frame["left"]) + 1, int(frame["left"] + frame["width"]) - 1
+    changed = np.argwhere(np.abs(after[f0:f1, g0:g1].astype(int) - on[f0:f1, g0:g1].astype(int)).sum(axis=2) > 30)
+    changed += [f0, g0]
+    far = np.hypot(changed[:, 1] - (x - box["x"]), changed[:, 0] - (y - box["y"])) > 12
+    assert not far.any(), (f"{far.sum()} pixels changed away from the tap's marker, rows "
+                           f"{changed[far, 0].min()}-{changed[far, 0].max()}, columns {changed[far, 1].min()}-"
+                           f"{changed[far, 1].max()} of {after.shape}; tap at {x - box['x']:.0f}, {y - box['y']:.0f}")

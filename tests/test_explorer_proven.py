@@ -95,44 +95,79 @@ def _explorer(view=VIEW):
     return app, sched
 
 
+def _image(app):
+    """The proven overlay's picture as the page has it: (rgba, code, names)."""
+    d = app.proven.src.data
+    return d["image"][0], d["code"][0], app.proven.names.args["names"]
+
+
 def test_overlay_draws_the_atlas_in_the_scan_s_colours_with_its_key():
     app, sched = _explorer()
     sched.run_all()
-    atlas = app._proven[1]
-    d = app.proven_src.data
-    assert len(d["left"]) == atlas.boxes.sizes["box"] > 100
+    atlas = app.proven.done[1]
+    rgba, code, names = _image(app)
+    assert rgba.shape == code.shape == (VIEW.height, VIEW.width)
+    assert atlas.boxes.sizes["box"] > 100 and (code >= 0).all()  # the atlas covers the view
     assert "proven overlay:" in app.status.object and "undecided (numerical)" in app.status.object
-    note = app.proven_note.object
-    assert app.proven_note.visible and "Undecided areas are numerical" in note
+    note = app.proven.note.object
+    assert app.proven.note.visible and "Undecided areas are numerical" in note
     assert f"depth {P.proven_depth(VIEW)}" in note and f"at least {P.MIN_BOX_PX} pixels" in note
-    # every pixel centre inside a proven word box has the scan's colour of the box's fill, in every
-    # colouring the overlay follows
-    es, us = app.ds.e.values, app.ds.u.values
-    labels = np.array(d["what"])
+    # every pixel of a proven word box has the scan's colour of that pixel, in every colouring the
+    # overlay follows (the picture is at the view's pixels: pixel (i, j) is the scan's pixel (i, j))
     for var in ("word_length", "period", "status"):
         app.color.value = var
-        d = app.proven_src.data
-        rgba = V.shade(app.ds, var)
-        checked = 0
-        for b in np.flatnonzero(np.char.startswith(labels.astype(str), "proven word")):
-            cols = np.flatnonzero((es > d["left"][b]) & (es < d["right"][b]))
-            rows = np.flatnonzero((us > d["bottom"][b]) & (us < d["top"][b]))
-            if cols.size and rows.size:
-                want = V._rgba32((d["fill"][b],))[0]
-                assert np.all(rgba[np.ix_(rows, cols)] == want), (var, labels[b])
-                checked += rows.size * cols.size
-        assert checked > 200
-    # undecided boxes hatched by reason; the proven non-sliding ones marked
-    kinds = {w.split(": ")[-1] for w in labels if w.startswith("undecided")}
-    assert kinds and kinds <= set(P.STYLES)
-    for w, h in zip(labels, d["hatch"]):
-        key = w.split(": ")[-1] if w.startswith("undecided") else w.split()[1] if w.startswith("proven ") else w
-        key = "word" if w.startswith("proven word") else key
-        assert h == P.STYLES[key][2]
+        rgba, code, names = _image(app)
+        word = np.isin(code, [k for k, w in enumerate(names) if w.startswith("proven word")])
+        assert word.sum() > 200
+        assert np.array_equal(rgba[word], V.shade(app.ds, var)[word]), var
+    # the proven word at each word pixel is the float map's word at its centre, on a sample
+    es, us = app.ds.e.values, app.ds.u.values
+    rows, cols = np.nonzero(word)
+    for k in np.linspace(0, rows.size - 1, 12).astype(int):
+        i, j = rows[k], cols[k]
+        assert names[code[i, j]] == "proven word " + sb.sliding_word(es[j], us[i], VIEW.max_iter).format(ascii=True)
+    # undecided boxes: translucent white with their reason's hatch on top (the map shows through);
+    # every label's pixels carry their style
+    labels = {w: (w.split(": ")[-1] if w.startswith("undecided") else "word" if w.startswith("proven word")
+                  else w.split()[1]) for w in names}
+    assert {k for k in labels.values() if k in ("graze", "edge", "chatter", "nonsliding")}
+    for k, w in enumerate(names):
+        fill, alpha, hatch, hcol, _ = P.STYLES[labels[w]]
+        px = rgba[code == k]
+        hatched = px == V._rgba32((hcol,))[0]
+        if hatch != " ":
+            assert hatched.any() and (~hatched).any(), w
+            assert np.all(px[~hatched] >> 24 == round(255 * alpha)), w
+        if fill is not None:
+            assert np.all(px[~hatched] & 0xFFFFFF == V._rgba32((fill,))[0] & 0xFFFFFF), w
     # off: nothing drawn, no key, no job left
     app.overlays.value = []
-    assert app.proven_src.data["left"] == [] and not app.proven_note.visible
+    assert app.proven.src.data["image"] == [] and not app.proven.note.visible
     assert "proven overlay" not in app.status.object
+
+
+def test_the_picture_s_boxes_meet_without_gaps_and_hatching_runs_on():
+    """proven_image: each box paints exactly the pixels whose centres it
+    contains, a box of any size (the boxes of a quadtree meet on shared
+    edges), and a hatch is the same lattice in every box (it runs on across
+    neighbouring boxes of one reason)."""
+    app, sched = _explorer()
+    sched.run_all()
+    atlas = app.proven.done[1]
+    pic = P.proven_image(atlas, 50, 37)
+    ds = atlas.boxes
+    (e0, e1), (u0, u1) = atlas.window
+    ce = e0 + (np.arange(50) + 0.5) * (e1 - e0) / 50
+    cu = u0 + (np.arange(37) + 0.5) * (u1 - u0) / 37
+    quads = P.proven_overlay(atlas)
+    for b in range(0, ds.sizes["box"], 7):
+        inside = np.outer((cu > ds["u0"].values[b]) & (cu < ds["u1"].values[b]),
+                          (ce > ds["e0"].values[b]) & (ce < ds["e1"].values[b]))
+        assert np.all(np.asarray(pic["names"])[pic["code"][inside]] == quads["what"][b])
+    masks = P._hatch_masks(37, 50)
+    assert masks["/"][0, 0] and masks["/"][1, 1] and not masks["/"][1, 0]  # rises to the right, row 0 at the bottom
+    with pytest.raises(ValueError, match="width and height"):
+        P.proven_image(atlas, 0, 10)
 
 
 def test_tap_shows_the_certificate_of_the_box_or_why_it_is_undecided():
@@ -141,7 +176,7 @@ def test_tap_shows_the_certificate_of_the_box_or_why_it_is_undecided():
     sched.run_all()
     e, u = app.view.point
     text = app.point_pane.object
-    c = P.proven_at(app._proven[1], e, u)
+    c = P.proven_at(app.proven.done[1], e, u)
     assert c["status"] == "word" and c["verdict"].ok
     (e0, e1), (u0, u1) = c["box"]
     assert e0 <= e <= e1 and u0 <= u <= u1
@@ -152,7 +187,7 @@ def test_tap_shows_the_certificate_of_the_box_or_why_it_is_undecided():
     # the word's family by its form: (1, 1, 1, 2) is member 3 of (1^k, 2, 0^inf)
     assert "family (1^k, 2, 0^inf), member k = 3" in text
     # an undecided box: its reason, and no claim of proof
-    boxes = app._proven[1].boxes
+    boxes = app.proven.done[1].boxes
     b = int(np.flatnonzero((boxes["reason"].values == "graze"))[0])
     pe, pu = (float(boxes[a].values[b] + boxes[c_].values[b]) / 2 for a, c_ in (("e0", "e1"), ("u0", "u1")))
     app._on_tap(SimpleNamespace(x=pe, y=pu))
@@ -166,3 +201,61 @@ def test_a_window_the_certifier_refuses_is_a_message_not_a_traceback():
     app, sched = _explorer(V.View(1e-300, 1e-3, 0.5, 0.6, 16, 16, max_iter=50, overlays=("proven",)))
     sched.run_all()
     assert "certifying the view failed" in app.status.object and "2^-53" in app.status.object
+
+
+def test_a_long_certificate_is_deferred_with_a_message_and_the_worker_stays_free(monkeypatch):
+    """Issue 43 item 3: a tap on a box proven not to slide within a max_iter
+    above TAP_CERTIFICATE_STEPS does not walk its certificate on the shared
+    worker (certify_box and sb.verify are Python loops: 57-133 s at max_iter
+    1e6); the tap says so and gives the Python line that computes it, which
+    does.  A second page on the same scheduler gets its picture, and no
+    certify_box call of the explorer walks more than the bound."""
+    walked = []
+    real = C.certify_box
+
+    def counting(*args, **kw):
+        walked.append(kw.get("max_iter", args[2] if len(args) > 2 else 1000))
+        return real(*args, **kw)
+
+    monkeypatch.setattr(C, "certify_box", counting)
+    max_iter = 4 * P.TAP_CERTIFICATE_STEPS
+    deep = V.View(0.2995, 0.29950000000002, 0.4135, 0.41350000000002, 16, 16, max_iter=max_iter,
+                  overlays=("proven",), point=(0.299500000000006, 0.413500000000006))
+    app, sched = _explorer(deep)
+    from stairbounce.explorer.app import Explorer
+
+    victim = Explorer(V.View(0.0, 1.0, 0.0, 1.5, 32, 32, max_iter=200), scheduler=sched)
+    victim.start()
+    sched.run_all()
+    assert "computed in" in victim.status.object
+    atlas = app.proven.done[1]
+    c = P.proven_at(atlas, *deep.point, max_steps=P.TAP_CERTIFICATE_STEPS)
+    assert c["status"] == "no_slide_within" and c["deferred"] == max_iter and c["certificate"] is None
+    text = app.point_pane.object
+    assert "not computed here" in text and f"{max_iter:,} steps" in text and "re-verified" not in text
+    assert max(walked, default=0) <= P.TAP_CERTIFICATE_STEPS
+    # the line the page gives computes the certificate of exactly that box, and it verifies
+    import html
+    import re
+
+    code = html.unescape(re.search(r'<code class="sb-cert-code">(.*?)</code>', text).group(1))
+    assert code.startswith("sb.verify(sb.certify_box(") and code.endswith(f"max_iter={max_iter}))")
+    cert = eval(code[len("sb.verify("):-1], {"sb": sb})
+    assert (cert.e, cert.u) == c["box"] and cert.status == "no_slide_within" and sb.verify(cert).ok
+
+
+def test_proven_at_defers_exactly_the_certificates_longer_than_the_bound():
+    app, sched = _explorer()
+    sched.run_all()
+    atlas = app.proven.done[1]
+    ds = atlas.boxes
+    b = int(np.flatnonzero(ds["status"].values == 0)[0])  # a proven word
+    n = P.certificate_steps(atlas, b)
+    assert n == len(sb.certify_box(e=(float(ds["e0"][b]), float(ds["e1"][b])), u=(float(ds["u0"][b]), float(ds["u1"][b])),
+                                   max_iter=atlas.max_iter).itinerary) > 0
+    e, u = float(ds["e0"][b] + ds["e1"][b]) / 2, float(ds["u0"][b] + ds["u1"][b]) / 2
+    assert P.proven_at(atlas, e, u, max_steps=n)["certificate"].status == "word"
+    late = P.proven_at(atlas, e, u, max_steps=n - 1)
+    assert late["deferred"] == n and late["certificate"] is None and late["word"]
+    with pytest.raises(ValueError, match="max_steps"):
+        P.proven_at(atlas, e, u, max_steps=-1)

@@ -168,24 +168,24 @@ def test_traced_mode_schedules_a_trace_a_new_view_cancels_it_and_arcs_replace_po
     the points they pass through; off clears the arcs, on again redraws them
     without a new job."""
     app, sched = _app(V.View(0.2, 0.3, 0.3, 0.4, 60, 50, max_iter=300))
-    assert app.arc_src.data["xs"] == [] and app.border_src.data["e"] == []
+    assert app.borders.arc_src.data["xs"] == [] and app.borders.border_src.data["e"] == []
     app.overlays.value = ["traced"]
     jobs = _borders_jobs(sched)
     assert len(jobs) == 1 and not jobs[0].started
-    assert app.arc_src.data["xs"] == [] and app.border_src.data["e"] == []  # not computed yet
+    assert app.borders.arc_src.data["xs"] == [] and app.borders.border_src.data["e"] == []  # not computed yet
     assert "locating the border points" in app.status.object
     old = jobs[0]
-    while not app.border_src.data["e"]:  # the border points: their grid's scan, the pairs (bounded slices)
+    while not app.borders.border_src.data["e"]:  # the border points: their grid's scan, the pairs (bounded slices)
         assert "locating the border points" in app.status.object
         sched.run_next()
-    n_points = len(app.border_src.data["e"])
+    n_points = len(app.borders.border_src.data["e"])
     assert n_points == V.view_border_points(app.view).sizes["point"] > 50
     assert "finding the words" in app.status.object
     while "finding the words" in app.status.object:  # the seed scan (bounded slices)
         sched.run_next()
     assert "tracing borders: 0 of " in app.status.object and " words (48 x 48 seeds)" in app.status.object
     sched.run_next()  # one word
-    assert app.arc_src.data["xs"] == [] and len(app.border_src.data["e"]) == n_points
+    assert app.borders.arc_src.data["xs"] == [] and len(app.borders.border_src.data["e"]) == n_points
     # a new view (a pan to tongue 1's tip region) cancels the trace under way
     app._on_ranges(SimpleNamespace(x0=TONGUE1[0], x1=TONGUE1[1], y0=TONGUE1[2], y1=TONGUE1[3]))
     assert old.cancelled and old not in sched._jobs
@@ -195,7 +195,7 @@ def test_traced_mode_schedules_a_trace_a_new_view_cancels_it_and_arcs_replace_po
     assert render and render[0].seq < new[0].seq  # the picture first
     sched.run_all()
     assert old.attained > 0 and sched.busy() is False
-    arcs = app.arc_src.data
+    arcs = app.borders.arc_src.data
     assert set(arcs["kind"]) == {"chatter", "window"}
     for xs, ys in zip(arcs["xs"], arcs["ys"]):  # only the new view's arcs
         assert TONGUE1[0] <= min(xs) and max(xs) <= TONGUE1[1] and TONGUE1[2] <= min(ys) and max(ys) <= TONGUE1[3]
@@ -206,30 +206,31 @@ def test_traced_mode_schedules_a_trace_a_new_view_cancels_it_and_arcs_replace_po
     kinds = pts["kind"].values.astype(str)
     assert (kinds == "chatter").sum() > 20
     # the result replaces the points: the chatter points are on the arc, the others stay
-    assert sorted(app.border_src.data["kind"]) == sorted(kinds[kinds != "chatter"].tolist())
+    assert sorted(app.borders.border_src.data["kind"]) == sorted(kinds[kinds != "chatter"].tolist())
     status = app.status.object
     assert "traced borders: 1 word (48 x 48 seeds)" in status and "chatter 1" in status
     assert f"{(kinds == 'chatter').sum()} of {kinds.size} border points replaced by arcs" in status
     assert "overlays=traced" in app.history_out.text
     assert [i.label.value for i in app.legend.items] == [
         "traced borders between words: graze violet, edge pink, chatter dark green, window grey"]
-    assert app.arcs_note.visible and "Hover near an arc" in app.arcs_note.object
+    assert app.borders.note.visible and "Hover near an arc" in app.borders.note.object
     # off: no arcs, no points, no job; on again: drawn from what was traced, no new job
     app.overlays.value = []
-    assert app.arc_src.data["xs"] == [] and app.border_src.data["e"] == [] and not _borders_jobs(sched)
+    assert app.borders.arc_src.data["xs"] == [] and app.borders.border_src.data["e"] == [] and not _borders_jobs(sched)
     assert "traced borders" not in app.status.object
     app.overlays.value = ["traced"]
-    assert not _borders_jobs(sched) and app.arc_src.data["kind"] == arcs["kind"]
+    assert not _borders_jobs(sched) and app.borders.arc_src.data["kind"] == arcs["kind"]
     assert "traced borders: 1 word" in app.status.object
     # the points alone: every point, no arcs
     app.overlays.value = ["borders"]
-    assert app.arc_src.data["xs"] == [] and len(app.border_src.data["e"]) == kinds.size
+    assert app.borders.arc_src.data["xs"] == [] and len(app.borders.border_src.data["e"]) == kinds.size
 
 
 def test_traced_mode_keeps_the_points_of_incomplete_words_and_says_when_it_fails(monkeypatch):
     """A word whose walk gave up keeps its border points and the status names it;
     a trace that fails leaves every point drawn and says so."""
     from stairbounce.explorer import app as A
+    from stairbounce.explorer import borders_layer
 
     real = V.trace_slices
 
@@ -239,24 +240,24 @@ def test_traced_mode_keeps_the_points_of_incomplete_words_and_says_when_it_fails
         regions[0].complete = False  # as if a walk around it had given up
         return regions
 
-    monkeypatch.setattr(A, "trace_slices", incomplete)
+    monkeypatch.setattr(borders_layer, "trace_slices", incomplete)
     app, sched = _app(V.View(*TONGUE1, 60, 50, max_iter=300))
     app.overlays.value = ["traced"]
     sched.run_all()
-    assert len(app.border_src.data["e"]) == V.view_border_points(app.view).sizes["point"]
-    assert "chatter" in app.arc_src.data["kind"]
+    assert len(app.borders.border_src.data["e"]) == V.view_border_points(app.view).sizes["point"]
+    assert "chatter" in app.borders.arc_src.data["kind"]
     assert "Incomplete (a walk gave up; their border points are kept): 1 word, (1, 0^inf)" in app.status.object
 
     def failing(view, side=V.TRACE_SIDE):
         yield 0, 3
         raise RuntimeError("the walk ran out of the domain")
 
-    monkeypatch.setattr(A, "trace_slices", failing)
+    monkeypatch.setattr(borders_layer, "trace_slices", failing)
     app, sched = _app(V.View(*TONGUE1, 60, 50, max_iter=300))
     app.overlays.value = ["traced"]
     sched.run_all()
-    assert app.arc_src.data["xs"] == []
-    assert len(app.border_src.data["e"]) == V.view_border_points(app.view).sizes["point"]
+    assert app.borders.arc_src.data["xs"] == []
+    assert len(app.borders.border_src.data["e"]) == V.view_border_points(app.view).sizes["point"]
     assert ("tracing borders failed: the walk ran out of the domain; the border points are shown"
             in app.status.object)
 
@@ -297,24 +298,25 @@ def test_hovering_near_a_traced_arc_reports_its_kind_step_and_both_words():
     from bokeh.models import HoverTool, MultiLine
 
     from stairbounce.explorer import app as A
+    from stairbounce.explorer import borders_layer
 
     from stairbounce.explorer.scheduler import Scheduler
 
     app = A.Explorer(V.View(0.0, 0.4, 0.3, 1.1, 60, 50, max_iter=300), scheduler=Scheduler(thread=False))
     hovers = [t for t in app.map_fig.tools if isinstance(t, HoverTool)
-              and any(r.data_source is app.arc_src for r in (t.renderers or []) if hasattr(r, "data_source"))]
+              and any(r.data_source is app.borders.arc_src for r in (t.renderers or []) if hasattr(r, "data_source"))]
     assert len(hovers) == 1
     [r] = hovers[0].renderers
     glyph = r.glyph
-    assert isinstance(glyph, MultiLine) and glyph.line_alpha == 0.0 and glyph.line_width == A.ARC_HOVER_PX >= 10
-    drawn = [x.glyph for x in app.map_fig.renderers if getattr(x, "data_source", None) is app.arc_src
+    assert isinstance(glyph, MultiLine) and glyph.line_alpha == 0.0 and glyph.line_width == borders_layer.ARC_HOVER_PX >= 10
+    drawn = [x.glyph for x in app.map_fig.renderers if getattr(x, "data_source", None) is app.borders.arc_src
              and x.glyph.line_alpha != 0.0 and x.glyph.line_color == "color"]
-    assert drawn and all(A.ARC_HOVER_PX >= 5 * g.line_width for g in drawn)  # the pointer may be off the line
+    assert drawn and all(borders_layer.ARC_HOVER_PX >= 5 * g.line_width for g in drawn)  # the pointer may be off the line
     fields = " ".join(v for _, v in hovers[0].tooltips)
     for col in ("@kind", "@step", "@word_low", "@word_high"):
         assert col in fields
     assert A._OVERLAY_LEGEND["traced"].startswith("traced borders between words:")
-    assert not app.arcs_note.visible  # said under the map while the arcs are on
+    assert not app.borders.note.visible  # said under the map while the arcs are on
     app.overlays.value = ["traced"]
-    assert app.arcs_note.visible and "the exact borders between two words" in app.arcs_note.object
-    assert "the words on its two sides" in app.arcs_note.object
+    assert app.borders.note.visible and "the exact borders between two words" in app.borders.note.object
+    assert "the words on its two sides" in app.borders.note.object

@@ -28,7 +28,7 @@ def test_known_patterns(word, pattern, k):
     fam = sb.family_of(word)
     assert fam == (pattern, k) and fam.pattern == pattern and fam.k == k
     # the pattern's member k is the word (read back by the cascade's parser)
-    from stairbounce.cascades import _parse_pattern
+    from stairbounce.cascades.patterns import _parse_pattern
 
     member = sb.Word(_parse_pattern(pattern).letters(k))
     assert member == (sb.Word(word) if isinstance(word, tuple) else sb.parse_word(word))

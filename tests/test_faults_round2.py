@@ -352,7 +352,7 @@ def _asked():
 def _cached(cache, compute):
     from stairbounce import figures as F
 
-    return F._cached(F.Settings(out=cache, cache_dir=cache), "scan", dict(CACHED), compute)
+    return F.settings._cached(F.Settings(out=cache, cache_dir=cache), "scan", dict(CACHED), compute)
 
 
 def _entry(cache):
@@ -425,7 +425,7 @@ def test_cache_info_clear_and_the_size_bound(tmp_path, capsys, monkeypatch):
     from stairbounce import figures as F
 
     other = dict(CACHED, max_iter=201)
-    F._cached(F.Settings(out=tmp_path, cache_dir=tmp_path), "scan", other,
+    F.settings._cached(F.Settings(out=tmp_path, cache_dir=tmp_path), "scan", other,
               lambda: scan(e=(0.0, 1.0, 30), u=(0.0, 1.5, 21), max_iter=201))
     left = [p for p, _ in _cache.entries(tmp_path)]
     assert len(left) == 1 and left[0] != first

@@ -389,7 +389,7 @@ def test_r11_a_store_bind_mounted_under_another_name_has_one_writer(bind_alias, 
 def _figures_cached(cache, kind, inputs, compute):
     from stairbounce import figures as F
 
-    return F._cached(F.Settings(out=cache, cache_dir=cache), kind, dict(inputs), compute)
+    return F.settings._cached(F.Settings(out=cache, cache_dir=cache), kind, dict(inputs), compute)
 
 
 BIF_INPUTS = {"e": 0.5, "u": [0.3, 1.0], "n": 40, "y0": 0.1, "v0": 0.0, "transient": 300, "keep": 50}
@@ -423,7 +423,7 @@ def test_r10_a_bifurcations_entry_is_used_the_second_time(tmp_path):
 def test_r10_the_kernel_hash_covers_every_module_that_computes_a_cached_entry(monkeypatch, tmp_path):
     """Report R10: the kernel hash left out borders.py, which computes the
     bifurcation entries (a change of it would reuse stale entries once they
-    hit).  Every function whose result figures.py caches is in a hashed
+    hit).  Every function whose result figures/ caches is in a hashed
     module, and a change of borders.py makes a new entry.  Since issue 36
     item 9 the bifurcations live in structure/bifurcations.py and the border
     kernels they call in structure/borders.py and structure/itinerary.py:
@@ -432,7 +432,8 @@ def test_r10_the_kernel_hash_covers_every_module_that_computes_a_cached_entry(mo
 
     from stairbounce import _cache, figures, nonsliding, orbits
 
-    kinds = set(re.findall(r'_cached\(\s*settings, "([a-z_]+)"', Path(figures.__file__).read_text()))
+    sources = "".join(p.read_text() for p in Path(figures.__file__).parent.glob("*.py"))
+    kinds = set(re.findall(r'_cached\(\s*settings, "([a-z_]+)"', sources))
     computed_by = {"scan": plane.scan, "orbits": orbits.orbit_diagram,
                    "bifurcations": structure.bifurcations.bifurcations,
                    "motion": nonsliding.motion_scan}

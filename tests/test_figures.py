@@ -14,6 +14,8 @@ from stairbounce.cli import main
 from stairbounce.fractal import box_dimension, boundary
 from stairbounce.plane import scan, tongue_mask
 
+from ._figures import patch_figures
+
 SCALE = 0.12  # 60 x 42 for Fig. 4, 60 px for Figs. 6/7, 360 orbit columns
 
 
@@ -84,14 +86,14 @@ def test_rerun_reads_the_cache(made, tmp_path, monkeypatch):
     out, cache, _ = made
     before = sorted(p.name for p in cache.iterdir())
     assert any(n.startswith("scan-") for n in before) and any(n.startswith("orbits-") for n in before)
-    real = F._cached
+    real = F.settings._cached
     calls = []
 
     def spy(settings, kind, inputs, compute):
         calls.append(kind)
         return real(settings, kind, inputs, lambda: pytest.fail("recomputed a cached scan"))
 
-    monkeypatch.setattr(F, "_cached", spy)
+    patch_figures(monkeypatch, "_cached", spy)
     settings = F.Settings(out=tmp_path, scale=SCALE, dpi=40, cache_dir=cache)
     res = F.make_figures(settings, only=["fig4", "fig5e"])
     assert [r.error for r in res] == [None, None] and calls == ["scan", "scan"]
@@ -182,8 +184,8 @@ def test_row_verdicts():
     with pytest.raises(ValueError, match="verdict must be one of"):
         F.Row("q", "p", "m", verdict="maybe")
     # the paper's value inside the interval agrees; outside it differs by the signed gap
-    assert F._compare(1.40, 1.324, ci=(1.30, 1.50))[0] == "agrees"
-    assert F._compare(1.53, 1.403, ci=(1.52, 1.55)) == (
+    assert F.rows._compare(1.40, 1.324, ci=(1.30, 1.50))[0] == "agrees"
+    assert F.rows._compare(1.53, 1.403, ci=(1.52, 1.55)) == (
         "differs", "+0.127: the paper's 1.403 is outside our interval [1.520, 1.550]")
 
 
@@ -242,14 +244,14 @@ def drawn(tmp_path_factory):
         "fig6": {"dimension": 1.4567, "ci95": [1.41, 1.50], "method": "test fixture",
                  "details": "-"}}))
     figs = {}
-    real = F._save
+    real = F.settings._save
 
     def keep(fig, settings, name):
         figs[name] = fig
         return real(fig, settings, name)
 
     mp = pytest.MonkeyPatch()
-    mp.setattr(F, "_save", keep)
+    patch_figures(mp, "_save", keep)
     try:
         settings = F.Settings(out=out, scale=SCALE, dpi=60, border_dimension=study)
         results = F.make_figures(settings)
@@ -477,8 +479,8 @@ def test_figs_8_and_9_mark_the_cascade_members(drawn):
     """Issue 39: every panel names its cascades in a legend of its own, draws a
     tick per member (at its centre, inside the panel) and numbers the first ones."""
     figs, results = drawn
-    panels = [(figs["fig8"].axes[0], F.FIG8_CASCADES)]
-    panels += list(zip(figs["fig9"].axes[:4], F.FIG9_CASCADES))
+    panels = [(figs["fig8"].axes[0], F.orbits.FIG8_CASCADES)]
+    panels += list(zip(figs["fig9"].axes[:4], F.orbits.FIG9_CASCADES))
     for ax, cascades in panels:
         (legend,) = _cascade_legends(ax)
         texts = [t.get_text() for t in legend.get_texts()]
@@ -536,18 +538,18 @@ def test_no_legend_entry_for_a_curve_outside_the_window():
 
 def test_compare_agrees_only_inside_the_interval():
     # the criterion stated in the report's header: the paper's number inside our interval
-    assert F._compare(1.40, 1.324, (1.30, 1.50))[0] == "agrees"
+    assert F.rows._compare(1.40, 1.324, (1.30, 1.50))[0] == "agrees"
     # issue 24: Fig. 6 at --scale 2 gave 1.366 [1.264, 1.468]; an interval that
     # excludes the paper's value differs, whatever its distance
-    verdict, why = F._compare(1.366, 1.324, (1.33, 1.40))
+    verdict, why = F.rows._compare(1.366, 1.324, (1.33, 1.40))
     assert verdict == "differs" and "outside" in why and "[1.330, 1.400]" in why
     # an interval reaching below 1 (or above 2) is a failed fit, never agreement
-    verdict, why = F._compare(1.014, 1.324, (-0.909, 2.937))
+    verdict, why = F.rows._compare(1.014, 1.324, (-0.909, 2.937))
     assert verdict == "not comparable" and "failed fit" in why
 
 
 def test_ours_rows_quote_no_paper():
-    row = F._ours("x", "measured 3", False, "criterion")
+    row = F.rows._ours("x", "measured 3", False, "criterion")
     assert row.paper == "-" and row.quantity.startswith("ours: ") and "FAILS" in row.measured
     assert row.verdict == "not comparable"
 
@@ -569,11 +571,12 @@ def test_the_slicing_row_is_checked_at_four_times_max_iter(tmp_path):
     (e, u), paper = F.DIMENSION_WINDOWS["fig7"]
     for max_iter in (50, 1000):
         s = F.Settings(out=tmp_path, scale=SCALE, max_iter=max_iter)
-        row = F._slicing_row(s, "fig7", e, u, paper)
+        row = F.dimension._slicing_row(s, "fig7", e, u, paper)
         assert f"checked at max_iter {4 * max_iter}" in row.quantity
-        lines = max(8, round(F.SLICING_LINES * SCALE))
+        lines = max(8, round(F.dimension.SLICING_LINES * SCALE))
+        scale_min, scale_max = F.dimension.SLICING_SCALES
         a, b = (slicing_dimension(sliding_classifier(max_iter=m), (e, u), n_lines=lines,
-                                  scale_min=F.SLICING_SCALES[0], scale_max=F.SLICING_SCALES[1], seed=0)
+                                  scale_min=scale_min, scale_max=scale_max, seed=0)
                 for m in (max_iter, 4 * max_iter))
         check = max_iter_check(a, b)
         assert not (max_iter == 50 and check.converged)  # the check can fail, and fails at 50 (test_slicing.py)
@@ -594,11 +597,11 @@ def test_the_slicing_row_is_checked_at_four_times_max_iter(tmp_path):
         d, interval, scales = _slicing_row_values(row)
         assert d == pytest.approx(fit.dimension, abs=5e-4)
         assert scales[0] == pytest.approx(fit.scales[0], rel=0.05) and scales[0] > lo
-        assert row.verdict == F._compare(fit.dimension, paper, fit.interval)[0]
+        assert row.verdict == F.rows._compare(fit.dimension, paper, fit.interval)[0]
 
 
 def test_box_rows_are_cut_where_four_times_max_iter_moves_the_local_slope():
-    """The box-counting rows' check (F._box_checked) on counts with a known
+    """The box-counting rows' check (F.dimension._box_checked) on counts with a known
     local slope: 1.5 at every size, and at 4 x max_iter 1.5 above 4 px but
     1.9 below (as if the finer boxes saw more border): the fit 1..64 px is cut
     to 4..64 px, where both slopes are exactly 1.5."""
@@ -610,17 +613,18 @@ def test_box_rows_are_cut_where_four_times_max_iter_moves_the_local_slope():
     more[:2] = np.round(counts[2] * (sizes[:2] / 4.0) ** -1.9)  # steeper below 4 px
     a = box_dimension_from_counts(sizes, counts, fit_range=(1, 64))
     b = box_dimension_from_counts(sizes, more, fit_range=(1, 64))
-    fit, text, ok = F._box_checked(a, b, 1000, 4000)
+    fit, text, ok = F.dimension._box_checked(a, b, 1000, 4000)
     assert ok and fit.fit_range == (4, 64)
     assert "max_iter 1000 -> 4000: not converged at the local slopes of boxes 1.41..2.83 px" in text
     assert text.endswith("fitted range cut to boxes 4..64 px")
     assert fit.dimension == pytest.approx(1.5, abs=2e-3)
     # nothing moves: the fit as it was
-    fit, text, ok = F._box_checked(a, a, 1000, 4000)
+    fit, text, ok = F.dimension._box_checked(a, a, 1000, 4000)
     assert ok and fit is a and text.endswith("converged at boxes 1..64 px")
     # the slope moves at every size but the coarsest: no fit, no verdict
     worse = np.round(counts[-2] * (sizes / 64.0) ** -1.9)
-    fit, text, ok = F._box_checked(a, box_dimension_from_counts(sizes, worse, fit_range=(1, 64)), 1000, 4000)
+    worse_fit = box_dimension_from_counts(sizes, worse, fit_range=(1, 64))
+    fit, text, ok = F.dimension._box_checked(a, worse_fit, 1000, 4000)
     assert not ok and "fewer than 3 converged box sizes" in text
 
 
@@ -649,7 +653,7 @@ def test_every_row_states_its_basis_and_the_certifier_rows_are_proven(made):
                 assert row["proof"], row
                 proven.append((f["name"], row["quantity"]))
                 assert row["verdict"] == "agrees", row
-    depth = F._certify_depth(F.Settings(out=out, scale=SCALE))
+    depth = F.proven._certify_depth(F.Settings(out=out, scale=SCALE))
     assert depth == 6
     names = [name for name, q in proven]
     assert ("fig3", "tongues (n, 0^inf) proven over boxes up to their tips (Theorem 3.1, n = 1..8)") in proven

@@ -463,9 +463,9 @@ def test_motion_figures_answer_chaotic_or_just_complicated(tmp_path):
     assert row.quantity.startswith("ours: chaotic or just complicated?") and row.paper == "-"
     assert row.verdict == "not comparable" and "; holds (" in row.measured
     # the picture is the convergence diagnostic N lambda_1 against N, not a map of lambda_1
-    assert res[0].params["lengths"] == list(F.LYAP_LENGTHS)
-    nl = F._lyap_convergence([0.5], [1.0])
-    assert nl.shape == (1, len(F.LYAP_LENGTHS)) and np.abs(nl).max() <= 4 * F.ZERO_EFOLDS
+    assert res[0].params["lengths"] == list(F.motion.LYAP_LENGTHS)
+    nl = F.motion._lyap_convergence([0.5], [1.0])
+    assert nl.shape == (1, len(F.motion.LYAP_LENGTHS)) and np.abs(nl).max() <= 4 * F.motion.ZERO_EFOLDS
     assert (tmp_path / "motion_lyap.png").exists() and (tmp_path / "motion_cut.png").exists()
 
 
@@ -480,7 +480,7 @@ def test_motion_k_masks_unconverged_pixels(tmp_path):
     from stairbounce.plot.motion import UNCONVERGED_COLOUR, plot_motion
 
     ds = motion_scan(e=(0.5, 0.999, 16), u=(0.5, 1.0, 8), steps=1000, transient=1000)
-    mask = F._unconverged(ds)
+    mask = F.motion._unconverged(ds)
     assert mask.any() and not mask.all()
     fig, ax = plt.subplots()
     plot_motion(ds, field="k_mean", ax=ax, unconverged=mask)

@@ -478,7 +478,7 @@ def test_cli_words_regions(tmp_path, capsys):
 def test_fig5c_report_row_on_exact_borders(tmp_path):
     from stairbounce import figures
 
-    row = figures._band_similarity_row(figures.Settings(out=tmp_path, scale=0.25))
+    row = figures.plane._band_similarity_row(figures.Settings(out=tmp_path, scale=0.25))
     assert row.verdict in figures.VERDICTS
     assert "tip ratios" in row.measured and "no constant scale factor" in row.why
 

@@ -29,14 +29,14 @@ def test_row_basis_is_checked():
 
 
 def test_depth_follows_the_scale(tmp_path):
-    assert F._certify_depth(_settings(tmp_path, 1.0)) == F.CERTIFY_DEPTH
-    assert F._certify_depth(_settings(tmp_path, 0.5)) == F.CERTIFY_DEPTH - 1
-    assert F._certify_depth(_settings(tmp_path, 0.01)) == 4
-    assert F._certify_depth(_settings(tmp_path, 16)) == 12
+    assert F.proven._certify_depth(_settings(tmp_path, 1.0)) == F.proven.CERTIFY_DEPTH
+    assert F.proven._certify_depth(_settings(tmp_path, 0.5)) == F.proven.CERTIFY_DEPTH - 1
+    assert F.proven._certify_depth(_settings(tmp_path, 0.01)) == 4
+    assert F.proven._certify_depth(_settings(tmp_path, 16)) == 12
 
 
 def test_tongue_row_is_proven(tmp_path):
-    row = F._tongue_proof_row(_settings(tmp_path, 0.05))
+    row = F.plane._tongue_proof_row(_settings(tmp_path, 0.05))
     assert row.basis == "proven" and "re-verified by sb.verify" in row.proof
     assert row.verdict == "agrees", row
     n = int(row.measured.split(" boxes")[0])
@@ -49,9 +49,9 @@ def _window_rows(tmp_path, name, e, u, scale=1 / 32):
     s = _settings(tmp_path, scale)
     n = s.px(400)
     ds = scan(e=(e[0], e[1], n), u=(u[0], u[1], n))
-    certified = F._certified_atlas(s, name, e, u)
+    certified = F.proven._certified_atlas(s, name, e, u)
     est = type("Fit", (), {"dimension": 1.4})()
-    return certified, F._proven_area_row(s, name, e, u, ds, certified), F._border_bracket_row(s, name, certified, est)
+    return certified, F.proven._proven_area_row(s, name, e, u, ds, certified), F.proven._border_bracket_row(s, name, certified, est)
 
 
 def test_window_rows_are_proven_and_agree(tmp_path):
@@ -67,13 +67,13 @@ def test_window_rows_are_proven_and_agree(tmp_path):
     assert f"at least {share:.1f}% of the window proven to slide" in area.measured
     assert f"at least {len(atlas.words())} distinct words" in area.measured
     counts = atlas.border_box_counts()
-    k1, k2 = F._slope_scales(depth)
+    k1, k2 = F.proven._slope_scales(depth)
     lo, hi = atlas.slope_bracket(k1, k2)
     assert f"between k = {k1} and {k2} proven in [{math.floor(lo * 1000) / 1000:.3f}, " in bracket.measured
     assert f"k = {k1}: {counts.lower[k1]}..{counts.upper[k1]}" in bracket.measured
     # a numerical estimate outside the bracket differs
     far = type("Fit", (), {"dimension": hi + 0.5})()
-    assert F._border_bracket_row(None, "fig7", certified, far).verdict == "differs"
+    assert F.proven._border_bracket_row(None, "fig7", certified, far).verdict == "differs"
 
 
 def test_a_window_from_e_0_is_certified_from_the_checkers_domain(tmp_path):
@@ -87,7 +87,7 @@ def test_a_window_from_e_0_is_certified_from_the_checkers_domain(tmp_path):
     assert atlas.window[0] == tuple(e)
     b = atlas.boxes
     at_zero = b["e0"].values == 0.0
-    assert at_zero.any() and (b["status"].values[at_zero] == F._undecided_code()).all()
+    assert at_zero.any() and (b["status"].values[at_zero] == F.proven._undecided_code()).all()
     assert set(b["reason"].values[at_zero].tolist()) == {"range"}
     assert area.measured.startswith(f"[0, {e[1]:g}] x") and "2^-53" not in area.proof
     assert area.basis == bracket.basis == "proven"
@@ -100,7 +100,7 @@ def test_rejected_certificates_fail_the_rows(tmp_path, monkeypatch):
         return Verdict(False, "word", None, "tampered", checked=1, rejected=1)
 
     monkeypatch.setattr(stairbounce, "verify", reject)
-    row = F._tongue_proof_row(_settings(tmp_path, 0.05))
+    row = F.plane._tongue_proof_row(_settings(tmp_path, 0.05))
     assert row.verdict == "differs" and row.basis == "numerical" and "NOT proven" in row.proof
     (e, u), _ = F.DIMENSION_WINDOWS["fig7"]
     _, area, bracket = _window_rows(tmp_path, "fig7", e, u)
@@ -119,7 +119,7 @@ def test_a_wrong_word_fails_the_tongue_row(tmp_path, monkeypatch):
         return c
 
     monkeypatch.setattr(stairbounce, "certify_box", shifted)
-    row = F._tongue_proof_row(_settings(tmp_path, 0.05))
+    row = F.plane._tongue_proof_row(_settings(tmp_path, 0.05))
     assert row.verdict == "differs" and "not proven (n, 0^inf)" in row.why
 
 

@@ -26,7 +26,7 @@ from stairbounce.structure import borders, itinerary, regions, words
 from .test_architecture import CORE, FORBIDDEN
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "stairbounce"
-NEW = ["itinerary", "words", "borders", "bifurcations", "checks", "continuation", "regions", "trace", "graph",
+NEW = ["itinerary", "words", "slices", "borders", "bifurcations", "checks", "continuation", "regions", "trace", "graph",
        "export"]
 OLD_ALL = {
     "borders": ["itinerary", "border_points", "word_table", "bifurcations"],
@@ -43,8 +43,8 @@ OLD_NAMES = {
             "_at _bisect_pair _bisect_sliding_pair _border_kernel _CONVENTION _event_of _finish_sliding "
             "_first_difference _grid_input _OUT _pairs _ROUND_LANES_MIN _ROUND_UNIT_MIN _run_pairs "
             "_scan_input _shrink_secant _slide_period _slide_periods _SLIDING _sliding_rounds _table _trial "
-            "_WORD _WORD_BISECT _word_table_rows _work_blocks _write_point _write_sliding_point "
-            "border_point_slices border_points grid_blocks PAIR_TRIALS pair_work staged word_group_slices "
+            "_WORD _WORD_BISECT _word_table_rows _write_point _write_sliding_point "
+            "border_point_slices border_points PAIR_TRIALS pair_work staged word_group_slices "
             "word_table word_table_slices "
         ).split(),
         "checks": "above_no_sliding_curve side_agreement tongue_distances TONGUE_WINDOW".split(),
@@ -53,6 +53,7 @@ OLD_NAMES = {
             "_itinerary_block _itinerary_blocks _ITINERARY_BYTES _ITINERARY_NAMES _margin _next_margin "
             "CHATTER EDGE GRAZE itinerary KINDS "
         ).split(),
+        "slices": "_work_blocks grid_blocks".split(),
         "words": "_fill_impacts _hash_rows _rows_equal _word_groups _word_text _words NONE_WORD".split(),
     },
     "regions": {
@@ -174,6 +175,7 @@ def test_the_structure_modules_import_one_way():
         assert ready, f"a cycle among {sorted(set(NEW) - set(order))}"
         order += ready
     assert order.index("itinerary") < order.index("borders") < order.index("bifurcations")
+    assert order.index("slices") < order.index("borders") and order.index("slices") < order.index("regions")
     assert order.index("continuation") < order.index("regions") < order.index("graph") < order.index("export")
 
 

@@ -338,7 +338,8 @@ def test_answer_file_schema_and_claims():
 
 
 def test_figures_report_row_carries_paper_and_estimate():
-    from stairbounce.figures import _study_row, load_border_dimension
+    from stairbounce.figures import load_border_dimension
+    from stairbounce.figures.dimension import _study_row
     from stairbounce.fractal import border_dimension_estimates
 
     best = load_border_dimension()["fig6"]
@@ -389,7 +390,8 @@ def test_the_study_row_states_its_max_iter_check():
     row says nothing of a check it does not have."""
     import copy
 
-    from stairbounce.figures import _study_row, load_border_dimension
+    from stairbounce.figures import load_border_dimension
+    from stairbounce.figures.dimension import _study_row
 
     for name, paper in (("fig6", 1.324), ("fig7", 1.403)):
         best = load_border_dimension()[name]

@@ -75,7 +75,8 @@ from .plane import (
     tongue_mask,
 )
 from .plane import scan as _scan_function
-from .cascades import Cascade, CascadeLaw, cascade, cascade_law, cascades, family_of
+from .cascades import (Cascade, CascadeLaw, FareyTest, cascade, cascade_law, cascades, family_of, farey_test,
+                       member_count, organising_centres)
 from .structure.bifurcations import bifurcations
 from .structure.borders import border_points, word_table
 from .structure.checks import band_similarity
@@ -84,7 +85,6 @@ from .structure.graph import BorderGraph, border_graph
 from .structure.itinerary import itinerary
 from .structure.regions import BorderArc, Corner, Region, RegionComponent, window_regions, word_region
 from .structure.trace import trace_border
-from .cascade_families import FareyTest, farey_test, member_count, organising_centres
 from ._progress import progress_bar
 from .structure import Certificate, CertifiedAtlas, certify, certify_box
 from .structure.labels import prove_labels

@@ -44,7 +44,7 @@ __all__ = ["kernel_hash", "entry_path", "read_entry", "write_entry", "entries", 
 # stairbounce module they import, anywhere in their code, transitively
 # (_kernel_files), so a helper they call is covered without being listed;
 # tests/test_faults_round3.py checks that every function whose result
-# figures.py caches is defined in a hashed module.
+# figures/ caches is defined in a hashed module.
 KERNEL_MODULES = ("model", "plane", "orbits", "nonsliding", "symbolic", "structure.bifurcations")
 # never followed: drawing and interfaces compute no cached number
 _NOT_KERNEL = ("plot", "cli", "explorer", "figures", "_cache")

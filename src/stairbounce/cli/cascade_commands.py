@@ -38,13 +38,15 @@ def cascade_(
     pattern: str = typer.Argument(..., help='The family, e.g. "(1^k, 0^inf)" or "((1, 0)^k, 1, 1, 0^inf)".'),
     e: str = typer.Option("0.02", "--e", help=E_HELP),
     u: str = typer.Option("0.6:0.75", "--u", help=U_HELP),
-    k_max: int = typer.Option(100, "--k-max", help="Largest exponent tried (1..1000000)."),
+    k_max: int = typer.Option(100, "--k-max", help="Largest exponent tried (1..1000000, and the work within the limit the guide states: refused before it starts)."),
     law_k: str = typer.Option(None, "--law-k", help="Members the law is fitted on, KLO:KHI (default: the last 8)."),
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps to name the words just outside each edge (>= 1)."),
     rows: int = typer.Option(60, "--rows", help="Members printed (all go to --out)."),
     count: bool = typer.Option(False, "--count", help="Count the members exactly: at --e (a number), or "
                                "every e in --e MIN:MAX where the count changes (--u a range, MIN:MAX)."),
     n: int = typer.Option(32, "--n", help="With --count and a range of e: e values checked before bisecting (>= 2)."),
+    prove: bool = typer.Option(False, "--prove", help="Prove each member's interval with certify_box "
+                               "(interval arithmetic over the segment of the line) and say which are proven."),
     out: Path = typer.Option(None, "--out", help="The members as .csv (one row per member)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
@@ -72,16 +74,46 @@ def cascade_(
         check_outputs(force, out=out)
     c = cascade(pattern, e=ev, u=uv, k_max=k_max, max_iter=max_iter, law_k=k_range)
     typer.echo(c.text(max_rows=rows))
+    members = c.members
+    if prove:
+        proofs = c.prove()
+        typer.echo(_proofs_text(c, proofs, rows))
+        members = members.merge(proofs[["k", "proven", "lo", "hi", "share"]].rename(
+            columns={"lo": "proven_lo", "hi": "proven_hi", "share": "proven_share"}), on="k", how="left")
     if out is not None:
         with atomic_path(out, overwrite=force) as tmp:
-            c.members.to_csv(tmp, index=False)
+            members.to_csv(tmp, index=False)
         typer.echo(f"wrote {out}")
+
+
+def _proofs_text(c, proofs, rows):
+    """``--prove``: which members are proven, over which segment."""
+    other = "u" if c.axis == "e" else "e"
+    whole = int((proofs.proven & (proofs.share == 1.0)).sum())
+    inner = int((proofs.proven & (proofs.share < 1.0)).sum())
+    lines = [f"proven members (basis: proven, sb.certify_box: every decision of the orbit of (1, 0) by "
+             f"outward-rounded interval arithmetic over every real point of the segment {other} = "
+             f"{c.fixed:g}, {c.axis} in [lo, hi]; the member's float interval, or the part left after "
+             "cutting 1e-9..0.1 of its width at each end):",
+             f"{'k':>4} {c.axis + ' lo':>20} {c.axis + ' hi':>20} {'share':>11}  verdict"]
+    for i, r in enumerate(proofs.itertuples()):
+        if i == rows:
+            lines.append(f"... {len(proofs) - rows} more")
+            break
+        if r.proven:
+            lines.append(f"{r.k:>4} {r.lo:>20.17g} {r.hi:>20.17g} {r.share:>11.9f}  proven")
+        else:
+            lines.append(f"{r.k:>4} {'':>20} {'':>20} {'':>11}  not proven ({r.status}"
+                         + (f": {r.reason} at step {r.step}" if r.reason else "") + ")")
+    lines.append(f"{whole + inner} of {len(proofs)} member(s) proven: {whole} over the whole float interval, "
+                 f"{inner} over an inner part; {len(proofs) - whole - inner} not proven (numerical only)")
+    return "\n".join(lines)
 
 
 def _count(pattern, e, u, k_max, n, out, force):
     """``--count``: the member count at one e, or its changes over a range of e."""
     from .._io import atomic_path
-    from ..cascade_families import member_count
+    from ..cascades import member_count
 
     if ":" not in u:
         raise CLIError(f"--u must be a range MIN:MAX with --count, got {u!r}")

@@ -43,6 +43,7 @@ def word(
     if w is None:
         # proven impossible above the Corollary 2.1 curve, else only not found
         typer.echo(f"e = {e:g}, u = {u:g}: {answer.text()}")
+        typer.echo(_basis(answer))
         return
     text = w.format(ascii=not terminal_can_print_infinity())
     typer.echo(f"e = {e:g}, u = {u:g}")
@@ -51,6 +52,27 @@ def word(
     typer.echo(f"period:  {plural(w.period, 'step')}"
                + ("" if stairs is None else f" = {w.period * stairs.step_length / stairs.to_speed(u):.6g} s"))
     typer.echo(f"impacts: {w.impacts} per period (plus the accumulation)")
+    typer.echo(_basis(answer))
+
+
+def _basis(answer):
+    """The answer's basis, one line: proven (Corollary 2.1, or sb.certify_box at the
+    point: interval arithmetic over the binary floats of e and u) or numerical."""
+    from ..structure.certify import certify_box
+
+    if answer.verdict == "impossible":
+        return "basis:   proven (Corollary 2.1, a closed-form bound; nothing iterated)"
+    e, u = answer.e, answer.u
+    cert = certify_box(e=(e, e), u=(u, u), max_iter=answer.max_iter)
+    what = "the binary floats of e and u; sb.certify_box, outward-rounded interval arithmetic"
+    if answer.word is not None and cert.status == "word" and cert.word == answer.word:
+        return f"basis:   proven at this point ({what}: every decision of the orbit of (1, 0))"
+    if answer.word is None and cert.status == "no_slide_within":
+        return (f"basis:   proven at this point ({what}): no slide within the first {answer.max_iter} "
+                "steps (whether it slides later is open)")
+    why = f"{cert.status}" + (f": {cert.reason} at step {cert.step}" if cert.reason else "")
+    return (f"basis:   numerical (the float64 orbit of (1, 0); sb.certify_box leaves this point {why}, "
+            "within rounding of a border)")
 
 
 @app.command("map", short_help="Poincare iterates (Prop 2.3): the state at each edge.")

@@ -170,6 +170,8 @@ def scan_(
         f"max_iter {max_iter}: periodic sliding solution at {100 * frac:.1f}% of the pixels"
         + (f", longest word {longest}" if found.any() else "")
     )
+    typer.echo("basis: numerical (each pixel centre's float64 orbit of (1, 0) followed up to max_iter steps; "
+               "stairbounce certify proves words over boxes)")
 
 
 def _scan_with_progress(sc, e, u, max_iter, y0, v0):

@@ -7,9 +7,11 @@ Pure Python like :mod:`.view` (no Panel, no Bokeh):
 - :func:`proven_slices`: :func:`stairbounce.certify` of the view's window
   (corners form, the view's max_iter) as scheduler slices of bounded work,
   returning the same :class:`~stairbounce.CertifiedAtlas` box for box;
-- :func:`proven_overlay`: the atlas as quads to draw (proven words in the
-  scan's colours, the other statuses and the undecided reasons marked, see
-  :data:`STYLES`), and :func:`proven_summary` (area shares);
+- :func:`proven_overlay`: the atlas's boxes with their marks (proven words in
+  the scan's colours, the other statuses and the undecided reasons marked, see
+  :data:`STYLES`), :func:`proven_image`: the same drawn as one RGBA picture
+  with its hatching (what the page shows: one image, not a glyph per box,
+  issue 46 item 2), and :func:`proven_summary` (area shares);
 - :func:`proven_at`: what a tap shows: the certificate of the atlas's box
   containing the point, re-verified by :func:`stairbounce.verify`, or why the
   box is undecided.
@@ -26,7 +28,8 @@ import xarray as xr
 from . import view as V
 
 __all__ = ["MIN_BOX_PX", "BOX_WORK", "STYLES", "proven_depth", "proven_slices", "proven_overlay",
-           "proven_summary", "proven_at"]
+           "proven_summary", "proven_at", "proven_image", "HATCH_PERIOD", "CERTIFICATE_STEP_WORK",
+           "TAP_CERTIFICATE_STEPS", "certificate_steps"]
 
 MIN_BOX_PX = 2
 """The atlas's smallest boxes are at least this many pixels a side: its depth
@@ -37,6 +40,19 @@ BOX_WORK = 7
 """Potential map steps per box of a level, in units of ``max_iter``: the box's
 two corners walked (the corners form) and up to five points of the float map
 (the "nonsliding" test of the deepest levels)."""
+
+CERTIFICATE_STEP_WORK = 20_000
+"""What one step of a box's certificate costs, in potential map steps (the unit
+of :data:`~stairbounce.explorer.view.SLICE_WORK`): :func:`stairbounce.certify_box`
+and :func:`stairbounce.verify` walk the steps in Python, about 85 us a step
+(measured at load 3.5 on the 2-core machine: 50,000 steps in 4.3 s), against
+a few nanoseconds for a map step of the compiled kernels."""
+
+TAP_CERTIFICATE_STEPS = V.SLICE_WORK // CERTIFICATE_STEP_WORK
+"""The most steps a tap's certificate may walk on the explorer's shared worker
+(5,000: one slice of bounded work, about 0.4 s); a longer one (a box proven
+not to slide within a max_iter of up to 1e6) is deferred: the tap says so and
+how to compute it (issue 43 item 3)."""
 
 STYLES = {
     # status or reason: (fill colour or None for the word's own, fill alpha, hatch, hatch colour, legend)
@@ -165,7 +181,8 @@ def _word_colours(words, var):
 def proven_overlay(atlas, var: str = "word_length") -> dict:
     """proven_overlay(atlas, var="word_length") -> dict of columns
 
-    The boxes of a :class:`~stairbounce.CertifiedAtlas` as quads: ``left``,
+    The boxes of a :class:`~stairbounce.CertifiedAtlas` and their marks, one
+    entry per box (what :func:`proven_image` paints): ``left``,
     ``right``, ``bottom``, ``top``, ``fill``, ``alpha``, ``hatch``,
     ``hatch_color`` (:data:`STYLES`; a proven word in the scan's colour of
     that word for the colouring variable ``var``), ``what`` (the box's status,
@@ -189,6 +206,78 @@ def proven_overlay(atlas, var: str = "word_length") -> dict:
     }
 
 
+HATCH_PERIOD = 7
+"""The hatching's period in pixels of :func:`proven_image` (as Bokeh's
+``hatch_scale`` 7 the quads had)."""
+
+
+def _hatch_masks(height: int, width: int) -> dict:
+    """{hatch character: boolean (height, width) mask of its marks}, in the
+    picture's pixels (row 0 at the bottom, as ``image_rgba`` draws it), so the
+    hatching runs on across neighbouring boxes as Bokeh's did."""
+    y, x = np.ogrid[:height, :width]
+    p = HATCH_PERIOD
+    xm, ym = x % p, y % p
+    up, down = (x - y) % p == 0, (x + y) % p == 0  # "/" rises to the right (rows go up)
+    horizontal, vertical = np.broadcast_to(ym == 0, (height, width)), np.broadcast_to(xm == 0, (height, width))
+    r2 = (xm - p // 2) ** 2 + (ym - p // 2) ** 2
+    return {" ": np.zeros((height, width), bool), ".": (xm < 2) & (ym < 2), "o": (r2 >= 2) & (r2 <= 5),
+            "/": up, "\\": down, "x": up | down, "-": horizontal, "|": vertical, "+": horizontal | vertical}
+
+
+def _edges(lo, hi, v, n):
+    """Pixel indices of the box edges ``v`` on an axis from ``lo`` to ``hi`` of
+    ``n`` pixels: a shared edge gives one index, so neighbouring boxes meet
+    without a gap or an overlap."""
+    return np.clip(np.rint((np.asarray(v) - lo) / (hi - lo) * n), 0, n).astype(np.int64)
+
+
+def proven_image(atlas, width: int, height: int, var: str = "word_length") -> dict:
+    """proven_image(atlas, width, height, var="word_length") -> dict
+
+    The atlas drawn as one RGBA picture of ``width`` x ``height`` pixels over
+    its window: each box filled as :func:`proven_overlay` says (its fill at its
+    alpha) with its hatch over it in the hatch colour (opaque), transparent
+    where no box is.  Keys: ``image`` (uint32 (height, width), Bokeh's
+    ``image_rgba`` byte order, row 0 at the bottom), ``code`` (int16 or int32 (height,
+    width): the index into ``names`` of the pixel's box label, -1 none, for the
+    hover), ``names`` (the distinct labels, :func:`proven_overlay`'s ``what``),
+    ``x``, ``y``, ``dw``, ``dh`` (the window).  Raises :class:`ValueError` for
+    a side below 1."""
+    width, height = int(width), int(height)
+    if width < 1 or height < 1:
+        raise ValueError(f"width and height must be at least 1 pixel, got {width} x {height}")
+    quads = proven_overlay(atlas, var)
+    (e_lo, e_hi), (u_lo, u_hi) = atlas.window
+    c0, c1 = _edges(e_lo, e_hi, quads["left"], width), _edges(e_lo, e_hi, quads["right"], width)
+    r0, r1 = _edges(u_lo, u_hi, quads["bottom"], height), _edges(u_lo, u_hi, quads["top"], height)
+    # each pixel's box (the atlas's boxes do not overlap; finer boxes painted last)
+    owner = np.full((height, width), -1, np.int64)
+    for b in np.argsort(atlas.boxes["level"].values, kind="stable").tolist():
+        owner[r0[b]:r1[b], c0[b]:c1[b]] = b
+    names, code_of_box = np.unique(np.asarray(quads["what"], dtype=object).astype(str), return_inverse=True)
+    fill = V._rgba32(quads["fill"]) if quads["fill"] else np.zeros(0, np.uint32)
+    alpha = np.rint(255 * np.asarray(quads["alpha"], float)).astype(np.uint32)
+    fill = (fill & np.uint32(0x00FFFFFF)) | (alpha << np.uint32(24)) if fill.size else fill
+    hatch_rgba = V._rgba32(quads["hatch_color"]) if quads["hatch_color"] else np.zeros(0, np.uint32)
+    inside = owner >= 0
+    image = np.zeros((height, width), np.uint32)
+    image[inside] = fill[owner[inside]]
+    hatches = np.asarray(quads["hatch"], dtype=object)
+    for ch, mask in _hatch_masks(height, width).items():
+        boxes = np.flatnonzero(hatches == ch)
+        if ch == " " or not boxes.size:
+            continue
+        mine = np.zeros(len(hatches) + 1, bool)
+        mine[boxes] = True
+        on = mask & mine[owner]  # owner -1 reads the extra False
+        image[on] = hatch_rgba[owner[on]]
+    code = np.where(inside, code_of_box[np.maximum(owner, 0)], -1)
+    code = code.astype(np.int16 if names.size < 2**15 else np.int32)  # half the bytes on the websocket
+    return {"image": image, "code": code, "names": names.tolist(), "x": e_lo, "y": u_lo,
+            "dw": e_hi - e_lo, "dh": u_hi - u_lo}
+
+
 def proven_summary(atlas) -> dict:
     """proven_summary(atlas) -> {style key: share of the window's area}, the
     keys of :data:`STYLES` present, largest first."""
@@ -200,8 +289,25 @@ def proven_summary(atlas) -> dict:
     return dict(sorted(shares.items(), key=lambda kv: -kv[1]))
 
 
-def proven_at(atlas, e: float, u: float, verify: bool = True) -> dict | None:
-    """proven_at(atlas, e, u, verify=True) -> dict or None
+def certificate_steps(atlas, b: int) -> int:
+    """certificate_steps(atlas, b) -> int: the steps that the certificate of the
+    atlas's box ``b`` walks: ``max_iter`` for a box proven not to slide within
+    them, the length of its itinerary for a proven word, 0 for an undecided box
+    or one Corollary 2.1 settles (no walk)."""
+    from ..structure.certificate import STATUSES
+
+    ds = atlas.boxes
+    status = STATUSES[int(ds["status"].values[b])]
+    if status == "no_slide_within":
+        return int(atlas.max_iter)
+    if status == "word":
+        off = ds["offsets"].values
+        return int(off[b + 1] - off[b])
+    return 0
+
+
+def proven_at(atlas, e: float, u: float, verify: bool = True, max_steps: int | None = None) -> dict | None:
+    """proven_at(atlas, e, u, verify=True, max_steps=None) -> dict or None
 
     What the atlas says at ``(e, u)``: its box containing the point (the
     smallest certified box there: the atlas's boxes do not overlap; on a
@@ -211,8 +317,14 @@ def proven_at(atlas, e: float, u: float, verify: bool = True) -> dict | None:
     :class:`~stairbounce.Certificate` (``certificate``, computed again by
     :func:`stairbounce.certify_box` on the box's edges, the computation the
     atlas made) and, with ``verify``, the verdict of the independent checker
-    :func:`stairbounce.verify` on it (``verdict``).
+    :func:`stairbounce.verify` on it (``verdict``).  With ``max_steps``, a
+    certificate that walks more steps (:func:`certificate_steps`) is not
+    computed: ``deferred`` holds its steps instead (``None`` otherwise), and
+    ``certificate`` and ``verdict`` are ``None``.  Raises :class:`ValueError`
+    for a ``max_steps`` below 0.
     """
+    if max_steps is not None and max_steps < 0:
+        raise ValueError(f"max_steps must be at least 0, got {max_steps}")
     from ..structure.certificate import STATUSES
 
     ds = atlas.boxes
@@ -226,7 +338,11 @@ def proven_at(atlas, e: float, u: float, verify: bool = True) -> dict | None:
            "level": int(ds["level"].values[b]), "status": status,
            "word": str(ds["word"].values[b]) or None, "reason": str(ds["reason"].values[b]) or None,
            "step": int(ds["step"].values[b]) if status == "undecided" else None,
-           "max_iter": atlas.max_iter, "certificate": None, "verdict": None}
+           "max_iter": atlas.max_iter, "certificate": None, "verdict": None, "deferred": None}
+    steps = certificate_steps(atlas, b)
+    if max_steps is not None and steps > max_steps:
+        out["deferred"] = steps
+        return out
     if status != "undecided":
         from ..structure.certify import certify_box
         from ..structure.verify import verify as check

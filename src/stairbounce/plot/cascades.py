@@ -152,16 +152,17 @@ def plot_cascade_law(c, ax=None, k=None):
     ax.loglog(m.k.values, m.width.values, "o", ms=3.5, color="k", label="members (exact widths)")
     law = c.law
     used = m[m.k.isin(law.ks_used)]
-    if len(used) >= 2 and math.isfinite(law.exponent):
+    # the straight lines whose residuals decide the law (the fitted slopes, not the asymptotic values)
+    if len(used) >= 2 and math.isfinite(law.exponent_fit):
         kk = used.k.values.astype(float)
         lw = np.log(used.width.values)
         grid = np.linspace(kk[0], kk[-1], 50)
-        a_alg = np.mean(lw + law.exponent * np.log(kk))
-        ax.loglog(grid, np.exp(a_alg - law.exponent * np.log(grid)), "-", color="C3", lw=1.5,
-                  label=rf"algebraic: $k^{{-{law.exponent:.3g}}}$ (residual {law.residual_algebraic:.2g})")
-        a_geo = np.mean(lw - kk * math.log(law.ratio))
-        ax.loglog(grid, np.exp(a_geo + grid * math.log(law.ratio)), "--", color="C0", lw=1.2,
-                  label=f"geometric: ${law.ratio:.3g}^k$ (residual {law.residual_geometric:.2g})")
+        a_alg = np.mean(lw + law.exponent_fit * np.log(kk))
+        ax.loglog(grid, np.exp(a_alg - law.exponent_fit * np.log(grid)), "-", color="C3", lw=1.5,
+                  label=rf"algebraic: $k^{{-{law.exponent_fit:.3g}}}$ (residual {law.residual_algebraic:.2g})")
+        a_geo = np.mean(lw - kk * math.log(law.ratio_fit))
+        ax.loglog(grid, np.exp(a_geo + grid * math.log(law.ratio_fit)), "--", color="C0", lw=1.2,
+                  label=f"geometric: ${law.ratio_fit:.3g}^k$ (residual {law.residual_geometric:.2g})")
     # plain numbers on the k axis (no 3x10^0 labels crowding the decade)
     from matplotlib.ticker import NullFormatter, ScalarFormatter
 

@@ -49,6 +49,7 @@ from .itinerary import (
     _follows,
     _impacts_from_rest,
 )
+from .slices import _work_blocks, grid_blocks  # noqa: F401  (grid_blocks: also reached here)
 from .words import _word_groups, _word_text, _words
 
 __all__ = ["border_points", "word_table"]
@@ -722,41 +723,6 @@ def pair_work(period, a, b, max_iter):
     pa, pb = period[a], period[b]
     pc = np.where(pa == 0, pb, np.where(pb == 0, pa, np.minimum(pa, pb))).astype(np.int64)
     return np.where(pc == 0, 0, PAIR_TRIALS * pc + int(max_iter))
-
-
-def _work_blocks(work, slice_work):
-    """Consecutive ``slice(start, stop)`` of the items whose summed ``work`` is at
-    most ``slice_work`` (an item over it alone: one item cannot be cut)."""
-    work = np.asarray(work, np.int64)
-    start, total = 0, 0
-    for i, w in enumerate(work.tolist()):
-        if i > start and total + w > slice_work:
-            yield slice(start, i)
-            start, total = i, 0
-        total += w
-    if start < work.size or work.size == 0:
-        yield slice(start, work.size)
-
-
-def grid_blocks(n_e, n_u, per_pixel, slice_work):
-    """grid_blocks(n_e, n_u, per_pixel, slice_work) -> iterator of (rows, cols) slices
-
-    Blocks covering an ``n_u x n_e`` grid of pixels costing ``per_pixel``
-    map steps each, in row-major order, of at most ``slice_work`` map steps
-    each (one pixel at least): bands of whole rows while a row fits, else
-    pieces of one row.
-    """
-    per_pixel = max(1, int(per_pixel))
-    per_row = n_e * per_pixel
-    if per_row <= slice_work:
-        rows = max(1, min(n_u, slice_work // per_row))
-        for s in range(0, n_u, rows):
-            yield slice(s, min(n_u, s + rows)), slice(0, n_e)
-        return
-    cols = max(1, slice_work // per_pixel)
-    for i in range(n_u):
-        for c in range(0, n_e, cols):
-            yield slice(i, i + 1), slice(c, min(n_e, c + cols))
 
 
 def border_point_slices(es, us, period, max_iter, attrs, slice_work):

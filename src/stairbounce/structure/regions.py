@@ -45,6 +45,7 @@ from ..model import SLIDING, check_count, check_state
 from ..symbolic import Word, parse_word, word_from_impacts
 from .continuation import _EPS, _ROUND_ULPS, _Margins, _walk
 from .itinerary import _hash_itinerary, _itinerary_of, _words_grid
+from .slices import grid_blocks
 
 __all__ = ["BorderArc", "Corner", "Region", "RegionComponent", "word_region", "window_regions"]
 
@@ -392,13 +393,11 @@ def _label_grid(es, us, max_iter, y0, v0):
 
 def _label_grid_slices(es, us, max_iter, y0, v0, slice_work):
     """:func:`_label_grid` in blocks of at most ``slice_work`` potential map
-    steps (``max_iter`` per pixel; :func:`stairbounce.borders.grid_blocks`),
+    steps (``max_iter`` per pixel; :func:`stairbounce.structure.slices.grid_blocks`),
     yielding ``(0, None)`` after each block (nothing when ``slice_work`` is
     None: one call); returns the same arrays (pixels are independent)."""
     if slice_work is None:
         return _label_grid(es, us, max_iter, y0, v0)
-    from .borders import grid_blocks
-
     h1 = np.empty((us.size, es.size), dtype=np.uint64)
     h2 = np.empty_like(h1)
     steps = np.empty((us.size, es.size), dtype=np.int64)

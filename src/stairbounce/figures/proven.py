@@ -1,0 +1,186 @@
+"""Proven rows: the certifier (stairbounce.certify_box / certify), re-verified
+by the independent checker (stairbounce.verify), on the windows of Figs. 5e,
+6 and 7."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .rows import Row
+from .settings import DIMENSION_WINDOWS
+
+
+CERTIFY_DEPTH = 9
+"""Depth of the certified atlases of the report's windows at scale 1 (boxes of
+window/256); each halving of ``Settings.scale`` takes one level off (4..12)."""
+
+
+def _certify_depth(s):
+    """The atlas depth for the settings' scale: CERTIFY_DEPTH at scale 1, one
+    level less per halving of the scale, within 4..12."""
+    return int(min(12, max(4, CERTIFY_DEPTH + round(math.log2(s.scale)))))
+
+
+def _rejections(verdicts):
+    """``(checked, rejected, first message)`` over stairbounce.verify's verdicts."""
+    checked = sum(v.checked for v in verdicts)
+    rejected = sum(0 if v.ok else max(v.rejected, 1) for v in verdicts)
+    first = next((v.message for v in verdicts if not v.ok), "")
+    return checked, rejected, first
+
+
+def _proof(n_certs, rejected, first):
+    """(basis, proof, verdict override or None) of a row resting on
+    ``n_certs`` certificates of which the checker ``rejected`` some."""
+    if rejected:
+        return ("numerical", f"NOT proven: sb.verify rejected {rejected} of {n_certs} certificates "
+                f"({first})", ("differs", f"the independent checker rejected {rejected} certificates"))
+    return ("proven", f"interval arithmetic; {n_certs} certificates re-verified by sb.verify", None)
+
+
+def _certified_atlas(s, name, e, u):
+    """The certified atlas of a window at :func:`_certify_depth` and the
+    checker's verdict on it: ``(atlas, depth, n_proven, basis, proof, override)``.
+    A window from e = 0 is certified as it is: its boxes touching e = 0 are
+    undecided ("range"), outside the checker's domain 0 < e of a proven box."""
+    import stairbounce as sb
+
+    depth = _certify_depth(s)
+    s.note(f"{name}: certified atlas, depth {depth}")
+    atlas = sb.certify(e=e, u=u, depth=depth, max_iter=s.max_iter)
+    n_proven = int((atlas.boxes["status"].values != _undecided_code()).sum())
+    v = sb.verify(atlas)
+    rejected = 0 if v.ok else max(v.rejected, 1)
+    basis, proof, override = _proof(n_proven, rejected, v.message)
+    return atlas, depth, n_proven, basis, proof, override
+
+
+def _undecided_code():
+    from ..structure.certificate import STATUSES
+
+    return STATUSES.index("undecided")
+
+
+def _window_text(e, u):
+    return f"[{e[0]:.3g}, {e[1]:g}] x [{u[0]:g}, {u[1]:g}]"
+
+
+def _pixels_in_proven_boxes(atlas, ds):
+    """The scan's pixel centres that lie in a box the atlas proves a word or
+    no sliding: ``(pixels, mismatches)``, a mismatch being a pixel whose float
+    status, period or jump count is not the proven one."""
+    from ..symbolic import parse_word
+
+    b = atlas.boxes
+    (e_lo, e_hi), (u_lo, u_hi) = atlas.window
+    depth = atlas.depth
+    E, U = np.meshgrid(ds.e.values, ds.u.values, indexing="ij")
+    stat = ds.status.transpose("e", "u").values
+    period = ds.period.transpose("e", "u").values
+    jumps = ds.jumps.transpose("e", "u").values
+    n = 1 << depth
+    fi = np.floor((E - e_lo) / (e_hi - e_lo) * n).astype(np.int64)
+    fj = np.floor((U - u_lo) / (u_hi - u_lo) * n).astype(np.int64)
+    inside = (fi >= 0) & (fi < n) & (fj >= 0) & (fj < n)
+    st = b["status"].values
+    keep = st != _undecided_code()
+    level, ii, jj = (b[k].values.astype(np.int64)[keep] for k in ("level", "i", "j"))
+    words, st = b["word"].values[keep], st[keep]
+    # the proven word's period and jump count per box (-1: proven not sliding)
+    names, inv = np.unique(words, return_inverse=True)
+    parsed = [parse_word(str(w)) if w else None for w in names]
+    per = np.array([-1 if w is None else w.period for w in parsed], dtype=np.int64)[inv]
+    jmp = np.array([-1 if w is None else sum(a > 0 for a in w.letters) for w in parsed], dtype=np.int64)[inv]
+    per[st != 0] = jmp[st != 0] = -1
+    key = (level << 50) | (ii << 25) | jj
+    order = np.argsort(key)
+    key = key[order]
+    pixels = mismatches = 0
+    fi, fj = fi[inside], fj[inside]
+    stat, period, jumps = stat[inside], period[inside], jumps[inside]
+    for lv in range(depth + 1):
+        if not key.size:
+            break
+        q = (np.int64(lv) << 50) | ((fi >> (depth - lv)) << 25) | (fj >> (depth - lv))
+        pos = np.minimum(np.searchsorted(key, q), key.size - 1)
+        hit = key[pos] == q
+        box = order[pos[hit]]
+        sliding = per[box] >= 0
+        good = np.where(sliding, (stat[hit] == 0) & (period[hit] == per[box]) & (jumps[hit] == jmp[box]),
+                        stat[hit] != 0)
+        pixels += int(hit.sum())
+        mismatches += int((~good).sum())
+    return pixels, mismatches
+
+
+def _proven_area_row(s, name, e, u, ds, certified):
+    """The window's proven sliding area and proven number of distinct words
+    (a lower bound), from its certified atlas, against the scan ``ds`` of the
+    same window: the proven share must not exceed the pixels' sliding share,
+    and every pixel centre in a proven box must have the proven word."""
+    atlas, depth, n_proven, basis, proof, override = certified
+    f = atlas.fraction()
+    why_f = atlas.fraction(by="reason")
+    words = atlas.words()
+    by_period = words.attrs.get("by_period", {})
+    pixel_share = float((ds.status.values == 0).mean())
+    pixels, mismatches = _pixels_in_proven_boxes(atlas, ds)
+    floor = math.floor(1000 * f["word"]) / 10  # rounded down: a proven lower bound
+    ok = floor <= 100 * pixel_share and mismatches == 0
+    verdict, why = ("agrees" if ok else "differs",
+                    (f"the proven {floor:.1f}% <= the pixels' {100 * pixel_share:.1f}%, and all {pixels} "
+                     f"pixel centres in proven boxes have the proven word" if ok else
+                     f"proven {floor:.1f}% against the pixels' {100 * pixel_share:.1f}%; {mismatches} of "
+                     f"{pixels} pixel centres in proven boxes disagree with their box"))
+    if override:
+        verdict, why = override
+    und = ", ".join(f"{r} {100 * v:.1f}%" for r, v in why_f.items() if v > 0)
+    return Row(f"proven sliding area and number of words (certified atlas, depth {depth})",
+               "the paper's picture of the window (numerical evidence)",
+               f"{_window_text(*atlas.window)}, boxes down to 1/{1 << depth} of the window: at least "
+               f"{floor:.1f}% of the window proven to slide, with at least {len(words)} distinct words "
+               f"(by period: {', '.join(f'{p}: {c}' for p, c in by_period.items())}); "
+               f"{100 * (f['no_sliding'] + f['no_slide_within']):.1f}% proven not to slide; undecided "
+               f"{100 * f['undecided']:.1f}% ({und}); the {ds.sizes['e']} x {ds.sizes['u']} pixel scan: "
+               f"{100 * pixel_share:.1f}% sliding (numerical)",
+               verdict=verdict, why=why, basis=basis, proof=proof + " (areas rounded down)")
+
+
+def _slope_scales(depth):
+    """The scales k1 < k2 of the proven slope bracket: k = 3 .. depth - 2 (the
+    lower bound is 0 at the last two levels by construction), at small depths
+    the two coarsest informative levels."""
+    k2 = max(2, depth - 2)
+    return min(3, k2 - 1), k2
+
+
+def _border_bracket_row(s, name, certified, est):
+    """The proven bracket on the border's box counts N(s) and on the
+    box-counting slope between two scales, beside the numerical dimension
+    ``est`` of this picture: does it lie inside the bracket?"""
+    atlas, depth, n_proven, basis, proof, override = certified
+    counts = atlas.border_box_counts()
+    k1, k2 = _slope_scales(depth)
+    low, up = counts["lower"].to_numpy(float), counts["upper"].to_numpy(float)
+    with np.errstate(divide="ignore"):  # as CertifiedAtlas.slope_bracket, on these counts
+        lo = float(np.log2(low[k2] / up[k1]) / (k2 - k1))
+        hi = float(np.log2(up[k2] / low[k1]) / (k2 - k1))
+    lo_r, hi_r = math.floor(lo * 1000) / 1000, math.ceil(hi * 1000) / 1000  # outward
+    inside = lo_r <= est.dimension <= hi_r
+    verdict, why = ("agrees" if inside else "differs",
+                    f"the numerical D = {est.dimension:.3f} is {'inside' if inside else 'outside'} the "
+                    f"proven bracket [{lo_r:.3f}, {hi_r:.3f}]")
+    if override:
+        verdict, why = override
+    table = "; ".join(f"k = {int(r.k)}: {int(r.lower)}..{int(r.upper)}" for r in counts.itertuples()
+                      if k1 <= r.k <= k2)
+    return Row(f"proven bracket on the border's box counts and slope (certified atlas, depth {depth})",
+               f"D = {DIMENSION_WINDOWS[name][1]} (numerical, box counting on pictures)",
+               f"{_window_text(*atlas.window)}: s-boxes of side window/2^k meeting the border of the "
+               f"sliding region, proven lower..upper bounds, {table}; box-counting slope between k = "
+               f"{k1} and {k2} proven in [{lo_r:.3f}, {hi_r:.3f}] (wide: the dimension stays numerical); "
+               f"this picture's fit: D = {est.dimension:.3f} (numerical)",
+               verdict=verdict, why=why, basis=basis,
+               proof=proof + " (the counts bound N(s); the slope bracket is rounded outward)")
