@@ -34,7 +34,7 @@ import time
 import numpy as np
 
 from stairbounce._io import atomic_path
-from stairbounce.fractal import box_dimension, perimeter_dimension
+from stairbounce.dimension import box_dimension, perimeter_dimension
 
 WINDOWS = {
     "Fig6": dict(e=(0.0, 0.333), u=(0.4, 0.733), paper=1.324),

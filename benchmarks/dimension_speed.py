@@ -29,7 +29,14 @@ import numpy as np
 from stairbounce.atlas import scan_to_zarr
 from stairbounce.atlas_boxes import store_box_counts, store_info
 from stairbounce.figures import DIMENSION_WINDOWS
-from stairbounce.fractal import DEFAULT_EPS, boundary, box_counts, random_points, sliding_classifier, uncertainty_dimension
+from stairbounce.dimension import (
+    DEFAULT_EPS,
+    boundary,
+    box_counts,
+    random_points,
+    sliding_classifier,
+    uncertainty_dimension,
+)
 from stairbounce.plane import scan_points
 
 

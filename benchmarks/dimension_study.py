@@ -49,7 +49,7 @@ from stairbounce._io import atomic_path
 from stairbounce.atlas import scan_to_zarr
 from stairbounce.atlas_boxes import store_box_counts
 from stairbounce.figures import DIMENSION_WINDOWS
-from stairbounce.fractal import (
+from stairbounce.dimension import (
     DEFAULT_EPS,
     box_dimension_from_counts,
     uncertainty_dimension,

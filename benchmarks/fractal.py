@@ -29,7 +29,8 @@ import time
 import numba
 import numpy as np
 
-from stairbounce.fractal import _count_boxes, boundary, box_counts
+from stairbounce.dimension import boundary, box_counts
+from stairbounce.dimension.boxes import _count_boxes
 
 
 def best(fn, repeat):

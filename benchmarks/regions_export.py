@@ -24,7 +24,7 @@ import os
 import time
 
 import stairbounce as sb
-from stairbounce import _region_export as rx
+from stairbounce.structure import export as rx
 
 WINDOWS = {
     "fig5e": ((0.04, 0.065), (0.92, 0.945), False),

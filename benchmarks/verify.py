@@ -33,7 +33,8 @@ import numpy as np
 
 from stairbounce.structure.certificate import STATUSES
 from stairbounce.structure.reference import reference_certificate
-from stairbounce.structure.verify import verify, verify_arrays
+from stairbounce.structure.verdict import verify
+from stairbounce.structure.verify import verify_arrays
 
 FIG7 = ((0.155, 0.2138), (0.6, 0.658))
 

@@ -68,7 +68,7 @@ def test_every_name_resolves_and_has_a_docstring(name):
 
 def test_the_flat_names_are_the_module_functions():
     # the flat API re-exports, it does not wrap (one source of truth)
-    assert sb.box_dimension is sb.fractal.box_dimension
+    assert sb.box_dimension is sb.dimension.box_dimension
     assert sb.scan_coords is plane.scan_coords
     assert sb.scan_to_zarr is sb.atlas.scan_to_zarr
     assert sb.poincare_map is sb.model.poincare_map

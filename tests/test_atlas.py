@@ -19,6 +19,9 @@ from stairbounce import atlas
 from stairbounce.atlas import downsample, scan_to_zarr, tile_slices, tiles_done
 from stairbounce.plane import load, save, scan
 
+from ._cli import run_cli as run
+from ._stores import StopAfter, stop_after
+
 # the scheduler's HTTP server (no dashboard) falls back to a free port when 8787 is taken
 pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")
 
@@ -41,20 +44,6 @@ def client():
         n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
     ) as cluster, distributed.Client(cluster) as c:
         yield c
-
-
-class StopAfter(Exception):
-    pass
-
-
-def stop_after(k):
-    """A progress callback that interrupts the scan once k tiles are complete."""
-
-    def progress(done, total):
-        if done >= k:
-            raise StopAfter(done)
-
-    return progress
 
 
 def assert_store_is_scan(ds, reference):
@@ -518,15 +507,6 @@ def test_downsample_leaves_small_scans_alone(reference):
 # --------------------------------------------------------------------------- #
 
 SCAN_ARGS = ["scan", "--e", "0.05:0.95", "--u", "0.1:1.4", "--size", "45x38", "--max-iter", "400"]
-
-
-def run(args, capsys):
-    from stairbounce.cli import main
-
-    with pytest.raises(SystemExit) as exc:
-        main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
 
 
 def test_cli_tiled_scan_writes_the_store_and_resumes(tmp_path, capsys, reference):

@@ -10,8 +10,10 @@ import pytest
 from stairbounce import atlas_boxes
 from stairbounce.atlas import scan_to_zarr
 from stairbounce.atlas_boxes import store_box_counts, store_box_dimension
-from stairbounce.fractal import box_counts, box_dimension, boundary, label_boundary
+from stairbounce.dimension import box_counts, box_dimension, boundary, label_boundary
 from stairbounce.plane import load
+
+from ._stores import StopAfter, stop_after
 
 pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")
 
@@ -88,16 +90,9 @@ def test_dimension_is_box_dimension_of_the_border(stores, image):
 
 
 def test_incomplete_store_is_refused(tmp_path):
-    class Stop(Exception):
-        pass
-
-    def stop(done, total):
-        if done >= 2:
-            raise Stop
-
     path = tmp_path / "part.zarr"
-    with pytest.raises(Stop):
-        scan_to_zarr(path, tile=32, progress=stop, numba_threads=2, **WINDOW)
+    with pytest.raises(StopAfter):
+        scan_to_zarr(path, tile=32, progress=stop_after(2), numba_threads=2, **WINDOW)
     with pytest.raises(ValueError, match=r"is not complete: \d+ of 25 tiles are missing"):
         store_box_counts(path)
 

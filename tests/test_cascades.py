@@ -12,9 +12,10 @@ import pytest
 
 import stairbounce as sb
 from stairbounce.cascades.patterns import _parse_pattern, word_impacts
-from stairbounce.cli import main
 from stairbounce.model import SLIDING
 from stairbounce.symbolic import word_from_impacts
+
+from ._cli import run_cli as _run
 
 E = 0.02
 U_RANGE = (0.6, 0.75)
@@ -273,13 +274,6 @@ def test_bad_law_input_is_refused_by_name(args, name):
 # --------------------------------------------------------------------------- #
 # Command line                                                                #
 # --------------------------------------------------------------------------- #
-
-
-def _run(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(args)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
 
 
 def test_cli_prints_the_members_and_the_law(tmp_path, capsys, ones):

@@ -11,16 +11,10 @@ import pytest
 import xarray as xr
 
 import stairbounce as sb
-from stairbounce.cli import main
+
+from ._cli import run_cli as run
 
 WINDOW = ["--e", "0:0.3", "--u", "0.3:0.7", "--size", "30x30", "--max-iter", "500"]
-
-
-def run(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(args)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
 
 
 def test_borders_writes_the_library_points(tmp_path, capsys):

@@ -6,15 +6,9 @@ from __future__ import annotations
 
 import pytest
 
-from stairbounce.cli import main
 from stairbounce.cli._app import CLIError, parse_overlays, plural, tile_for_workers
 
-
-def run(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(args)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
+from ._cli import run_cli as run
 
 
 def test_overlay_is_a_comma_list_or_repeated_everywhere():

@@ -11,17 +11,17 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from stairbounce.cli import main
-from stairbounce.fractal import boundary, box_dimension, perimeter_dimension
+from stairbounce.dimension import boundary, box_dimension, perimeter_dimension
+
+from ._cli import run_cli
+from ._stores import StopAfter, stop_after
 
 FIG7 = ["--e", "0.155:0.2138", "--u", "0.6:0.658"]
 
 
 def run(argv, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(["dimension", *argv])
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
+    """``stairbounce dimension ARGV`` in this process."""
+    return run_cli(["dimension", *argv], capsys)
 
 
 def number(pattern, text):
@@ -153,7 +153,7 @@ def test_console_script(tmp_path):
 
 
 def test_uncertainty_is_the_default_for_a_window_and_prints_the_api_result(tmp_path, capsys):
-    from stairbounce.fractal import sliding_classifier, uncertainty_dimension
+    from stairbounce.dimension import sliding_classifier, uncertainty_dimension
 
     png = tmp_path / "u.png"
     code, out, err = run([*FIG7, "--max-iter", "200", "--points", "2000", "--eps", "1e-3:0.1:5",
@@ -216,16 +216,9 @@ def test_uncertainty_and_store_bad_input_exit_2(tmp_path, capsys, small_store, a
 def test_incomplete_store_exits_2(tmp_path, capsys):
     from stairbounce.atlas import scan_to_zarr
 
-    class Stop(Exception):
-        pass
-
-    def stop(done, total):
-        if done >= 1:
-            raise Stop
-
     path = tmp_path / "part.zarr"
-    with pytest.raises(Stop):
-        scan_to_zarr(path, e=(0.155, 0.2138, 64), u=(0.6, 0.658, 64), max_iter=50, tile=16, progress=stop,
+    with pytest.raises(StopAfter):
+        scan_to_zarr(path, e=(0.155, 0.2138, 64), u=(0.6, 0.658, 64), max_iter=50, tile=16, progress=stop_after(1),
                      numba_threads=2)
     code, out, err = run(["--store", str(path)], capsys)
     assert code == 2 and "is not complete" in err and err.count("\n") == 1

@@ -13,12 +13,7 @@ from PIL import Image
 import stairbounce as sb
 from stairbounce.cli import main
 
-
-def run(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(args)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
+from ._cli import run_cli as run
 
 
 def test_word_prints_word_period_impacts(capsys):

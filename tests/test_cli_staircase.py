@@ -19,17 +19,11 @@ import pytest
 import xarray as xr
 
 import stairbounce as sb
-from stairbounce.cli import main
+
+from ._cli import run_cli as run
 
 # a household staircase: 17 cm risers, 29 cm treads
 A, B, G = 0.17, 0.29, 9.81
-
-
-def run(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(args)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
 
 
 def u_of(speed, a=A, b=B, g=G):

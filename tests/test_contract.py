@@ -20,7 +20,8 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import stairbounce as sb
-from stairbounce import atlas, fractal, orbits, plane, units
+from stairbounce import atlas, orbits, plane, units
+from stairbounce import dimension as fractal
 from stairbounce.symbolic import Word
 
 NOT_NUMBERS = [None, "1", "0.5", "abc", True, False, np.bool_(True), 0.5 + 0j, [0.5], (0.5,), {}, b"1",

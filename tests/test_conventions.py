@@ -16,16 +16,10 @@ import xarray as xr
 
 import stairbounce as sb
 from stairbounce import plane
-from stairbounce.cli import main
+
+from ._cli import run_cli as run
 
 FIG5E = ((0.04, 0.065), (0.92, 0.945))
-
-
-def run(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(args)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
 
 
 def no_warning(call):

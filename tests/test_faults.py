@@ -34,10 +34,10 @@ import zarr
 
 from stairbounce import _io, atlas
 from stairbounce.atlas import scan_to_zarr, tiles_done
-from stairbounce.cli import main
 from stairbounce.plane import FILL_VALUES, load, save, scan
 
-from .test_atlas import StopAfter, stop_after
+from ._cli import run_cli as run
+from ._stores import StopAfter, stop_after
 
 pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")
 
@@ -50,13 +50,6 @@ EXE = str(Path(sys.executable).with_name("stairbounce"))
 @pytest.fixture(scope="module")
 def reference():
     return scan(**WINDOW)
-
-
-def run(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
 
 
 def one_line_error(err):

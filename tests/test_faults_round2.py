@@ -26,7 +26,7 @@ from stairbounce import _io
 from stairbounce.atlas import scan_to_zarr, tiles_done
 from stairbounce.plane import load, save, scan
 
-from .test_atlas import StopAfter, stop_after
+from ._stores import StopAfter, stop_after
 from .test_faults import SCAN, TILE, WINDOW, reference, run  # noqa: F401  (reference: a fixture)
 
 pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")

@@ -92,12 +92,9 @@ def test_r4_the_explorer_s_traced_overlay_of_such_a_view():
 
 
 def _cli(capsys, args):
-    from stairbounce.cli import main
+    from ._cli import run_cli
 
-    with pytest.raises(SystemExit) as exc:
-        main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
+    return run_cli(args, capsys)
 
 
 def test_r4_words_regions_names_incomplete_words_and_prints_counts_as_text(capsys, monkeypatch, tmp_path):

@@ -11,7 +11,7 @@ from PIL import Image
 
 from stairbounce import figures as F
 from stairbounce.cli import main
-from stairbounce.fractal import box_dimension, boundary
+from stairbounce.dimension import box_dimension, boundary
 from stairbounce.plane import scan, tongue_mask
 
 from ._figures import patch_figures

@@ -1,4 +1,4 @@
-"""Box counting (stairbounce.fractal) against slow references, against sets of
+"""Box counting (stairbounce.dimension) against slow references, against sets of
 known dimension, and against the paper's Figures 6 and 7."""
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 from scipy import stats
 
-from stairbounce import fractal
-from stairbounce.fractal import (
+from stairbounce.dimension import boxes as dimension_boxes
+from stairbounce.dimension import (
     box_counts,
     box_dimension,
     boundary,
@@ -154,7 +154,7 @@ def test_box_counts_match_naive_loop_on_random_images():
         s2, c2 = box_counts(img, sizes=sizes, offsets=offsets, reduce="mean")
         lists = img.tolist()
         for size, got_min, got_mean in zip(s, c, c2):
-            shifts = fractal._offsets_for(size, offsets)
+            shifts = dimension_boxes._offsets_for(size, offsets)
             ref = [naive.box_count(lists, int(size), oy, ox) for oy in shifts for ox in shifts]
             assert got_min == min(ref)
             assert got_mean == pytest.approx(np.mean(ref))
@@ -178,7 +178,7 @@ def test_pyramid_and_direct_kernel_agree_on_a_large_image():
     img = rng.random((1000, 1331)) < 0.003
     s, c = box_counts(img)
     for size, count in zip(s, c):
-        assert fractal._count_boxes(img.view(np.uint8), int(size), 0, 0) == count
+        assert dimension_boxes._count_boxes(img.view(np.uint8), int(size), 0, 0) == count
 
 
 def test_box_counts_accept_any_nonzero_image():
@@ -432,7 +432,7 @@ def test_plot_box_dimension_draws_border_and_fitted_line():
 def _linear_region_cubic(x, y, tol, min_points):
     """The plain search linear_region used before its O(n^2) form: every
     window refitted from scratch, lengths from the longest down."""
-    from stairbounce.fractal import _fit
+    from stairbounce.dimension.fit import _fit
 
     n = len(x)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -461,7 +461,7 @@ def _linear_region_cubic(x, y, tol, min_points):
 def test_linear_region_quadratic_form_equals_the_plain_search():
     """Report D12: the search was O(n^3).  The O(n^2) form picks the same
     window as the plain one on log-log curves with bends, noise and kinks."""
-    from stairbounce.fractal import linear_region
+    from stairbounce.dimension import linear_region
 
     rng = np.random.default_rng(12)
     for trial in range(60):
@@ -477,7 +477,7 @@ def test_linear_region_quadratic_form_equals_the_plain_search():
 def test_linear_region_is_fast_on_many_points():
     """2000 points (the plain search took more than 30 s) in well under a second
     or two; and a constant x is refused instead of answering (0, n)."""
-    from stairbounce.fractal import linear_region, slope_fit
+    from stairbounce.dimension import linear_region, slope_fit
 
     x = np.log(np.arange(1, 2001, dtype=float))
     y = 1.5 * x + 0.01 * np.sin(7 * x)
@@ -491,7 +491,8 @@ def test_linear_region_is_fast_on_many_points():
 def test_box_counts_offsets_are_bounded():
     """Report D12: offsets=10**9 looped for ever; offsets beyond the box side add
     nothing (every shift is already used) and beyond 64 are refused."""
-    from stairbounce.fractal import _offsets_for, box_counts
+    from stairbounce.dimension import box_counts
+    from stairbounce.dimension.boxes import _offsets_for
 
     assert _offsets_for(4, 64) == [0, 1, 2, 3] == _offsets_for(4, 4)
     assert _offsets_for(8, 3) == [0, 2, 5]
@@ -506,7 +507,7 @@ def test_box_counts_offsets_are_bounded():
 def test_box_sides_beyond_int64_arithmetic_are_refused():
     """Report D5: sizes=[2**63 - 1] counted 0 boxes (int64 overflow), [2**64]
     raised TypeError.  Sides up to 2**31 are counted: one box holds the set."""
-    from stairbounce.fractal import box_counts
+    from stairbounce.dimension import box_counts
 
     img = np.eye(8, dtype=bool)
     for bad in ([2**63 - 1], [2**64], [1.5], [0], ["a"], [True]):

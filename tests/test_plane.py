@@ -15,7 +15,6 @@ import xarray as xr
 
 import stairbounce
 from stairbounce import plane as sc
-from stairbounce.cli import main
 from stairbounce.model import _constants, _slide_or_steps, iterate, no_sliding_bound, tongue
 from stairbounce.plane import (
     no_sliding_curve,
@@ -27,6 +26,8 @@ from stairbounce.plane import (
 )
 from stairbounce.symbolic import sliding_word
 from tests import naive
+
+from ._cli import run_cli as _run
 
 FIELDS = ("status", "word_length", "jumps", "period", "impacts")
 DATA = Path(__file__).parent / "data"
@@ -637,13 +638,6 @@ def test_every_plot_refuses_an_unknown_overlay_by_name():
 # --------------------------------------------------------------------------- #
 # Command line                                                                #
 # --------------------------------------------------------------------------- #
-
-
-def _run(argv, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(argv)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
 
 
 def test_cli_scan_writes_data_and_figure(tmp_path, capsys):

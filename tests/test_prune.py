@@ -272,7 +272,7 @@ def test_progress_blocks_with_pruning():
 
 
 def test_perimeter_dimension_passes_prune():
-    from stairbounce.fractal import perimeter_dimension
+    from stairbounce.dimension import perimeter_dimension
 
     a = perimeter_dimension(e=(0.1, 0.333), u=(0.4, 0.733), method="boxes", resolution=64, max_iter=300,
                             fit_range=(1, 8))

@@ -93,7 +93,8 @@ def test_margins_decide_like_the_map_and_their_derivatives_are_exact():
             xp, xm = [e, u], [e, u]
             xp[k] += h
             xm[k] -= h
-            fd = (F(xp)[0] - F(xm)[0]) / (2 * h)
+            with np.errstate(invalid="ignore"):  # inf - inf where a margin is infinite, masked by ok
+                fd = (F(xp)[0] - F(xm)[0]) / (2 * h)
             ok = np.isfinite(g) & np.isfinite(fd)
             np.testing.assert_allclose(d[ok], fd[ok], rtol=1e-5, atol=1e-5 * (1 + np.abs(d[ok]).max()))
         checked += 1

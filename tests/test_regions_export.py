@@ -90,7 +90,7 @@ def test_pinched_slivers_at_the_tongue_tips_give_a_valid_partition():
     # within rounding of each other, where halving cannot separate their chords; before
     # those chords were noded (both faces through the same points, the pinched sliver's
     # inverted loops dropped), 2 of the 35 polygons self-intersected
-    from stairbounce import _region_export as rx
+    from stairbounce.structure import export as rx
 
     e, u, res = (0.0, 0.999), (0.001, 1.5), 32
     regs = sb.window_regions(e, u, resolution=res)

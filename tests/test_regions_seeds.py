@@ -15,7 +15,7 @@ import pytest
 import stairbounce as sb
 from stairbounce import structure
 from stairbounce.structure import regions
-from tests.test_cli_consistency import run as run_cli
+from tests._cli import run_cli
 from tests.test_regions import _pixel_area
 
 

@@ -49,7 +49,11 @@ def test_citation_file_cites_this_version_and_the_paper():
 
 def test_changelog_says_what_this_release_is():
     text = (ROOT / "CHANGELOG.md").read_text()
-    first = re.search(r"^## (\S+)", text, re.M)
-    assert first and first.group(1) == sb.__version__, "the newest entry is the package's version"
+    # the newest release entry is the package's version; changes not yet released
+    # stand above it under "## Unreleased"
+    heads = re.findall(r"^## (\S+)", text, re.M)
+    released = heads[1:] if heads[:1] == ["Unreleased"] else heads
+    assert released and released[0] == sb.__version__, "the newest entry is the package's version"
+    assert "Unreleased" not in released
     # and the history before it, from the first commit's date
     assert "## 0.1.0" in text

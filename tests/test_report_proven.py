@@ -12,7 +12,7 @@ import pytest
 import stairbounce
 from stairbounce import figures as F
 from stairbounce.plane import scan
-from stairbounce.structure.verify import Verdict
+from stairbounce.structure.verdict import Verdict
 
 
 def _settings(tmp_path, scale):

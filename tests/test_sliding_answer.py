@@ -14,7 +14,8 @@ import pytest
 
 from tests import naive
 import stairbounce as sb
-from stairbounce.cli import main
+
+from ._cli import run_cli as run
 
 
 def cor21(e):
@@ -67,13 +68,6 @@ def test_speed_bound_in_metres_per_second_and_short_repr():
     assert len(long.word) > 10 and "\n" not in repr(long) and len(repr(long)) < 120
     with pytest.raises(ValueError, match="max_iter"):
         sb.sliding_answer(0.5, 0.5, max_iter=0)
-
-
-def run(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(args)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
 
 
 def test_word_command_says_impossible_with_the_speed(capsys):

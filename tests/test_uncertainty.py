@@ -1,4 +1,4 @@
-"""The uncertainty exponent (fractal.uncertain_fraction, uncertainty_dimension,
+"""The uncertainty exponent (dimension.uncertain_fraction, uncertainty_dimension,
 sliding_classifier), validated on borders whose dimension is known exactly.
 
 Sources of the exact answers:
@@ -22,12 +22,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from stairbounce.fractal import (
-    DEFAULT_EPS,
-    random_points,
-    uncertain_fraction,
-    uncertainty_dimension,
-)
+from stairbounce.dimension import DEFAULT_EPS, random_points, uncertain_fraction, uncertainty_dimension
 
 UNIT = ((0.0, 1.0), (0.0, 1.0))
 CANTOR_D = 1.0 + math.log(2.0) / math.log(3.0)
@@ -190,7 +185,7 @@ def test_same_seed_same_points_and_answer():
 
 def test_points_do_not_depend_on_the_chunking(monkeypatch):
     # the classifier is called block by block; the blocks change nothing
-    import stairbounce.fractal as fr
+    from stairbounce.dimension import uncertainty as fr
 
     full = uncertain_fraction(disk, UNIT, [1e-3, 1e-2], n_points=3000, seed=9)
     monkeypatch.setattr(fr, "_CHUNK", 700)
@@ -266,7 +261,7 @@ def test_not_callable_and_too_few_uncertain_points():
 
 @pytest.mark.parametrize("which, field", [("sliding", "status"), ("words", "word_length")])
 def test_sliding_classifier_labels_are_the_scans(which, field):
-    from stairbounce.fractal import sliding_classifier
+    from stairbounce.dimension import sliding_classifier
     from stairbounce.plane import scan
 
     ds = scan(e=(0.155, 0.2138, 40), u=(0.6, 0.658, 30), max_iter=300)
@@ -279,7 +274,7 @@ def test_sliding_classifier_labels_are_the_scans(which, field):
 def test_model_dimension_is_the_same_on_one_thread_and_on_all():
     import numba
 
-    from stairbounce.fractal import sliding_classifier
+    from stairbounce.dimension import sliding_classifier
 
     classify = sliding_classifier(max_iter=200, which="words")
     w = ((0.155, 0.2138), (0.6, 0.658))
@@ -295,7 +290,7 @@ def test_model_dimension_is_the_same_on_one_thread_and_on_all():
 
 
 def test_model_bad_input():
-    from stairbounce.fractal import perimeter_dimension, sliding_classifier
+    from stairbounce.dimension import perimeter_dimension, sliding_classifier
 
     with pytest.raises(ValueError, match="max_iter must be an integer >= 1"):
         sliding_classifier(max_iter=0)
@@ -318,7 +313,7 @@ def test_model_bad_input():
 
 
 def test_answer_file_schema_and_claims():
-    from stairbounce.fractal import border_dimension_estimates
+    from stairbounce.dimension import border_dimension_estimates
 
     data = border_dimension_estimates()
     assert data["generated_by"].startswith("python benchmarks/dimension_study.py")
@@ -340,7 +335,7 @@ def test_answer_file_schema_and_claims():
 def test_figures_report_row_carries_paper_and_estimate():
     from stairbounce.figures import load_border_dimension
     from stairbounce.figures.dimension import _study_row
-    from stairbounce.fractal import border_dimension_estimates
+    from stairbounce.dimension import border_dimension_estimates
 
     best = load_border_dimension()["fig6"]
     row = _study_row("fig6", 1.324, best)
@@ -360,7 +355,7 @@ def test_figures_report_row_carries_paper_and_estimate():
 
 
 def test_fit_of_a_stored_measurement_is_the_same_fit():
-    from stairbounce.fractal import uncertainty_dimension_from_counts
+    from stairbounce.dimension import uncertainty_dimension_from_counts
 
     eps = np.logspace(-4, -1, 7)
     est = uncertainty_dimension(disk, UNIT, eps=eps, n_points=20_000, seed=4, fit_range=(1e-3, 0.1))
@@ -373,7 +368,7 @@ def test_fit_of_a_stored_measurement_is_the_same_fit():
 
 def test_pruning_changes_no_label_of_the_classifier():
     # the Fig. 6 window straddles the Corollary 2.1 curve, where pruning skips work
-    from stairbounce.fractal import sliding_classifier
+    from stairbounce.dimension import sliding_classifier
 
     x, y, _ = random_points(((0.0, 0.333), (0.4, 0.733)), 3000, seed=5)
     for which in ("sliding", "words"):

@@ -19,7 +19,8 @@ import xarray as xr
 import stairbounce as sb
 from stairbounce.structure.certificate import STATUSES, Certificate
 from stairbounce.structure.reference import reference_certificate
-from stairbounce.structure.verify import CHECKS, read_atlas_arrays, verify, verify_arrays, verify_codes, verify_file
+from stairbounce.structure.verdict import read_atlas_arrays, verify, verify_file
+from stairbounce.structure.verify import CHECKS, verify_arrays, verify_codes
 
 FIG5E = ((0.04, 0.065), (0.92, 0.945))
 FIG7 = ((0.155, 0.2138), (0.6, 0.658))
@@ -135,7 +136,7 @@ def test_proven_boxes_agree_with_the_float_package_at_points_inside(window, requ
         for _ in range(3):
             e = rng.uniform(*c.e)
             u = rng.uniform(*c.u)
-            found = sb.sliding_word(e, u, max_steps=c.max_iter)
+            found = sb.sliding_word(e, u, max_iter=c.max_iter)
             if c.status == "word":
                 assert found == c.word, (c.e, c.u, e, u)
             else:

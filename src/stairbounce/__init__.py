@@ -90,14 +90,12 @@ from .structure import Certificate, CertifiedAtlas, certify, certify_box
 from .structure.labels import prove_labels
 from .structure.trapping import TrappingRegion, trapping_region
 from .structure.tubes import BorderTube, border_tube
-from .structure.verify import Verdict, verify
+from .structure.verdict import Verdict, verify
 from .symbolic import SlidingAnswer, Word, parse_word, sliding_answer, sliding_word
 from .trajectory import Accumulation, Flight, Impact, Slide, Trajectory, trajectory
 from .units import Speed, SpeedWindow, Speeds, Staircase, normalized_speed, physical_speed, time_scale
 from ._compat import register_alias as _register_alias
 from ._version import __version__
-from . import fractal  # noqa: F401  (the old name of stairbounce.dimension, an alias)
-from . import _region_export, borders, regions  # noqa: F401  (old paths of stairbounce.structure's modules)
 
 
 # ``sb.scan`` is the function; it doubles as the old module ``stairbounce.scan``
@@ -225,10 +223,14 @@ __all__ = [
 
 # heavy submodules, imported on first use (PEP 562)
 _LAZY_SUBMODULES = ("plot", "figures", "explorer", "cli")
+# the old paths of moved modules, imported (with their DeprecationWarning) only
+# when asked for: stairbounce.fractal (now stairbounce.dimension) and
+# stairbounce.borders, regions, _region_export (now stairbounce.structure's)
+_DEPRECATED_SUBMODULES = ("fractal", "borders", "regions", "_region_export")
 
 
 def __getattr__(name):
-    if name in _LAZY_SUBMODULES:
+    if name in _LAZY_SUBMODULES or name in _DEPRECATED_SUBMODULES:
         return _import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 

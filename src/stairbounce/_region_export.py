@@ -4,6 +4,9 @@ re-exported here, the very object.  An assignment through this module reaches
 nothing: patch :mod:`stairbounce.structure.export`.
 """
 
+import warnings
+
+
 from .structure.export import (  # noqa: F401
     _EPS,
     _MAX_ROUNDS,
@@ -37,3 +40,8 @@ from .structure.export import (  # noqa: F401
     untraced,
     write,
 )
+
+warnings.warn("stairbounce._region_export is deprecated since 0.5.0 and will be removed in 0.6.0: "
+              "import from stairbounce.structure.export"
+              ", or use the flat stairbounce API",
+              DeprecationWarning, stacklevel=2)

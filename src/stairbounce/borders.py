@@ -10,6 +10,9 @@ through this module (``monkeypatch.setattr``) reaches nothing: patch the module
 that looks the name up (docs/design.md, "Architecture and data flow").
 """
 
+import warnings
+
+
 from .structure.bifurcations import (  # noqa: F401
     _MAX_ROUNDS,
     _bifurcation_kernel,
@@ -95,3 +98,8 @@ from .structure.words import (  # noqa: F401
 )
 
 __all__ = ["itinerary", "border_points", "word_table", "bifurcations"]
+
+warnings.warn("stairbounce.borders is deprecated since 0.5.0 and will be removed in 0.6.0: "
+              "import from stairbounce.structure.borders (and .itinerary, .words, .bifurcations, .checks)"
+              ", or use the flat stairbounce API",
+              DeprecationWarning, stacklevel=2)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import sys
 import types
+import warnings
 
 from .dimension import __all__ as _public
 from .dimension import borders, boxes, classifier, fit, perimeter, result, slicing, study, uncertainty
@@ -58,3 +59,8 @@ class _Alias(types.ModuleType):
 
 
 sys.modules[__name__].__class__ = _Alias
+
+warnings.warn("stairbounce.fractal is deprecated since 0.5.0 and will be removed in 0.6.0: "
+              "import from stairbounce.dimension"
+              ", or use the flat stairbounce API",
+              DeprecationWarning, stacklevel=2)

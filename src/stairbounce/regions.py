@@ -11,6 +11,9 @@ through this module (``monkeypatch.setattr``) reaches nothing: patch the module
 that looks the name up (docs/design.md, "Architecture and data flow").
 """
 
+import warnings
+
+
 from .structure.checks import band_similarity  # noqa: F401
 from .structure.continuation import (  # noqa: F401
     _EPS,
@@ -114,3 +117,8 @@ from .structure.trace import (  # noqa: F401
 __all__ = ["BorderArc", "Corner", "Region", "RegionComponent", "BorderGraph", "trace_border",
            "word_region", "window_regions", "border_graph", "regions_geojson", "regions_svg",
            "write_regions", "band_similarity"]
+
+warnings.warn("stairbounce.regions is deprecated since 0.5.0 and will be removed in 0.6.0: "
+              "import from stairbounce.structure.regions (and .continuation, .trace, .graph, .export, .checks)"
+              ", or use the flat stairbounce API",
+              DeprecationWarning, stacklevel=2)

@@ -14,22 +14,40 @@ _OUT_SUFFIXES = (".nc", ".zarr", ".geojson")
 _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
 
+def _pct(x: float, digits: int, down: bool = True) -> str:
+    """``100 x`` in percent with ``digits`` decimals, rounded down (a lower bound stays
+    one) or up, exactly (decimal arithmetic on the float's exact value)."""
+    from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
+
+    q = Decimal(1).scaleb(-digits)
+    return str((Decimal(x) * 100).quantize(q, rounding=ROUND_FLOOR if down else ROUND_CEILING))
+
+
 def _verify(path: Path) -> None:
     try:
-        from ..structure.verify import verify_file
+        from ..structure.verdict import verify
     except ImportError:
         raise CLIError("--verify is not available: this stairbounce has no independent checker "
-                       "(stairbounce.structure.verify)") from None
-    n_checked, n_rejected = verify_file(path)
-    typer.echo(f"{path}: {n_checked} certificates checked, {n_rejected} rejected")
-    if n_rejected:
+                       "(stairbounce.structure.verdict)") from None
+    try:
+        v = verify(path)
+    except ValueError as exc:
+        raise CLIError(str(exc)) from None
+    typer.echo(f"{path}: {v.checked} certificates checked, {v.rejected} rejected: {v.message}")
+    if v.numbers:
+        n = v.numbers
+        typer.echo(f"the checker's numbers ({n['basis']}), shares of {n['of']}:")
+        typer.echo("  " + ", ".join(f"{k} [{_pct(lo, 4)}%, {_pct(hi, 4, down=False)}%]"
+                                    for k, (lo, hi) in n["status"].items()))
+        if not v.complete:
+            lo, hi = n["uncovered_area"]
+            typer.echo(f"  uncovered area in [{lo:.6g}, {hi:.6g}] (the atlas does not cover its window)")
+        words = sorted(n["words"].items(), key=lambda p: (-p[1][0], p[0]))
+        typer.echo(f"  proven words: {len(words)} (at least that many words in {n['of']})")
+        for w, (lo, hi) in words[:10]:
+            typer.echo(f"  {w:<32} area in [{lo:.6g}, {hi:.6g}]")
+    if not v.ok:
         raise typer.Exit(1)
-
-
-def _box_areas(atlas):
-    """Each box's area."""
-    b = atlas.boxes
-    return (b["e1"].values - b["e0"].values) * (b["u1"].values - b["u0"].values)
 
 
 def _picture(atlas, png: Path, dpi: int, force: bool) -> None:
@@ -158,19 +176,21 @@ def certify_(
     n_box = atlas.boxes.sizes["box"]
     typer.echo(f"e in [{e_lo:g}, {e_hi:g}], u in [{u_lo:g}, {u_hi:g}], depth {depth} (boxes down to "
                f"window/{1 << depth}), max_iter {max_iter}: {n_box} boxes in {seconds:.2f} s")
-    typer.echo("proven: " + ", ".join(f"{k} {100 * f[k]:.2f}%" for k in ("word", "no_sliding", "no_slide_within"))
-               + " of the window's area")
+    typer.echo("proven: at least " + ", ".join(f"{k} {_pct(f[k], 2)}%" for k in ("word", "no_sliding", "no_slide_within"))
+               + " of the window's area (proven bounds: the boxes' exact areas summed, rounded down)")
     if trap:
         rs, st = atlas.boxes["reason"].values, atlas.boxes["status"].values
-        trapped = float(((st == STATUSES.index("no_sliding")) & (rs == "trapping")) @ _box_areas(atlas)) / ((e_hi - e_lo) * (u_hi - u_lo))
-        typer.echo(f"  of which no_sliding by a trapping region {100 * trapped:.2f}% (proven: the orbit of (1, 0) "
-                   "never slides there)")
-    typer.echo(f"undecided {100 * f['undecided']:.2f}%: "
-               + ", ".join(f"{k} {100 * v:.2f}%" for k, v in r.items() if v > 0)
+        book = atlas._book()
+        trapped = book.share((st == STATUSES.index("no_sliding")) & (rs == "trapping"))[0]
+        typer.echo(f"  of which no_sliding by a trapping region at least {_pct(trapped, 2)}% (proven: the orbit of "
+                   "(1, 0) never slides there)")
+    f_up = atlas.fraction(bound="upper")
+    typer.echo(f"undecided at most {_pct(f_up['undecided'], 2, down=False)}%: "
+               + ", ".join(f"{k} {_pct(v, 2, down=False)}%" for k, v in atlas.fraction("reason", "upper").items() if v > 0)
                + ("  (nonsliding: numerical, the float map does not slide there)" if r.get("nonsliding") else ""))
     by = ", ".join(f"{p}: {c}" for p, c in words.attrs["by_period"].items())
     typer.echo(f"proven words: {len(words)} (a proven lower bound on the window's words; by period {by})")
-    (a, b), (c, d) = atlas.window
+    shares = atlas.fraction("word")
     for row in words.head(top).itertuples():
-        typer.echo(f"  {row.word:<32} period {row.period:>4}  area >= {100 * row.area / ((b - a) * (d - c)):.3f}% "
+        typer.echo(f"  {row.word:<32} period {row.period:>4}  area >= {_pct(shares[row.word], 3)}% "
                    f"({row.boxes} boxes)")

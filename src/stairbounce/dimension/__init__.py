@@ -37,7 +37,8 @@ estimator where its name says:
 ``study``
     the dimension study's shipped result (:func:`border_dimension_estimates`).
 
-``stairbounce.fractal`` is the old name of this package, kept as an alias.
+``stairbounce.fractal`` is the old name of this package, kept as an alias that
+warns (DeprecationWarning) and will be removed in 0.6.0.
 """
 
 from .borders import boundary, label_boundary

@@ -345,7 +345,7 @@ def proven_at(atlas, e: float, u: float, verify: bool = True, max_steps: int | N
         return out
     if status != "undecided":
         from ..structure.certify import certify_box
-        from ..structure.verify import verify as check
+        from ..structure.verdict import verify as check
 
         cert = certify_box(e=out["box"][0], u=out["box"][1], max_iter=atlas.max_iter, form=str(ds.attrs["form"]))
         out["certificate"] = cert

@@ -89,3 +89,17 @@ def section_in_metres(ax, stairs: Staircase):
     ax.set_xlabel("height at the edge (m)")
     ax.set_ylabel("vertical velocity at the edge (m/s)")
     ax.set_title(f"{ax.get_title()} ({describe(stairs)})", fontsize="medium")
+
+
+def frame_plane(ax, ds, e_lo, e_hi, u_lo, u_hi):
+    """The frame of an (e, u) picture (the scan's and the motion's): limits,
+    axis labels, and the physical speed axis when ``ds`` carries a staircase
+    (:func:`staircase`); returns that staircase, or None."""
+    ax.set_xlim(e_lo, e_hi)
+    ax.set_ylim(u_lo, u_hi)
+    ax.set_xlabel("e (restitution coefficient)")
+    ax.set_ylabel("u (horizontal speed)")
+    stairs = staircase(ds)
+    if stairs is not None:
+        speed_axis(ax.yaxis, stairs)
+    return stairs

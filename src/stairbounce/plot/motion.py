@@ -153,13 +153,7 @@ def plot_motion(ds, field="k_mean", ax=None, sliding=None, overlay=OVERLAYS, col
         e = np.linspace(max(e_lo, 1e-6), e_hi, 600)
         ax.plot(e, (1.0 - e) / (2.0 * np.sqrt(2.0 * e)), color="#e8590c", lw=1.4, ls="--",
                 label="Corollary 2.1: no sliding above")
-    ax.set_xlim(e_lo, e_hi)
-    ax.set_ylim(u_lo, u_hi)
-    ax.set_xlabel("e (restitution coefficient)")
-    ax.set_ylabel("u (horizontal speed)")
-    stairs = _units.staircase(ds)
-    if stairs is not None:
-        _units.speed_axis(ax.yaxis, stairs)
+    _units.frame_plane(ax, ds, e_lo, e_hi, u_lo, u_hi)
     if title is None:
         what = {"speed_spread": "spread of the impact speeds = <k>/(its Cauchy-Schwarz bound) - 1",
                 "lyap1": "lambda_1 (per step): O(1/N) everywhere, lambda_1 = 0"}.get(

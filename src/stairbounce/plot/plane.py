@@ -235,13 +235,7 @@ def plot_scan(ds, field="word_length", ax=None, overlay=(), cmap=None, colorbar=
         if ((curve >= u_lo) & (curve <= u_hi)).any():
             handles.append(plt.Line2D([], [], color=BOUND_COLOR, lw=1.4, ls="--",
                                       label="Corollary 2.1: no sliding above"))
-    ax.set_xlim(e_lo, e_hi)
-    ax.set_ylim(u_lo, u_hi)
-    ax.set_xlabel("e (restitution coefficient)")
-    ax.set_ylabel("u (horizontal speed)")
-    stairs = _units.staircase(ds)
-    if stairs is not None:
-        _units.speed_axis(ax.yaxis, stairs)
+    stairs = _units.frame_plane(ax, ds, e_lo, e_hi, u_lo, u_hi)
     mi = ds.attrs.get("max_iter")
     if title is None:
         speeds = (f"u in [{u_lo:g}, {u_hi:g}]" if stairs is None else

@@ -8,7 +8,8 @@ of points), ``borders`` (border points and word tables), ``bifurcations``,
 ``checks`` (against the paper's theorems), and the certifier: ``certificate``,
 ``_kernel``, ``certify``, ``verify``, ``reference``, ``labels``, ``tubes``.
 ``stairbounce.borders``, ``stairbounce.regions`` and
-``stairbounce._region_export`` are the old paths, kept as re-exports.
+``stairbounce._region_export`` are the old paths, kept as re-exports that
+warn (DeprecationWarning) and will be removed in 0.6.0.
 
 Importing the package loads the certifier's entry points only; the other
 modules load when imported (``stairbounce`` itself imports them all).

@@ -37,7 +37,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-STATUSES = ("word", "no_sliding", "no_slide_within", "undecided")
+from .. import _validate as _v
+
+STATUSES = ("word", "no_sliding", "no_slide_within", "undecided", "sliding")
 """What a certificate states about its box (index = the status code in arrays).
 
 * ``word``: every point of the box has the periodic sliding solution through
@@ -53,6 +55,9 @@ STATUSES = ("word", "no_sliding", "no_slide_within", "undecided")
 * ``no_slide_within``: proven that the orbit of (1, 0) does not slide in the
   first ``max_iter`` steps anywhere in the box (a finite claim): the itinerary
   has ``max_iter`` entries, none -1.
+* ``sliding`` (atlases with ``classes=True``, ``structure/classes.py``): every
+  point of the box slides within ``max_iter`` steps, with one of the listed words
+  (both sides of the undecided decisions followed); no single itinerary.
 * ``undecided``: ``reason`` says which decision could not be proven at
   ``step`` (1-based): ``"chatter"`` (the slide test), ``"graze"`` (the first
   impact, margin of impact 1), ``"edge"`` (a later impact), or another reason
@@ -179,6 +184,220 @@ class Certificate:
 def _region(d):
     if d is None:
         return None
-    from .trapping import TrappingRegion
-
     return TrappingRegion.from_dict(d)
+
+
+def _cell_edge(lo, width, hi, i, n):
+    """The ``i``-th of the ``n + 1`` edges of a grid axis ``[lo, hi]``."""
+    if i >= n:
+        return hi
+    return lo + width * (float(i) * (1.0 / n))
+
+
+@dataclass(frozen=True)
+class TrappingRegion:
+    """A proven trapping region of the box ``e x u`` (:func:`trapping_region`).
+
+    ``itinerary``: the entry, the impact numbers of the decided steps of the
+    orbit of (1, 0) before it is in the region; ``grid = (v_lo, v_hi, nv,
+    s_lo, s_hi, ns)``: the rectangle of the ``(v, s)`` plane cut into
+    ``nv x ns`` cells, cell ``(i, j)`` being ``[edge_v(i), edge_v(i+1)] x
+    [edge_s(j), edge_s(j+1)]`` with ``edge(i) = lo + (hi - lo) * (i * (1/n))``
+    (``hi`` for ``i = n``), floats; ``cells``: the region, the cells' indices
+    ``j * nv + i``, sorted; ``entry``: the enclosure ``(v0, v1, s0, s1)`` of the
+    state after the entry.
+    """
+
+    e: tuple[float, float]
+    u: tuple[float, float]
+    itinerary: tuple[int, ...]
+    grid: tuple[float, float, int, float, float, int]
+    cells: np.ndarray
+    entry: tuple[float, float, float, float]
+
+    def boxes(self):
+        """The region's cells as an ``(n, 4)`` array of ``(v0, v1, s0, s1)``."""
+        v_lo, v_hi, nv, s_lo, s_hi, ns = self.grid
+        i = self.cells % nv
+        j = self.cells // nv
+        ev = np.array([_cell_edge(v_lo, v_hi - v_lo, v_hi, k, nv) for k in range(nv + 1)])
+        es = np.array([_cell_edge(s_lo, s_hi - s_lo, s_hi, k, ns) for k in range(ns + 1)])
+        return np.stack([ev[i], ev[i + 1], es[j], es[j + 1]], axis=1)
+
+    def to_dict(self):
+        """The region as plain JSON types (floats exact by ``json``'s repr)."""
+        return {"e": list(map(float, self.e)), "u": list(map(float, self.u)),
+                "itinerary": [int(k) for k in self.itinerary],
+                "grid": [float(self.grid[0]), float(self.grid[1]), int(self.grid[2]),
+                         float(self.grid[3]), float(self.grid[4]), int(self.grid[5])],
+                "cells": [int(c) for c in self.cells], "entry": list(map(float, self.entry))}
+
+    @classmethod
+    def from_dict(cls, d):
+        """The region of :meth:`to_dict` (nothing re-checked: see ``sb.verify``)."""
+        g = d["grid"]
+        return cls(e=(float(d["e"][0]), float(d["e"][1])), u=(float(d["u"][0]), float(d["u"][1])),
+                   itinerary=tuple(int(k) for k in d["itinerary"]),
+                   grid=(float(g[0]), float(g[1]), int(g[2]), float(g[3]), float(g[4]), int(g[5])),
+                   cells=np.asarray(d["cells"], dtype=np.int64), entry=tuple(map(float, d["entry"])))
+
+
+# --------------------------------------------------------------------------- #
+# The arguments of a box and of a window                                      #
+# --------------------------------------------------------------------------- #
+
+
+def _pair(name, value):
+    if isinstance(value, (str, bytes)) or not isinstance(value, (tuple, list, np.ndarray)) or len(value) != 2:
+        raise ValueError(f"{name} must be a pair ({name}0, {name}1) of real numbers, got {_v._show(value)}")
+    return _v.real(f"{name}0", value[0]), _v.real(f"{name}1", value[1])
+
+
+def _check_e(e, window=False):
+    """``(e0, e1)`` with ``0 < e0 <= e1 < 1`` (a box) or ``0 <= e0 < e1 <= 1`` (a
+    window, whose boxes touching e = 0 or e = 1 are undecided "range"), each 0 or
+    >= 2^-53."""
+    e0, e1 = _pair("e", e)
+    top = "<= 1" if window else "< 1"
+    rule = f"e must be a pair (e0, e1) with 0 {'<=' if window else '<'} e0 {'<' if window else '<='} e1 {top}"
+    if not ((0.0 <= e0 if window else 0.0 < e0) and (e1 <= 1.0 if window else e1 < 1.0)):
+        raise ValueError(f"{rule} (restitution coefficients), got ({e0}, {e1})")
+    if not (e0 < e1 if window else e0 <= e1):
+        raise ValueError(f"{rule}: {'an empty' if e0 == e1 else 'a reversed'} range, got ({e0}, {e1})")
+    for x in (e0, e1):
+        if _v.e_too_small(x):
+            raise ValueError(f"{_v.E_TINY_RULE}, got {x} in e = ({e0}, {e1})")
+    return e0, e1
+
+
+def _check_u(u, window=False):
+    """``(u0, u1)`` within ``[1e-150, 1e150]`` (``u0 = 0`` allowed for a window)."""
+    u0, u1 = _pair("u", u)
+    low = 0.0 if window else _v.U_MIN
+    rule = (f"u must be a pair (u0, u1) with {'0 <=' if window else f'{_v.U_MIN:g} <='} u0 "
+            f"{'<' if window else '<='} u1 <= {_v.U_MAX:g} (horizontal speeds, the valid numeric range)")
+    if not (u0 >= low and u1 <= _v.U_MAX and (u0 > 0.0 or window)):
+        raise ValueError(f"{rule}, got ({u0}, {u1})")
+    if window and 0.0 < u0 < _v.U_MIN:
+        raise ValueError(f"{rule}, got ({u0}, {u1})")
+    if not (u0 < u1 if window else u0 <= u1):
+        raise ValueError(f"{rule}: {'an empty' if u0 == u1 else 'a reversed'} range, got ({u0}, {u1})")
+    return u0, u1
+
+
+# --------------------------------------------------------------------------- #
+# An atlas's table, decoded                                                   #
+# --------------------------------------------------------------------------- #
+
+ATLAS_REASONS = ("", "graze", "edge", "chatter", "impacts", "nonsliding", "range", "trapping", "branches")
+"""The reasons an atlas's box may carry: ``""`` (a proven box), the undecided
+reasons (``structure/certify.py``, ``UNDECIDED_REASONS``) and ``"trapping"`` (a
+``no_sliding`` box proven by a trapping region)."""
+
+
+def _names(ds, key):
+    """The names list ``{key}_names`` of a Zarr store's ``{key}_code`` (save)."""
+    if f"{key}_names" not in ds.attrs:
+        raise ValueError(f"atlas: {key}_code is stored without its names list (the attribute {key}_names)")
+    names = ds.attrs[f"{key}_names"]
+    names = [names] if isinstance(names, str) else list(np.atleast_1d(names))
+    if not all(isinstance(x, str) for x in names):
+        raise ValueError(f"atlas: {key}_names must be a list of texts, got {names!r}")
+    return names
+
+
+def _codes(name, codes, what, n):
+    """Integer ``codes`` each in ``[0, n)`` (indices into ``what``), else ValueError."""
+    codes = np.asarray(codes)
+    if codes.dtype.kind not in "iu":
+        raise ValueError(f"atlas: {name} must hold integers, got dtype {codes.dtype}")
+    bad = (codes < 0) | (codes >= n)
+    if bad.any():
+        raise ValueError(f"atlas: {name} {int(codes[bad][0])} at box {int(np.flatnonzero(bad)[0])} is outside "
+                         f"{what} (0 to {n - 1})")
+    return codes
+
+
+def decode_atlas(ds):
+    """decode_atlas(ds) -> xarray.Dataset
+
+    An atlas's table with its texts decoded, as :meth:`CertifiedAtlas.load` and the
+    checker (``sb.verify``) read it, from an ``.nc`` file, a ``.zarr`` store or memory:
+    ``status`` as int8 codes into :data:`STATUSES` (names are looked up), ``word`` and
+    ``reason`` as Python strings (one object per distinct text), read from a Zarr
+    store's ``word_code``/``reason_code`` and its ``word_names``/``reason_names``
+    attributes.  Refused with ValueError, by name: a code without its names list, a
+    code out of the list's range, a status name or code not in :data:`STATUSES`, a
+    reason not in :data:`ATLAS_REASONS`, and a ``word_code`` or ``reason_code`` beside a
+    ``word`` or ``reason`` (two answers).  Other variables are kept as they are.
+    """
+    import pandas as pd
+
+    ds = ds.copy()
+    ds.attrs = dict(ds.attrs)
+    for key in ("word", "reason"):
+        if f"{key}_code" in ds.variables:
+            if key in ds.variables:
+                raise ValueError(f"atlas: both {key} and {key}_code are stored; one of them must go")
+            names = _names(ds, key)
+            codes = _codes(f"{key}_code", ds[f"{key}_code"].values, f"its names list {key}_names", len(names))
+            table = np.array(names + [""], dtype=object)[:-1] if names else np.zeros(0, dtype=object)
+            ds[key] = (ds[f"{key}_code"].dims, table[codes])
+            ds = ds.drop_vars(f"{key}_code")
+            del ds.attrs[f"{key}_names"]
+        elif f"{key}_names" in ds.attrs:
+            raise ValueError(f"atlas: {key}_names is stored without {key}_code")
+        if key in ds.variables:
+            # one Python string per distinct text (8 bytes a box)
+            v = np.asarray(ds[key].values)
+            codes, names = pd.factorize(v if v.dtype.kind == "O" else v.astype(str).astype(object))
+            names = np.array([str(x) for x in names] + [""], dtype=object)
+            if codes.size and codes.min() < 0:
+                raise ValueError(f"atlas: {key} holds a missing value at box {int(np.flatnonzero(codes < 0)[0])}")
+            ds[key] = (ds[key].dims, names[codes])
+    if "reason" in ds.variables:
+        known = set(ATLAS_REASONS)
+        strange = [r for r in np.unique(ds["reason"].values.astype(str)) if r not in known]
+        if strange:
+            raise ValueError(f"atlas: reason {strange[0]!r} is not one of {', '.join(map(repr, ATLAS_REASONS))}")
+    if "statuses" in ds.attrs and str(ds.attrs["statuses"]) != ",".join(STATUSES):
+        raise ValueError(f"atlas: its status names (attribute statuses) {ds.attrs['statuses']!r} are not "
+                         f"{','.join(STATUSES)!r}")
+    if "status" in ds.variables:
+        st = np.asarray(ds["status"].values)
+        if st.dtype.kind in "USO":
+            index = {s: k for k, s in enumerate(STATUSES)}
+            text = st.astype(str)
+            bad = np.array([s not in index for s in text], dtype=bool)
+            if bad.any():
+                raise ValueError(f"atlas: status {text[bad][0]!r} at box {int(np.flatnonzero(bad)[0])} is not one "
+                                 f"of {', '.join(STATUSES)}")
+            ds["status"] = (ds["status"].dims, np.array([index[s] for s in text], dtype=np.int8))
+        else:
+            st = _codes("status code", st, f"the statuses ({', '.join(STATUSES)})", len(STATUSES))
+            ds["status"] = (ds["status"].dims, st.astype(np.int8))
+    return ds
+
+
+def read_atlas_file(path):
+    """read_atlas_file(path) -> xarray.Dataset: the table of an atlas file (``.nc`` or
+    ``.zarr``) read into memory as stored (:func:`decode_atlas` decodes it); a path of
+    another kind, or a file that cannot be read, refused with ValueError."""
+    from pathlib import Path
+
+    import xarray as xr
+
+    s = str(path).rstrip("/")
+    if not (s.endswith(".nc") or s.endswith(".zarr")):
+        raise ValueError(f"path must be an atlas file ending in .nc or .zarr, got {str(path)!r}")
+    if not (Path(s).is_dir() if s.endswith(".zarr") else Path(s).is_file()):
+        what = "a directory" if s.endswith(".zarr") else "a regular file"
+        raise ValueError(f"cannot read a certified atlas from {path}: not {what}")
+    try:
+        if s.endswith(".zarr"):
+            with xr.open_zarr(s, consolidated=False) as f:
+                return f.load()
+        with xr.open_dataset(s, engine="netcdf4") as f:
+            return f.load()
+    except (OSError, KeyError, ValueError, RuntimeError, TypeError) as exc:  # RuntimeError: a garbled chunk
+        raise ValueError(f"cannot read a certified atlas from {path}: {exc}") from None

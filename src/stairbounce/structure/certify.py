@@ -20,7 +20,7 @@ from .. import _validate as _v
 from ..model import check_count
 from ..symbolic import Word, word_from_impacts
 from . import _kernel as K
-from .certificate import STATUSES, Certificate, Decisions
+from .certificate import STATUSES, Certificate, Decisions, _check_e, _check_u
 
 __all__ = ["certify_box", "certify", "CertifiedAtlas", "UNDECIDED_REASONS"]
 
@@ -50,49 +50,12 @@ _MAX_DEPTH = 26
 # longer itineraries are computed again at the end (64 bytes a box of a level, about
 # twice what the rest of a level holds)
 _KEPT = 32
+_SLIDING_STATUS = STATUSES.index("sliding")
 
 
 # --------------------------------------------------------------------------- #
 # Validation                                                                  #
 # --------------------------------------------------------------------------- #
-
-
-def _pair(name, value):
-    if isinstance(value, (str, bytes)) or not isinstance(value, (tuple, list, np.ndarray)) or len(value) != 2:
-        raise ValueError(f"{name} must be a pair ({name}0, {name}1) of real numbers, got {_v._show(value)}")
-    return _v.real(f"{name}0", value[0]), _v.real(f"{name}1", value[1])
-
-
-def _check_e(e, window=False):
-    """``(e0, e1)`` with ``0 < e0 <= e1 < 1`` (a box) or ``0 <= e0 < e1 <= 1`` (a
-    window, whose boxes touching e = 0 or e = 1 are undecided "range"), each 0 or
-    >= 2^-53."""
-    e0, e1 = _pair("e", e)
-    top = "<= 1" if window else "< 1"
-    rule = f"e must be a pair (e0, e1) with 0 {'<=' if window else '<'} e0 {'<' if window else '<='} e1 {top}"
-    if not ((0.0 <= e0 if window else 0.0 < e0) and (e1 <= 1.0 if window else e1 < 1.0)):
-        raise ValueError(f"{rule} (restitution coefficients), got ({e0}, {e1})")
-    if not (e0 < e1 if window else e0 <= e1):
-        raise ValueError(f"{rule}: {'an empty' if e0 == e1 else 'a reversed'} range, got ({e0}, {e1})")
-    for x in (e0, e1):
-        if _v.e_too_small(x):
-            raise ValueError(f"{_v.E_TINY_RULE}, got {x} in e = ({e0}, {e1})")
-    return e0, e1
-
-
-def _check_u(u, window=False):
-    """``(u0, u1)`` within ``[1e-150, 1e150]`` (``u0 = 0`` allowed for a window)."""
-    u0, u1 = _pair("u", u)
-    low = 0.0 if window else _v.U_MIN
-    rule = (f"u must be a pair (u0, u1) with {'0 <=' if window else f'{_v.U_MIN:g} <='} u0 "
-            f"{'<' if window else '<='} u1 <= {_v.U_MAX:g} (horizontal speeds, the valid numeric range)")
-    if not (u0 >= low and u1 <= _v.U_MAX and (u0 > 0.0 or window)):
-        raise ValueError(f"{rule}, got ({u0}, {u1})")
-    if window and 0.0 < u0 < _v.U_MIN:
-        raise ValueError(f"{rule}, got ({u0}, {u1})")
-    if not (u0 < u1 if window else u0 <= u1):
-        raise ValueError(f"{rule}: {'an empty' if u0 == u1 else 'a reversed'} range, got ({u0}, {u1})")
-    return u0, u1
 
 
 def _check_form(form):
@@ -211,7 +174,7 @@ def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
 
 
 def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress=None, *, tiles=1,
-            form="corners", trap=False) -> CertifiedAtlas:
+            form="corners", trap=False, classes=False) -> CertifiedAtlas:
     """certify(e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, progress=None, *, tiles=1, form="corners", trap=False) -> CertifiedAtlas
 
     Cover a window of the (e, u) plane with boxes, each certified
@@ -225,9 +188,9 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     corners nor centre the float map slides within ``max_iter`` steps stops
     with the reason ``"nonsliding"`` (numerical: the enclosures of a long
     non-sliding orbit widen, and splitting cannot help there), so the atlas
-    tells the undecided area of a border from that of non-sliding motion; an
-    undecided box of the last level is "nonsliding" when its centre does not
-    slide (the pixel of a scan with 2^depth pixels a side).  A
+    tells the undecided area of a border from that of non-sliding motion, at
+    the last level too (the corners are shared between boxes and iterated
+    once).  A
     box touching ``e = 0``, ``e = 1`` or ``u = 0`` is undecided (reason ``"range"``) and
     split down to the last level, so only a strip one box wide stays so.
 
@@ -255,14 +218,26 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
         there, so no periodic sliding solution), its region stored in the
         table (``trap_*`` variables) for ``sb.verify``.
 
+    classes : bool, default False
+        Class-level proofs (:mod:`stairbounce.structure.classes`): an undecided
+        border box (graze, edge, chatter) of the last level (coarser ones are
+        split on, so the words keep their proven areas) has both sides of its undecided
+        decisions followed; it becomes ``sliding`` (every point slides within
+        ``max_iter``, its possible words in ``word``, separated by " | ") or
+        ``no_slide_within`` (reason ``"branches"``) when that is proven, so what
+        stays undecided is the border of the region sliding within ``max_iter``.
+        A box meeting the Corollary 2.1 curve is split down to the last level
+        rather than stopped as "nonsliding".  ``sb.verify`` re-checks them
+        (``structure/verify_branches.py``).
+
     Returns
     -------
     CertifiedAtlas
     """
-    return _certify(e, u, depth, max_iter, progress, tiles, form, trap=trap)
+    return _certify(e, u, depth, max_iter, progress, tiles, form, trap=trap, classes=classes)
 
 
-def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap=False):
+def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap=False, classes=False):
     """:func:`certify`; with ``reference`` the "nonsliding" check is taken box by box in
     the level kernel (:func:`_kernel._any_slides`, the algorithm before the shared
     check of :func:`_mark_nonsliding`; the tests compare the two)."""
@@ -276,6 +251,8 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap
         raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
     if not isinstance(trap, (bool, np.bool_)):
         raise ValueError(f"trap must be True or False, got {trap!r}")
+    if not isinstance(classes, (bool, np.bool_)):
+        raise ValueError(f"classes must be True or False, got {classes!r}")
     start = min(_START_LEVEL, depth)
     allowed = [t for t in (1, 2, 4, 8) if t <= 1 << start]
     tiles = check_count("tiles", tiles, 1)
@@ -304,20 +281,42 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap
             gi, gj = np.meshgrid(np.arange(ti * per_tile, (ti + 1) * per_tile),
                                  np.arange(tj * per_tile, (tj + 1) * per_tile))
             for _, level_done in _run_tile(win, depth, start, gi.ravel(), gj.ravel(), max_iter, code, parts,
-                                           None if reference else points):
+                                           None if reference else points, classes=classes):
                 if level_done:
                     tick()
     cols, kept, row = _box_table(parts)
     del parts
     ds = _atlas_dataset(win, depth, max_iter, code, *cols, kept, row)
+    if classes:
+        from .classes import mark_atlas
+
+        mark_atlas(ds)
     if trap:
         from .trapping import trap_atlas
 
         ds = trap_atlas(ds)
+        _recheck_regions(ds)
     return CertifiedAtlas(ds, seconds=time.perf_counter() - t0)
 
 
-def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch=None):
+def _recheck_regions(ds):
+    """Re-verify the atlas's trapping regions with the independent checker
+    (``structure/verify_trapping.py``) before the atlas is returned; a region that
+    fails is a fault of the certifier: RuntimeError."""
+    from .verify_trapping import check_atlas_regions
+
+    status = ds["status"].values
+    arrays = {"status": status, "max_iter": int(ds.attrs["max_iter"]),
+              **{k: ds[k].values for k in ("e0", "e1", "u0", "u1", "itinerary", "offsets")}}
+    code = np.zeros(status.size, np.int8)
+    check_atlas_regions(ds, arrays, code, 1)
+    if code.any():
+        b = int(np.flatnonzero(code)[0])
+        raise RuntimeError(f"the trapping region of box {b} failed the independent check "
+                           f"({int(np.count_nonzero(code))} regions failed): a fault of the certifier, please report it")
+
+
+def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch=None, classes=False):
     """The quadtree below a batch of boxes ``(gi, gj)`` of level ``start``, as a
     generator: it appends the final boxes to ``out`` as arrays ``(level, i, j, status,
     reason, step, nsteps, kept)``, one tuple per level (``kept``: the kept itineraries
@@ -341,16 +340,22 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch
         step = np.empty(n, np.int64)
         nsteps = np.empty(n, np.int64)
         kept = np.empty((n, _KEPT), np.int16)
-        # the leaves' reason by their centre alone (the pixel of a scan at 2^depth); coarser
-        # boxes stop as "nonsliding" only when neither the centre nor a corner slides
-        ns_points = 0 if level < ns_level else (1 if level == depth else 5)
+        # a box stops as "nonsliding" only when neither its centre nor a corner slides, at
+        # every level from ns_level on, the last included (issue 43: the label's promise)
+        ns_points = 0 if level < ns_level else 5
         size = max(1, n if batch is None else batch)
         for lo in range(0, n, size):
             s = slice(lo, min(n, lo + size))
             run_kernel(K._certify_level, win, level, ii[s], jj[s], max_iter, K.IMPACT_CAP, form,
                        ns_points if points is None else 0, status[s], reason[s], step[s], nsteps[s], kept[s])
+            if classes and level == depth:  # class-level proofs (structure/classes.py) on the leaves:
+                # coarser undecided boxes are split on, so the words keep their proven areas
+                from .classes import classify_level
+
+                classify_level(win, level, ii[s], jj[s], max_iter, status[s], reason[s], nsteps[s])
             if ns_points and points is not None:
-                _mark_nonsliding(win, level, depth, ii[s], jj[s], status[s], reason[s], ns_points, points)
+                _mark_nonsliding(win, level, depth, ii[s], jj[s], status[s], reason[s], ns_points, points,
+                                 keep_curve=classes and level < depth)
             if s.stop < n:
                 yield level, False
         final = (status != K.UNDECIDED) | (reason == K.NONSLIDING) | (level == depth)
@@ -439,12 +444,14 @@ def _slides_at(es, us, max_iter, chunk=1 << 20):
     return out
 
 
-def _mark_nonsliding(win, level, depth, ii, jj, status, reason, ns_points, points):
+def _mark_nonsliding(win, level, depth, ii, jj, status, reason, ns_points, points, keep_curve=False):
     """Give the reason "nonsliding" to the undecided boxes of a level (not "range" nor
     "impacts") at none of whose first ``ns_points`` points (1: the centre; 5: the centre
     and the corners) the float map slides: the verdict of :func:`_kernel._any_slides`,
     taken for all the boxes at once, each corner once (``points``, a :class:`_SlideCache`)."""
     cand = np.flatnonzero((status == K.UNDECIDED) & (reason != K.RANGE) & (reason != K.IMPACTS))
+    if keep_curve and cand.size:  # boxes meeting the Corollary 2.1 curve are split on
+        cand = cand[~_meets_curve(win, level, ii[cand], jj[cand])]
     if not cand.size:
         return
     es, us = np.empty(cand.size), np.empty(cand.size)
@@ -456,6 +463,16 @@ def _mark_nonsliding(win, level, depth, ii, jj, status, reason, ns_points, point
         gj = np.concatenate([cj, cj, cj + 1, cj + 1])
         rest = rest[~points.corners(level, gi, gj).reshape(4, -1).any(axis=0)]
     reason[rest] = K.NONSLIDING
+
+
+def _meets_curve(win, level, ii, jj):
+    """Whether part of each box ``(ii, jj)`` of a level is above the Corollary 2.1 curve
+    (proven at its corner ``(e1, u1)``: a child there would be ``no_sliding``)."""
+    e0, e1, u0, u1 = (np.empty(ii.size) for _ in range(4))
+    K._box_edges(win, np.full(ii.size, level, np.int64), ii, jj, e0, e1, u0, u1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        bound = (1.0 - e1) / (2.0 * np.sqrt(2.0 * e1))
+    return (e1 < 1.0) & (u1 > bound * (1.0 + 1e-12))
 
 
 def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, step, nsteps, kept, row):
@@ -549,6 +566,40 @@ def _area(ds):
     return (ds["e1"].values - ds["e0"].values) * (ds["u1"].values - ds["u0"].values)
 
 
+def _border_classes(st, words, border):
+    """The class of each box for :meth:`CertifiedAtlas.border_box_counts`: -2 undecided,
+    -1 not sliding (``no_sliding``, ``no_slide_within``), >= 0 sliding (``"sliding"``:
+    one class, 0; ``"words"``: one class per proven word, ``sliding`` boxes undecided)."""
+    if border not in ("sliding", "words"):
+        raise ValueError(f"border must be one of sliding, words, got {border!r}")
+    cls = np.full(st.size, -1, np.int64)
+    w = st == K.WORD
+    if border == "sliding":
+        cls[w | (st == _SLIDING_STATUS)] = 0
+    else:
+        if w.any():
+            cls[w] = np.unique(words[w], return_inverse=True)[1]
+        cls[st == _SLIDING_STATUS] = -2
+    cls[st == K.UNDECIDED] = -2
+    return cls
+
+
+def _slope_bounds(lower, upper, dk):
+    """Brackets on the slopes ``log2(N_k / N_{k-1}) / dk`` between consecutive rows
+    of proven counts ``lower <= N <= upper`` (nan first), rounded outward
+    (:func:`tiling.log2_ratio_bounds`; dividing by a power of two is exact, by
+    another ``dk`` moved one float outward)."""
+    from .tiling import log2_ratio_bounds
+
+    lo, _ = log2_ratio_bounds(lower[1:], upper[:-1])
+    _, hi = log2_ratio_bounds(upper[1:], lower[:-1])
+    with np.errstate(invalid="ignore"):
+        lo, hi = lo / dk, hi / dk
+    if dk & (dk - 1):
+        lo, hi = np.nextafter(lo, -np.inf), np.nextafter(hi, np.inf)
+    return np.concatenate([[np.nan], lo]), np.concatenate([[np.nan], hi])
+
+
 class CertifiedAtlas:
     """A window of the (e, u) plane covered by certified boxes (:func:`certify`).
 
@@ -559,13 +610,16 @@ class CertifiedAtlas:
     in the quadtree ``level, i, j``, and the itineraries of the proven
     (``word``, ``no_slide_within``) boxes in the array form of
     :mod:`stairbounce.structure.certificate` (``itinerary``, ``offsets``; the
-    attribute ``max_iter``).  Areas are float sums (rounding of a relative
-    1e-16, not enclosed).
+    attribute ``max_iter``).  Its areas and shares are proven bounds: sums of the
+    boxes' exact areas rounded outward (``structure/tiling.py``); they are of the
+    window when the boxes cover it (always, for an atlas of :func:`certify`), else of
+    the covered part (:meth:`area_basis`).
     """
 
     def __init__(self, boxes, seconds=None):
         self.boxes = boxes
         self.seconds = seconds
+        self._areas = None
 
     # -- what it says ------------------------------------------------------
 
@@ -583,40 +637,62 @@ class CertifiedAtlas:
     def depth(self) -> int:
         return int(self.boxes.attrs["depth"])
 
-    def _window_area(self):
-        (a, b), (c, d) = self.window
-        return (b - a) * (d - c)
+    def _book(self):
+        """The proven areas of the boxes (:class:`tiling.AreaBook`), of the window when
+        the boxes tile it (:func:`tiling.tiling`), else of the covered part."""
+        if self._areas is None:
+            from .tiling import AreaBook, tiling
+
+            ds = self.boxes
+            cols = [ds[k].values for k in ("e0", "e1", "u0", "u1")]
+            t = tiling(self.window, self.depth, ds["level"].values, ds["i"].values, ds["j"].values, *cols)
+            bad = int(np.count_nonzero(~t.placed | t.overlapping))
+            if bad:
+                raise ValueError(f"the atlas's boxes are not its window's quadtree ({bad} boxes misplaced or "
+                                 "overlapping; sb.verify says which): its derived numbers are refused")
+            self._areas = AreaBook(*cols, self.window, t.complete)
+        return self._areas
+
+    def area_basis(self) -> str:
+        """area_basis() -> str: what the areas and shares are of and how they are proven."""
+        return (f"proven bounds of {self._book().of}: sums of the boxes' exact areas rounded outward"
+                + ("" if self._book().complete else " (the boxes do not cover the window)"))
 
     def to_dataframe(self):
-        """The boxes as a pandas DataFrame (status by name; the itineraries left out)."""
-        df = self.boxes.drop_vars(["offsets", "itinerary"]).to_dataframe()
+        """The boxes as a pandas DataFrame, one row per box (status by name; the
+        itineraries and the trapping regions left out: they are not per box)."""
+        box_vars = [k for k, v in self.boxes.data_vars.items() if v.dims == ("box",)]
+        df = self.boxes[box_vars].to_dataframe()
         df["status"] = np.array(STATUSES, dtype=object)[df["status"].to_numpy()]
         return df
 
-    def fraction(self, by="status"):
-        """fraction(by="status") -> dict: the window's area share of each status, or
-        with ``by="reason"`` of each reason of the undecided boxes, or with
-        ``by="word"`` of each proven word."""
-        area = _area(self.boxes) / self._window_area()
-        if by == "status":
-            codes = self.boxes["status"].values
-            return {name: float(area[codes == k].sum()) for k, name in enumerate(STATUSES)}
-        if by == "reason":
-            rs = self.boxes["reason"].values
-            und = self.boxes["status"].values == K.UNDECIDED
-            return {r: float(area[und & (rs == r)].sum()) for r in UNDECIDED_REASONS}
-        if by == "word":
-            return self._word_areas(area)
-        raise ValueError(f"by must be one of status, reason, word, got {by!r}")
+    def fraction(self, by="status", bound="lower"):
+        """fraction(by="status", bound="lower") -> dict: the window's area share of each
+        status, or with ``by="reason"`` of each reason of the undecided boxes, or with
+        ``by="word"`` of each proven word (largest first).
 
-    def _word_areas(self, area):
-        words = self.boxes["word"].values
-        sel = self.boxes["status"].values == K.WORD
-        if not sel.any():
-            return {}
-        names, inverse = np.unique(words[sel], return_inverse=True)
-        sums = np.bincount(inverse, weights=area[sel], minlength=names.size)
-        return {str(w): float(a) for w, a in sorted(zip(names, sums), key=lambda p: -p[1])}
+        Proven (``structure/tiling.py``): ``bound="lower"`` (default) a lower bound on
+        each share, ``"upper"`` an upper bound, ``"both"`` the pair ``(lower, upper)``:
+        the exact share of the boxes' area lies between them (a relative 1e-15 or so apart).
+        Of the covered part when the boxes do not cover the window (:meth:`area_basis`).
+        """
+        if bound not in ("lower", "upper", "both"):
+            raise ValueError(f"bound must be one of lower, upper, both, got {bound!r}")
+        book = self._book()
+        st = self.boxes["status"].values
+        if by == "status":
+            pairs = {name: book.share(st == k) for k, name in enumerate(STATUSES)}
+        elif by == "reason":
+            got = book.groups(self.boxes["reason"].values, st == K.UNDECIDED)
+            pairs = {r: book._ratio(*got[r]) if r in got else (0.0, 0.0) for r in UNDECIDED_REASONS}
+        elif by == "word":
+            got = book.groups(self.boxes["word"].values, st == K.WORD)
+            pairs = {str(w): book._ratio(*a) for w, a in sorted(got.items(), key=lambda p: (-p[1][0], str(p[0])))}
+        else:
+            raise ValueError(f"by must be one of status, reason, word, got {by!r}")
+        if bound == "both":
+            return pairs
+        return {k: v[0 if bound == "lower" else 1] for k, v in pairs.items()}
 
     def word_area_bounds(self, word):
         """word_area_bounds(word) -> (lower, upper): proven bounds on the area of
@@ -626,34 +702,32 @@ class CertifiedAtlas:
         Lower: the area of the boxes proven to have it.  Upper: the window less
         every box proven to be something else (another word, ``no_sliding``, or
         ``no_slide_within`` when the word's period is at most ``max_iter``).
+        Both sums rounded outward (``structure/tiling.py``); of the covered part
+        when the boxes do not cover the window (:meth:`area_basis`).
         """
         from ..symbolic import parse_word
 
         w = word if isinstance(word, Word) else parse_word(word)
         text = w.format(ascii=True)
-        area = _area(self.boxes)
-        st = self.boxes["status"].values
-        words = self.boxes["word"].values
-        mine = (st == K.WORD) & (words == text)
-        other = ((st == K.WORD) & ~mine) | (st == K.NO_SLIDING)
-        if w.period <= self.max_iter:
-            other |= st == K.NO_SLIDE_WITHIN
-        return float(area[mine].sum()), float(self._window_area() - area[other].sum())
+        got = self._book().word_bounds(self.boxes["status"].values, self.boxes["word"].values, self.max_iter,
+                                       lambda _: w.period, only=text)
+        return got[text]
 
     def words(self):
         """words() -> pandas.DataFrame: the proven words (a proven lower bound on
         the number of distinct words in the window), largest proven area first,
         with ``period``, ``length``, ``boxes`` and ``area`` (the proven lower
-        bound on the word's area); ``.attrs["by_period"]`` counts them by period."""
+        bound on the word's area, rounded down: ``structure/tiling.py``);
+        ``.attrs["by_period"]`` counts them by period."""
         import pandas as pd
 
         from ..symbolic import parse_word
 
-        area = _area(self.boxes)
         words = self.boxes["word"].values
         sel = self.boxes["status"].values == K.WORD
-        names, inverse, counts = np.unique(words[sel], return_inverse=True, return_counts=True)
-        sums = np.bincount(inverse, weights=area[sel], minlength=names.size)
+        names, counts = np.unique(words[sel], return_counts=True)
+        got = self._book().groups(words, sel)
+        sums = np.array([got[n][0] for n in names], dtype=np.float64)
         parsed = [parse_word(str(n)) for n in names]
         df = pd.DataFrame({
             "word": [str(n) for n in names], "period": [w.period for w in parsed],
@@ -672,7 +746,8 @@ class CertifiedAtlas:
         itin = _itinerary_buffer(self.max_iter)
         cols = [ds[k].values for k in ("e0", "e1", "u0", "u1")]
         trapped = ds["reason"].values == "trapping"
-        for b in np.flatnonzero(st != K.UNDECIDED):
+        branches = ds["reason"].values == "branches"  # no single itinerary: sb.verify(atlas) checks them
+        for b in np.flatnonzero((st != K.UNDECIDED) & ~branches):
             if trapped[b]:  # a trapping region (structure/trapping.py)
                 from .trapping import certificate_of, region_of
 
@@ -682,11 +757,21 @@ class CertifiedAtlas:
             s, rs, sp, it, dec, marg = _run_box(e0, e1, u0, u1, self.max_iter, form, itin)
             yield _certificate(e0, e1, u0, u1, self.max_iter, s, rs, sp, it, dec, marg)
 
-    def border_box_counts(self):
-        """border_box_counts() -> pandas.DataFrame: for each scale s = window/2^k
-        (k = 0 .. depth) proven bounds on N(s), the number of s-boxes of the
-        window's grid that meet the border between classes (each word one class,
-        ``no_sliding`` and ``no_slide_within`` together "not sliding").
+    def border_box_counts(self, border="words"):
+        """border_box_counts(border="words") -> pandas.DataFrame: for each scale
+        s = window/2^k (k = 0 .. depth) proven bounds on N(s), the number of s-boxes
+        of the window's grid that meet a border between classes of boxes.
+
+        ``border="sliding"`` (the paper's perimeter, Figs. 6 and 7; not yet the
+        default, the report's row reads the default and cannot take a zero lower
+        count, which this border has wherever the non-sliding side is unproven): two classes,
+        the points whose orbit of (1, 0) slides within ``max_iter`` steps (boxes
+        ``word`` and ``sliding``) and those where it does not (``no_sliding``,
+        ``no_slide_within``): the border of the region sliding within
+        ``max_iter``.  ``border="words"``: each word its own class (``sliding``
+        boxes, with several possible words, count as undecided there),
+        ``no_sliding`` and ``no_slide_within`` together "not sliding": the union
+        of all borders.
 
         ``lower``: s-boxes holding proven boxes of two classes (a segment
         between them, inside the s-box, crosses the border).  ``upper``:
@@ -695,6 +780,10 @@ class CertifiedAtlas:
         point lies in an undecided box).  ``slope_lo, slope_hi``: the bracket
         on the finite-scale box-counting slope ``log2(N(s_k)/N(s_{k-1}))``
         between this scale and the one before.
+
+        What it does not prove: the border of the region sliding *at all* (the
+        limit ``max_iter -> infinity``), nor the dimension (the limit of small
+        scales): the bounds hold at the scales listed.
         """
         import pandas as pd
 
@@ -703,12 +792,7 @@ class CertifiedAtlas:
         ii = ds["i"].values
         jj = ds["j"].values
         st = ds["status"].values
-        words = ds["word"].values
-        cls = np.full(st.size, -1, np.int64)  # -1: not sliding; -2: undecided
-        w = st == K.WORD
-        if w.any():
-            cls[w] = np.unique(words[w], return_inverse=True)[1]
-        cls[st == K.UNDECIDED] = -2
+        cls = _border_classes(st, ds["word"].values, border)
         rows = []
         for k in range(self.depth + 1):
             n = 1 << k
@@ -751,24 +835,40 @@ class CertifiedAtlas:
             rows.append({"k": k, "size_e": (e_hi - e_lo) / n, "size_u": (u_hi - u_lo) / n,
                          "lower": int(two.size), "upper": int(upper)})
         df = pd.DataFrame(rows)
-        lo = df["lower"].to_numpy(float)
-        hi = df["upper"].to_numpy(float)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            slope_lo = np.log2(lo[1:] / hi[:-1])
-            slope_hi = np.log2(hi[1:] / lo[:-1])
-        df["slope_lo"] = np.concatenate([[np.nan], slope_lo])
-        df["slope_hi"] = np.concatenate([[np.nan], slope_hi])
+        df["slope_lo"], df["slope_hi"] = _slope_bounds(df["lower"].to_numpy(float), df["upper"].to_numpy(float), 1)
+        df.attrs["of"] = self._book().of
         return df
 
-    def slope_bracket(self, k1, k2):
-        """slope_bracket(k1, k2) -> (lo, hi): proven bracket on the box-counting
-        slope ``log2(N(s_k2)/N(s_k1)) / (k2 - k1)`` between two scales."""
-        df = self.border_box_counts()
+    def slope_bracket(self, k1, k2, border="words"):
+        """slope_bracket(k1, k2, border="words") -> (lo, hi): proven bracket on the
+        box-counting slope ``log2(N(s_k2)/N(s_k1)) / (k2 - k1)`` between two scales
+        of the border :meth:`border_box_counts` counts."""
+        df = self.border_box_counts(border)
         k1 = check_count("k1", k1, 0, self.depth)
         k2 = check_count("k2", k2, k1 + 1, self.depth)
         L, U = df["lower"].to_numpy(float), df["upper"].to_numpy(float)
-        with np.errstate(divide="ignore"):
-            return (float(np.log2(L[k2] / U[k1]) / (k2 - k1)), float(np.log2(U[k2] / L[k1]) / (k2 - k1)))
+        lo, hi = _slope_bounds(L[[k1, k2]], U[[k1, k2]], k2 - k1)
+        return float(lo[1]), float(hi[1])
+
+    def perimeter_bracket(self, k1, k2):
+        """perimeter_bracket(k1, k2) -> dict: what a report row "proven" on the paper's
+        perimeter states: the counts of :meth:`border_box_counts` with
+        ``border="sliding"`` at the scales ``k1 .. k2`` (``lower``, ``upper``
+        lists), the slope bracket between them (``slope``, ``(lo, hi)``; ``-inf``
+        when a lower count is 0), ``basis`` ``"proven"`` with ``proof`` (by what)
+        and ``not_proven`` (what it does not prove)."""
+        k1 = check_count("k1", k1, 0, self.depth)
+        k2 = check_count("k2", k2, k1 + 1, self.depth)
+        df = self.border_box_counts("sliding")
+        sel = (df["k"] >= k1) & (df["k"] <= k2)
+        return {"k1": k1, "k2": k2, "lower": [int(x) for x in df["lower"][sel]],
+                "upper": [int(x) for x in df["upper"][sel]], "slope": self.slope_bracket(k1, k2, "sliding"),
+                "basis": "proven",
+                "proof": (f"certified boxes (interval arithmetic, depth {self.depth}, max_iter {self.max_iter}); "
+                          "the counts bound the number of window/2^k cells meeting the border of the region "
+                          "sliding within max_iter"),
+                "not_proven": ("the border of the region sliding at all (the limit max_iter -> infinity), and "
+                               "the dimension (the limit of small scales)")}
 
     # -- files -------------------------------------------------------------
 
@@ -805,32 +905,12 @@ class CertifiedAtlas:
     @classmethod
     def load(cls, path):
         """load(path) -> CertifiedAtlas: read an atlas written by :meth:`save` (.nc or .zarr)."""
-        import xarray as xr
+        from .certificate import decode_atlas, read_atlas_file
 
-        s = str(path).rstrip("/")
-        try:
-            if s.endswith(".zarr"):
-                ds = xr.open_zarr(path, consolidated=False).load()
-            elif s.endswith(".nc"):
-                with xr.open_dataset(path, engine="netcdf4") as f:
-                    ds = f.load()
-            else:
-                raise ValueError(f"path must end in .nc or .zarr, got {str(path)!r}")
-        except (OSError, KeyError) as exc:
-            raise ValueError(f"cannot read a certified atlas from {path}: {exc}") from None
+        ds = read_atlas_file(path)
         if ds.attrs.get("kind") != "stairbounce certified atlas":
             raise ValueError(f"{path} is not a certified atlas written by stairbounce")
-        import pandas as pd
-
-        for k in ("word", "reason"):
-            if f"{k}_code" in ds:  # a Zarr store (save)
-                names = np.array([str(x) for x in ds.attrs.pop(f"{k}_names")] or [""], dtype=object)
-                ds[k] = ("box", names[ds[f"{k}_code"].values])
-                ds = ds.drop_vars(f"{k}_code")
-            # one Python string per distinct text, as certify makes them (8 bytes a box)
-            v = np.asarray(ds[k].values)
-            codes, names = pd.factorize(v if v.dtype.kind == "O" else v.astype(str).astype(object))
-            ds[k] = ("box", np.asarray(names, dtype=object)[codes])
+        ds = decode_atlas(ds)
         for k in ("e_range", "u_range"):
             ds.attrs[k] = [float(x) for x in np.atleast_1d(ds.attrs[k])]
         return cls(ds)
@@ -867,7 +947,10 @@ class CertifiedAtlas:
                                "max_iter": self.max_iter, "coordinates": "(e, u)"}}
 
     def __repr__(self):
-        f = self.fraction()
         n = self.boxes.sizes["box"]
+        try:
+            f = self.fraction()
+        except ValueError:
+            return f"CertifiedAtlas({n} boxes, depth {self.depth}: not its window's quadtree, numbers refused)"
         parts = ", ".join(f"{k} {100 * v:.1f}%" for k, v in f.items())
         return f"CertifiedAtlas({n} boxes, depth {self.depth}: {parts})"

@@ -57,13 +57,14 @@ re-verifies (a), (b) and (c) from the box, the entry itinerary and the region.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
 from .. import model as _model
 from ._kernel import _dn, _up
+from .certificate import Certificate, TrappingRegion, _check_e, _check_u
+from .certificate import _cell_edge as _cell_edge_py
 
 __all__ = ["TrappingRegion", "trapping_region"]
 
@@ -139,12 +140,8 @@ def _branches(v0, v1, s0, s1, E0, E1, Tl, Th, Rl, out):
     return n
 
 
-@njit(cache=True)
-def _cell_edge(lo, width, hi, i, n):
-    """The ``i``-th of the ``n + 1`` edges of a grid axis ``[lo, hi]``."""
-    if i >= n:
-        return hi
-    return lo + width * (float(i) * (1.0 / n))
+# the edge of certificate.py (TrappingRegion.boxes), compiled for the kernels below
+_cell_edge = njit(cache=True)(_cell_edge_py)
 
 
 @njit(cache=True)
@@ -280,52 +277,6 @@ def _hull(e, u, n0, steps):
     return h, False
 
 
-@dataclass(frozen=True)
-class TrappingRegion:
-    """A proven trapping region of the box ``e x u`` (:func:`trapping_region`).
-
-    ``itinerary``: the entry, the impact numbers of the decided steps of the
-    orbit of (1, 0) before it is in the region; ``grid = (v_lo, v_hi, nv,
-    s_lo, s_hi, ns)``: the rectangle of the ``(v, s)`` plane cut into
-    ``nv x ns`` cells, cell ``(i, j)`` being ``[edge_v(i), edge_v(i+1)] x
-    [edge_s(j), edge_s(j+1)]`` with ``edge(i) = lo + (hi - lo) * (i * (1/n))``
-    (``hi`` for ``i = n``), floats; ``cells``: the region, the cells' indices
-    ``j * nv + i``, sorted; ``entry``: the enclosure ``(v0, v1, s0, s1)`` of the
-    state after the entry.
-    """
-
-    e: tuple[float, float]
-    u: tuple[float, float]
-    itinerary: tuple[int, ...]
-    grid: tuple[float, float, int, float, float, int]
-    cells: np.ndarray
-    entry: tuple[float, float, float, float]
-
-    def boxes(self):
-        """The region's cells as an ``(n, 4)`` array of ``(v0, v1, s0, s1)``."""
-        v_lo, v_hi, nv, s_lo, s_hi, ns = self.grid
-        i = self.cells % nv
-        j = self.cells // nv
-        ev = np.array([_cell_edge(v_lo, v_hi - v_lo, v_hi, k, nv) for k in range(nv + 1)])
-        es = np.array([_cell_edge(s_lo, s_hi - s_lo, s_hi, k, ns) for k in range(ns + 1)])
-        return np.stack([ev[i], ev[i + 1], es[j], es[j + 1]], axis=1)
-
-    def to_dict(self):
-        """The region as plain JSON types (floats exact by ``json``'s repr)."""
-        return {"e": list(map(float, self.e)), "u": list(map(float, self.u)),
-                "itinerary": [int(k) for k in self.itinerary],
-                "grid": [float(self.grid[0]), float(self.grid[1]), int(self.grid[2]),
-                         float(self.grid[3]), float(self.grid[4]), int(self.grid[5])],
-                "cells": [int(c) for c in self.cells], "entry": list(map(float, self.entry))}
-
-    @classmethod
-    def from_dict(cls, d):
-        """The region of :meth:`to_dict` (nothing re-checked: see ``sb.verify``)."""
-        g = d["grid"]
-        return cls(e=(float(d["e"][0]), float(d["e"][1])), u=(float(d["u"][0]), float(d["u"][1])),
-                   itinerary=tuple(int(k) for k in d["itinerary"]),
-                   grid=(float(g[0]), float(g[1]), int(g[2]), float(g[3]), float(g[4]), int(g[5])),
-                   cells=np.asarray(d["cells"], dtype=np.int64), entry=tuple(map(float, d["entry"])))
 
 
 # grid tries: (cells a side, padding of the float orbits' rectangle, in its extent)
@@ -392,8 +343,6 @@ def trapping_region(e, u, max_iter=1000):
     max_iter : int >= 1, default 1000
     """
     from ..model import check_count
-    from .certify import _check_e, _check_u
-
     e0, e1 = _check_e(e)
     u0, u1 = _check_u(u)
     max_iter = check_count("max_iter", max_iter, 1)
@@ -477,8 +426,6 @@ def region_of(ds, b):
 
 def certificate_of(region, max_iter):
     """The ``no_sliding`` :class:`Certificate` (reason ``"trapping"``) of a region."""
-    from .certificate import Certificate
-
     return Certificate(e=region.e, u=region.u, max_iter=int(max_iter), status="no_sliding",
                        reason="trapping", itinerary=region.itinerary, decisions=("trapping region",),
                        margins=np.zeros((0, 2)), region=region)
