@@ -14,6 +14,13 @@ memory, never written).  Timed, best of ``--repeat`` after a warm-up call:
    re-deriving the certificate (``reference_certificate``), on a sample.
 
 Prints boxes per second and the ratios.
+
+With ``--atlas-depth D`` (issue 43 item 3; 0 skips), also, against the numpy
+checker the compiled one replaced (``tests/_verify_numpy.py``) in the same
+process: the Fig. 7 atlas ``sb.certify(depth=D)`` re-verified (boxes/s), a
+no_slide_within certificate of ``--steps`` steps (``certify_box`` and
+``verify``; the numpy checker on ``--old-steps`` of them, per step), and a
+trapping region (``verify_region``).
 """
 
 from __future__ import annotations
@@ -72,6 +79,9 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--depth", type=int, default=12)
     ap.add_argument("--sample", type=int, default=500, help="boxes of the per-box baselines")
+    ap.add_argument("--atlas-depth", type=int, default=12, help="the Fig. 7 atlas's depth (0: skip)")
+    ap.add_argument("--steps", type=int, default=10**6, help="steps of the no_slide_within certificate")
+    ap.add_argument("--old-steps", type=int, default=20000, help="steps given to the numpy checker")
     a = ap.parse_args()
     print(f"load before: {os.getloadavg()}")
     t = time.perf_counter()
@@ -97,7 +107,56 @@ def main():
           f"(verify_arrays x{(a.n / t_all) / (len(sample) / t_one):.0f})")
     print(f"per box, Arb reference re-derived: {len(sample) / t_arb:,.0f} boxes/s  "
           f"(verify_arrays x{(a.n / t_all) / (len(sample) / t_arb):.0f})")
+    if a.atlas_depth:
+        compiled_vs_numpy(a)
     print(f"load after: {os.getloadavg()}")
+
+
+def compiled_vs_numpy(a):
+    import sys
+    from pathlib import Path
+
+    import stairbounce as sb
+    from stairbounce.structure.verify import verify_codes
+    from stairbounce.structure.verify_trapping import verify_region
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from tests import _verify_numpy as old
+
+    t = time.perf_counter()
+    atlas = sb.certify(e=FIG7[0], u=FIG7[1], depth=a.atlas_depth)
+    t_cert = time.perf_counter() - t
+    b = atlas.boxes
+    arr = [np.asarray(b[k].values) for k in ("e0", "e1", "u0", "u1")] + [b["status"].values.astype(np.int64)]
+    arr += [atlas.max_iter, b["itinerary"].values.astype(np.int64), b["offsets"].values.astype(np.int64)]
+    n = len(arr[0])
+    t_new = best(lambda: verify_codes(*arr), a.repeat)
+    t = time.perf_counter()
+    c_old = old.verify_codes(*arr)[0]
+    t_old = time.perf_counter() - t
+    assert (verify_codes(*arr)[0] == c_old).all() and (c_old == 0).all()
+    print(f"Fig. 7 atlas depth {a.atlas_depth}: {n:,} boxes, {len(arr[6]):,} steps (certify {t_cert:.1f} s); "
+          f"compiled {n / t_new:,.0f} boxes/s ({t_new:.2f} s), numpy {n / t_old:,.0f} boxes/s ({t_old:.2f} s): "
+          f"x{t_old / t_new:.1f}  load {os.getloadavg()}")
+    box = ((0.2995, 0.2995 + 3e-16), (0.4135, 0.4135 + 3e-16))
+    t = time.perf_counter()
+    c = sb.certify_box(*box, max_iter=a.steps)
+    t_box = time.perf_counter() - t
+    t_ver = best(lambda: sb.verify(c), a.repeat)
+    short = [np.array([x]) for x in (c.e[0], c.e[1], c.u[0], c.u[1])] + [np.array([2]), a.old_steps]
+    short += [np.asarray(c.itinerary[:a.old_steps], np.int64), np.array([0, a.old_steps])]
+    t = time.perf_counter()
+    assert old.verify_codes(*short)[0][0] == 0
+    t_old = (time.perf_counter() - t) * a.steps / a.old_steps
+    print(f"{c.status} certificate of {len(c.itinerary):,} steps ({len(c.decisions):,} decisions): certify_box "
+          f"{t_box:.2f} s, verify {t_ver:.3f} s; numpy checker {t_old:.1f} s (from {a.old_steps:,} steps): "
+          f"x{t_old / t_ver:.0f}  load {os.getloadavg()}")
+    r = sb.trapping_region((0.299, 0.30), (0.413, 0.414))
+    args = (*r.e, *r.u, 1000, r.itinerary, r.grid, r.cells)
+    t_new = best(lambda: verify_region(*args), a.repeat)
+    t_old = best(lambda: old.verify_region(*args), a.repeat)
+    print(f"trapping region ({len(r.cells)} cells): compiled {1e3 * t_new:.2f} ms, numpy {1e3 * t_old:.1f} ms: "
+          f"x{t_old / t_new:.0f}  load {os.getloadavg()}")
 
 
 if __name__ == "__main__":

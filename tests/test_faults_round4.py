@@ -232,11 +232,10 @@ def test_r9_a_trapping_certificate_with_a_huge_grid_is_refused_by_name(n):
     r = sb.trapping_region(e=(0.299, 0.30), u=(0.413, 0.414))
     assert r is not None
     cert = certificate_of(dataclasses.replace(r, grid=r.grid[:2] + (n,) + r.grid[3:5] + (n,)), 1000)
-    # the report: MemoryError; now the claim is rejected, the verdict naming the grid (the
-    # checker's way with every malformed region: a rejection, not an exception)
-    verdict = sb.verify(cert)
-    assert not verdict and verdict.check == "trapping"
-    assert f"grid of {n} x {n} cells needs about" in verdict.message
+    # the report: MemoryError; now refused by name before anything is allocated: the
+    # checker's work estimate (boxes + steps + cells) names the grid's cells and the limit
+    with pytest.raises(ValueError, match=rf"the trapping region: .* {n * n:,} trapping cells .* limit"):
+        sb.verify(cert)
 
 
 # --------------------------------------------------------------------------- #

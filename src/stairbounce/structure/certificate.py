@@ -32,6 +32,7 @@ after the other) and ``offsets`` (int64, N + 1: box i's itinerary is
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -67,13 +68,65 @@ REASONS = ("graze", "edge", "chatter")
 """The border events (the labels of ``sb.border_points``) an undecided box can stop at."""
 
 
+class Decisions(Sequence):
+    """The names of a certificate's decisions, kept as codes and named on demand.
+
+    ``codes`` (int64, read-only): 0 for ``"slide"``, ``j >= 1`` for
+    ``"impact j"`` (the certifier's record, :func:`stairbounce.certify_box`).
+    A sequence of str like the tuple it stands for: ``len``, indexing (a slice
+    gives a ``Decisions``), iteration, and ``==`` with another ``Decisions``
+    or any sequence of the same names.  A certificate of a million steps keeps
+    one array, not some four million strings.
+    """
+
+    __slots__ = ("codes",)
+
+    def __init__(self, codes):
+        codes = np.array(codes, dtype=np.int64).ravel()
+        if codes.size and codes.min() < 0:
+            raise ValueError(f"decision codes must be >= 0 (0: slide, j: impact j), got {int(codes.min())}")
+        codes.setflags(write=False)
+        self.codes = codes
+
+    @staticmethod
+    def name(code: int) -> str:
+        """The name of one decision code."""
+        return "slide" if code == 0 else f"impact {int(code)}"
+
+    def __len__(self) -> int:
+        return int(self.codes.size)
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return Decisions(self.codes[i])
+        return self.name(int(self.codes[i]))
+
+    def __iter__(self):
+        return (self.name(c) for c in self.codes.tolist())
+
+    def __eq__(self, other) -> bool:
+        if isinstance(other, Decisions):
+            return bool(np.array_equal(self.codes, other.codes))
+        if isinstance(other, Sequence) and not isinstance(other, (str, bytes)):
+            return len(other) == len(self) and all(a == b for a, b in zip(self, other))
+        return NotImplemented
+
+    __hash__ = None
+
+    def __repr__(self) -> str:
+        head = ", ".join(repr(x) for x in self[:4])
+        return f"Decisions({len(self)}: {head}{', ...' if len(self) > 4 else ''})"
+
+
 @dataclass(frozen=True)
 class Certificate:
     """What is proven over one box of the (e, u) plane, with the evidence.
 
     ``margins`` has one row ``(lo, hi)`` per decision taken, in order, and
     ``decisions`` names each (``"slide"`` or ``"impact j"``), so that a reader
-    sees every sign that was decided and by how much.
+    sees every sign that was decided and by how much: a tuple of str, or (from
+    :func:`stairbounce.certify_box`) a :class:`Decisions`, the same names kept
+    as an int array and spelled out when read.
     """
 
     e: tuple[float, float]
@@ -84,7 +137,7 @@ class Certificate:
     reason: str | None = None  # when status == "undecided"
     step: int | None = None  # the undecided step (1-based)
     itinerary: tuple[int, ...] = ()
-    decisions: tuple[str, ...] = ()
+    decisions: tuple[str, ...] | Decisions = ()
     margins: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     region: object | None = None  # structure.trapping.TrappingRegion when reason == "trapping"
 
@@ -94,13 +147,19 @@ class Certificate:
         return self.status != "undecided"
 
     def to_dict(self) -> dict:
-        """The certificate as plain JSON types (floats written exactly by ``json``'s repr)."""
+        """The certificate as plain JSON types (floats written exactly by ``json``'s repr).
+
+        Decisions held as codes (:class:`Decisions`) are written as
+        ``"decision_codes"`` (ints), others as ``"decisions"`` (names);
+        :meth:`from_dict` reads either."""
+        coded = isinstance(self.decisions, Decisions)
         return {
             "e": [float(self.e[0]), float(self.e[1])], "u": [float(self.u[0]), float(self.u[1])],
             "max_iter": int(self.max_iter), "status": self.status,
             "word": None if self.word is None else [int(a) for a in getattr(self.word, "letters")],
             "reason": self.reason, "step": self.step,
-            "itinerary": [int(k) for k in self.itinerary], "decisions": list(self.decisions),
+            "itinerary": [int(k) for k in self.itinerary],
+            **({"decision_codes": self.decisions.codes.tolist()} if coded else {"decisions": list(self.decisions)}),
             "margins": [[float(lo), float(hi)] for lo, hi in np.asarray(self.margins).reshape(-1, 2)],
             **({"region": getattr(self.region, "to_dict")()} if self.region is not None else {}),
         }
@@ -127,7 +186,7 @@ class Certificate:
             max_iter=_integer("max_iter", d["max_iter"]), status=_text("status", d["status"]),
             word=word, reason=d.get("reason"), step=d.get("step"),
             itinerary=_integers("itinerary", d.get("itinerary", ())),
-            decisions=tuple(d.get("decisions", ())),
+            decisions=(Decisions(d["decision_codes"]) if "decision_codes" in d else tuple(d.get("decisions", ()))),
             margins=_margins(d.get("margins", [])),
             region=_region(d.get("region")),
         )

@@ -20,7 +20,7 @@ from .. import _validate as _v
 from ..model import check_count
 from ..symbolic import Word, word_from_impacts
 from . import _kernel as K
-from .certificate import STATUSES, Certificate, _check_e, _check_u
+from .certificate import STATUSES, Certificate, Decisions, _check_e, _check_u
 
 __all__ = ["certify_box", "certify", "CertifiedAtlas", "UNDECIDED_REASONS"]
 
@@ -124,10 +124,6 @@ def _itinerary_buffer(max_iter):
 # --------------------------------------------------------------------------- #
 
 
-def _decision_name(code):
-    return "slide" if code == 0 else f"impact {code}"
-
-
 def _run_box(e0, e1, u0, u1, max_iter, form, itin):
     """Certify one box twice: once to size the record, once recording it."""
     dummy_d = np.empty(0, np.int64)
@@ -148,7 +144,7 @@ def _certificate(e0, e1, u0, u1, max_iter, st, rs, sp, itin, dec, marg):
         reason=UNDECIDED_REASONS[rs] if status == "undecided" else None,
         step=int(sp) if status == "undecided" else None,
         itinerary=tuple(int(k) for k in itin),
-        decisions=tuple(_decision_name(int(c)) for c in dec),
+        decisions=Decisions(dec),
         margins=marg,
     )
 

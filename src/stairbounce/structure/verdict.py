@@ -19,7 +19,7 @@ import numpy as np
 from ..symbolic import Word, parse_word, word_from_impacts
 from .certificate import ATLAS_REASONS, STATUSES, Certificate, check_certificate_fields, decode_atlas, read_atlas_file
 from .tiling import AreaBook, tiling
-from .verify import _BRANCHES, _COR, _ITIN, _OK, _TRAP, _WORD, _WORD_S, CHECKS, verify_codes
+from .verify import _BRANCHES, _COR, _ITIN, _OK, _TRAP, _WORD, _WORD_S, CHECKS, check_work, verify_codes
 from .verify_branches import check_atlas_branches
 from .verify_trapping import check_atlas_regions, verify_certificate_region
 
@@ -74,6 +74,7 @@ def _arrays_of_certificate(cert):
 
 
 def _verify_certificate(cert):
+    check_work(1, len(cert.itinerary), what="the certificate")
     if cert.status == "no_sliding" and cert.reason == "trapping":  # a trapping region (verify_trapping.py)
         return verify_certificate_region(cert, Verdict)
     try:
@@ -329,6 +330,23 @@ def _verify_dataset(data):
                    numbers=numbers)
 
 
+def _read_checked(path):
+    """The atlas file, read after its work (``verify.MAX_WORK``) is estimated
+    from its variables' sizes, opened lazily."""
+    import xarray as xr
+
+    s = str(path)
+    try:
+        f = xr.open_zarr(s, consolidated=False) if s.endswith(".zarr") else xr.open_dataset(s, engine="netcdf4")
+    except Exception:  # noqa: BLE001 - read_atlas_file names what is wrong with the file
+        f = None
+    if f is not None:
+        with f:
+            sizes = [f[name].size if name in f.variables else 0 for name in ("e0", "itinerary", "trap_cells")]
+        check_work(*sizes, what=f"the atlas file {s!r}")
+    return read_atlas_file(path)
+
+
 def verify_file(path):
     """verify_file(path) -> (n_checked, n_rejected)
 
@@ -336,7 +354,7 @@ def verify_file(path):
     :func:`read_atlas_arrays`) with :func:`verify_arrays`; a stored ``word``
     text must be the word its itinerary spells.
     """
-    verdict = _verify_dataset(read_atlas_file(path))
+    verdict = _verify_dataset(_read_checked(path))
     return verdict.checked, verdict.rejected
 
 
@@ -364,7 +382,7 @@ def verify(obj):
         check_certificate_fields(obj)
         return _verify_certificate(obj)
     if isinstance(obj, (str, Path)):
-        return _verify_dataset(read_atlas_file(obj))
+        return _verify_dataset(_read_checked(obj))
     data = getattr(obj, "boxes", obj)
     if hasattr(data, "variables") and hasattr(data, "attrs"):
         return _verify_dataset(data)

@@ -85,13 +85,23 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _validate as _v
+from . import _check_kernel as _ck
 from .certificate import STATUSES
 
-__all__ = ["CHECKS", "verify_arrays", "verify_codes"]
+__all__ = ["CHECKS", "MAX_WORK", "check_work", "verify_arrays", "verify_codes"]
 
 CHECKS = ("ok", "box", "status", "itinerary", "corollary", "slide", "impact", "no impact", "word", "trapping",
           "branches")
 """Names of the checks; ``verify_codes`` returns indices into this tuple (0: accepted)."""
+
+MAX_WORK = 5 * 10**8
+"""The checker's work limit: boxes plus itinerary entries (steps) plus trapping
+cells of one call.  The compiled checker re-decides about 10^7 steps a second
+on one core (benchmarks/README.md), so the limit is about a minute of work and
+4 GB of itinerary; beyond it ``verify``, ``verify_codes`` and ``verify_file``
+refuse with a ValueError naming the size, before reading a file's arrays
+(``stairbounce certify --verify``: one line, exit 2).  Raise it here (it is
+read at each call) to check more in one call."""
 
 _OK, _BOX, _STATUS, _ITIN, _COR, _SLIDE, _IMPACT, _NOIMPACT, _WORD, _TRAP, _BRANCHES = range(len(CHECKS))
 _SLIDING_S = STATUSES.index("sliding")
@@ -100,10 +110,6 @@ _WORD_S, _NOSLIDING_S, _WITHIN_S, _UNDECIDED_S = (STATUSES.index(s) for s in
 # an interval is a (2, n) array: row 0 the lower bounds, row 1 the upper ones;
 # one nextafter call moves both rows outward
 _OUTWARD = np.array([[-np.inf], [np.inf]])
-# boxes followed together, and itinerary entries whose coefficients are held
-# at once (about 40 float64 arrays of this length: some 80 MB)
-_CHUNK = 1 << 15
-_ENTRIES = 1 << 18
 
 
 def _out(x):
@@ -161,19 +167,26 @@ def _pow_point(e, k):
         base = _mul_pos(base, base)
 
 
-def _coefficients(e, k):
-    """At the floats ``e`` (exact), enclosures of ``e^k``, ``A_k``, ``A_{k+1}``
-    and ``B_k`` (see the module's docstring)."""
-    one = np.ones((2, len(e)))
-    ep = _point(e)
-    one_p, one_m = _add(one, ep), _sub(one, ep)
-    E = _pow_point(e, k)
-    eE = _mul_pos(ep, E)
-    A = _div_pos(_sub(one_p, 2.0 * E), one_m)  # 2 E exact: a power of two
-    A1 = _div_pos(_sub(one_p, 2.0 * eE), one_m)
-    omE = np.maximum(_sub(one, E), 0.0)  # 1 - e^k >= 0
-    B = _div_pos(_mul_pos(one_p, omE), one_m)
-    return E, A, A1, B
+def _size(a):
+    """Entries of an array-like, without converting it (0 for a scalar)."""
+    if hasattr(a, "size") and not callable(a.size):
+        return int(a.size)
+    return len(a) if hasattr(a, "__len__") else 0
+
+
+def check_work(n_boxes, n_entries, n_cells=0, what="the certificates"):
+    """check_work(n_boxes, n_entries, n_cells=0, what="the certificates") -> int
+
+    The checker's work estimate ``n_boxes + n_entries + n_cells`` (boxes,
+    itinerary entries, trapping cells), refused beyond :data:`MAX_WORK`."""
+    work = int(n_boxes) + int(n_entries) + int(n_cells)
+    if work > MAX_WORK:
+        raise ValueError(
+            f"{what}: {int(n_boxes):,} boxes, {int(n_entries):,} itinerary entries (steps)"
+            + (f" and {int(n_cells):,} trapping cells" if n_cells else "")
+            + f" are {work:,} units of checking work, more than the checker's limit of {MAX_WORK:,} "
+            "(stairbounce.structure.verify.MAX_WORK, about a minute): split the atlas or raise the limit")
+    return work
 
 
 def _structure(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
@@ -230,6 +243,7 @@ def verify_codes(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
     step's).  The checks and the argument for their rigour are in the module's
     docstring.
     """
+    check_work(_size(e0), _size(itinerary))
     e0, e1, u0, u1 = (np.ascontiguousarray(np.asarray(a, dtype=np.float64).ravel()) for a in (e0, e1, u0, u1))
     n = len(e0)
     status = np.asarray(status).ravel()
@@ -237,8 +251,8 @@ def verify_codes(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
         names = {s: i for i, s in enumerate(STATUSES)}
         status = np.array([names.get(str(s), -1) for s in status], dtype=np.int64)
     status = status.astype(np.int64)
-    itinerary = np.asarray(itinerary, dtype=np.int64).ravel()
-    offsets = np.asarray(offsets, dtype=np.int64).ravel()
+    itinerary = np.ascontiguousarray(np.asarray(itinerary, dtype=np.int64).ravel())
+    offsets = np.ascontiguousarray(np.asarray(offsets, dtype=np.int64).ravel())
     max_iter = _v.count("max_iter", max_iter, 1)
     if not (len(e1) == len(u0) == len(u1) == len(status) == n):
         raise ValueError(f"e0, e1, u0, u1 and status must have one entry per box, got lengths "
@@ -252,79 +266,11 @@ def verify_codes(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
     nos = (code == 0) & (status == _NOSLIDING_S)
     code[nos & ~_corollary(e0, u0)] = _COR
 
-    # the dynamics, along each itinerary; boxes sorted by itinerary length, so
-    # that the boxes still running at step n are a prefix
-    length = np.diff(offsets)
-    run = np.flatnonzero((code == 0) & (length > 0))
-    run = run[np.argsort(-length[run], kind="stable")]
-    # in chunks of boxes of similar length, so that memory stays bounded
-    for c in range(0, len(run), _CHUNK):
-        part = run[c:c + _CHUNK]
-        _follow(e0[part], e1[part], u0[part], u1[part], itinerary, offsets[part], length[part],
-                code, step, part)
+    # the dynamics, along each itinerary: compiled, one box after another, its
+    # steps in order (structure/_check_kernel.py: this module's arithmetic)
+    run = np.flatnonzero((code == 0) & (np.diff(offsets) > 0))
+    _ck.follow(e0, e1, u0, u1, itinerary, offsets, run, code, step, _SLIDE, _IMPACT, _NOIMPACT)
     return code, step
-
-
-def _follow(e0, e1, u0, u1, itinerary, start, length, code, step, index):
-    """Re-decide every step of the boxes (sorted by decreasing ``length``);
-    writes the first failure of box ``index[i]`` into ``code`` and ``step``.
-
-    The itinerary entries are laid out step-major (at step n the boxes still
-    running are a prefix, so their entries are one contiguous slice); the
-    coefficients of a block of steps are computed in one pass, then the loop
-    over the block's steps only carries the state ``(v, s)``.
-    """
-    m = len(e0)
-    counts = np.bincount(length, minlength=int(length[0]) + 1)
-    still = m - np.cumsum(counts)[:-1]  # boxes with length > n, n = 0 .. max - 1
-    edges = np.concatenate([[0], np.cumsum(still)])
-    one = np.ones((2, m))
-    two = 2.0 * one
-    T = np.stack([_div_pos(one, _point(u1))[0], _div_pos(one, _point(u0))[1]])  # 1/u decreases
-    # ratio = (1+e)/(1-e) over the box: its value at e0 (lower) and e1 (upper)
-    R = _over_box(*(_div_pos(_add(one, _point(x)), _sub(one, _point(x))) for x in (e0, e1)))
-    V = np.zeros((2, m))
-    S = _sqrt(two)
-    fail = np.zeros(m, dtype=np.int8)
-    fstep = np.zeros(m, dtype=np.int64)
-    nsteps = len(still)
-    n0 = 0
-    while n0 < nsteps:  # blocks of steps of at most _ENTRIES entries (or one step)
-        n1 = int(np.searchsorted(edges, edges[n0] + _ENTRIES, side="right")) - 1
-        n1 = min(max(n1, n0 + 1), nsteps)
-        rank = np.concatenate([np.arange(still[j]) for j in range(n0, n1)])
-        k = itinerary[start[rank] + np.repeat(np.arange(n0, n1), still[n0:n1])]
-        kk = np.maximum(k, 0)
-        # over [e0, e1] each coefficient lies between its values at e0 and e1
-        E, A, A1, B = (_over_box(x, y) for x, y in zip(_coefficients(e0[rank], kk), _coefficients(e1[rank], kk)))
-        A = np.maximum(A, 0.0)  # A_k >= 1 where k >= 1, its only use
-        for n in range(n0, n1):
-            a = int(still[n])
-            at = slice(edges[n] - edges[n0], edges[n + 1] - edges[n0])
-            kn = k[at]
-            t, v, s = T[:, :a], V[:, :a], S[:, :a]
-            tv = _sub(t, v)  # T - v
-            slide = _sub(tv, _mul_pos(R[:, :a], s))  # (2.4)
-            hit = _sub(tv, _mul_pos(A[:, at], s))  # T - t_k, t_k = v + A_k s
-            miss = _sub(tv, _mul_pos(A1[:, at], s))  # T - t_{k+1}
-            sliding = kn == -1
-            ok_slide = np.where(sliding, slide[0] >= 0.0, slide[1] < 0.0)
-            ok_hit = (kn < 1) | (hit[0] >= 0.0)
-            ok_miss = sliding | (miss[1] < 0.0)
-            bad = ~(ok_slide & ok_hit & ok_miss)
-            if bad.any():
-                new_fail = np.where(~ok_slide, _SLIDE, np.where(~ok_hit, _IMPACT, _NOIMPACT))
-                first = (fail[:a] == 0) & bad
-                fail[:a][first] = new_fail[first]
-                fstep[:a][first] = n + 1
-            # the next state: v' = v - T + B_k s, s' = sqrt(2 + (e^k s)^2)
-            es = _mul_pos(E[:, at], s)
-            V[:, :a] = _add(_sub(v, t), _mul_pos(B[:, at], s))
-            S[:, :a] = _sqrt(_add(_mul_pos(es, es), two[:, :a]))
-        n0 = n1
-    failed = fail != 0
-    code[index[failed]] = fail[failed]
-    step[index[failed]] = fstep[failed]
 
 
 def verify_arrays(e0, e1, u0, u1, status, max_iter, itinerary, offsets):

@@ -1,0 +1,294 @@
+"""The checker's compiled loops (numba): the step-by-step re-decision of
+``structure/verify.py`` and the trapping-region check of
+``structure/verify_trapping.py``, over boxes, steps, cells and impact numbers.
+
+Independent of the certifier: this module shares no code with
+``structure/_kernel.py``, ``structure/trapping.py`` or ``stairbounce.model``.
+Its arithmetic is the checker's, operation for operation (the rigour argument
+is ``verify.py``'s module docstring): every bound is one IEEE-754 operation
+(+, -, *, /, sqrt; correctly rounded to nearest; numba compiles without
+fastmath, so nothing is contracted into a fused multiply-add nor reordered)
+moved one float outward by :func:`_dn` / :func:`_up` (``np.nextafter`` towards
+-inf / +inf).  The scalar operations here are those the numpy version applied
+to whole arrays, in the same order, so both give the same floats and the same
+verdicts (tests/test_verify_fast.py compares them with the numpy checker kept
+in tests/).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+# impact numbers k < _CACHED have their coefficients computed once per box
+_CACHED = 64
+
+
+@njit(cache=True, inline="always")
+def _dn(x):
+    return np.nextafter(x, -np.inf)
+
+
+@njit(cache=True, inline="always")
+def _up(x):
+    return np.nextafter(x, np.inf)
+
+
+@njit(cache=True, inline="always")
+def _min(a, b):  # np.minimum: a NaN wins
+    if a != a or b != b:
+        return np.nan
+    return a if a <= b else b
+
+
+@njit(cache=True, inline="always")
+def _max(a, b):  # np.maximum: a NaN wins
+    if a != a or b != b:
+        return np.nan
+    return a if a >= b else b
+
+
+@njit(cache=True, inline="always")
+def _mul_pos(alo, ahi, blo, bhi):
+    """Product of two non-negative intervals (bounds clipped at 0)."""
+    return _max(_dn(alo * blo), 0.0), _max(_up(ahi * bhi), 0.0)
+
+
+@njit(cache=True, inline="always")
+def _div_pos(alo, ahi, blo, bhi):
+    """``a / b`` for ``b`` positive, ``a`` of any sign."""
+    return _dn(_min(alo / blo, alo / bhi)), _up(_max(ahi / bhi, ahi / blo))
+
+
+@njit(cache=True, inline="always")
+def _sqrt(alo, ahi):
+    """Root of a non-negative interval."""
+    return (_max(_dn(np.sqrt(_max(alo, 0.0))), 0.0), _max(_up(np.sqrt(_max(ahi, 0.0))), 0.0))
+
+
+@njit(cache=True)
+def _coefficients(e, k):
+    """At the float ``e`` (exact), enclosures of ``e^k``, ``A_k``, ``A_{k+1}``
+    and ``B_k`` (verify.py's docstring), as eight floats ``(E_lo, E_hi, A_lo,
+    A_hi, A1_lo, A1_hi, B_lo, B_hi)``; ``e^k`` by binary powering with each
+    product rounded outward."""
+    elo, ehi = 1.0, 1.0
+    blo, bhi = e, e
+    while True:
+        if k & 1:
+            elo, ehi = _mul_pos(elo, ehi, blo, bhi)
+        k >>= 1
+        if k == 0:
+            break
+        blo, bhi = _mul_pos(blo, bhi, blo, bhi)
+    ope_lo, ope_hi = _dn(1.0 + e), _up(1.0 + e)  # 1 + e
+    ome_lo, ome_hi = _dn(1.0 - e), _up(1.0 - e)  # 1 - e
+    eelo, eehi = _mul_pos(e, e, elo, ehi)  # e^(k+1)
+    # 1 + e - 2 e^k (2 e^k exact: a power of two), over 1 - e
+    alo, ahi = _div_pos(_dn(ope_lo - 2.0 * ehi), _up(ope_hi - 2.0 * elo), ome_lo, ome_hi)
+    a1lo, a1hi = _div_pos(_dn(ope_lo - 2.0 * eehi), _up(ope_hi - 2.0 * eelo), ome_lo, ome_hi)
+    # 1 - e^k >= 0
+    omlo, omhi = _max(_dn(1.0 - ehi), 0.0), _max(_up(1.0 - elo), 0.0)
+    plo, phi = _mul_pos(ope_lo, ope_hi, omlo, omhi)
+    b_lo, b_hi = _div_pos(plo, phi, ome_lo, ome_hi)
+    return elo, ehi, alo, ahi, a1lo, a1hi, b_lo, b_hi
+
+
+@njit(cache=True, inline="always")
+def _times(u0, u1):
+    """``T = 1/u`` over ``[u0, u1]`` (decreasing in u): lower at u1, upper at u0."""
+    return _div_pos(1.0, 1.0, u1, u1)[0], _div_pos(1.0, 1.0, u0, u0)[1]
+
+
+@njit(cache=True)
+def _fill(coef, at, e0, e1, k):
+    """The coefficients of impact number ``k`` over ``[e0, e1]`` into ``coef[at]``:
+    each increases with e, so its lower bound at e0 and upper bound at e1."""
+    c0 = _coefficients(e0, k)
+    c1 = _coefficients(e1, k)
+    for q in range(4):
+        coef[at, 2 * q] = c0[2 * q]
+        coef[at, 2 * q + 1] = c1[2 * q + 1]
+
+
+@njit(cache=True)
+def follow(e0, e1, u0, u1, itinerary, offsets, boxes, code, step, c_slide, c_impact, c_noimpact):
+    """Re-decide every step of the boxes ``boxes``; writes the first failure of
+    box ``b`` (``c_slide``, ``c_impact`` or ``c_noimpact``) into ``code[b]`` and
+    its 1-based step into ``step[b]``.  Box ``b``'s itinerary is
+    ``itinerary[offsets[b]:offsets[b + 1]]`` (entries >= -1, checked before)."""
+    stamp = np.full(_CACHED, -1, np.int64)
+    cache = np.empty((_CACHED, 8))
+    one_c = np.empty((1, 8))
+    for bi in range(len(boxes)):
+        b = boxes[bi]
+        a, z = e0[b], e1[b]
+        tlo, thi = _times(u0[b], u1[b])
+        # ratio = (1+e)/(1-e) over the box: its value at e0 (lower) and e1 (upper)
+        rlo = _div_pos(_dn(1.0 + a), _up(1.0 + a), _dn(1.0 - a), _up(1.0 - a))[0]
+        rhi = _div_pos(_dn(1.0 + z), _up(1.0 + z), _dn(1.0 - z), _up(1.0 - z))[1]
+        vlo, vhi = 0.0, 0.0
+        slo, shi = _sqrt(2.0, 2.0)
+        for n in range(offsets[b], offsets[b + 1]):
+            k = itinerary[n]
+            kk = k if k > 0 else 0
+            if kk < _CACHED:
+                if stamp[kk] != bi:
+                    _fill(cache, kk, a, z, kk)
+                    stamp[kk] = bi
+                c = cache[kk]
+            else:
+                _fill(one_c, 0, a, z, kk)
+                c = one_c[0]
+            tvlo, tvhi = _dn(tlo - vhi), _up(thi - vlo)  # T - v
+            rs = _mul_pos(rlo, rhi, slo, shi)
+            slide_lo, slide_hi = _dn(tvlo - rs[1]), _up(tvhi - rs[0])  # (2.4)
+            bad = 0
+            if k == -1:
+                if not slide_lo >= 0.0:
+                    bad = c_slide
+            else:
+                if not slide_hi < 0.0:
+                    bad = c_slide
+                else:
+                    if k >= 1:  # T - t_k, t_k = v + A_k s (A_k >= 0 here)
+                        hs = _mul_pos(_max(c[2], 0.0), _max(c[3], 0.0), slo, shi)
+                        if not _dn(tvlo - hs[1]) >= 0.0:
+                            bad = c_impact
+                    if bad == 0:  # T - t_{k+1}
+                        ms = _mul_pos(c[4], c[5], slo, shi)
+                        if not _up(tvhi - ms[0]) < 0.0:
+                            bad = c_noimpact
+            if bad != 0:
+                code[b] = bad
+                step[b] = n - offsets[b] + 1
+                break
+            # the next state: v' = v - T + B_k s, s' = sqrt(2 + (e^k s)^2)
+            es_lo, es_hi = _mul_pos(c[0], c[1], slo, shi)
+            bs_lo, bs_hi = _mul_pos(c[6], c[7], slo, shi)
+            vlo, vhi = _dn(_dn(vlo - thi) + bs_lo), _up(_up(vhi - tlo) + bs_hi)
+            q_lo, q_hi = _mul_pos(es_lo, es_hi, es_lo, es_hi)
+            slo, shi = _sqrt(_dn(q_lo + 2.0), _up(q_hi + 2.0))
+
+
+@njit(cache=True)
+def entered(e0, e1, u0, u1, itinerary):
+    """The enclosure ``(v0, v1, s0, s1)`` of the state after the itinerary
+    (impact numbers >= 0), from ``(v, s) = (0, sqrt 2)`` with ``v' = v - T +
+    B_k s``, ``s' = sqrt(2 + (e^k s)^2)``."""
+    tlo, thi = _times(u0, u1)
+    vlo, vhi = 0.0, 0.0
+    slo, shi = _sqrt(2.0, 2.0)
+    for n in range(len(itinerary)):
+        k = itinerary[n]
+        c0 = _coefficients(e0, k if k > 0 else 0)
+        c1 = _coefficients(e1, k if k > 0 else 0)
+        es_lo, es_hi = _mul_pos(c0[0], c1[1], slo, shi)
+        bs_lo, bs_hi = _mul_pos(_max(c0[6], 0.0), _max(c1[7], 0.0), slo, shi)
+        vlo, vhi = _dn(_dn(vlo - thi) + bs_lo), _up(_up(vhi - tlo) + bs_hi)
+        q_lo, q_hi = _mul_pos(es_lo, es_hi, es_lo, es_hi)
+        slo, shi = _sqrt(_dn(q_lo + 2.0), _up(q_hi + 2.0))
+    return vlo, vhi, slo, shi
+
+
+@njit(cache=True)
+def _search_right(edges, x):
+    """``np.searchsorted(edges, x, "right")`` for a finite ``x``."""
+    lo, hi = 0, len(edges)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if edges[mid] <= x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True)
+def _search_left(edges, x):
+    """``np.searchsorted(edges, x, "left")`` for a finite ``x``."""
+    lo, hi = 0, len(edges)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if edges[mid] < x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True)
+def covered(prefix, ev, es, a0, a1, b0, b1):
+    """Whether the rectangle ``[a0, a1] x [b0, b1]`` lies in the union of the
+    flagged cells of the grid with edges ``ev`` (v) and ``es`` (s);
+    ``prefix[j, i]`` counts the flagged cells below row j and left of column i."""
+    nv, ns = len(ev) - 1, len(es) - 1
+    if not (a0 >= ev[0] and a1 <= ev[nv] and b0 >= es[0] and b1 <= es[ns] and a0 <= a1 and b0 <= b1):
+        return False
+    i0 = min(max(_search_right(ev, a0) - 1, 0), nv - 1)
+    i1 = max(min(max(_search_left(ev, a1) - 1, 0), nv - 1), i0)
+    j0 = min(max(_search_right(es, b0) - 1, 0), ns - 1)
+    j1 = max(min(max(_search_left(es, b1) - 1, 0), ns - 1), j0)
+    count = prefix[j1 + 1, i1 + 1] - prefix[j0, i1 + 1] - prefix[j1 + 1, i0] + prefix[j0, i0]
+    return count == (i1 - i0 + 1) * (j1 - j0 + 1)
+
+
+@njit(cache=True)
+def region_check(e0, e1, u0, u1, v0, v1, s0, s1, prefix, ev, es, cap):
+    """The ``slide`` and ``invariant`` checks of ``verify_trapping.verify_region``
+    on the cells ``[v0, v1] x [s0, s1]`` (arrays): 0 when both hold, 1 when the
+    slide margin is not proven < 0 on a cell, 2 when an image is not covered (or
+    an impact number beyond ``cap`` stays possible).  The loop over impact
+    numbers k runs while some cell may still take impact k (as the numpy
+    version did)."""
+    m = len(v0)
+    th = _times(u0, u1)[1]  # T at u0, upper bound
+    tl = _times(u0, u1)[0]  # T at u1, lower bound
+    ratio0 = _div_pos(_dn(1.0 + e0), _up(1.0 + e0), _dn(1.0 - e0), _up(1.0 - e0))[0]
+    for c in range(m):
+        if not _up(_up(th - v0[c]) - _dn(ratio0 * s0[c])) < 0.0:
+            return 1
+    live = np.ones(m, np.bool_)
+    hi_prev = np.full(m, np.inf)
+    for k in range(cap + 1):
+        E_lo, _, A_lo, _, A1_lo, _, B_lo, _ = _coefficients(e0, k)
+        _, E_hi, _, A_hi, _, A1_hi, _, B_hi = _coefficients(e1, k)
+        any_live = False
+        for c in range(m):
+            # margins T - v - A s: least at the upper corner, largest at the lower one
+            lo_next = _dn(tl - _up(v1[c] + _up(A1_hi * s1[c])))  # T - t_{k+1}, least
+            if k:
+                lo_k = _dn(tl - _up(v1[c] + _up(A_hi * s1[c])))
+                hi_k = _up(th - _dn(v0[c] + _max(_dn(A_lo * s0[c]), 0.0)))
+            else:
+                lo_k = -np.inf
+                hi_k = hi_prev[c]
+            can = live[c] and not (lo_next >= 0.0)
+            if k and hi_k < 0.0:
+                can = False
+            if can:
+                # v' = v - T + B_k s, s' = sqrt(2 + (e^k s)^2), increasing: the corners
+                a0 = _dn(_dn(v0[c] - th) + _max(_dn(B_lo * s0[c]), 0.0))
+                a1 = _up(_up(v1[c] - tl) + _up(B_hi * s1[c]))
+                w_lo = _max(_dn(E_lo * s0[c]), 0.0)
+                w_hi = _up(E_hi * s1[c])
+                if k:  # v' = w_k - d, d = T - t_k in [max(lo_k, 0), hi_k] and [0, 2 w_k)
+                    a0 = _max(_max(a0, _dn(w_lo - hi_k)), -w_hi)
+                    a1 = _min(a1, _up(w_hi - _max(lo_k, 0.0)))
+                else:  # v' = -(T - t_1) - s with T - t_1 < 0 and >= its lower bound
+                    hi1 = _up(th - _dn(v0[c] + _max(_dn(1.0 * s0[c]), 0.0)))
+                    a0 = _max(a0, _dn(-_min(hi1, 0.0) - s1[c]))
+                    a1 = _min(a1, _up(-lo_next - s0[c]))
+                q0 = _mul_pos(w_lo, w_lo, w_lo, w_lo)[0]
+                b0 = _sqrt(_dn(q0 + 2.0), _dn(q0 + 2.0))[0]
+                q1 = _mul_pos(w_hi, w_hi, w_hi, w_hi)[1]
+                b1 = _sqrt(_up(q1 + 2.0), _up(q1 + 2.0))[1]
+                if not covered(prefix, ev, es, a0, a1, b0, b1):
+                    return 2
+            # impact k + 1 may happen where T - t_{k+1} is not proven < 0
+            hi_prev[c] = _up(th - _dn(v0[c] + _max(_dn(A1_lo * s0[c]), 0.0)))
+            live[c] = not (hi_prev[c] < 0.0)
+            any_live = any_live or live[c]
+        if not any_live:
+            return 0
+    return 2
