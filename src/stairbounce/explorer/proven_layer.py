@@ -17,7 +17,7 @@ from .proven import (MIN_BOX_PX, STYLES, TAP_CERTIFICATE_STEPS, proven_at, prove
 
 
 # the proven overlay's picture before an atlas is drawn (nothing), and its hover: the box's label
-_NO_PROVEN_IMAGE = dict(image=[], code=[], x=[], y=[], dw=[], dh=[])
+_NO_PROVEN_IMAGE: dict[str, list] = dict(image=[], code=[], x=[], y=[], dw=[], dh=[])
 
 
 _PROVEN_HOVER_JS = "return value >= 0 && value < names.length ? names[value] : 'none';"

@@ -111,7 +111,7 @@ class Decisions(Sequence):
             return len(other) == len(self) and all(a == b for a, b in zip(self, other))
         return NotImplemented
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]  # mutable-looking equality: not hashable
 
     def __repr__(self) -> str:
         head = ", ".join(repr(x) for x in self[:4])
@@ -152,14 +152,13 @@ class Certificate:
         Decisions held as codes (:class:`Decisions`) are written as
         ``"decision_codes"`` (ints), others as ``"decisions"`` (names);
         :meth:`from_dict` reads either."""
-        coded = isinstance(self.decisions, Decisions)
         return {
             "e": [float(self.e[0]), float(self.e[1])], "u": [float(self.u[0]), float(self.u[1])],
             "max_iter": int(self.max_iter), "status": self.status,
             "word": None if self.word is None else [int(a) for a in getattr(self.word, "letters")],
             "reason": self.reason, "step": self.step,
             "itinerary": [int(k) for k in self.itinerary],
-            **({"decision_codes": self.decisions.codes.tolist()} if coded else {"decisions": list(self.decisions)}),
+            **({"decision_codes": self.decisions.codes.tolist()} if isinstance(self.decisions, Decisions) else {"decisions": list(self.decisions)}),
             "margins": [[float(lo), float(hi)] for lo, hi in np.asarray(self.margins).reshape(-1, 2)],
             **({"region": getattr(self.region, "to_dict")()} if self.region is not None else {}),
         }
@@ -182,7 +181,7 @@ class Certificate:
         except (TypeError, ValueError) as exc:
             raise ValueError(f"certificate word must be a list of impact counts, got {d['word']!r} ({exc})") from None
         return cls(
-            e=_pair("e", d["e"]), u=_pair("u", d["u"]),
+            e=_field_pair("e", d["e"]), u=_field_pair("u", d["u"]),
             max_iter=_integer("max_iter", d["max_iter"]), status=_text("status", d["status"]),
             word=word, reason=d.get("reason"), step=d.get("step"),
             itinerary=_integers("itinerary", d.get("itinerary", ())),
@@ -192,7 +191,7 @@ class Certificate:
         )
 
 
-def _pair(name, v):
+def _field_pair(name, v):
     """``(lo, hi)``: two numbers (not text), or ValueError naming ``name``."""
     try:
         if isinstance(v, (str, bytes)) or len(v) != 2:
@@ -238,8 +237,8 @@ def check_certificate_fields(cert) -> None:
     integer, ``status`` text): what the checker needs before it can judge the
     claim (a claim of the right form but false is a rejected verdict, not an
     error)."""
-    _pair("e", cert.e)
-    _pair("u", cert.u)
+    _field_pair("e", cert.e)
+    _field_pair("u", cert.u)
     _integer("max_iter", cert.max_iter)
     _text("status", cert.status)
 

@@ -174,6 +174,11 @@ def _size(a):
     return len(a) if hasattr(a, "__len__") else 0
 
 
+class WorkLimitError(ValueError):
+    """The checking asked for is beyond :data:`MAX_WORK`: refused, not judged
+    (a claim too large to check is neither verified nor rejected)."""
+
+
 def check_work(n_boxes, n_entries, n_cells=0, what="the certificates"):
     """check_work(n_boxes, n_entries, n_cells=0, what="the certificates") -> int
 
@@ -181,7 +186,7 @@ def check_work(n_boxes, n_entries, n_cells=0, what="the certificates"):
     itinerary entries, trapping cells), refused beyond :data:`MAX_WORK`."""
     work = int(n_boxes) + int(n_entries) + int(n_cells)
     if work > MAX_WORK:
-        raise ValueError(
+        raise WorkLimitError(
             f"{what}: {int(n_boxes):,} boxes, {int(n_entries):,} itinerary entries (steps)"
             + (f" and {int(n_cells):,} trapping cells" if n_cells else "")
             + f" are {work:,} units of checking work, more than the checker's limit of {MAX_WORK:,} "

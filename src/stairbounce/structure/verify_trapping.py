@@ -37,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _check_kernel as _ck
-from .verify import check_work, verify_codes
+from .verify import WorkLimitError, check_work, verify_codes
 
 __all__ = ["TRAP_CHECKS", "verify_region"]
 
@@ -113,6 +113,8 @@ def verify_certificate_region(cert, verdict):
     try:
         what = verify_region(cert.e[0], cert.e[1], cert.u[0], cert.u[1], cert.max_iter, cert.itinerary,
                              r.grid, r.cells)
+    except WorkLimitError:
+        raise  # too large to check: refused by name, not a verdict
     except (ValueError, TypeError) as exc:
         return verdict(False, "trapping", None, f"malformed trapping region: {exc}")
     if what == "ok":
