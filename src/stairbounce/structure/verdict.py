@@ -335,7 +335,10 @@ def _read_checked(path):
     from its variables' sizes, opened lazily."""
     import xarray as xr
 
+    from .._io import check_input
+
     s = str(path)
+    check_input(path, (".nc", ".zarr"))  # a FIFO or device would block the opening below forever
     try:
         f = xr.open_zarr(s, consolidated=False) if s.endswith(".zarr") else xr.open_dataset(s, engine="netcdf4")
     except Exception:  # noqa: BLE001 - read_atlas_file names what is wrong with the file
