@@ -431,3 +431,50 @@ def test_certify_png_names_its_window_and_share_colours_word_length_and_marks_tr
     assert "word's length" in seen["bar"]
     assert any("trapping" in t for t in seen["legend"])
     assert not any(t == "no sliding (Cor. 2.1)" and "trapping" in t for t in seen["legend"])
+
+
+# --------------------------------------------------------------------------- #
+# F13: a long run says which pass it is counting                              #
+# --------------------------------------------------------------------------- #
+
+
+def test_f13_certify_names_each_pass_and_counts_it():
+    # the report: "certify levels: 12/12 (100%)" for 4 minutes of trapping at depth 14 (12
+    # levels counted for depth 14, the trapping pass not at all): now each pass is named as
+    # it begins, the levels by their numbers, and the trapping pass counts its own boxes
+    names, counts = [], []
+    atlas = sb.certify(e=(0.29, 0.31), u=(0.40, 0.42), depth=5, trap=True, phase=names.append,
+                       progress=lambda done, total: counts.append((len(names), done, total)))
+    assert names == ["levels 3-5", "trapping regions", "re-checking trapping regions"]
+    levels = [c for c in counts if c[0] == 1]
+    assert levels[-1][1:] == (3, 3)            # levels 3, 4 and 5 of one tile
+    tried = int(atlas.boxes.attrs["trap_tried"])
+    trapping = [c for c in counts if c[0] == 2]
+    assert tried < 256 or trapping and trapping[-1][2] >= tried
+    with pytest.raises(ValueError, match="phase must be None or a callable"):
+        sb.certify(e=(0.29, 0.31), u=(0.40, 0.42), depth=3, phase="levels")
+
+
+def test_f13_the_cli_bar_names_the_pass(monkeypatch, capsys):
+    import contextlib
+
+    from stairbounce.cli import certify_commands
+
+    seen = []
+
+    class Bar:  # records what the command shows on its bar
+        def update(self, task, description=None, **_):
+            if description is not None:
+                seen.append(description)
+
+    @contextlib.contextmanager
+    def recording_bar(console, description, total, unit=""):
+        seen.append(description)
+        yield Bar(), 0
+
+    monkeypatch.setattr(certify_commands, "progress_bar", recording_bar)
+    code, out, err = _run_cli(["certify", "--e", "0.29:0.31", "--u", "0.40:0.42", "--depth", "5", "--trap"],
+                              capsys)
+    assert code == 0, err
+    assert seen == ["certify", "certify levels 3-5", "certify trapping regions",
+                    "certify re-checking trapping regions"]

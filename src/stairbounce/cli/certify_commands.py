@@ -8,7 +8,7 @@ from pathlib import Path
 
 import typer
 
-from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, save_figure, with_row_progress
+from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, progress_bar, save_figure
 
 _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -181,9 +181,8 @@ def certify_(
     check_outputs(force, out=out, png=png)
     t0 = time.perf_counter()
     try:
-        atlas = with_row_progress(description="certify levels", rows=1,
-                                  run=lambda p: certify(e=(e_lo, e_hi), u=(u_lo, u_hi), depth=depth,
-                                                        max_iter=max_iter, progress=p, trap=trap))
+        atlas = _with_phases(lambda p, ph: certify(e=(e_lo, e_hi), u=(u_lo, u_hi), depth=depth,
+                                                  max_iter=max_iter, progress=p, trap=trap, phase=ph))
     except ValueError as exc:  # the library names its parameters; the options carry the same names
         raise CLIError(f"--{str(exc).replace('_', '-')}" if str(exc).split()[0] in ("depth", "max_iter")
                        else str(exc)) from None
@@ -218,3 +217,16 @@ def certify_(
     for row in words.head(top).itertuples():
         typer.echo(f"  {row.word:<32} period {row.period:>4}  area >= {_pct(shares[row.word], 3)}% "
                    f"({row.boxes} boxes)")
+
+
+def _with_phases(run):
+    """``run(progress, phase)`` behind one progress bar on stderr whose
+    description names the pass being counted ("certify levels 3-14", then
+    "certify trapping regions", ...), its count restarting with each pass."""
+    from rich.console import Console
+
+    with progress_bar(Console(stderr=True), "certify", 1) as (bar, task):
+        def phase(name):
+            bar.update(task, description=f"certify {name}", completed=0, total=1)
+
+        return run(lambda done, total: bar.update(task, completed=done, total=max(total, 1)), phase)

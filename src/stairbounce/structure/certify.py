@@ -224,8 +224,8 @@ def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
 
 
 def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress=None, *, tiles=1,
-            form="corners", trap=False, classes=False) -> CertifiedAtlas:
-    """certify(e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, progress=None, *, tiles=1, form="corners", trap=False) -> CertifiedAtlas
+            form="corners", trap=False, classes=False, phase=None) -> CertifiedAtlas:
+    """certify(e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, progress=None, *, tiles=1, form="corners", trap=False, classes=False, phase=None) -> CertifiedAtlas
 
     Cover a window of the (e, u) plane with boxes, each certified
     (:func:`certify_box`): an adaptive quadtree down to boxes of
@@ -256,7 +256,9 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
         The smallest boxes are window/2^depth a side.
     max_iter : int >= 1, default 1000
     progress : callable ``progress(done, total)``, optional
-        Called after each level of each tile.
+        Called after each level of each tile, then (with ``trap``) every 256
+        boxes tried for a trapping region: ``done`` and ``total`` count the
+        current phase.
     tiles : 1, 2, 4 or 8 (at most 2^depth), default 1
         Tiles a side, certified one after the other (the same boxes).
     form : "corners" (default), "mean-value" or "naive"
@@ -279,15 +281,22 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
         A box meeting the Corollary 2.1 curve is split down to the last level
         rather than stopped as "nonsliding".  ``sb.verify`` re-checks them
         (``structure/verify_branches.py``).
+    phase : callable ``phase(name)``, optional
+        Called as each pass begins, so that a progress display can say what it
+        counts: ``"levels 3-14"`` (the quadtree's levels, from the 8 x 8
+        start level to ``depth``), then ``"class-level proofs"``,
+        ``"trapping regions"`` and ``"re-checking trapping regions"`` when
+        those passes run.
 
     Returns
     -------
     CertifiedAtlas
     """
-    return _certify(e, u, depth, max_iter, progress, tiles, form, trap=trap, classes=classes)
+    return _certify(e, u, depth, max_iter, progress, tiles, form, trap=trap, classes=classes, phase=phase)
 
 
-def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap=False, classes=False):
+def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap=False, classes=False,
+             phase=None):
     """:func:`certify`; with ``reference`` the "nonsliding" check is taken box by box in
     the level kernel (:func:`_kernel._any_slides`, the algorithm before the shared
     check of :func:`_mark_nonsliding`; the tests compare the two)."""
@@ -299,6 +308,8 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap
     code = _check_form(form)
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
+    if phase is not None and not callable(phase):
+        raise ValueError(f"phase must be None or a callable phase(name), got {phase!r}")
     if not isinstance(trap, (bool, np.bool_)):
         raise ValueError(f"trap must be True or False, got {trap!r}")
     if not isinstance(classes, (bool, np.bool_)):
@@ -321,6 +332,8 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap
         if progress is not None:
             progress(done[0], total)
 
+    if phase is not None:
+        phase(f"levels {start}-{depth}")
     if progress is not None:
         progress(0, total)
     parts = []
@@ -340,11 +353,17 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap
     if classes:
         from .classes import mark_atlas
 
+        if phase is not None:
+            phase("class-level proofs")
         mark_atlas(ds)
     if trap:
         from .trapping import trap_atlas
 
-        ds = trap_atlas(ds)
+        if phase is not None:
+            phase("trapping regions")
+        ds = trap_atlas(ds, progress=progress)
+        if phase is not None:
+            phase("re-checking trapping regions")
         _recheck_regions(ds)
     return CertifiedAtlas(ds, seconds=time.perf_counter() - t0)
 
