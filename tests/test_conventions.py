@@ -242,18 +242,24 @@ def test_words_regions_with_the_default_window_is_not_refused(tmp_path, capsys):
     assert code == 2 and "--size with --regions must be 2 to 8192 pixels a side" in err
 
 
+def _pixels_line(out):
+    """The line of a scan's summary that gives its grid ("N x M pixels ..."); the basis
+    line ("basis: numerical ...") follows it."""
+    return next(line for line in out.splitlines() if " pixels" in line and " x " in line)
+
+
 def test_a_zoom_without_size_gets_square_pixels_and_the_default_view_its_grid(tmp_path, capsys):
     code, out, err = run(["scan", "--e", "0.04:0.065", "--u", "0.92:0.945", "--max-iter", "100",
                           "--out", str(tmp_path / "z.nc")], capsys)
     assert code == 0, err
-    assert out.rstrip().splitlines()[-1].startswith("500 x 500 pixels")
+    assert _pixels_line(out).startswith("500 x 500 pixels")
     code, out, err = run(["scan", "--e", "0:0.5", "--max-iter", "50", "--out", str(tmp_path / "h.nc")], capsys)
-    assert out.rstrip().splitlines()[-1].startswith("167 x 500 pixels")   # 0.5 x 1.5: square pixels
+    assert _pixels_line(out).startswith("167 x 500 pixels")   # 0.5 x 1.5: square pixels
     code, out, err = run(["scan", "--max-iter", "50", "--out", str(tmp_path / "d.nc")], capsys)
-    assert out.rstrip().splitlines()[-1].startswith("500 x 350 pixels")   # the paper's Fig. 4 grid
+    assert _pixels_line(out).startswith("500 x 350 pixels")   # the paper's Fig. 4 grid
     code, out, err = run(["scan", "--e", "0.04:0.065", "--u", "0.92:0.945", "--size", "50x20",
                           "--max-iter", "50", "--out", str(tmp_path / "s.nc")], capsys)
-    assert out.rstrip().splitlines()[-1].startswith("50 x 20 pixels")
+    assert _pixels_line(out).startswith("50 x 20 pixels")
 
 
 # --------------------------------------------------------------------------- #

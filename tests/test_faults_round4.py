@@ -234,7 +234,7 @@ def test_r9_a_trapping_certificate_with_a_huge_grid_is_refused_by_name(n):
     cert = certificate_of(dataclasses.replace(r, grid=r.grid[:2] + (n,) + r.grid[3:5] + (n,)), 1000)
     # the report: MemoryError; now refused by name before anything is allocated: the
     # checker's work estimate (boxes + steps + cells) names the grid's cells and the limit
-    with pytest.raises(ValueError, match=rf"the trapping region: .* {n * n:,} trapping cells .* limit"):
+    with pytest.raises(ValueError, match=rf"the trapping region: .* {n * n + r.cells.size:,} trapping cells .* limit"):
         sb.verify(cert)
 
 

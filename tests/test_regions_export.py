@@ -212,14 +212,14 @@ def _lab(hexcolour):
 
 
 def test_border_colours_are_one_set_outside_the_word_length_palette():
-    from stairbounce.explorer import app
+    from stairbounce.explorer import app, borders_layer
     from stairbounce.plot.borders import KIND_COLORS
     from stairbounce.plot.plane import TONGUE_COLOR, color_key
 
     kinds = ("graze", "edge", "chatter")
     assert KIND_COLORS == {k: _colours.KIND_COLOURS[k] for k in kinds}
     assert structure.export.KIND_COLOURS is _colours.KIND_COLOURS
-    assert app._WINDOW_ARC_COLOR == _colours.KIND_COLOURS["window"]
+    assert borders_layer._WINDOW_ARC_COLOR == _colours.KIND_COLOURS["window"]
     for k in kinds:
         assert _colours.KIND_COLOUR_NAMES[k] in app._OVERLAY_LEGEND["traced"]
         assert _colours.KIND_COLOUR_NAMES[k] in app._OVERLAY_LEGEND["borders"]
