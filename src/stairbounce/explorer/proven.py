@@ -42,15 +42,19 @@ two corners walked (the corners form) and up to five points of the float map
 (the "nonsliding" test of the deepest levels)."""
 
 CERTIFICATE_STEP_WORK = 20_000
-"""What one step of a box's certificate costs, in potential map steps (the unit
-of :data:`~stairbounce.explorer.view.SLICE_WORK`): :func:`stairbounce.certify_box`
-and :func:`stairbounce.verify` walk the steps in Python, about 85 us a step
-(measured at load 3.5 on the 2-core machine: 50,000 steps in 4.3 s), against
-a few nanoseconds for a map step of the compiled kernels."""
+"""What one step of a box's certificate is charged, in potential map steps (the
+unit of :data:`~stairbounce.explorer.view.SLICE_WORK`).  Set when
+:func:`stairbounce.certify_box` and :func:`stairbounce.verify` walked the steps
+in Python (85 us a step at load 3.5); both are compiled now (a 100,000-step
+``no_slide_within`` certificate: certify_box 0.037 s, verify 0.011 s, about
+0.5 us a step, at load 0.7 on 2026-11-28), so the charge is about 100 times
+what a step costs and the bound below defers taps that would now fit in a
+slice: conservative, kept until the explorer's tests are sized for a larger
+bound."""
 
 TAP_CERTIFICATE_STEPS = V.SLICE_WORK // CERTIFICATE_STEP_WORK
 """The most steps a tap's certificate may walk on the explorer's shared worker
-(5,000: one slice of bounded work, about 0.4 s); a longer one (a box proven
+(5,000; a few milliseconds of work today, see above); a longer one (a box proven
 not to slide within a max_iter of up to 1e6) is deferred: the tap says so and
 how to compute it (issue 43 item 3)."""
 
