@@ -2,7 +2,8 @@
 
 ``verify_arrays(e0, e1, u0, u1, status, max_iter, itinerary, offsets)`` checks
 N certificates in the array form of ``structure/certificate.py`` at once, with
-its own rigorous arithmetic (numpy float64 intervals, outward rounded), and
+its own rigorous arithmetic (float64 intervals, outward rounded; the step loops
+compiled in ``structure/_check_kernel.py``, numba without fastmath), and
 shares no code with the certifier's kernel nor with ``stairbounce.model``; only
 ``stairbounce.symbolic`` is used, to spell a word from an itinerary.
 
