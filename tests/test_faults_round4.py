@@ -259,6 +259,7 @@ def test_r11_one_suffix_rule_for_the_cli_and_save(small_atlas, tmp_path, capsys)
 
 def test_r11_the_suffix_is_refused_before_the_work(tmp_path, capsys, monkeypatch):
     import importlib
+    import re
 
     C = importlib.import_module("stairbounce.structure.certify")
 
@@ -478,3 +479,24 @@ def test_f13_the_cli_bar_names_the_pass(monkeypatch, capsys):
     assert code == 0, err
     assert seen == ["certify", "certify levels 3-5", "certify trapping regions",
                     "certify re-checking trapping regions"]
+
+
+def test_f13_a_level_that_needs_gigabytes_is_announced_with_its_estimate(monkeypatch, capsys):
+    import warnings
+
+    import importlib
+    import re
+
+    C = importlib.import_module("stairbounce.structure.certify")
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", C.CertifyMemoryWarning)
+        sb.certify(e=(0.29, 0.31), u=(0.40, 0.42), depth=6)      # a few kB: nothing said
+    # the threshold lowered to a few kB, as a depth-16 run meets it at its gigabyte
+    monkeypatch.setattr(C, "_WARN_BYTES", 20_000)
+    with pytest.warns(C.CertifyMemoryWarning, match=r"certify: level \d+ of 6 holds [\d,]+ boxes, about 0\.0 GiB"):
+        sb.certify(e=(0.29, 0.31), u=(0.40, 0.42), depth=6)
+    code, out, err = _run_cli(["certify", "--e", "0.29:0.31", "--u", "0.40:0.42", "--depth", "6"], capsys)
+    assert code == 0
+    said = [line for line in err.splitlines() if "GiB" in line]
+    assert len(said) == 1 and re.match(r"stairbounce: warning: certify: level \d of 6 holds [\d,]+ boxes", said[0])

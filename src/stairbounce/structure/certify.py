@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 
 import numpy as np
 
@@ -100,7 +101,18 @@ _MAX_DEPTH = 26
 # longer itineraries are computed again at the end (64 bytes a box of a level, about
 # twice what the rest of a level holds)
 _KEPT = 32
+# what one box of a level holds while the level is computed (its status, reason, step,
+# length, kept itinerary, position and its children's positions), in bytes: the
+# measured peak of certify over the boxes of its largest level (benchmarks/README.md,
+# "certify's memory"); a run whose level would need more than _WARN_BYTES says so
+_LEVEL_BYTES_PER_BOX = 250
+_WARN_BYTES = 1 << 30
 _SLIDING_STATUS = STATUSES.index("sliding")
+
+
+class CertifyMemoryWarning(UserWarning):
+    """A certified atlas's level is about to hold more than a gigabyte
+    (:data:`_WARN_BYTES`): the run goes on, and says so with its estimate."""
 
 
 # --------------------------------------------------------------------------- #
@@ -402,8 +414,16 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch
     ii = gi.astype(np.int64)
     jj = gj.astype(np.int64)
     ns_level = max(0, depth - _NONSLIDING_LEVELS)
+    held = 0  # bytes of the final boxes kept so far
+    warned = False
     for level in range(start, depth + 1):
         n = ii.size
+        need = n * _LEVEL_BYTES_PER_BOX + held
+        if need > _WARN_BYTES and not warned:
+            warned = True
+            warnings.warn(f"certify: level {level} of {depth} holds {n:,} boxes, about {need / 2**30:.1f} GiB "
+                          "with the boxes kept so far; each further level holds up to 4 times as many boxes "
+                          "(about 3 times on the paper's windows)", CertifyMemoryWarning, stacklevel=2)
         status = np.empty(n, np.int8)
         reason = np.empty(n, np.int8)
         step = np.empty(n, np.int64)
@@ -431,6 +451,7 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch
         keep = final & ((status == K.WORD) | (status == K.NO_SLIDE_WITHIN)) & (nsteps <= _KEPT)
         out.append((np.full(int(final.sum()), level, np.int8), ii[final], jj[final], status[final],
                     reason[final], step[final], nsteps[final], kept[keep]))
+        held += sum(a.nbytes for a in out[-1])
         del kept
         split = ~final
         i2 = 2 * ii[split]
