@@ -152,13 +152,15 @@ class Certificate:
         Decisions held as codes (:class:`Decisions`) are written as
         ``"decision_codes"`` (ints), others as ``"decisions"`` (names);
         :meth:`from_dict` reads either."""
+        decisions = ({"decision_codes": self.decisions.codes.tolist()} if isinstance(self.decisions, Decisions)
+                     else {"decisions": list(self.decisions)})
         return {
             "e": [float(self.e[0]), float(self.e[1])], "u": [float(self.u[0]), float(self.u[1])],
             "max_iter": int(self.max_iter), "status": self.status,
             "word": None if self.word is None else [int(a) for a in getattr(self.word, "letters")],
             "reason": self.reason, "step": self.step,
             "itinerary": [int(k) for k in self.itinerary],
-            **({"decision_codes": self.decisions.codes.tolist()} if isinstance(self.decisions, Decisions) else {"decisions": list(self.decisions)}),
+            **decisions,
             "margins": [[float(lo), float(hi)] for lo, hi in np.asarray(self.margins).reshape(-1, 2)],
             **({"region": getattr(self.region, "to_dict")()} if self.region is not None else {}),
         }

@@ -3,8 +3,8 @@
 Re-verifies a ``no_sliding`` certificate proven by a trapping region
 (``structure/trapping.py``) from the box, ``max_iter``, the entry itinerary
 and the region (its grid and cells) alone, with float64 intervals rounded
-outward (compiled in ``structure/_check_kernel.py``) (the arithmetic of ``structure/verify.py``, whose rigour
-argument applies word for word); it shares no code with the certifier's
+outward, compiled in ``structure/_check_kernel.py`` (the arithmetic of
+``structure/verify.py``, whose rigour argument applies word for word); it shares no code with the certifier's
 kernel, with ``trapping.py`` nor with ``stairbounce.model``.
 
 Checks (the first failure is the verdict):
