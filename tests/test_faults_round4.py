@@ -500,3 +500,122 @@ def test_f13_a_level_that_needs_gigabytes_is_announced_with_its_estimate(monkeyp
     assert code == 0
     said = [line for line in err.splitlines() if "GiB" in line]
     assert len(said) == 1 and re.match(r"stairbounce: warning: certify: level \d of 6 holds [\d,]+ boxes", said[0])
+
+
+# --------------------------------------------------------------------------- #
+# R8 / item 5: Ctrl-C while a file is written, and the process's end          #
+# --------------------------------------------------------------------------- #
+
+import signal  # noqa: E402
+import threading  # noqa: E402
+
+import xarray as xr  # noqa: E402
+
+
+@pytest.mark.parametrize("suffix,method", [(".nc", "to_netcdf"), (".zarr", "to_zarr")])
+def test_r8_ctrl_c_while_saving_never_lands_inside_the_writer(small_atlas, tmp_path, monkeypatch, suffix, method):
+    """A KeyboardInterrupt raised inside xarray's netCDF writer left its HDF5 lock
+    taken and the writer's clean-up waited for it for ever (`certify --out X.nc`
+    interrupted while saving hung; found while measuring item 5).  The writer now
+    runs off the main thread: the interrupt reaches the caller, not the writer, no
+    file is left, and the next save works (no lock left taken)."""
+    original = getattr(xr.Dataset, method)
+    started, release = threading.Event(), threading.Event()
+    seen = {}
+
+    def slow_writer(self, *args, **kwargs):
+        seen["main"] = threading.current_thread() is threading.main_thread()
+        started.set()
+        release.wait(10)
+        seen["result"] = original(self, *args, **kwargs)
+        return seen["result"]
+
+    monkeypatch.setattr(xr.Dataset, method, slow_writer)
+
+    def interrupt():
+        started.wait(10)
+        os.kill(os.getpid(), signal.SIGINT)
+        if suffix == ".zarr":  # the folder's writer is waited for: let it finish
+            release.set()
+
+    target = tmp_path / f"a{suffix}"
+    timer = threading.Thread(target=interrupt)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        small_atlas.save(target)
+    timer.join()
+    assert seen["main"] is False
+    if suffix == ".nc":  # the caller was interrupted while the writer still waited
+        assert "result" not in seen
+        release.set()
+    monkeypatch.setattr(xr.Dataset, method, original)
+    small_atlas.save(target)   # waits for the writer left behind (two at once crashed HDF5)
+    assert "result" in seen   # which had ended, and removed its temporary:
+    assert [p.name for p in tmp_path.iterdir()] == [target.name]
+    assert sb.CertifiedAtlas.load(target).boxes.sizes["box"] == small_atlas.boxes.sizes["box"]
+
+
+def test_r8_the_console_script_ends_with_main_s_status_at_once(tmp_path):
+    """The console script flushes the streams and ends with os._exit (Python's own
+    shutdown of numba and xarray took 0.45 s of a Ctrl-C's 0.5): what main prints
+    arrives whole, and its status is the process's."""
+    import subprocess
+    import sys
+
+    code = "import sys; from stairbounce.cli import console; sys.argv = ['stairbounce'] + sys.argv[1:]; console()"
+    ok = subprocess.run([sys.executable, "-c", code, "word", "--e", "0.1", "--u", "0.7"],
+                        capture_output=True, text=True, timeout=120)
+    assert ok.returncode == 0 and "word" in ok.stdout.lower() and ok.stdout.endswith("\n")
+    bad = subprocess.run([sys.executable, "-c", code, "word", "--e", "2", "--u", "0.7"],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "e" in bad.stderr
+
+
+def test_r8_ctrl_c_stops_a_certify_job_at_its_next_kernel(monkeypatch):
+    """certify runs off the main thread (run_interruptible): the main thread raises
+    at once on Ctrl-C and the job, told by its halt flag, stops at its next kernel
+    instead of computing the rest of its levels in the background."""
+    calls = []
+
+    def progress(done, total):
+        calls.append((done, total))
+        if len(calls) == 2:  # the first level is done: Ctrl-C now
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt):
+        sb.certify(depth=12, progress=progress)
+    for t in [t for t in threading.enumerate() if t.name == "stairbounce-job"]:
+        t.join(60)
+        assert not t.is_alive()
+    total = calls[0][1]
+    assert calls[-1][0] < total  # the job stopped: the last levels never ran
+
+
+def test_r8_unique_inverse_is_numpy_s_unique_by_hashing():
+    from stairbounce.structure.tiling import unique_inverse
+
+    rng = np.random.default_rng(3)
+    words = np.array(["(1, 2, 0^inf)", "", "(1, 1, 2, 0^inf)", "(2, 0^inf)"], dtype=object)[rng.integers(0, 4, 5000)]
+    for values in (words, rng.integers(-3, 9, 5000)):
+        names, inverse = unique_inverse(values)
+        want_names, want_inverse = np.unique(values, return_inverse=True)
+        assert list(names) == list(want_names) and np.array_equal(inverse, want_inverse.ravel())
+    names, inverse = unique_inverse(np.array([], dtype=object))
+    assert names.size == 0 and inverse.size == 0
+
+
+def test_r8_an_nc_atlas_written_in_slices_is_the_file_to_netcdf_writes(small_atlas, tmp_path, monkeypatch):
+    """The text columns are written in slices (the netCDF library converts text
+    holding Python's lock); the file reads back identical to xarray's own."""
+    import importlib
+
+    C = importlib.import_module("stairbounce.structure.certify")
+    monkeypatch.setattr(C, "_TEXT_SLICE", 7)   # several slices and a partial last one
+    small_atlas.save(tmp_path / "sliced.nc")
+    plain = C._with_cf_attributes(small_atlas.boxes)
+    plain.attrs = {k: (list(v) if isinstance(v, tuple) else v) for k, v in plain.attrs.items()}
+    plain.to_netcdf(tmp_path / "plain.nc", engine="netcdf4", format="NETCDF4")
+    with xr.open_dataset(tmp_path / "sliced.nc") as a, xr.open_dataset(tmp_path / "plain.nc") as b:
+        assert a.identical(b)
+        assert a["word"].values.tolist() == small_atlas.boxes["word"].values.tolist()
+    assert sb.verify(tmp_path / "sliced.nc").rejected == 0

@@ -226,14 +226,14 @@ def write_entry(path, ds, kind, inputs):
     """Write ``ds`` as the entry at ``path`` (atomically), with its request
     and checksum; then keep the cache within :func:`max_bytes`.  Errors (a
     full or unwritable cache) propagate: the caller warns and goes on."""
-    from ._io import atomic_path
+    from ._io import atomic_path, write_shielded
 
     path = Path(path)
     stored = ds.copy(deep=False)
     stored.attrs = {**ds.attrs, REQUEST_ATTR: request(kind, inputs), CHECKSUM_ATTR: checksum(ds)}
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path, overwrite=True) as tmp:  # our own cache
-        stored.to_netcdf(tmp)
+        write_shielded(lambda: stored.to_netcdf(tmp), tmp)
     bound(path.parent, keep=path)
 
 

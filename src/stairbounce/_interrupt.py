@@ -25,7 +25,7 @@ from llvmlite import ir
 from numba.core import types
 from numba.extending import intrinsic
 
-__all__ = ["run_kernel", "new_halt", "halted"]
+__all__ = ["run_kernel", "new_halt", "halted", "run_shielded", "run_interruptible", "check_halt"]
 
 
 @intrinsic
@@ -48,6 +48,8 @@ def halted(typingctx, halt):
 
 _POOL = None
 _POOL_LOCK = threading.Lock()
+# the halt flag of the job (run_interruptible) that the current thread runs, if any
+_JOB = threading.local()
 
 
 def new_halt():
@@ -95,9 +97,15 @@ def run_kernel(kernel, *args):
     other thread (a Dask worker, a tile of a local tiled scan, a web server)
     the kernel runs in place: signals are not delivered there anyway.
     """
-    halt = new_halt()
     if threading.current_thread() is not threading.main_thread():
-        return kernel(*args, halt)
+        halt = getattr(_JOB, "halt", None)
+        if halt is None:
+            return kernel(*args, new_halt())
+        check_halt()
+        out = kernel(*args, halt)
+        check_halt()  # the kernel may have returned early: its outputs are partial
+        return out
+    halt = new_halt()
     import numba
 
     # numba's thread count is per calling thread: the helper uses the caller's
@@ -116,3 +124,121 @@ def run_kernel(kernel, *args):
         except BaseException:  # noqa: BLE001 - the interrupt is what goes on
             pass
         raise
+
+
+# one file writer at a time: run_shielded
+_WRITING = threading.Lock()
+
+
+def run_shielded(write, wait=False, cleanup=None):
+    """run_shielded(write, wait=False, cleanup=None) -> what ``write()`` returns
+
+    Run a file writer (``xarray``'s ``to_netcdf`` or ``to_zarr``) where Ctrl-C
+    cannot land inside it.  A KeyboardInterrupt raised in the middle of
+    xarray's netCDF writer, between taking its HDF5 lock and the ``try`` that
+    releases it, left the lock taken, and the writer's own clean-up then waited
+    for it forever (a ``certify --out X.nc`` interrupted while saving hung).  In
+    the main thread the writer therefore runs in a helper thread (signals are
+    delivered to the main thread only) while the main thread waits.  On Ctrl-C
+    the main thread raises at once (``wait=False``) or once the writer has
+    ended (``wait=True``: a Zarr folder, whose chunk writes would otherwise
+    recreate the folder that :func:`stairbounce._io.atomic_path` removes); a
+    writer left behind calls ``cleanup()`` when it ends (it removes the
+    temporary file, so nothing is left in a process that goes on).  The helper
+    thread is a daemon: a process ending on Ctrl-C does not wait for it (a
+    temporary it leaves is a dead process's, removed by the next write in that
+    folder).  In any other thread ``write()`` is called in place.
+
+    One writer at a time (:data:`_WRITING`, taken by the helper thread): a
+    writer left behind by a Ctrl-C is waited for by the next (two netCDF
+    writers at once crashed HDF5: a segmentation fault); the main thread's
+    wait stays interruptible.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        with _WRITING:
+            return write()
+    result = {}
+    abandoned = threading.Event()
+
+    def target():
+        with _WRITING:  # after a writer left behind, if any
+            try:
+                result["value"] = write()
+            except BaseException as exc:  # noqa: BLE001 - handed to the main thread
+                result["error"] = exc
+            finally:
+                if abandoned.is_set() and cleanup is not None:
+                    cleanup()
+
+    thread = threading.Thread(target=target, name="stairbounce-writer", daemon=True)
+    try:
+        thread.start()
+        while thread.is_alive():
+            thread.join(0.05)
+    except BaseException:
+        abandoned.set()
+        if wait:
+            while thread.is_alive():
+                try:
+                    thread.join(0.05)
+                except KeyboardInterrupt:  # a second Ctrl-C: stop waiting
+                    break
+        raise
+    if "error" in result:
+        raise result["error"]
+    return result.get("value")
+
+
+def check_halt():
+    """In a job of :func:`run_interruptible`: raise KeyboardInterrupt once its
+    caller has been interrupted (for Python loops between kernels, such as the
+    trapping pass's box by box); elsewhere nothing."""
+    halt = getattr(_JOB, "halt", None)
+    if halt is not None and halt[0]:
+        raise KeyboardInterrupt
+
+
+def run_interruptible(fn, *args, **kwargs):
+    """run_interruptible(fn, *args, **kwargs) -> what ``fn(*args, **kwargs)`` returns
+
+    Run a whole job, kernels and the numpy work between them, so that Ctrl-C is
+    seen within 0.05 s.  A single numpy call over millions of boxes (a sort, a
+    concatenation: the certified atlas's levels) holds Python's signal handler
+    back for its whole length, up to a second at depth 14.  In the main thread
+    the job runs in a helper thread while the main thread waits; on Ctrl-C the
+    job's halt flag is set and the main thread raises at once.  The job stops
+    at its next kernel (:func:`run_kernel` passes the job's flag to the kernel,
+    which returns within a slice, and raises KeyboardInterrupt before its
+    partial outputs are used) or :func:`check_halt`; the helper thread is a
+    daemon, so a process ending on Ctrl-C does not wait for it.  numba's thread
+    count is the caller's.  In any other thread the job runs in place.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return fn(*args, **kwargs)
+    import numba
+
+    threads = numba.get_num_threads()
+    halt = new_halt()
+    result = {}
+
+    def target():
+        _JOB.halt = halt
+        numba.set_num_threads(threads)
+        try:
+            result["value"] = fn(*args, **kwargs)
+        except BaseException as exc:  # noqa: BLE001 - handed to the main thread
+            result["error"] = exc
+        finally:
+            _JOB.halt = None
+
+    thread = threading.Thread(target=target, name="stairbounce-job", daemon=True)
+    try:
+        thread.start()
+        while thread.is_alive():
+            thread.join(0.05)
+    except BaseException:
+        halt[0] = 1
+        raise
+    if "error" in result:
+        raise result["error"]
+    return result.get("value")

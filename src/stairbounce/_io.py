@@ -427,6 +427,17 @@ def atomic_path(path, overwrite=False):
         raise
 
 
+def write_shielded(write, tmp):
+    """Call ``write()``, which writes the temporary ``tmp`` of :func:`atomic_path`,
+    so that Ctrl-C cannot land inside the writer
+    (:func:`stairbounce._interrupt.run_shielded`): a file's writer is left behind
+    at once and removes ``tmp`` when it ends; a folder's (Zarr) is waited for."""
+    from ._interrupt import run_shielded
+
+    folder = Path(tmp).suffix.lower() == ".zarr"
+    return run_shielded(write, wait=folder, cleanup=lambda: _remove(tmp, settle=folder))
+
+
 def _netcdf_os_error(exc, path):
     """The OSError behind a netCDF4 ``RuntimeError("NetCDF: HDF error")``: a
     full disk (ENOSPC, when under 1 MiB is left, the temporary still in

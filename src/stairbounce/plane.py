@@ -1402,7 +1402,7 @@ def save(ds, path, chunks=256, overwrite=False):
     In a Zarr store a chunk that is missing reads as :data:`FILL_VALUES`
     (status 255, counts -1), never as a valid result.
     """
-    from ._io import atomic_path
+    from ._io import atomic_path, write_shielded
 
     fmt = _format(path)
     chunks = check_count("chunks", chunks, 1)
@@ -1415,10 +1415,10 @@ def save(ds, path, chunks=256, overwrite=False):
             for k in enc:
                 if k in FILL_VALUES and ds[k].dtype == _FIELDS[k][0]:
                     enc[k]["fill_value"] = FILL_VALUES[k]
-            ds.to_zarr(tmp, mode="w", encoding=enc, consolidated=False)
+            write_shielded(lambda: ds.to_zarr(tmp, mode="w", encoding=enc, consolidated=False), tmp)
         else:
             enc = {k: {"zlib": True, "complevel": 4} for k in ds.data_vars}
-            ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=enc)
+            write_shielded(lambda: ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=enc), tmp)
 
 
 def load(path):

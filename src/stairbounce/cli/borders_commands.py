@@ -67,11 +67,11 @@ def _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, 
 def _write(ds, path: Path, overwrite: bool, dim: str) -> None:
     """A labelled table to .nc (netCDF4, strings as variable-length text) or
     .csv (one row per entry of ``dim``), atomically."""
-    from .._io import atomic_path
+    from .._io import atomic_path, write_shielded
 
     with atomic_path(path, overwrite=overwrite) as tmp:
         if path.suffix.lower() == ".nc":
-            ds.to_netcdf(tmp, engine="netcdf4")
+            write_shielded(lambda: ds.to_netcdf(tmp, engine="netcdf4"), tmp)
         else:
             ds.drop_dims([d for d in ds.dims if d != dim]).to_dataframe().to_csv(tmp)
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from .._io import atomic_path
+from .._io import atomic_path, write_shielded
 from ..model import check_count
 from ..units import with_speed
 from . import _staircase as st
@@ -85,9 +85,9 @@ def _write_data(ds, path: Path, overwrite=False) -> None:
     suffix = path.suffix.lower()
     with atomic_path(path, overwrite=overwrite) as tmp:
         if suffix == ".nc":
-            ds.to_netcdf(tmp)
+            write_shielded(lambda: ds.to_netcdf(tmp), tmp)
         elif suffix == ".zarr":
-            ds.to_zarr(tmp)
+            write_shielded(lambda: ds.to_zarr(tmp), tmp)
         else:
             ds.to_dataframe().to_csv(tmp)
 

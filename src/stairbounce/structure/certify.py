@@ -304,7 +304,11 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     -------
     CertifiedAtlas
     """
-    return _certify(e, u, depth, max_iter, progress, tiles, form, trap=trap, classes=classes, phase=phase)
+    from .._interrupt import run_interruptible
+
+    # the levels and the numpy work between them off the main thread: Ctrl-C within 0.05 s
+    return run_interruptible(_certify, e, u, depth, max_iter, progress, tiles, form, trap=trap, classes=classes,
+                             phase=phase)
 
 
 def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap=False, classes=False,
@@ -622,6 +626,30 @@ def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, st
     return ds
 
 
+# text rows written to a netCDF file per call (_to_netcdf_in_slices)
+_TEXT_SLICE = 1 << 18
+
+
+def _to_netcdf_in_slices(ds, path, encoding):
+    """``ds.to_netcdf(path)`` (netCDF4), its text columns (``word``, ``reason``:
+    variable-length strings) written afterwards in slices of :data:`_TEXT_SLICE`
+    rows: the netCDF library converts a text column holding Python's lock, which
+    for the 4.4 million boxes of a depth-13 atlas was 0.54 s in one call, so long
+    that a Ctrl-C waited for it (issue 45, item 5).  The file is the one
+    ``to_netcdf`` writes: the same variables, types and attributes."""
+    import netCDF4
+
+    texts = [k for k in ds.data_vars if ds[k].dtype.kind == "O"]
+    ds.drop_vars(texts).to_netcdf(path, engine="netcdf4", format="NETCDF4", encoding=encoding)
+    with netCDF4.Dataset(path, "a") as nc:
+        for k in texts:
+            var = nc.createVariable(k, str, ds[k].dims)
+            var.setncatts({a: v for a, v in ds[k].attrs.items()})
+            values = ds[k].values
+            for lo in range(0, values.size, _TEXT_SLICE):
+                var[lo:lo + _TEXT_SLICE] = values[lo:lo + _TEXT_SLICE]
+
+
 def _word_texts(status, itinerary, offsets):
     """The word (ASCII text, ``""`` unless proven) of every box, spelled once per distinct
     itinerary (told apart by a hash, the boxes of one hash checked to share the itinerary;
@@ -812,10 +840,12 @@ class CertifiedAtlas:
         import pandas as pd
 
         from ..symbolic import parse_word
+        from .tiling import unique_inverse
 
         words = self.boxes["word"].values
         sel = self.boxes["status"].values == K.WORD
-        names, counts = np.unique(words[sel], return_counts=True)
+        names, inverse = unique_inverse(words[sel])
+        counts = np.bincount(inverse, minlength=names.size)
         got = self._book().groups(words, sel)
         sums = np.array([got[n][0] for n in names], dtype=np.float64)
         parsed = [parse_word(str(n)) for n in names]
@@ -968,7 +998,8 @@ class CertifiedAtlas:
         (:func:`stairbounce._io.atomic_path`)."""
         import json
 
-        from .._io import atomic_path, check_output, suffix_of
+        from .._io import atomic_path, check_output, suffix_of, write_shielded
+        from .tiling import unique_inverse
 
         suffix = suffix_of(path, ATLAS_SUFFIXES)   # case ignored: the CLI's rule, checked first
         check_output(path, overwrite)
@@ -983,14 +1014,14 @@ class CertifiedAtlas:
             if suffix == ".zarr":
                 # Zarr v3 specifies no string type: each text column as codes into a list kept in attrs
                 for k in ("word", "reason"):
-                    names, codes = np.unique(ds[k].values, return_inverse=True)
+                    names, codes = unique_inverse(ds[k].values)
                     ds = ds.drop_vars(k).assign({f"{k}_code": ("box", codes.astype(np.int32))})
                     ds[f"{k}_code"].attrs["long_name"] = _CF[f"{k}_code"][0]
                     ds.attrs[f"{k}_names"] = [str(x) for x in names]
-                ds.to_zarr(tmp, mode="w", consolidated=False)
+                write_shielded(lambda: ds.to_zarr(tmp, mode="w", consolidated=False), tmp)
             else:
                 enc = {k: {"zlib": True, "complevel": 4} for k in ds.data_vars if ds[k].dtype.kind not in "UO"}
-                ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=enc)
+                write_shielded(lambda: _to_netcdf_in_slices(ds, tmp, enc), tmp)
 
     @classmethod
     def load(cls, path):

@@ -157,6 +157,22 @@ def area_bounds(e0, e1, u0, u1):
     return lo, hi
 
 
+def unique_inverse(values):
+    """``(names, inverse)`` as ``np.unique(values, return_inverse=True)`` gives them
+    (the distinct values sorted; ``names[inverse] == values``), by hashing
+    (``pandas.factorize``): ``np.unique`` sorts an object array of millions of
+    words in one call that holds Python's lock for seconds, so that Ctrl-C
+    waited for it (issue 45, item 5); the hash table is a fraction of that."""
+    import pandas as pd
+
+    values = np.asarray(values)
+    if values.dtype.kind != "O":
+        names, inverse = np.unique(values, return_inverse=True)
+        return names, inverse.ravel()
+    codes, names = pd.factorize(values, sort=True)
+    return np.asarray(names, dtype=object), codes.astype(np.int64, copy=False)
+
+
 class AreaBook:
     """Proven areas and shares of sets of an atlas's boxes.
 
@@ -194,9 +210,9 @@ class AreaBook:
         sel = np.flatnonzero(mask)
         if not sel.size:
             return {}
-        names, inverse = np.unique(np.asarray(keys)[sel], return_inverse=True)
-        order = np.argsort(inverse.ravel(), kind="stable")
-        cuts = np.searchsorted(inverse.ravel()[order], np.arange(names.size + 1))
+        names, inverse = unique_inverse(np.asarray(keys)[sel])
+        order = np.argsort(inverse, kind="stable")
+        cuts = np.searchsorted(inverse[order], np.arange(names.size + 1))
         lo, hi = self.lo[sel][order], self.hi[sel][order]
         return {names[k]: _sum_bounds(lo[cuts[k]:cuts[k + 1]], hi[cuts[k]:cuts[k + 1]]) for k in range(names.size)}
 

@@ -62,6 +62,7 @@ import numpy as np
 from numba import njit
 
 from .. import model as _model
+from .._interrupt import check_halt
 from ._kernel import _dn, _up
 from .certificate import Certificate, TrappingRegion, _check_e, _check_u
 from .certificate import _cell_edge as _cell_edge_py
@@ -381,8 +382,10 @@ def trap_atlas(ds, progress=None):
                 found[int(b)] = r
             else:
                 failures[why] = failures.get(why, 0) + 1
-        if progress is not None and (n + 1) % 256 == 0:
-            progress(n + 1, sel.size)
+        if (n + 1) % 256 == 0:
+            check_halt()   # a Ctrl-C of certify's caller (run_interruptible) stops the pass here
+            if progress is not None:
+                progress(n + 1, sel.size)
     off = ds["offsets"].values
     itin = ds["itinerary"].values
     pieces = [itin[off[b]:off[b + 1]] if b not in found else np.asarray(found[b].itinerary, np.int64)
