@@ -126,6 +126,29 @@ def run_kernel(kernel, *args):
         raise
 
 
+def _call_into(result, fn, *args, **kwargs):
+    """``result["value"] = fn(...)``, or ``result["error"]`` what it raised (a helper
+    thread's outcome, handed to the main thread by :func:`_outcome`)."""
+    try:
+        result["value"] = fn(*args, **kwargs)
+    except BaseException as exc:  # noqa: BLE001 - handed to the main thread
+        result["error"] = exc
+
+
+def _outcome(result):
+    if "error" in result:
+        raise result["error"]
+    return result.get("value")
+
+
+def _start_and_wait(thread):
+    """Start ``thread`` and wait for it in slices of 0.05 s, so that the main
+    thread runs Python's signal handler (Ctrl-C) within one."""
+    thread.start()
+    while thread.is_alive():
+        thread.join(0.05)
+
+
 # one file writer at a time: run_shielded
 _WRITING = threading.Lock()
 
@@ -163,18 +186,14 @@ def run_shielded(write, wait=False, cleanup=None):
     def target():
         with _WRITING:  # after a writer left behind, if any
             try:
-                result["value"] = write()
-            except BaseException as exc:  # noqa: BLE001 - handed to the main thread
-                result["error"] = exc
+                _call_into(result, write)
             finally:
                 if abandoned.is_set() and cleanup is not None:
                     cleanup()
 
     thread = threading.Thread(target=target, name="stairbounce-writer", daemon=True)
     try:
-        thread.start()
-        while thread.is_alive():
-            thread.join(0.05)
+        _start_and_wait(thread)
     except BaseException:
         abandoned.set()
         if wait:
@@ -184,9 +203,7 @@ def run_shielded(write, wait=False, cleanup=None):
                 except KeyboardInterrupt:  # a second Ctrl-C: stop waiting
                     break
         raise
-    if "error" in result:
-        raise result["error"]
-    return result.get("value")
+    return _outcome(result)
 
 
 def check_halt():
@@ -225,20 +242,14 @@ def run_interruptible(fn, *args, **kwargs):
         _JOB.halt = halt
         numba.set_num_threads(threads)
         try:
-            result["value"] = fn(*args, **kwargs)
-        except BaseException as exc:  # noqa: BLE001 - handed to the main thread
-            result["error"] = exc
+            _call_into(result, fn, *args, **kwargs)
         finally:
             _JOB.halt = None
 
     thread = threading.Thread(target=target, name="stairbounce-job", daemon=True)
     try:
-        thread.start()
-        while thread.is_alive():
-            thread.join(0.05)
+        _start_and_wait(thread)
     except BaseException:
         halt[0] = 1
         raise
-    if "error" in result:
-        raise result["error"]
-    return result.get("value")
+    return _outcome(result)
