@@ -16,6 +16,7 @@ import pytest
 
 from stairbounce import plane, structure
 from stairbounce.structure import borders, regions
+from stairbounce.explorer import overlays, render
 from stairbounce.explorer import view as V
 
 # --------------------------------------------------------------------------- #
@@ -68,7 +69,7 @@ class Meter:
         count(borders, "_border_kernel", lambda es, us, period, a, b, axis, max_iter, *r: _pairs_bound(period, a, b, max_iter))
         count(structure.words, "_fill_impacts", lambda e, u, periods, *r: periods.sum())
         count(regions, "_words_grid", lambda es, us, y0, v0, max_iter, *r: es.size * us.size * max_iter)
-        count(V, "_word_at", lambda e, u, window, max_iter, *r: max_iter)
+        count(overlays, "_word_at", lambda e, u, window, max_iter, *r: max_iter)
         orig = regions._trace_word
 
         def traced(*a, **k):  # the documented exception: one traced word, one slice
@@ -97,7 +98,8 @@ def meter(monkeypatch):
     # compile what the meter wraps before wrapping it (numba reads globals when it compiles)
     V.traced_overlay(R1_VIEW, regions.window_regions((0.2, 0.21), (0.5, 0.51), resolution=4, max_iter=50),
                      V.view_border_points(V.View(0.2, 0.21, 0.5, 0.51, 16, 16, max_iter=50)))
-    monkeypatch.setattr(V, "SLICE_WORK", R1_SLICE)
+    for mod in (V, render, overlays):  # the modules that read SLICE_WORK (view re-exports it)
+        monkeypatch.setattr(mod, "SLICE_WORK", R1_SLICE)
     m = Meter()
     m.install(monkeypatch)
     return m
