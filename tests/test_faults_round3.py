@@ -290,6 +290,7 @@ def test_r3_a_store_of_before_keeps_resuming_and_its_checksums_are_bound_from_th
 
 
 from .test_faults import run as _run_cli  # noqa: E402  (the CLI in process: exit status, out, err)
+from .test_faults_round2 import kernel_changed  # noqa: E402
 from .test_faults_round2 import one_line_error as _one_line_error  # noqa: E402
 
 
@@ -448,16 +449,10 @@ def test_r10_the_kernel_hash_covers_every_module_that_computes_a_cached_entry(mo
     assert {"structure/regions.py", "structure/borders.py", "structure/itinerary.py", "structure/words.py"} <= hashed
     assert not {"borders.py", "regions.py", "_region_export.py"} & hashed  # the old paths' shims compute nothing
     _figures_cached(tmp_path, "bifurcations", BIF_INPUTS, _bifurcations)
-    real = _cache._kernel_sources()
-    changed = [(n, t + b"\n# changed") if n == "structure/borders.py" else (n, t) for n, t in real]
-    monkeypatch.setattr(_cache, "_kernel_sources", lambda: changed)
-    _cache.kernel_hash.cache_clear()
-    try:
+    with kernel_changed(monkeypatch, "structure/borders.py"):
         calls = []
         _figures_cached(tmp_path, "bifurcations", BIF_INPUTS, lambda: calls.append(1) or _bifurcations())
         assert calls == [1]
-    finally:
-        _cache.kernel_hash.cache_clear()
 
 
 # --------------------------------------------------------------------------- #
