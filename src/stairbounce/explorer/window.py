@@ -17,6 +17,7 @@ from urllib.parse import urlencode
 
 import numpy as np
 
+from .._validate import size_text
 from ..model import check_e, check_u
 from ..plot.plane import _LEAST
 
@@ -201,11 +202,10 @@ def parse_window(name: str, text: str, limit: float) -> tuple[float, float]:
 
 def parse_size(text: str) -> tuple[int, int]:
     """``"600x400"`` -> ``(600, 400)``: width along e, height along u, within the budget."""
-    parts = text.lower().split("x")
-    try:
-        w, h = (int(p) for p in parts)
-    except ValueError:
-        raise ValueError(f"size must be WIDTHxHEIGHT in pixels, e.g. 600x600, got {text!r}") from None
+    wh = size_text(text)
+    if wh is None:
+        raise ValueError(f"size must be WIDTHxHEIGHT in pixels, e.g. 600x600, got {text!r}")
+    w, h = wh
     if w < MIN_SIDE or h < MIN_SIDE:
         raise ValueError(f"size must be at least {MIN_SIDE}x{MIN_SIDE} pixels, got {text!r}")
     if w * h > PIXEL_BUDGET:
