@@ -36,19 +36,14 @@ import numpy as np
 import stairbounce as sb
 from stairbounce import structure
 from stairbounce.structure import borders
+from _timing import wall_times
 
 FIG5E = ((0.04, 0.065), (0.92, 0.945))
 WINDOWS = {"fig6": ((0.0, 0.333), (0.4, 0.733)), "fig7": ((0.155, 0.2138), (0.6, 0.658))}
 
 
 def best(fn, repeat):
-    fn()
-    times = []
-    out = None
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
+    times, out = wall_times(fn, repeat, warm=True)
     return min(times), out
 
 

@@ -29,23 +29,18 @@ from __future__ import annotations
 
 import argparse
 import os
-import time
 
 import numpy as np
 
 import stairbounce as sb
+from _timing import wall_times
 
 E, U = 0.01, (0.6, 0.75)
 PATTERN = "(1^k, 0^inf)"
 
 
 def best(f, repeat):
-    f()
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = f()
-        times.append(time.perf_counter() - t)
+    times, out = wall_times(f, repeat, warm=True)
     return min(times), out
 
 

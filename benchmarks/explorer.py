@@ -34,6 +34,7 @@ import numpy as np
 
 from stairbounce import plane
 from stairbounce.explorer.view import View, compute_view, shade
+from _timing import wall_times
 
 CASES = [
     ("Fig. 4 window", View(0.0, 1.0, 0.0, 1.5, 600, 600, 1000)),
@@ -44,11 +45,7 @@ CASES = [
 
 
 def best(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
+    times, out = wall_times(fn, repeat)
     return min(times), out
 
 

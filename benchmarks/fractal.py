@@ -24,22 +24,17 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import time
 
 import numba
 import numpy as np
 
 from stairbounce.dimension import boundary, box_counts
 from stairbounce.dimension.boxes import _count_boxes
+from _timing import wall_times
 
 
 def best(fn, repeat):
-    times = []
-    out = None
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
+    times, out = wall_times(fn, repeat)
     return min(times), statistics.median(times), out
 
 

@@ -25,6 +25,7 @@ import numpy as np
 
 from stairbounce import poincare_map
 from stairbounce.orbits import orbit_diagram
+from _timing import wall_times
 
 CASES = {
     "Fig. 8 (e = 0.001, u in [0.3, 2.0])": (0.001, (0.3, 2.0)),
@@ -34,11 +35,7 @@ CASES = {
 
 def timed(fn, repeat):
     """Best and median wall time of ``repeat`` calls."""
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
+    times, _ = wall_times(fn, repeat)
     return min(times), statistics.median(times)
 
 

@@ -40,6 +40,7 @@ import numpy as np
 
 import stairbounce.plane as P
 from stairbounce.atlas import scan_to_zarr
+from _timing import wall_times
 
 
 def no_check_copy():
@@ -56,11 +57,7 @@ def no_check_copy():
 
 
 def best(f, repeat):
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - t)
+    times, _ = wall_times(f, repeat)
     return min(times), float(np.median(times))
 
 

@@ -35,6 +35,7 @@ from stairbounce.structure.certificate import STATUSES
 from stairbounce.structure.reference import reference_certificate
 from stairbounce.structure.verdict import verify
 from stairbounce.structure.verify import verify_arrays
+from _timing import wall_times
 
 FIG7 = ((0.155, 0.2138), (0.6, 0.658))
 
@@ -64,12 +65,7 @@ def arrays(certs):
 
 
 def best(f, repeat):
-    f()
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - t)
+    times, _ = wall_times(f, repeat, warm=True)
     return min(times)
 
 

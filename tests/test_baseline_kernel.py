@@ -3,13 +3,12 @@ answers as the production scan does: a yardstick that measures the same work."""
 
 from __future__ import annotations
 
-import importlib
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests._benchmarks import import_benchmark
 from stairbounce.plane import pixel_centres, scan_coords
 
 _PATH = Path(__file__).resolve().parent.parent / "benchmarks" / "baseline_kernel.py"
@@ -17,12 +16,7 @@ _PATH = Path(__file__).resolve().parent.parent / "benchmarks" / "baseline_kernel
 
 @pytest.fixture(scope="module")
 def baseline():
-    # imported under its own name (numba's cache keys compiled code by the module)
-    sys.path.insert(0, str(_PATH.parent))
-    try:
-        return importlib.import_module("baseline_kernel")
-    finally:
-        sys.path.remove(str(_PATH.parent))
+    return import_benchmark("baseline_kernel")
 
 
 def test_frozen_header_and_no_stairbounce_import():

@@ -82,6 +82,21 @@ def _names_parameter(message, name):
     return re.search(rf"(^|[^a-z_]){re.escape(name)}([^a-z_]|$)", message) is not None
 
 
+def refuses_each(func, kwargs, name, bads, names):
+    """Each of ``bads`` as parameter ``name`` of ``func(**kwargs)`` raises a
+    ValueError whose message ``names(message, name)`` accepts; any other
+    exception, or none, fails."""
+    for bad in bads:
+        try:
+            func(**{**kwargs, name: bad})
+        except ValueError as exc:
+            assert names(str(exc), name), (func.__name__, name, bad, str(exc))
+        except Exception as exc:  # noqa: BLE001 - the contract forbids any other type
+            raise AssertionError(f"{func.__name__}({name}={bad!r}) raised {type(exc).__name__}: {exc}") from None
+        else:
+            raise AssertionError(f"{func.__name__}({name}={bad!r}) was accepted")
+
+
 def _bad_values(kind, extra, name):
     if kind == COUNT:
         return NOT_COUNTS + extra
@@ -95,15 +110,7 @@ def _bad_values(kind, extra, name):
 def test_every_bad_value_is_a_value_error_naming_the_parameter(func, kwargs, name, kind, extra):
     """Every listed bad value of every parameter: ValueError naming it."""
     func(**kwargs)  # the valid call works
-    for bad in _bad_values(kind, extra, name):
-        try:
-            func(**{**kwargs, name: bad})
-        except ValueError as exc:
-            assert _names_parameter(str(exc), name), (func.__name__, name, bad, str(exc))
-        except Exception as exc:  # noqa: BLE001 - the contract forbids any other type
-            raise AssertionError(f"{func.__name__}({name}={bad!r}) raised {type(exc).__name__}: {exc}") from None
-        else:
-            raise AssertionError(f"{func.__name__}({name}={bad!r}) was accepted")
+    refuses_each(func, kwargs, name, _bad_values(kind, extra, name), _names_parameter)
 
 
 anything = st.one_of(

@@ -25,13 +25,12 @@ bias (``bias_interval``, ``KNOWN_BIAS``) covers the exact answer.
 
 from __future__ import annotations
 
-import importlib
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests._benchmarks import import_benchmark
 from stairbounce.dimension import boundary, box_dimension, slicing_dimension, uncertainty_dimension
 from stairbounce.dimension.result import KNOWN_BIAS
 
@@ -40,11 +39,7 @@ _PATH = Path(__file__).resolve().parent.parent / "benchmarks" / "dimension_bias.
 
 @pytest.fixture(scope="module")
 def study():
-    sys.path.insert(0, str(_PATH.parent))
-    try:
-        return importlib.import_module("dimension_bias")
-    finally:
-        sys.path.remove(str(_PATH.parent))
+    return import_benchmark("dimension_bias")
 
 
 def _measure(study, target, method):

@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 
 from stairbounce import no_sliding_bound, plane, sliding_word, tongue
 from stairbounce.cli import main
+from stairbounce.explorer import render as R
 from stairbounce.explorer import view as V
 from tests import naive
 
@@ -165,19 +166,19 @@ def test_compute_view_is_the_scan_bit_for_bit():
     view = V.View(0.0, 1.0, 0.0, 1.5, 120, 90, max_iter=400)
     ref = plane.scan(e=(0.0, 1.0, 120), u=(0.0, 1.5, 90), max_iter=400)
     for band_work in (10**12, 120 * 400 * 7):  # one band, bands of 7 rows
-        old = V.SLICE_WORK
-        V.SLICE_WORK = band_work
+        old = R.SLICE_WORK  # compute_view's module reads it (view re-exports it)
+        R.SLICE_WORK = band_work
         try:
             ds = V.compute_view(view)
         finally:
-            V.SLICE_WORK = old
+            R.SLICE_WORK = old
         xr.testing.assert_identical(ds.drop_attrs(), ref.drop_attrs())
         for k in ("e_min", "e_max", "n_e", "u_min", "u_max", "n_u", "max_iter", "convention"):
             assert ds.attrs[k] == ref.attrs[k]
 
 
 def test_compute_view_cancels_between_bands_and_reports_progress(monkeypatch):
-    monkeypatch.setattr(V, "SLICE_WORK", 50 * 100 * 10)  # 10 rows per band
+    monkeypatch.setattr(R, "SLICE_WORK", 50 * 100 * 10)  # 10 rows per band
     view = V.View(0.0, 1.0, 0.0, 1.5, 50, 40, max_iter=100)
     seen = []
     V.compute_view(view, progress=lambda done, total: seen.append((done, total)))

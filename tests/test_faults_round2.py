@@ -9,6 +9,7 @@ checked against a 60-digit mpmath evaluation of (2.4).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -391,22 +392,31 @@ def test_an_entry_whose_values_were_changed_is_recomputed(tmp_path):
     assert calls == [1]
 
 
-def test_the_cache_key_follows_the_kernels_source_not_the_version(tmp_path, monkeypatch):
-    """Report N1: the key held only ``__version__`` (0.1.0 for 159 commits): an
-    entry made by other kernels was reused by name."""
+@contextlib.contextmanager
+def kernel_changed(monkeypatch, source):
+    """Within the block the kernel file ``source`` (a path under the package,
+    as ``_cache._kernel_sources`` names it) reads as changed: the cache's key
+    of kernels is computed afresh on entry and on exit."""
     from stairbounce import _cache
 
-    _cached(tmp_path, _asked)
     real = _cache._kernel_sources()
-    changed = [(name, text + b"\n# changed") if name == "plane.py" else (name, text) for name, text in real]
+    changed = [(name, text + b"\n# changed") if name == source else (name, text) for name, text in real]
     monkeypatch.setattr(_cache, "_kernel_sources", lambda: changed)
     _cache.kernel_hash.cache_clear()
     try:
+        yield
+    finally:
+        _cache.kernel_hash.cache_clear()
+
+
+def test_the_cache_key_follows_the_kernels_source_not_the_version(tmp_path, monkeypatch):
+    """Report N1: the key held only ``__version__`` (0.1.0 for 159 commits): an
+    entry made by other kernels was reused by name."""
+    _cached(tmp_path, _asked)
+    with kernel_changed(monkeypatch, "plane.py"):
         calls = []
         _cached(tmp_path, lambda: calls.append(1) or _asked())
         assert calls == [1]
-    finally:
-        _cache.kernel_hash.cache_clear()
 
 
 def test_cache_info_clear_and_the_size_bound(tmp_path, capsys, monkeypatch):

@@ -16,6 +16,7 @@ import pytest
 
 from stairbounce import plane, structure
 from stairbounce.structure import borders, regions
+from stairbounce.explorer import overlays, render
 from stairbounce.explorer import view as V
 
 # --------------------------------------------------------------------------- #
@@ -68,7 +69,7 @@ class Meter:
         count(borders, "_border_kernel", lambda es, us, period, a, b, axis, max_iter, *r: _pairs_bound(period, a, b, max_iter))
         count(structure.words, "_fill_impacts", lambda e, u, periods, *r: periods.sum())
         count(regions, "_words_grid", lambda es, us, y0, v0, max_iter, *r: es.size * us.size * max_iter)
-        count(V, "_word_at", lambda e, u, window, max_iter, *r: max_iter)
+        count(overlays, "_word_at", lambda e, u, window, max_iter, *r: max_iter)
         orig = regions._trace_word
 
         def traced(*a, **k):  # the documented exception: one traced word, one slice
@@ -97,7 +98,8 @@ def meter(monkeypatch):
     # compile what the meter wraps before wrapping it (numba reads globals when it compiles)
     V.traced_overlay(R1_VIEW, regions.window_regions((0.2, 0.21), (0.5, 0.51), resolution=4, max_iter=50),
                      V.view_border_points(V.View(0.2, 0.21, 0.5, 0.51, 16, 16, max_iter=50)))
-    monkeypatch.setattr(V, "SLICE_WORK", R1_SLICE)
+    for mod in (V, render, overlays):  # the modules that read SLICE_WORK (view re-exports it)
+        monkeypatch.setattr(mod, "SLICE_WORK", R1_SLICE)
     m = Meter()
     m.install(monkeypatch)
     return m
@@ -288,6 +290,7 @@ def test_r3_a_store_of_before_keeps_resuming_and_its_checksums_are_bound_from_th
 
 
 from .test_faults import run as _run_cli  # noqa: E402  (the CLI in process: exit status, out, err)
+from .test_faults_round2 import kernel_changed  # noqa: E402
 from .test_faults_round2 import one_line_error as _one_line_error  # noqa: E402
 
 
@@ -446,16 +449,10 @@ def test_r10_the_kernel_hash_covers_every_module_that_computes_a_cached_entry(mo
     assert {"structure/regions.py", "structure/borders.py", "structure/itinerary.py", "structure/words.py"} <= hashed
     assert not {"borders.py", "regions.py", "_region_export.py"} & hashed  # the old paths' shims compute nothing
     _figures_cached(tmp_path, "bifurcations", BIF_INPUTS, _bifurcations)
-    real = _cache._kernel_sources()
-    changed = [(n, t + b"\n# changed") if n == "structure/borders.py" else (n, t) for n, t in real]
-    monkeypatch.setattr(_cache, "_kernel_sources", lambda: changed)
-    _cache.kernel_hash.cache_clear()
-    try:
+    with kernel_changed(monkeypatch, "structure/borders.py"):
         calls = []
         _figures_cached(tmp_path, "bifurcations", BIF_INPUTS, lambda: calls.append(1) or _bifurcations())
         assert calls == [1]
-    finally:
-        _cache.kernel_hash.cache_clear()
 
 
 # --------------------------------------------------------------------------- #

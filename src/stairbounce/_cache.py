@@ -239,12 +239,10 @@ def write_entry(path, ds, kind, inputs):
 
 def entries(folder):
     """The entries in ``folder`` (``KIND-HASH.nc`` files), oldest use first: list of (Path, bytes)."""
+    from ._io import scan_folder
+
     found = []
-    try:
-        it = list(os.scandir(folder))
-    except OSError:
-        return found
-    for e in it:
+    for e in scan_folder(folder):
         if _ENTRY.match(e.name) and e.is_file(follow_symlinks=False):
             with contextlib.suppress(OSError):
                 st = e.stat(follow_symlinks=False)

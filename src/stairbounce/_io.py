@@ -125,6 +125,18 @@ def _owner_gone(host, pid, since):
     return start is not None and since is not None and start > since + 1.0
 
 
+def scan_folder(folder):
+    """scan_folder(folder) -> list of os.DirEntry
+
+    The entries of ``folder`` (:func:`os.scandir`), none where it cannot be
+    read (missing, not a folder, no permission).
+    """
+    try:
+        return list(os.scandir(folder))
+    except OSError:
+        return []
+
+
 def clean_stale_temporaries(folder):
     """clean_stale_temporaries(folder) -> list of Path
 
@@ -135,11 +147,7 @@ def clean_stale_temporaries(folder):
     everything whose name is not ours.  Returns what was removed.
     """
     removed = []
-    try:
-        entries = list(os.scandir(folder))
-    except OSError:
-        return removed
-    for entry in entries:
+    for entry in scan_folder(folder):
         m = _TEMP.match(entry.name)
         if m is None:
             continue

@@ -94,6 +94,20 @@ def window(name, spec):
     return lo, hi, (n[0] if n else None)
 
 
+def size_text(text):
+    """size_text(text) -> (int, int) or None
+
+    ``"600x400"`` -> ``(600, 400)`` (width, height; ``X`` too), ``None`` where
+    ``text`` is not two integers joined by an ``x``.  The bounds are the caller's.
+    """
+    parts = text.lower().split("x")
+    try:
+        w, h = (int(p) for p in parts)
+    except ValueError:
+        return None
+    return w, h
+
+
 def renamed(old, old_value, new, new_value, default, stacklevel=3):
     """The value of a keyword renamed from ``old`` to ``new`` (default
     ``default``): ``old_value`` (None when not given) is still taken, with a

@@ -135,11 +135,12 @@ def parse_range(name: str, text: str) -> tuple[float, float]:
 
 def parse_size(text: str) -> tuple[int, int]:
     """``"500x350"`` -> ``(500, 350)`` (width along e, height along u), both >= 1."""
-    parts = text.lower().split("x")
-    try:
-        w, h = (int(p) for p in parts)
-    except ValueError:
-        raise CLIError(f"--size must be WIDTHxHEIGHT in pixels, e.g. 500x350, got {text!r}") from None
+    from .._validate import size_text
+
+    wh = size_text(text)
+    if wh is None:
+        raise CLIError(f"--size must be WIDTHxHEIGHT in pixels, e.g. 500x350, got {text!r}")
+    w, h = wh
     if w < 1 or h < 1:
         raise CLIError(f"--size must have WIDTH >= 1 and HEIGHT >= 1, got {text!r}")
     return w, h

@@ -173,6 +173,14 @@ def _strip(d, half, dim, width=41):
     return "[" + "".join(row) + "]"
 
 
+def _print_result(result, ew, uw, at_defaults, checked, which):
+    """The estimator's table, its estimate (:func:`_print_estimate`) and the
+    accounting of the interval (:func:`_print_accounting`)."""
+    typer.echo(result.table())
+    _print_estimate(result)
+    _print_accounting(result, ew, uw, at_defaults, checked, which)
+
+
 def _measure_again(result, run, max_iter):
     """``run(4 * max_iter)``, compared scale by scale with ``result``; returns
     the ``compare`` argument of :func:`stairbounce.plot.plot_local_dimension`."""
@@ -360,9 +368,7 @@ def dimension(
             f"border of the {what} in [{ew[0]:g}, {ew[1]:g}] x [{uw[0]:g}, {uw[1]:g}], max_iter {max_iter}: "
             f"uncertainty exponent of {points} random points (seed {seed}, random directions)"
         )
-        typer.echo(result.table())
-        _print_estimate(result)
-        _print_accounting(result, ew, uw, at_defaults, check_max_iter, which)
+        _print_result(result, ew, uw, at_defaults, check_max_iter, which)
         typer.echo(f"r = {result.r:.5f}; fit: eps {result.fit_range[0]:.3g}..{result.fit_range[1]:.3g} of the "
                    f"window, {result.fit.n} values, alpha = {result.alpha:.4f}, D = 2 - alpha (stderr "
                    f"binomial {result.stderr_binomial:.4f}, scatter about the line {result.stderr_fit:.4f})")
@@ -404,9 +410,7 @@ def dimension(
             f"border of the {what} in [{ew[0]:g}, {ew[1]:g}] x [{uw[0]:g}, {uw[1]:g}], max_iter {max_iter}: "
             f"slicing, {lines} random lines (seed {seed}), {result.evaluations} points classified"
         )
-        typer.echo(result.table())
-        _print_estimate(result)
-        _print_accounting(result, ew, uw, at_defaults, check_max_iter, which)
+        _print_result(result, ew, uw, at_defaults, check_max_iter, which)
         # the same seed: the same lines
         compare = _measure_again(result, run, max_iter) if check_max_iter else ()
         if png is not None:

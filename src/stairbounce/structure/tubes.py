@@ -86,15 +86,21 @@ def _up(x):
     return np.nextafter(x, np.inf)
 
 
-def _coef(e, k):
-    """At the floats ``e`` (exact), enclosures of ``e^k``, ``(e^k)'``,
-    ``B_k``, ``B_k'`` (``B_k = (1+e) Q_k``, ``Q_k = (1 - e^k)/(1 - e)``,
-    ``Q_k' = N_k / (1-e)^2``, ``N_k = 1 - k e^(k-1) + (k-1) e^k``)."""
+def _ones(e):
+    """At the floats ``e`` (exact): ``n = e.size`` and the enclosures of 1,
+    ``1 + e``, ``1 - e`` and ``(1 - e)^2``."""
     n = e.size
     one = np.ones((2, n))
     ep = _point(e)
     one_p, one_m = _add(one, ep), _sub(one, ep)
-    om2 = _mul_pos(one_m, one_m)
+    return n, one, one_p, one_m, _mul_pos(one_m, one_m)
+
+
+def _coef(e, k):
+    """At the floats ``e`` (exact), enclosures of ``e^k``, ``(e^k)'``,
+    ``B_k``, ``B_k'`` (``B_k = (1+e) Q_k``, ``Q_k = (1 - e^k)/(1 - e)``,
+    ``Q_k' = N_k / (1-e)^2``, ``N_k = 1 - k e^(k-1) + (k-1) e^k``)."""
+    n, one, one_p, one_m, om2 = _ones(e)
     if k == 0:
         z = np.zeros((2, n))
         return one, z, z, z
@@ -113,11 +119,7 @@ def _coef(e, k):
 def _event_coef(e, index):
     """``C`` and ``C'`` of the event: index 0 the slide, ``(1+e)/(1-e)``; index
     m >= 1 the m-th impact, ``A_m = (1+e-2e^m)/(1-e)`` (``A_m' = 2 N_m/(1-e)^2``)."""
-    n = e.size
-    one = np.ones((2, n))
-    ep = _point(e)
-    one_p, one_m = _add(one, ep), _sub(one, ep)
-    om2 = _mul_pos(one_m, one_m)
+    n, one, one_p, one_m, om2 = _ones(e)
     if index == 0:
         return _div_pos(one_p, one_m), _div_pos(2.0 * one, om2)
     if index == 1:
