@@ -110,6 +110,13 @@ _WARN_BYTES = 1 << 30
 _SLIDING_STATUS = STATUSES.index("sliding")
 
 
+def _available_memory():
+    """Bytes of memory available now (``_validate.available_memory``), or None: a level
+    whose estimate (its boxes x :data:`_LEVEL_BYTES_PER_BOX`) exceeds it is refused
+    before its work (ValueError naming ``certify_to_zarr``)."""
+    return _v.available_memory()
+
+
 class CertifyMemoryWarning(UserWarning):
     """A certified atlas's level is about to hold more than a gigabyte
     (:data:`_WARN_BYTES`): the run goes on, and says so with its estimate."""
@@ -424,6 +431,10 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch
             warnings.warn(f"certify: level {level} of {depth} holds {n:,} boxes, about {need / 2**30:.1f} GiB "
                           "with the boxes kept so far; each further level holds up to 4 times as many boxes "
                           "(about 3 times on the paper's windows)", CertifyMemoryWarning, stacklevel=2)
+        avail = _available_memory()
+        if avail is not None and n * _LEVEL_BYTES_PER_BOX > avail:
+            raise ValueError(f"certify: depth {depth} needs about {need / 2**30:.1f} GiB at level {level}, more "
+                             f"than this machine's {avail / 2**30:.1f} GiB available; use certify_to_zarr / --store")
         status = np.empty(n, np.int8)
         reason = np.empty(n, np.int8)
         step = np.empty(n, np.int64)
