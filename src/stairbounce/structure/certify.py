@@ -310,6 +310,14 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     Returns
     -------
     CertifiedAtlas
+
+    Raises
+    ------
+    ValueError
+        A bad parameter (naming it), or a level whose memory estimate (its
+        boxes x 250 B) exceeds the memory available now, before its work:
+        :func:`stairbounce.certify_to_zarr` streams the same atlas to a store
+        with the memory of a tile.
     """
     return _certify(e, u, depth, max_iter, progress, tiles, form, trap=trap, classes=classes, phase=phase)
 
