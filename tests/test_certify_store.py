@@ -131,11 +131,16 @@ def test_a_damaged_tile_is_found_by_its_checksum_and_computed_again(tmp_path):
     assert_same_atlas(sb.CertifiedAtlas.load(path).boxes, reference(**FIG7, depth=6))
 
 
-def test_verify_checks_a_store_as_a_whole_atlas(tmp_path):
+def test_verify_checks_a_store_as_a_whole_atlas(tmp_path, monkeypatch):
     path = tmp_path / "a.zarr"
     sb.certify_to_zarr(path, **FIG7, depth=6, tile_level=4, tile_boxes=20)
     v = sb.verify(path)
     assert v.ok and v.atlas and v.complete and v.checked == reference(**FIG7, depth=6).sizes["box"]
+
+    verify_module = importlib.import_module("stairbounce.structure.verify")
+    monkeypatch.setattr(verify_module, "MAX_WORK", 10)  # the work estimated from the summary, before reading
+    with pytest.raises(ValueError, match="the atlas store .* units of checking work"):
+        sb.verify(path)
 
 
 def test_a_store_is_one_writer_at_a_time(tmp_path):

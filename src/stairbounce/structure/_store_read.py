@@ -95,6 +95,17 @@ def _decode(arrays, attrs, key):
     return table[arrays.pop(f"{key}_code")]
 
 
+def store_sizes(path):
+    """``(boxes, itinerary steps, trapping cells)`` of a complete store, from its summary
+    (the checker's work estimated before the boxes are read); None without a summary."""
+    try:
+        root = store_state(path)[0]
+        s = json.loads(root["summary"])
+        return int(s["boxes"]), int(s["itinerary"]), int(s.get("trap_cells", 0))
+    except Exception:  # noqa: BLE001 - incomplete or damaged: read_store says which
+        return None
+
+
 def read_store(path):
     """read_store(path) -> xarray.Dataset: the whole atlas table of a streamed store,
     in memory: every tile read, checked against its checksum, and the tiles merged in

@@ -154,6 +154,7 @@ def _summary(ds):
         return out
 
     return {"boxes": int(st.size), "itinerary": int(ds["itinerary"].size),
+            "trap_cells": int(ds["trap_cells"].size) if "trap_cells" in ds.variables else 0,
             "status": {name: list(_sum_bounds(lo[st == k], hi[st == k])) for k, name in enumerate(STATUSES)},
             "reason": groups(ds["reason"].values, st == K.UNDECIDED),
             "word": groups(ds["word"].values, st == K.WORD),
@@ -485,8 +486,9 @@ def _write_summary(path):
     for k in range(done.size):
         g = zarr.open_group(os.path.join(str(path), R.BOXES, R.tile_name(k)), mode="r")
         summaries.append(json.loads(g.attrs["summary"]))
-    total = {"boxes": sum(s["boxes"] for s in summaries), "itinerary": sum(s["itinerary"] for s in summaries),
-             "trapping": _combine([s["trapping"] for s in summaries])}
+    total = {k: sum(s[k] for s in summaries) for k in ("boxes", "itinerary", "trap_cells")}
+    total.update({
+             "trapping": _combine([s["trapping"] for s in summaries])})
     for key in ("status", "reason", "word"):
         names = sorted({n for s in summaries for n in s[key]})
         total[key] = {n: _combine([s[key][n] for s in summaries if n in s[key]]) for n in names}

@@ -337,8 +337,15 @@ def _read_checked(path):
 
     from .._io import check_input
 
+    from ._store_read import is_store, store_sizes
+
     s = str(path)
     check_input(path, (".nc", ".zarr"))  # a FIFO or device would block the opening below forever
+    if is_store(path):  # a streamed atlas (certify_to_zarr): its size from its summary
+        sizes = store_sizes(path)
+        if sizes is not None:
+            check_work(*sizes, what=f"the atlas store {s!r}")
+        return read_atlas_file(path)
     try:
         f = xr.open_zarr(s, consolidated=False) if s.endswith(".zarr") else xr.open_dataset(s, engine="netcdf4")
     except Exception:  # noqa: BLE001 - read_atlas_file names what is wrong with the file
