@@ -146,11 +146,12 @@ def _summary(ds):
         out = {}
         sel = np.flatnonzero(mask)
         if sel.size:
-            names, inv = np.unique(np.asarray(keys)[sel].astype(str), return_inverse=True)
-            inv = inv.ravel()
+            inv, names = _factorize(np.asarray(keys)[sel])
+            order = np.argsort(inv, kind="stable")
+            cuts = np.searchsorted(inv[order], np.arange(len(names) + 1))
             for k, name in enumerate(names):
-                m = sel[inv == k]
-                out[str(name)] = list(_sum_bounds(lo[m], hi[m]))
+                m = sel[order[cuts[k]:cuts[k + 1]]]
+                out[name] = list(_sum_bounds(lo[m], hi[m]))
         return out
 
     return {"boxes": int(st.size), "itinerary": int(ds["itinerary"].size),
@@ -168,10 +169,25 @@ def _encode(ds):
     ds = ds.copy()
     ds.attrs = {k: (list(v) if isinstance(v, tuple) else v) for k, v in ds.attrs.items()}
     for k in ("word", "reason"):
-        names, codes = np.unique(ds[k].values.astype(str), return_inverse=True)
-        ds = ds.drop_vars(k).assign({f"{k}_code": ("box", codes.ravel().astype(np.int32))})
-        ds.attrs[f"{k}_names"] = [str(x) for x in names]
+        codes, names = _factorize(ds[k].values)
+        ds = ds.drop_vars(k).assign({f"{k}_code": ("box", codes.astype(np.int32))})
+        ds.attrs[f"{k}_names"] = names
     return ds
+
+
+def _factorize(values):
+    """``(codes, names)``: the distinct texts of ``values`` (sorted) and each value's index
+    among them, by hashing (no fixed-width copy of the texts: a word can be hundreds of
+    letters, and a ``<U`` copy of a tile's words took 170 MiB at depth 12)."""
+    import pandas as pd
+
+    v = np.asarray(values)
+    codes, uniques = pd.factorize(v if v.dtype.kind == "O" else v.astype(object))
+    names = [str(x) for x in uniques]
+    order = sorted(range(len(names)), key=names.__getitem__)
+    remap = np.empty(len(names), np.int64)
+    remap[order] = np.arange(len(names))
+    return remap[codes] if len(names) else codes.astype(np.int64), [names[k] for k in order]
 
 
 def _compute_tile(win, depth, tile_level, gi, gj, max_iter, code, classes, trap, parts=None):
