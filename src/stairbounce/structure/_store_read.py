@@ -17,6 +17,7 @@ import numpy as np
 STORE_KIND = "stairbounce certified atlas store"
 STORE_FORMAT = "stairbounce-certify-store-1"
 RECORD = "tiles"   # the tile record: done flags and checksums (attrs: format, token)
+SUMMARY = "summary"  # a group whose attribute "summary" holds the tiles' numbers combined
 BOXES = "boxes"    # one group per tile: BOXES/00000 (the coarse levels), 00001, ...
 
 # the dimensions of an atlas table's variables (certify._atlas_dataset, trapping.trap_atlas)
@@ -36,7 +37,7 @@ def is_store(path):
     group's ``kind``): read without zarr, from the root's metadata file."""
     try:
         with open(os.path.join(os.fspath(path), "zarr.json"), "rb") as f:
-            meta = json.loads(f.read(1 << 20))
+            meta = json.loads(f.read(16 << 20))
         return meta.get("attributes", {}).get("kind") == STORE_KIND
     except (OSError, ValueError, AttributeError):
         return False
@@ -99,11 +100,22 @@ def store_sizes(path):
     """``(boxes, itinerary steps, trapping cells)`` of a complete store, from its summary
     (the checker's work estimated before the boxes are read); None without a summary."""
     try:
-        root = store_state(path)[0]
-        s = json.loads(root["summary"])
+        s = read_summary(path)
         return int(s["boxes"]), int(s["itinerary"]), int(s.get("trap_cells", 0))
     except Exception:  # noqa: BLE001 - incomplete or damaged: read_store says which
         return None
+
+
+def read_summary(path):
+    """The store's combined summary (dict), or None when the run has not finished."""
+    import zarr
+
+    try:
+        g = zarr.open_group(os.path.join(os.fspath(path), SUMMARY), mode="r")
+    except Exception:  # noqa: BLE001 - not written yet
+        return None
+    text = g.attrs.get("summary")
+    return None if text is None else json.loads(text)
 
 
 def read_store(path):

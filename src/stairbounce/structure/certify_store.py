@@ -20,8 +20,9 @@ Layout of a store::
 
     atlas.zarr/
       zarr.json              attrs: kind, format, window, depth, max_iter, form, trap,
-                             classes, tile_level, tile_boxes, n_tiles; summary (at the end)
+                             classes, tile_level, tile_boxes, n_tiles
       tiles/done, tiles/crc  done flag and checksum per tile (attrs: format, token)
+      summary/               attrs: the tiles' summaries combined (written at the end)
       boxes/000000 ...       one group per tile: its atlas table as CertifiedAtlas.save
                              writes a .zarr (word_code/reason_code and names lists),
                              its summary (proven area bounds by status, reason, word)
@@ -39,7 +40,7 @@ other arguments on an existing store are refused by name.
 Derived numbers without loading the boxes: each tile's proven area bounds (sums of the
 boxes' exact areas rounded outward, ``tiling.area_bounds``) by status, undecided
 reason and word are summed over the tiles (``math.fsum`` of the tiles' lower bounds
-moved one float down, of the upper bounds one up) into the root's ``summary``
+moved one float down, of the upper bounds one up) into the ``summary`` group's
 attribute: :class:`CertifiedStore`'s :meth:`~CertifiedStore.fraction` and
 :meth:`~CertifiedStore.word_area_bounds`.  They may be a float or two wider than the
 in-memory atlas's (summed in another order), and still proven.
@@ -492,7 +493,7 @@ def _combine(pairs):
 
 
 def _write_summary(path):
-    """The tiles' summaries combined into the root's ``summary`` attribute (all tiles done)."""
+    """The tiles' summaries combined into the ``summary`` group's attribute (all tiles done)."""
     import zarr
 
     stored, record, done, _ = R.store_state(path)
@@ -508,7 +509,9 @@ def _write_summary(path):
     for key in ("status", "reason", "word"):
         names = sorted({n for s in summaries for n in s[key]})
         total[key] = {n: _combine([s[key][n] for s in summaries if n in s[key]]) for n in names}
-    zarr.open_group(str(path), mode="r+").attrs["summary"] = json.dumps(total, sort_keys=True)
+    # a group of its own: the root's metadata stays small (thousands of words at depth 15)
+    group = zarr.open_group(os.path.join(str(path), R.SUMMARY), mode="a", zarr_format=3)
+    group.attrs["summary"] = json.dumps(total, sort_keys=True)
 
 
 class CertifiedStore:
@@ -524,10 +527,10 @@ class CertifiedStore:
         if not R.is_store(self.path):
             raise ValueError(f"{path} is not a certified atlas store")
         self.attrs, _, self._done, _ = R.store_state(self.path)
-        if "summary" not in self.attrs:
+        self.summary = R.read_summary(self.path)
+        if self.summary is None or not self._done.all():
             raise ValueError(f"{path} is incomplete ({int(self._done.sum())} of {self._done.size} tiles "
                              "computed): run certify_to_zarr again with the same arguments to finish it")
-        self.summary = json.loads(self.attrs["summary"])
 
     @property
     def window(self):
