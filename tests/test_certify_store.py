@@ -197,3 +197,16 @@ def test_cli_store_resume_verify_and_errors(tmp_path, capsys):
         code, out, err = _cli(args + extra, capsys)
         assert code == 2, (extra, err)
         assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_ragged_rows_are_taken_block_by_block():
+    R = importlib.import_module("stairbounce.structure._store_read")
+    np = pytest.importorskip("numpy")
+    rng = np.random.default_rng(4)
+    lengths = rng.integers(0, 5, 50)
+    values = np.arange(int(lengths.sum())) * 3
+    starts = np.cumsum(lengths) - lengths
+    order = rng.permutation(50)
+    want = np.concatenate([values[starts[k]:starts[k] + lengths[k]] for k in order])
+    for block in (1, 3, 7, 1 << 20):
+        assert np.array_equal(R._take_rows(values, starts[order], lengths[order], block=block), want)
