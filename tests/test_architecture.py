@@ -11,7 +11,7 @@ import pytest
 
 CORE = ["_validate", "model", "symbolic", "trajectory", "units", "plane", "orbits", "fractal", "dimension", "atlas",
         "atlas_boxes", "nonsliding", "borders", "regions", "_region_export", "_colours", "_io", "_interrupt",
-        "_cache", "structure", "structure.certify", "structure.verify", "structure.verdict", "structure.tiling",
+        "_cache", "structure", "structure.certify", "structure.certify_store", "structure._store_read", "structure.verify", "structure.verdict", "structure.tiling",
         "structure.labels", "structure.tubes",
         "structure.itinerary", "structure.words", "structure.slices", "structure.borders", "structure.bifurcations",
         "structure.checks", "structure.continuation", "structure.regions", "structure.trace", "structure.graph",

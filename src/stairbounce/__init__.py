@@ -87,6 +87,7 @@ from .structure.regions import BorderArc, Corner, Region, RegionComponent, windo
 from .structure.trace import trace_border
 from ._progress import progress_bar
 from .structure import Certificate, CertifiedAtlas, certify, certify_box
+from .structure.certify_store import CertifiedStore, certify_to_zarr
 from .structure.labels import prove_labels
 from .structure.trapping import TrappingRegion, trapping_region
 from .structure.tubes import BorderTube, border_tube
@@ -121,6 +122,8 @@ __all__ = [
     "CertifiedAtlas",
     "certify",
     "certify_box",
+    "certify_to_zarr",
+    "CertifiedStore",
     "BoxDimension",
     "Flight",
     "Impact",

@@ -145,7 +145,14 @@ def certify_(
                               "where one is proven, the orbit of (1, 0) never slides there (status no_sliding, "
                               "reason 'trapping'). Costs more than the atlas itself."),
     verify: Path = typer.Option(None, "--verify", help="Instead: re-check the certificates of a saved atlas "
-                                "(.nc or .zarr) with the independent checker."),
+                                "(.nc or .zarr, or a --store) with the independent checker."),
+    store: Path = typer.Option(None, "--store", help="Stream the atlas to this .zarr store tile by tile "
+                               "(memory bounded by a tile, not the depth; the same boxes as in memory); "
+                               "the same command resumes an interrupted store. Not with --out or --png "
+                               "(they hold the atlas in memory: load the store for them)."),
+    scheduler: str = typer.Option(None, "--scheduler", help="With --store: compute the tiles on the Dask "
+                                  "scheduler at this address (tcp://HOST:8786); the workers write the store, "
+                                  "which they must see at the same path."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
     """Cover a window of the (e, u) plane with boxes on which interval arithmetic proves
@@ -171,6 +178,13 @@ def certify_(
         return
     e_lo, e_hi = parse_range("e", e)
     u_lo, u_hi = parse_range("u", u)
+    if scheduler is not None and store is None:
+        raise CLIError("--scheduler needs --store (the tiles of a streamed atlas)")
+    if store is not None:
+        if out is not None or png is not None:
+            raise CLIError("--store writes the atlas itself: give --out or --png without --store, or load the store")
+        _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, top)
+        return
     if out is not None:
         suffix_of(out, ATLAS_SUFFIXES, "--out")   # the rule of CertifiedAtlas.save, before the work
     if png is not None:
@@ -217,6 +231,43 @@ def certify_(
     for row in words.head(top).itertuples():
         typer.echo(f"  {row.word:<32} period {row.period:>4}  area >= {_pct(shares[row.word], 3)}% "
                    f"({row.boxes} boxes)")
+
+
+def _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, top):
+    """``--store``: :func:`stairbounce.certify_to_zarr` behind a progress bar over its
+    tiles, then the summary from the store's proven numbers (its boxes not loaded)."""
+    import time
+
+    from ..structure.certify_store import certify_to_zarr
+
+    if scheduler is not None and "://" not in scheduler:
+        raise CLIError(f"--scheduler must be an address such as tcp://HOST:8786, got {scheduler!r}")
+    if store.suffix != ".zarr":
+        raise CLIError(f"--store must be a .zarr store, got {str(store)!r}")
+    t0 = time.perf_counter()
+    try:
+        st = _with_phases(lambda p, ph: certify_to_zarr(store, e=(e_lo, e_hi), u=(u_lo, u_hi), depth=depth,
+                                                        max_iter=max_iter, trap=trap, client=scheduler,
+                                                        progress=p, phase=ph))
+    except KeyboardInterrupt:
+        typer.echo(f"stairbounce: the complete tiles are kept in {store}; run the same command to resume", err=True)
+        raise
+    except ValueError as exc:
+        raise CLIError(f"--{str(exc).replace('_', '-')}" if str(exc).split()[0] in ("depth", "max_iter")
+                       else str(exc)) from None
+    seconds = time.perf_counter() - t0
+    f, f_up = st.fraction(), st.fraction(bound="upper")
+    typer.echo(f"wrote {store}: e in [{e_lo:g}, {e_hi:g}], u in [{u_lo:g}, {u_hi:g}], depth {depth}, max_iter "
+               f"{max_iter}: {st.boxes} boxes in {st.attrs['n_tiles']} tiles, {seconds:.2f} s")
+    typer.echo("proven: at least " + ", ".join(f"{k} {_pct(f[k], 2)}%" for k in ("word", "no_sliding", "no_slide_within"))
+               + " of the window's area (proven bounds, summed over the tiles and rounded outward)")
+    typer.echo(f"undecided at most {_pct(f_up['undecided'], 2, down=False)}%: "
+               + ", ".join(f"{k} {_pct(v, 2, down=False)}%" for k, v in st.fraction("reason", "upper").items() if v > 0))
+    shares = st.fraction("word")
+    typer.echo(f"proven words: {len(shares)} (a proven lower bound on the window's words)")
+    for w, v in list(shares.items())[:top]:
+        typer.echo(f"  {w:<32} area >= {_pct(v, 3)}%")
+    typer.echo(f"check it with: stairbounce certify --verify {store}")
 
 
 def _with_phases(run):

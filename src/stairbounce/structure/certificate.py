@@ -445,9 +445,13 @@ def decode_atlas(ds):
 
 def read_atlas_file(path):
     """read_atlas_file(path) -> xarray.Dataset: the table of an atlas file (``.nc`` or
-    ``.zarr``) read into memory as stored (:func:`decode_atlas` decodes it); a path of
+    ``.zarr``, or a store of ``certify_to_zarr``, its tiles merged) read into memory as
+    stored (:func:`decode_atlas` decodes it); a path of
     another kind, something that is not a regular file or a folder, or a file that
     cannot be read, refused with a one-line ValueError (:func:`stairbounce._io.read_dataset`)."""
     from .._io import read_dataset
+    from ._store_read import is_store, read_store
 
+    if is_store(path):  # a streamed atlas (certify_to_zarr): its tiles merged, each checked
+        return read_store(path)
     return read_dataset(path, "a certified atlas")

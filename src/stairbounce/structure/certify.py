@@ -110,6 +110,13 @@ _WARN_BYTES = 1 << 30
 _SLIDING_STATUS = STATUSES.index("sliding")
 
 
+def _available_memory():
+    """Bytes of memory available now (``_validate.available_memory``), or None: a level
+    whose estimate (its boxes x :data:`_LEVEL_BYTES_PER_BOX`) exceeds it is refused
+    before its work (ValueError naming ``certify_to_zarr``)."""
+    return _v.available_memory()
+
+
 class CertifyMemoryWarning(UserWarning):
     """A certified atlas's level is about to hold more than a gigabyte
     (:data:`_WARN_BYTES`): the run goes on, and says so with its estimate."""
@@ -303,6 +310,14 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     Returns
     -------
     CertifiedAtlas
+
+    Raises
+    ------
+    ValueError
+        A bad parameter (naming it), or a level whose memory estimate (its
+        boxes x 250 B) exceeds the memory available now, before its work:
+        :func:`stairbounce.certify_to_zarr` streams the same atlas to a store
+        with the memory of a tile.
     """
     from .._interrupt import run_interruptible
 
@@ -428,6 +443,10 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch
             warnings.warn(f"certify: level {level} of {depth} holds {n:,} boxes, about {need / 2**30:.1f} GiB "
                           "with the boxes kept so far; each further level holds up to 4 times as many boxes "
                           "(about 3 times on the paper's windows)", CertifyMemoryWarning, stacklevel=2)
+        avail = _available_memory()
+        if avail is not None and n * _LEVEL_BYTES_PER_BOX > avail:
+            raise ValueError(f"certify: depth {depth} needs about {need / 2**30:.1f} GiB at level {level}, more "
+                             f"than this machine's {avail / 2**30:.1f} GiB available; use certify_to_zarr / --store")
         status = np.empty(n, np.int8)
         reason = np.empty(n, np.int8)
         step = np.empty(n, np.int64)
