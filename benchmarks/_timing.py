@@ -1,4 +1,4 @@
-"""Wall-clock timing shared by the benchmark scripts."""
+"""Wall-clock timing, and the integer options of ``main``, shared by the benchmark scripts."""
 
 from __future__ import annotations
 
@@ -21,3 +21,15 @@ def wall_times(fn, repeat, warm=False):
         out = fn()
         times.append(time.perf_counter() - t)
     return times, out
+
+
+def int_options(parser, **defaults):
+    """int_options(parser, **defaults) -> parser
+
+    Add one integer option per keyword to the ``argparse`` parser: ``--NAME``
+    (underscores written as dashes) with that default, as in
+    ``int_options(parser, repeat=5, size=300)``.
+    """
+    for name, default in defaults.items():
+        parser.add_argument("--" + name.replace("_", "-"), type=int, default=default)
+    return parser

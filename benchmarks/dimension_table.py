@@ -37,6 +37,7 @@ from stairbounce.dimension import (
     slicing_dimension,
     uncertainty_dimension,
 )
+from _timing import int_options
 
 WINDOWS = {
     "fig6": ((0.0, 0.333), (0.4, 0.733)),
@@ -105,11 +106,7 @@ def cell(r):
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--resolution", type=int, default=4096)
-    p.add_argument("--points", type=int, default=200_000)
-    p.add_argument("--fine-points", type=int, default=400_000)
-    p.add_argument("--lines", type=int, default=128)
-    p.add_argument("--max-iter-top", type=int, default=16000)
+    int_options(p, resolution=4096, points=200_000, fine_points=400_000, lines=128, max_iter_top=16000)
     p.add_argument("--windows", default="fig6,fig7,fig5d")
     p.add_argument("--skip-fine", action="store_true")
     p.add_argument("--json", default=None)

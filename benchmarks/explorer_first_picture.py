@@ -32,6 +32,8 @@ import subprocess
 import sys
 import time
 
+from _timing import int_options  # same folder: run as a script
+
 _WRAP_WS = """
 (() => {
   const Native = window.WebSocket;
@@ -105,10 +107,7 @@ def one_page(browser, url, size):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--size", type=int, default=300)
-    args = ap.parse_args()
+    args = int_options(argparse.ArgumentParser(description=__doc__.split("\n")[0]), repeat=5, size=300).parse_args()
     from playwright.sync_api import sync_playwright
 
     from stairbounce.explorer.view import View, compute_view, shade

@@ -25,6 +25,7 @@ import os
 import statistics
 import time
 
+from _timing import int_options
 from explorer_first_picture import _LOOPBACK, _start_server  # same folder: run as a script
 
 _POLL_PREVIEW = """
@@ -75,10 +76,7 @@ def busy_page(browser, url, size):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--repeat", type=int, default=4)
-    ap.add_argument("--size", type=int, default=300)
-    args = ap.parse_args()
+    args = int_options(argparse.ArgumentParser(description=__doc__.split("\n")[0]), repeat=4, size=300).parse_args()
     from playwright.sync_api import sync_playwright
 
     print(f"load before: {os.getloadavg()[0]:.2f}")

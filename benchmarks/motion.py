@@ -23,6 +23,7 @@ import numpy as np
 
 from stairbounce.nonsliding import motion_scan
 from stairbounce.plane import scan
+from _timing import int_options
 
 
 def best(f, repeat):
@@ -37,11 +38,7 @@ def best(f, repeat):
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    p.add_argument("--n-e", type=int, default=500)
-    p.add_argument("--n-u", type=int, default=350)
-    p.add_argument("--steps", type=int, default=1000)
-    p.add_argument("--transient", type=int, default=1000)
-    p.add_argument("--repeat", type=int, default=3)
+    int_options(p, n_e=500, n_u=350, steps=1000, transient=1000, repeat=3)
     a = p.parse_args(argv)
     grid = dict(e=(0.0, 1.0, a.n_e), u=(0.0, 1.5, a.n_u), steps=a.steps, transient=a.transient)
     motion_scan((0.0, 1.0, 8), (0.0, 1.5, 8), 10, 10)  # compile

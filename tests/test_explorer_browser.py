@@ -131,6 +131,22 @@ def _frame_box(page):
     )
 
 
+def _model_data(page, name, body):
+    """What the JavaScript ``body`` returns, run in the browser over ``d``: the
+    data of the page's Bokeh model named ``name`` (None where there is none)."""
+    return page.evaluate(
+        """() => {
+            for (const doc of Bokeh.documents) {
+              const m = doc.get_model_by_name('%s');
+              if (m == null) continue;
+              const d = m.data instanceof Map ? Object.fromEntries(m.data) : m.data;
+              %s
+            }
+            return null;
+        }""" % (name, body)
+    )
+
+
 def _window(page):
     return (page.locator(".sb-e-window input").input_value(),
             page.locator(".sb-u-window input").input_value())
@@ -664,18 +680,8 @@ def test_traced_borders_mode_draws_the_arcs(server, page):
     line.wait_for(timeout=60_000)
     assert "chatter 1" in line.inner_text() and "replaced by arcs" in line.inner_text()
     assert _query(page)["overlays"] == "traced"
-    arcs = page.evaluate(
-        """() => {
-            for (const doc of Bokeh.documents) {
-              const m = doc.get_model_by_name('sb-traced-arcs');
-              if (m == null) continue;
-              const d = m.data instanceof Map ? Object.fromEntries(m.data) : m.data;
-              return {kind: Array.from(d.kind), points: Array.from(d.xs, (x) => x.length),
-                      low: Array.from(d.word_low)};
-            }
-            return null;
-        }"""
-    )
+    arcs = _model_data(page, "sb-traced-arcs", """
+        return {kind: Array.from(d.kind), points: Array.from(d.xs, (x) => x.length), low: Array.from(d.word_low)};""")
     assert arcs is not None and sorted(set(arcs["kind"])) == ["chatter", "window"]
     i = arcs["kind"].index("chatter")
     assert arcs["points"][i] > 5 and arcs["low"][i] == "(1, 0^inf)"
@@ -699,19 +705,10 @@ def test_proven_overlay_draws_the_certified_atlas_and_its_key(server, page):
     line.wait_for(timeout=60_000)
     assert re.search(r"proven overlay: (\d+) boxes to depth 6", line.inner_text())
     assert _query(page)["overlays"] == "proven"
-    drawn = page.evaluate(
-        """() => {
-            for (const doc of Bokeh.documents) {
-              const m = doc.get_model_by_name('sb-proven-image');
-              if (m == null) continue;
-              const d = m.data instanceof Map ? Object.fromEntries(m.data) : m.data;
-              if (!d.image.length) return {n: 0};
-              const codes = new Set(d.code[0]);
-              return {n: d.image[0].length, codes: codes.size, shape: d.image[0].shape ?? null};
-            }
-            return null;
-        }"""
-    )
+    drawn = _model_data(page, "sb-proven-image", """
+        if (!d.image.length) return {n: 0};
+        const codes = new Set(d.code[0]);
+        return {n: d.image[0].length, codes: codes.size, shape: d.image[0].shape ?? null};""")
     assert drawn is not None and drawn["n"] == 128 * 128 and drawn["codes"] > 3
     key = page.locator(".sb-proven-key").get_by_text("Undecided areas are numerical")
     key.wait_for(timeout=10_000)

@@ -129,23 +129,39 @@ def _pixel_by_pixel(es, us, max_iter, y0, v0):
     return out
 
 
+# the step limit of the windows checked pixel by pixel
+MAX_ITER = 300
+
+
+def _window(e, u, y0, v0):
+    """A window's pixel centres (``np.linspace`` of ``e`` and ``u``, each
+    ``(lo, hi, n)``) and its arrays computed pixel by pixel at MAX_ITER."""
+    es, us = np.linspace(*e), np.linspace(*u)
+    return es, us, _pixel_by_pixel(es, us, MAX_ITER, y0, v0)
+
+
+def _assert_scan_fast_gives(ref, case, es, us, y0, v0, prune, units, chunk, *long_min):
+    """sc._scan_fast over the window at MAX_ITER, into arrays filled with 77
+    (never an answer), gives ``ref`` field by field; a failure names ``case``
+    and the field."""
+    npix = es.size * us.size
+    outs = [np.full(npix, 77, dtype=dt) for dt, _ in sc._FIELDS.values()]
+    sc._scan_fast(es, us, True, MAX_ITER, y0, v0, prune, units, chunk, *outs, np.zeros(1, np.int64), *long_min)
+    for k, o in zip(FIELDS, outs):
+        assert np.array_equal(o.reshape(us.size, es.size), ref[k]), (*case, k)
+
+
 @pytest.mark.parametrize("y0, v0", [(1.0, 0.0), (2.5, -0.7)])
 def test_any_segments_and_units_give_the_pixel_by_pixel_arrays(y0, v0):
     # a window across the Corollary 2.1 curve with many-impact steps (closed
     # form), short and long periods, and pixels that never slide
-    es = np.linspace(0.05, 0.95, 23)
-    us = np.linspace(0.03, 1.2, 19)
-    max_iter = 300
-    ref = _pixel_by_pixel(es, us, max_iter, y0, v0)
+    es, us, ref = _window((0.05, 0.95, 23), (0.03, 1.2, 19), y0, v0)
     npix = es.size * us.size
     # units that take segments from a shared counter: one, several, more
     # units than segments (the extra ones find none left)
     for chunk, units in ((7, 1), (37, 3), (64, 5), (npix, 1), (npix, 3), (5, 40)):
         for prune in (True, False):
-            outs = [np.full(npix, 77, dtype=dt) for dt, _ in sc._FIELDS.values()]
-            sc._scan_fast(es, us, True, max_iter, y0, v0, prune, units, chunk, *outs, np.zeros(1, np.int64))
-            for k, o in zip(FIELDS, outs):
-                assert np.array_equal(o.reshape(us.size, es.size), ref[k]), (chunk, units, prune, k)
+            _assert_scan_fast_gives(ref, (chunk, units, prune), es, us, y0, v0, prune, units, chunk)
     # the window exercises what it is meant to: periods of several steps,
     # pixels that never slide, pruned pixels and steps past 8 impacts
     assert (ref["status"] == 1).any() and (ref["period"] > 5).any()
@@ -162,17 +178,11 @@ def test_the_long_common_step_at_any_switch_gives_the_pixel_by_pixel_arrays(y0, 
     # one with a fourth impact in long_min lanes (1 in production): always
     # (0), never (2**62) or switching (1, 3), the arrays of model._step one
     # pixel at a time; a window of steps with every count of impacts 1 to 9
-    es = np.linspace(0.3, 0.97, 29)
-    us = np.linspace(0.01, 0.5, 23)
-    max_iter = 300
-    ref = _pixel_by_pixel(es, us, max_iter, y0, v0)
+    es, us, ref = _window((0.3, 0.97, 29), (0.01, 0.5, 23), y0, v0)
     npix = es.size * us.size
     chunk, units = sc._chunking(npix, 2, unit_min=64)
     for long_min in (0, 1, 3, 2**62):
-        outs = [np.full(npix, 77, dtype=dt) for dt, _ in sc._FIELDS.values()]
-        sc._scan_fast(es, us, True, max_iter, y0, v0, False, units, chunk, *outs, np.zeros(1, np.int64), long_min)
-        for k, o in zip(FIELDS, outs):
-            assert np.array_equal(o.reshape(us.size, es.size), ref[k]), (long_min, k)
+        _assert_scan_fast_gives(ref, (long_min,), es, us, y0, v0, False, units, chunk, long_min)
     ks = np.concatenate([iterate(1.0, 0.0, e, u, 60)[2] for e in es[::2] for u in us[::2]])
     counts = np.bincount(ks[ks >= 0], minlength=10)
     assert (counts[1:10] > 20).all(), counts

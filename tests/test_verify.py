@@ -193,6 +193,14 @@ def _tamper_letters(certs, rng):
     return out
 
 
+def _changed_claims(certs, tampered, rng, box):
+    """The word certificates of ``certs``, each claimed on ``box(c, w)`` for a
+    width w drawn from 1e-6 to 10**-2.5, then those of ``tampered`` with one
+    impact number changed (_tamper_letters), all from ``rng`` in that order."""
+    claims = [box(c, 10 ** rng.uniform(-6, -2.5)) for c in certs if c.status == "word"]
+    return claims + _tamper_letters(tampered, rng)
+
+
 def test_a_changed_impact_number_is_rejected(fig7):
     tampered = _tamper_letters(fig7, np.random.default_rng(3))
     assert len(tampered) > 500
@@ -249,14 +257,9 @@ def test_the_checker_and_the_reference_agree_on_which_claims_hold(fig7):
     """A claim holds for the reference when it proves the same status and
     itinerary on the (possibly widened or changed) box."""
     rng = np.random.default_rng(8)
-    claims = []
-    for c in fig7[:600]:
-        if c.status != "word":
-            continue
-        w = 10 ** rng.uniform(-6, -2.5)
-        claims.append(dataclasses.replace(c, e=(c.e[0] - w * rng.random(), c.e[1] + w * rng.random()),
-                                          u=(c.u[0] - w * rng.random(), c.u[1] + w * rng.random())))
-    claims += _tamper_letters(fig7[:200], rng)
+    claims = _changed_claims(fig7[:600], fig7[:200], rng, lambda c, w: dataclasses.replace(
+        c, e=(c.e[0] - w * rng.random(), c.e[1] + w * rng.random()),
+        u=(c.u[0] - w * rng.random(), c.u[1] + w * rng.random())))
     accepted = _accepted(_arrays(claims))
     held = np.array([
         (lambda r: r.status == c.status and r.itinerary == c.itinerary)(reference_certificate(c.e, c.u))
@@ -388,13 +391,8 @@ def test_a_claim_holds_on_a_box_exactly_when_it_holds_at_its_two_corners(fig7):
     exact ranges up to rounding, and it accepts a box exactly when it accepts
     both corners as point boxes."""
     rng = np.random.default_rng(9)
-    claims = []
-    for c in fig7[:700]:
-        if c.status != "word":
-            continue
-        w = 10 ** rng.uniform(-6, -2.5)
-        claims.append(dataclasses.replace(c, e=(c.e[0], c.e[0] + w), u=(c.u[0], c.u[0] + w)))
-    claims += _tamper_letters(fig7[:150], rng)
+    claims = _changed_claims(fig7[:700], fig7[:150], rng,
+                             lambda c, w: dataclasses.replace(c, e=(c.e[0], c.e[0] + w), u=(c.u[0], c.u[0] + w)))
     box = _accepted(_arrays(claims))
     low = _accepted(_arrays([dataclasses.replace(c, e=(c.e[0],) * 2, u=(c.u[0],) * 2) for c in claims]))
     high = _accepted(_arrays([dataclasses.replace(c, e=(c.e[1],) * 2, u=(c.u[1],) * 2) for c in claims]))

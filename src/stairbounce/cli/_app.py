@@ -11,6 +11,7 @@ import math
 from contextlib import contextmanager
 import threading
 from pathlib import Path
+from typing import Annotated
 
 import typer
 
@@ -58,6 +59,12 @@ class CLIError(Exception):
 INTERRUPTED = threading.Event()
 
 FORCE_HELP = "Replace output files that exist (never a folder stairbounce did not write)."
+
+# Options several commands share, defined once as parameter types: the option
+# comes from the annotation, the default from the parameter (``dpi: Dpi = 150``).
+Dpi = Annotated[int, typer.Option("--dpi", help="Resolution of raster output (10-1200).")]
+Force = Annotated[bool, typer.Option("--force", help=FORCE_HELP)]
+MaxIter = Annotated[int, typer.Option("--max-iter", help="Steps allowed before giving up (>= 1).")]
 
 
 def check_interrupted():
@@ -162,6 +169,7 @@ def renamed_option(old: str, old_value, new: str, new_value, default):
 DEFAULT_E, DEFAULT_U, DEFAULT_SIZE = "0:1", "0:1.5", (500, 350)
 SIZE_HELP = ("Pixels WIDTHxHEIGHT (along e x along u); default square pixels, 500 along the longer side "
              "of the window (500x350, the paper's Fig. 4 grid, for the default window).")
+Size = Annotated[str, typer.Option("--size", help=SIZE_HELP)]
 
 
 def window_size(size, e, u, default_window: bool) -> tuple[int, int]:

@@ -11,6 +11,7 @@ and the physical set; they print both descriptions of the staircase.
 from __future__ import annotations
 
 import math
+from typing import Annotated
 
 import typer
 
@@ -23,20 +24,25 @@ LENGTH_HELP = "Step length b in metres (with --speed)."
 G_HELP = "Gravity in m/s^2 (with --speed; default 9.81)."
 
 
+E_HELP = "Restitution coefficient, in [0, 1)."
+U_HELP = "Horizontal speed in normalised units (u > 0). Or --speed with --step-height, --step-length."
+
+# The options the model's commands share, defined once as parameter types
+# (``speed: st.Speed = None``; Typer reads the option from the annotation,
+# the default from the parameter).
+E = Annotated[float, typer.Option("--e", help=E_HELP)]
+U = Annotated[float, typer.Option("--u", help=U_HELP)]
+Speed = Annotated[float, typer.Option("--speed", help=SPEED_HELP)]
+StepHeight = Annotated[float, typer.Option("--step-height", help=HEIGHT_HELP)]
+StepLength = Annotated[float, typer.Option("--step-length", help=LENGTH_HELP)]
+G = Annotated[float, typer.Option("--g", help=G_HELP)]
+Y0 = Annotated[float, typer.Option("--y0", help="Initial height above the step's floor (>= 0).")]
+V0 = Annotated[float, typer.Option("--v0", help="Initial vertical velocity.")]
+
+
 def speed_option(help=SPEED_HELP):
+    """--speed with its own help: a window or a number or range (a string)."""
     return typer.Option(None, "--speed", help=help)
-
-
-def step_height_option():
-    return typer.Option(None, "--step-height", help=HEIGHT_HELP)
-
-
-def step_length_option():
-    return typer.Option(None, "--step-length", help=LENGTH_HELP)
-
-
-def g_option():
-    return typer.Option(None, "--g", help=G_HELP)
 
 
 def _number(name: str, value) -> float | None:

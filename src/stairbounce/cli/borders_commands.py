@@ -5,19 +5,22 @@ to rounding and labelled graze / edge / chatter, and the table of its words
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Annotated
 
 import typer
 
 from . import _staircase as st
 from ._app import (
-    FORCE_HELP,
     CLIError,
+    Dpi,
+    Force,
+    MaxIter,
+    Size,
     app,
     check_dpi,
     check_outputs,
     DEFAULT_E,
     DEFAULT_U,
-    SIZE_HELP,
     parse_range,
     save_figure,
     window_size,
@@ -29,6 +32,10 @@ _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 E_HELP = "Window along e, MIN:MAX: the image edges, within [0, 1]; default 0:1, Fig. 4's window."
 U_HELP = "Window along u, MIN:MAX (normalised): the image edges, MIN >= 0. Or --speed with --step-height, --step-length."
 SPEED_HELP = "Window along the ball's horizontal speed in m/s, MIN:MAX (instead of --u)."
+# the window options of borders and words
+WindowE = Annotated[str, typer.Option("--e", help=E_HELP)]
+WindowU = Annotated[str, typer.Option("--u", help=U_HELP + " Default 0:1.5, Fig. 4's window.")]
+WindowSpeed = Annotated[str, typer.Option("--speed", help=SPEED_HELP)]
 
 
 def _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force, outputs=True):
@@ -90,20 +97,14 @@ def _figure(png, dpi, force, draw):
 
 @app.command("borders", short_help="Borders between pixels located to rounding, by event.")
 def borders_(
-    e: str = typer.Option(None, "--e", help=E_HELP),
-    u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5, Fig. 4's window."),
-    speed: str = st.speed_option(SPEED_HELP),
-    step_height: float = st.step_height_option(),
-    step_length: float = st.step_length_option(),
-    g: float = st.g_option(),
-    size: str = typer.Option(None, "--size", help=SIZE_HELP),
-    max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
+    e: WindowE = None, u: WindowU = None, speed: WindowSpeed = None,
+    step_height: st.StepHeight = None, step_length: st.StepLength = None, g: st.G = None,
+    size: Size = None, max_iter: MaxIter = 1000,
     outcome: str = typer.Option("word", "--outcome", help="What the two sides differ in: word (every border) "
                                 "or sliding (the border of the sliding region, one point per crossing)."),
     out: Path = typer.Option(None, "--out", help="The border points: .nc (netCDF) or .csv (one row per point)."),
     png: Path = typer.Option(None, "--png", help="Figure (.png, .pdf or .svg): the borders over the scan, coloured by kind."),
-    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
-    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
+    dpi: Dpi = 150, force: Force = False,
 ):
     """Every border between neighbouring pixels located to rounding and labelled by its
     event at a step's edge: graze (first contact), edge (a later impact) or chatter
@@ -136,33 +137,29 @@ def borders_(
                f"{int(pts.sliding_border.values.sum())} on the border of the sliding region")
 
 
+_REGIONS_HELP = ("Trace every word's region as polygons (stairbounce.structure.regions; seeded by a scan of the "
+                 "window at --size, 2 to 8192 pixels a side) and write them to --out .geojson or .svg.")
+_FROM_CORNERS_HELP = ("With --regions: also trace the regions smaller than a seed pixel found around the corners "
+                      "of their neighbours (several times slower).")
+_PROVE_HELP = ("Prove each word by intervals at one of its pixel centres (stairbounce.structure.labels) and "
+               "report the proven words, a proven lower bound on the distinct words, first.")
+_TOLERANCE_HELP = ("With --regions: largest deviation of an exported chord from the traced curve (default 1e-6 "
+                   "of the window's larger side).")
+
+
 @app.command("words", short_help="The distinct words of a window and N(p), or regions.")
 def words_(
-    e: str = typer.Option(None, "--e", help=E_HELP),
-    u: str = typer.Option(None, "--u", help=U_HELP + " Default 0:1.5, Fig. 4's window."),
-    speed: str = st.speed_option(SPEED_HELP),
-    step_height: float = st.step_height_option(),
-    step_length: float = st.step_length_option(),
-    g: float = st.g_option(),
-    size: str = typer.Option(None, "--size", help=SIZE_HELP),
-    max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
+    e: WindowE = None, u: WindowU = None, speed: WindowSpeed = None,
+    step_height: st.StepHeight = None, step_length: st.StepLength = None, g: st.G = None,
+    size: Size = None, max_iter: MaxIter = 1000,
     top: int = typer.Option(10, "--top", help="Rows of the table to print (>= 0)."),
     out: Path = typer.Option(None, "--out", help="The word table: .nc (with N(p)) or .csv (one row per word)."),
     png: Path = typer.Option(None, "--png", help="Figure (.png, .pdf or .svg): N(p), distinct words by period."),
-    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
-    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
-    regions: bool = typer.Option(False, "--regions", help="Trace every word's region as polygons "
-                                 "(stairbounce.structure.regions; seeded by a scan of the window at --size, 2 to "
-                                 "8192 pixels a side) and write them to --out .geojson or .svg."),
-    from_corners: bool = typer.Option(False, "--from-corners", help="With --regions: also trace the "
-                                      "regions smaller than a seed pixel found around the corners of "
-                                      "their neighbours (several times slower)."),
-    prove: bool = typer.Option(False, "--prove", help="Prove each word by intervals at one of its "
-                               "pixel centres (stairbounce.structure.labels) and report the proven "
-                               "words, a proven lower bound on the distinct words, first."),
-    tolerance: float = typer.Option(None, "--tolerance", help="With --regions: largest deviation of an "
-                                    "exported chord from the traced curve (default 1e-6 of the window's "
-                                    "larger side)."),
+    dpi: Dpi = 150, force: Force = False,
+    regions: bool = typer.Option(False, "--regions", help=_REGIONS_HELP),
+    from_corners: bool = typer.Option(False, "--from-corners", help=_FROM_CORNERS_HELP),
+    prove: bool = typer.Option(False, "--prove", help=_PROVE_HELP),
+    tolerance: float = typer.Option(None, "--tolerance", help=_TOLERANCE_HELP),
 ):
     """The distinct words of the periodic sliding solutions in a window: letters, period,
     pixels, area, a representative point, bounding box, border points by kind; and N(p)."""
@@ -212,16 +209,9 @@ def words_(
 
 @app.command("itinerary", short_help="Impact numbers and event margins, step by step.")
 def itinerary_(
-    e: float = typer.Option(..., "--e", help="Restitution coefficient, in [0, 1)."),
-    u: float = typer.Option(None, "--u", help="Horizontal speed in normalised units (u > 0). Or --speed with "
-                            "--step-height, --step-length."),
-    speed: float = st.speed_option(),
-    step_height: float = st.step_height_option(),
-    step_length: float = st.step_length_option(),
-    g: float = st.g_option(),
-    max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
-    y0: float = typer.Option(1.0, "--y0", help="Initial height above the step's floor (>= 0)."),
-    v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
+    e: st.E, u: st.U = None,
+    speed: st.Speed = None, step_height: st.StepHeight = None, step_length: st.StepLength = None, g: st.G = None,
+    max_iter: MaxIter = 1000, y0: st.Y0 = 1.0, v0: st.V0 = 0.0,
     as_csv: bool = typer.Option(False, "--csv", help="Write CSV to stdout instead of a table."),
 ):
     """Print the impact number of every step up to the slide, with the signed time margins

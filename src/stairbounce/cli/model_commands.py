@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import sys
 from pathlib import Path
+from typing import Annotated
 
 import typer
 
@@ -13,21 +14,18 @@ from ..model import SLIDING, iterate
 from ..symbolic import sliding_answer, terminal_can_print_infinity
 from ..trajectory import trajectory
 from . import _staircase as st
-from ._app import (FORCE_HELP, CLIError, app, check_dpi, check_outputs, plural, progress_bar, renamed_option,
+from ._app import (CLIError, Dpi, Force, app, check_dpi, check_outputs, plural, progress_bar, renamed_option,
                    save_figure)
 
-E_HELP = "Restitution coefficient, in [0, 1)."
-U_HELP = "Horizontal speed in normalised units (u > 0); one step takes 1/u. Or --speed with --step-height, --step-length."
+# --u as st.U, and how long one step takes
+U = Annotated[float, typer.Option("--u", help="Horizontal speed in normalised units (u > 0); one step takes 1/u. "
+                                  "Or --speed with --step-height, --step-length.")]
 
 
 @app.command(short_help="Word of the sliding solution through (1, 0), or why none.")
 def word(
-    e: float = typer.Option(..., "--e", help=E_HELP),
-    u: float = typer.Option(None, "--u", help=U_HELP),
-    speed: float = st.speed_option(),
-    step_height: float = st.step_height_option(),
-    step_length: float = st.step_length_option(),
-    g: float = st.g_option(),
+    e: st.E, u: U = None,
+    speed: st.Speed = None, step_height: st.StepHeight = None, step_length: st.StepLength = None, g: st.G = None,
     max_iter: int = typer.Option(1000, "--max-iter", help="Steps to iterate before giving up (>= 1)."),
     max_steps: int = typer.Option(None, "--max-steps", hidden=True,
                                   help="The old name of --max-iter (deprecated)."),
@@ -79,14 +77,9 @@ def _basis(answer):
 
 @app.command("map", short_help="Poincare iterates (Prop 2.3): the state at each edge.")
 def map_(
-    e: float = typer.Option(..., "--e", help=E_HELP),
-    u: float = typer.Option(None, "--u", help=U_HELP),
-    speed: float = st.speed_option(),
-    step_height: float = st.step_height_option(),
-    step_length: float = st.step_length_option(),
-    g: float = st.g_option(),
-    y0: float = typer.Option(1.0, "--y0", help="Initial height above the step's floor (>= 0)."),
-    v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
+    e: st.E, u: U = None,
+    speed: st.Speed = None, step_height: st.StepHeight = None, step_length: st.StepLength = None, g: st.G = None,
+    y0: st.Y0 = 1.0, v0: st.V0 = 0.0,
     steps: int = typer.Option(10, "--steps", help="Number of steps (>= 0)."),
     as_csv: bool = typer.Option(False, "--csv", help="Write CSV to stdout instead of a table."),
 ):
@@ -115,19 +108,13 @@ def map_(
 
 @app.command("trajectory", short_help="The ball's path (Fig 1) and Poincare section (Fig 2).")
 def trajectory_(
-    e: float = typer.Option(..., "--e", help=E_HELP),
-    u: float = typer.Option(None, "--u", help=U_HELP),
-    speed: float = st.speed_option(),
-    step_height: float = st.step_height_option(),
-    step_length: float = st.step_length_option(),
-    g: float = st.g_option(),
-    y0: float = typer.Option(1.0, "--y0", help="Initial height above the step's floor (>= 0)."),
-    v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
+    e: st.E, u: U = None,
+    speed: st.Speed = None, step_height: st.StepHeight = None, step_length: st.StepLength = None, g: st.G = None,
+    y0: st.Y0 = 1.0, v0: st.V0 = 0.0,
     steps: int = typer.Option(8, "--steps", help="Number of steps (>= 1)."),
     out: Path = typer.Option(Path("trajectory.png"), "--out", help="Figure file (.png, .pdf, .svg)."),
     animate: Path = typer.Option(None, "--animate", help="Also write an animation of the ball (.gif)."),
-    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
-    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
+    dpi: Dpi = 150, force: Force = False,
 ):
     """Draw the ball's path on the staircase (Fig. 1) beside its Poincare section (Fig. 2).
     With a physical staircase the axes are in metres, m/s and seconds."""

@@ -13,16 +13,11 @@ MOTION_FIELD_NAMES = ("k_mean", "lyap1", "jump_mean", "speed_spread")
 
 @app.command(short_help="Non-sliding motion: <k>, mean jump, Lyapunov exponents.")
 def motion(
-    e: float = typer.Option(..., "--e", help="Restitution coefficient, in [0, 1)."),
-    u: float = typer.Option(None, "--u", help="Horizontal speed in normalised units (u > 0). Or --speed with --step-height, --step-length."),
-    speed: float = st.speed_option(),
-    step_height: float = st.step_height_option(),
-    step_length: float = st.step_length_option(),
-    g: float = st.g_option(),
+    e: st.E, u: st.U = None,
+    speed: st.Speed = None, step_height: st.StepHeight = None, step_length: st.StepLength = None, g: st.G = None,
     steps: int = typer.Option(1000, "--steps", help="Kept steps (>= 2)."),
     transient: int = typer.Option(1000, "--transient", help="Steps discarded first (>= 0)."),
-    y0: float = typer.Option(1.0, "--y0", help="Initial height above the step's floor (>= 0)."),
-    v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
+    y0: st.Y0 = 1.0, v0: st.V0 = 0.0,
 ):
     """Whether the orbit slides; if not, <k> (impacts per step), the mean jump and the Lyapunov exponents."""
     from ..nonsliding import motion as run

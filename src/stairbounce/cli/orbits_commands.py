@@ -12,8 +12,9 @@ from ..model import check_count
 from ..units import with_speed
 from . import _staircase as st
 from ._app import (
-    FORCE_HELP,
     CLIError,
+    Dpi,
+    Force,
     app,
     check_dpi,
     check_outputs,
@@ -99,9 +100,7 @@ def orbit_diagram_(
     u: str = typer.Option(None, "--u", help="Horizontal speed u > 0: a number, or a range MIN:MAX to sweep (edges, "
                           "MIN >= 0: --n values at the centres of equal cells, so u = 0 is never used)."),
     speed: str = st.speed_option("Horizontal speed in m/s, a number or a range MIN:MAX (edges; instead of --u)."),
-    step_height: float = st.step_height_option(),
-    step_length: float = st.step_length_option(),
-    g: float = st.g_option(),
+    step_height: st.StepHeight = None, step_length: st.StepLength = None, g: st.G = None,
     n: int = typer.Option(3000, "--n", help="Number of values of the swept parameter (>= 2): the centres of "
                           "--n equal cells of its range."),
     transient: int = typer.Option(2000, "--transient", help="Iterates discarded at each value (>= 0)."),
@@ -116,8 +115,7 @@ def orbit_diagram_(
     value_range: str = typer.Option(None, "--range", help="Plotted range MIN:MAX of the component (a zoom)."),
     png: Path = typer.Option(None, "--png", help="Figure file (.png, .pdf or .svg)."),
     out: Path = typer.Option(None, "--out", help="Data file: .nc (netCDF), .zarr or .csv (one row per point)."),
-    dpi: int = typer.Option(150, "--dpi", help="Resolution of raster output (10-1200)."),
-    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
+    dpi: Dpi = 150, force: Force = False,
 ):
     """Orbit (bifurcation) diagram: iterate the Poincare map at each value of the swept parameter
     and plot the kept iterates (Section 4, Figs. 8 and 9). Exactly one of --e, --u is a range."""

@@ -17,7 +17,8 @@ from ._app import (
     parse_overlays,
     DEFAULT_E,
     DEFAULT_U,
-    SIZE_HELP,
+    MaxIter,
+    Size,
     parse_range,
     plural,
     window_size,
@@ -51,11 +52,8 @@ def scan_(
     speed: str = st.speed_option(
         "Window along the ball's speed in m/s, MIN:MAX (with --step-height and --step-length; instead "
         "of --u): the picture's axis and the data's coordinate 'speed' are in m/s."),
-    step_height: float = st.step_height_option(),
-    step_length: float = st.step_length_option(),
-    g: float = st.g_option(),
-    size: str = typer.Option(None, "--size", help=SIZE_HELP),
-    max_iter: int = typer.Option(1000, "--max-iter", help="Steps allowed before giving up (>= 1)."),
+    step_height: st.StepHeight = None, step_length: st.StepLength = None, g: st.G = None,
+    size: Size = None, max_iter: MaxIter = 1000,
     y0: float = typer.Option(1.0, "--y0", help="Initial height at the edge (>= 0); (1, 0) is the paper's."),
     v0: float = typer.Option(0.0, "--v0", help="Initial vertical velocity."),
     out: Path = typer.Option(None, "--out", help="Save the data: .zarr (chunked) or .nc."),

@@ -10,7 +10,7 @@ import time
 import panel as pn
 from bokeh.models import ColumnDataSource, CustomJSHover, HoverTool
 
-from ._common import _TRACE_PROGRESS_EVERY
+from ._common import _TRACE_PROGRESS_EVERY, _answer_stands
 from .layer import Layer
 from .proven import (MIN_BOX_PX, STYLES, TAP_CERTIFICATE_STEPS, proven_at, proven_depth, proven_image, proven_slices,
                      proven_summary)
@@ -192,10 +192,7 @@ class ProvenLayer(Layer):
                      else f"certifying the view: the itineraries of {done} of {total} boxes ...")
 
     def _done(self, gen, key, atlas, error, job):
-        if gen != self.gen:
-            return
-        if error is not None:
-            self.message(f"certifying the view failed: {error}", "error")
+        if not _answer_stands(gen, self.gen, error, self.message, "certifying the view"):
             return
         page = self.page
         self.done = (key, atlas, job.attained)

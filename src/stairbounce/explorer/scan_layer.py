@@ -9,6 +9,7 @@ from dataclasses import replace
 import numpy as np
 from bokeh.models import CustomJSHover, FixedTicker
 
+from ._common import _answer_stands
 from .export import export_name
 from .view import (
     MOTION_COLOR_VARS,
@@ -141,10 +142,7 @@ class ScanLayer:
                                  dw=[view.e_hi - view.e_lo], dh=[view.u_hi - view.u_lo])
 
     def _finish(self, gen, view, result, error, job):
-        if gen != self._gen:
-            return
-        if error is not None:
-            self._message(f"render failed: {error}", "error")
+        if not _answer_stands(gen, self._gen, error, self._message, "render"):
             return
         ds, rgba, values = result
         if self.view.color != view.color and has_color(ds, self.view.color):  # recoloured meanwhile

@@ -34,6 +34,11 @@ def _motion(settings, e, u, n_e, n_u):
 ENERGY_TOL = 0.05
 
 
+def _result(s, fig, name, title, rows, params, caption):
+    """How each motion recipe ends: its one figure saved as ``name``, in a Result."""
+    return Result(name, title, [_save(fig, s, name)], rows, params, caption=caption)
+
+
 def _unconverged(ds):
     """Non-sliding pixels still transient: energy balance off by ENERGY_TOL or more."""
     return (ds.slide_step.values == 0) & ~(np.abs(ds.dissipation.values - 1.0) < ENERGY_TOL)
@@ -98,8 +103,7 @@ def motion_k(s: Settings) -> Result:
                f"Magenta: unconverged pixels, whose mean energy lost per step is not within "
                f"{100 * ENERGY_TOL:g}% of the height descended (still transient), not coloured by "
                "a value they have not reached.")
-    return Result("motion_k", "Non-sliding motion: impacts per step <k>",
-                  [_save(fig, s, "motion_k")], rows, params, caption=caption)
+    return _result(s, fig, "motion_k", "Non-sliding motion: impacts per step <k>", rows, params, caption)
 
 
 # the orbit lengths of the lambda_1 convergence diagnostic, and how many pixels it follows
@@ -189,8 +193,8 @@ def motion_lyap(s: Settings) -> Result:
                f"lambda_1 on the paper's plane (red) and {len(e_pts) - 1} non-sliding pixels drawn "
                f"at random (grey; seed 0), after a transient of {MOTION_TRANSIENT} steps (ours). "
                "Bounded N lambda_1, |lambda_1| on the 1/N line: lambda_1 = 0, no chaos.")
-    return Result("motion_lyap", "Non-sliding motion: lambda_1 = 0, N lambda_1 against N",
-                  [_save(fig, s, "motion_lyap")], rows, params, caption=caption)
+    return _result(s, fig, "motion_lyap", "Non-sliding motion: lambda_1 = 0, N lambda_1 against N", rows, params,
+                   caption)
 
 
 MOTION_CUT_U = 0.9
@@ -224,7 +228,5 @@ def motion_cut(s: Settings) -> Result:
                "one-impact families' values 1/n where they cross the cut (orange circles); middle, "
                "the relative spread of the impact speeds (0 on a family); bottom, N lambda_1, "
                "bounded because lambda_1 = 0. Sliding values of e are left out.")
-    return Result("motion_cut", f"<k> against e at u = {MOTION_CUT_U}",
-                  [_save(fig, s, "motion_cut")], rows,
-                  {"u": MOTION_CUT_U, "n_e": n, "steps": MOTION_STEPS, "transient": MOTION_TRANSIENT},
-                  caption=caption)
+    params = {"u": MOTION_CUT_U, "n_e": n, "steps": MOTION_STEPS, "transient": MOTION_TRANSIENT}
+    return _result(s, fig, "motion_cut", f"<k> against e at u = {MOTION_CUT_U}", rows, params, caption)
