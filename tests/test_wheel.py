@@ -183,7 +183,7 @@ def test_every_import_of_the_package_is_a_declared_dependency(wheel):
     # and the wheel's entry point is the command line
     with zipfile.ZipFile(wheel) as z:
         entry = z.read(next(n for n in z.namelist() if n.endswith("entry_points.txt"))).decode()
-    assert "stairbounce = stairbounce.cli:main" in entry
+    assert "stairbounce = stairbounce.cli:console" in entry
 
 
 def test_wheel_carries_the_one_version_and_the_type_marker(wheel):

@@ -133,6 +133,17 @@ def _check_form(form):
     return _FORM_CODES[form]
 
 
+def _check_request(e, u, depth, max_iter, form):
+    """The window, depth, max_iter and form of an atlas, checked (ValueError by
+    name): ``(e_lo, e_hi, u_lo, u_hi, depth, max_iter, form code)``."""
+    e_lo, e_hi = _check_e(e, window=True)
+    u_lo, u_hi = _check_u(u, window=True)
+    depth = check_count("depth", depth, 0, _MAX_DEPTH)
+    max_iter = check_count("max_iter", max_iter, 1)
+    _itinerary_buffer(max_iter)
+    return e_lo, e_hi, u_lo, u_hi, depth, max_iter, _check_form(form)
+
+
 def _itinerary_buffer(max_iter):
     _v.check_memory(f"max_iter = {max_iter}", 8 * max_iter)
     return np.empty(max_iter, np.int64)
@@ -331,12 +342,7 @@ def _certify(e, u, depth, max_iter, progress, tiles, form, reference=False, trap
     """:func:`certify`; with ``reference`` the "nonsliding" check is taken box by box in
     the level kernel (:func:`_kernel._any_slides`, the algorithm before the shared
     check of :func:`_mark_nonsliding`; the tests compare the two)."""
-    e_lo, e_hi = _check_e(e, window=True)
-    u_lo, u_hi = _check_u(u, window=True)
-    depth = check_count("depth", depth, 0, _MAX_DEPTH)
-    max_iter = check_count("max_iter", max_iter, 1)
-    _itinerary_buffer(max_iter)
-    code = _check_form(form)
+    e_lo, e_hi, u_lo, u_hi, depth, max_iter, code = _check_request(e, u, depth, max_iter, form)
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be None or a callable progress(done, total), got {progress!r}")
     if phase is not None and not callable(phase):

@@ -63,9 +63,9 @@ import numpy as np
 from ..model import check_count
 from . import _kernel as K
 from . import _store_read as R
-from .certificate import STATUSES, _check_e, _check_u
-from .certify import (_START_LEVEL, UNDECIDED_REASONS, CertifiedAtlas, _atlas_dataset, _box_table, _check_form,
-                      _itinerary_buffer, _MAX_DEPTH, _recheck_regions, _run_tile, _SlideCache)
+from .certificate import STATUSES
+from .certify import (_START_LEVEL, UNDECIDED_REASONS, CertifiedAtlas, _atlas_dataset, _box_table, _check_request,
+                      _recheck_regions, _run_tile, _SlideCache)
 
 __all__ = ["certify_to_zarr", "CertifiedStore", "TILE_LEVEL", "TILE_BOXES"]
 
@@ -373,12 +373,7 @@ def certify_to_zarr(path, e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=
     from ..atlas import _check_client, _check_path, _connect, _dask_each, _unwritable_reason
 
     path = _check_path(path)
-    e_lo, e_hi = _check_e(e, window=True)
-    u_lo, u_hi = _check_u(u, window=True)
-    depth = check_count("depth", depth, 0, _MAX_DEPTH)
-    max_iter = check_count("max_iter", max_iter, 1)
-    _itinerary_buffer(max_iter)
-    code = _check_form(form)
+    e_lo, e_hi, u_lo, u_hi, depth, max_iter, code = _check_request(e, u, depth, max_iter, form)
     for name, flag in (("trap", trap), ("classes", classes), ("verify", verify)):
         if not isinstance(flag, (bool, np.bool_)):
             raise ValueError(f"{name} must be True or False, got {flag!r}")
