@@ -11,7 +11,7 @@ import math
 from contextlib import contextmanager
 import threading
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Optional
 
 import typer
 
@@ -169,7 +169,7 @@ def renamed_option(old: str, old_value, new: str, new_value, default):
 DEFAULT_E, DEFAULT_U, DEFAULT_SIZE = "0:1", "0:1.5", (500, 350)
 SIZE_HELP = ("Pixels WIDTHxHEIGHT (along e x along u); default square pixels, 500 along the longer side "
              "of the window (500x350, the paper's Fig. 4 grid, for the default window).")
-Size = Annotated[str, typer.Option("--size", help=SIZE_HELP)]
+Size = Annotated[Optional[str], typer.Option("--size", help=SIZE_HELP)]
 
 
 def window_size(size, e, u, default_window: bool) -> tuple[int, int]:

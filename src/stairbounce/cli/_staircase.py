@@ -11,7 +11,7 @@ and the physical set; they print both descriptions of the staircase.
 from __future__ import annotations
 
 import math
-from typing import Annotated
+from typing import Annotated, Optional
 
 import typer
 
@@ -30,12 +30,12 @@ U_HELP = "Horizontal speed in normalised units (u > 0). Or --speed with --step-h
 # The options the model's commands share, defined once as parameter types
 # (``speed: st.Speed = None``; Typer reads the option from the annotation,
 # the default from the parameter).
-E = Annotated[float, typer.Option("--e", help=E_HELP)]
-U = Annotated[float, typer.Option("--u", help=U_HELP)]
-Speed = Annotated[float, typer.Option("--speed", help=SPEED_HELP)]
-StepHeight = Annotated[float, typer.Option("--step-height", help=HEIGHT_HELP)]
-StepLength = Annotated[float, typer.Option("--step-length", help=LENGTH_HELP)]
-G = Annotated[float, typer.Option("--g", help=G_HELP)]
+E = Annotated[Optional[float], typer.Option("--e", help=E_HELP)]
+U = Annotated[Optional[float], typer.Option("--u", help=U_HELP)]
+Speed = Annotated[Optional[float], typer.Option("--speed", help=SPEED_HELP)]
+StepHeight = Annotated[Optional[float], typer.Option("--step-height", help=HEIGHT_HELP)]
+StepLength = Annotated[Optional[float], typer.Option("--step-length", help=LENGTH_HELP)]
+G = Annotated[Optional[float], typer.Option("--g", help=G_HELP)]
 Y0 = Annotated[float, typer.Option("--y0", help="Initial height above the step's floor (>= 0).")]
 V0 = Annotated[float, typer.Option("--v0", help="Initial vertical velocity.")]
 

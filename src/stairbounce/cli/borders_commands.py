@@ -5,7 +5,7 @@ to rounding and labelled graze / edge / chatter, and the table of its words
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Optional
 
 import typer
 
@@ -33,9 +33,9 @@ E_HELP = "Window along e, MIN:MAX: the image edges, within [0, 1]; default 0:1, 
 U_HELP = "Window along u, MIN:MAX (normalised): the image edges, MIN >= 0. Or --speed with --step-height, --step-length."
 SPEED_HELP = "Window along the ball's horizontal speed in m/s, MIN:MAX (instead of --u)."
 # the window options of borders and words
-WindowE = Annotated[str, typer.Option("--e", help=E_HELP)]
-WindowU = Annotated[str, typer.Option("--u", help=U_HELP + " Default 0:1.5, Fig. 4's window.")]
-WindowSpeed = Annotated[str, typer.Option("--speed", help=SPEED_HELP)]
+WindowE = Annotated[Optional[str], typer.Option("--e", help=E_HELP)]
+WindowU = Annotated[Optional[str], typer.Option("--u", help=U_HELP + " Default 0:1.5, Fig. 4's window.")]
+WindowSpeed = Annotated[Optional[str], typer.Option("--speed", help=SPEED_HELP)]
 
 
 def _window(e, u, speed, step_height, step_length, g, size, max_iter, out, png, dpi, force, outputs=True):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Optional, cast
 
 import typer
 
@@ -18,7 +18,7 @@ from ._app import (CLIError, Dpi, Force, app, check_dpi, check_outputs, plural, 
                    save_figure)
 
 # --u as st.U, and how long one step takes
-U = Annotated[float, typer.Option("--u", help="Horizontal speed in normalised units (u > 0); one step takes 1/u. "
+U = Annotated[Optional[float], typer.Option("--u", help="Horizontal speed in normalised units (u > 0); one step takes 1/u. "
                                   "Or --speed with --step-height, --step-length.")]
 
 
@@ -37,7 +37,7 @@ def word(
     u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
     if stairs is not None:
         typer.echo(st.describe(u, stairs))
-    answer = sliding_answer(e, u if stairs is None else stairs.speed(float(speed)),
+    answer = sliding_answer(e, u if stairs is None else stairs.speed(float(cast(float, speed))),
                             max_iter=max_iter)
     w = answer.word
     if w is None:
@@ -86,7 +86,7 @@ def map_(
     """Print the Poincare iterates (Prop. 2.3): the state at each step edge and the step's impacts.
     With a physical staircase, also the height in m and the velocity in m/s."""
     u, stairs = st.resolve_u(u, speed, step_height, step_length, g)
-    ys, vs, ks = iterate(y0, v0, e, u, steps)
+    ys, vs, ks = iterate(y0, v0, cast(float, e), cast(float, u), steps)
     # (y, v) normalised, then (y a, v sqrt(a g)) in SI units when a staircase was given
     si = () if stairs is None else (stairs.step_height, stairs.velocity_unit)
     if as_csv:
