@@ -512,6 +512,18 @@ import threading  # noqa: E402
 import xarray as xr  # noqa: E402
 
 
+@pytest.fixture
+def ctrl_c_raises():
+    """Python's Ctrl-C handler, for the tests that send SIGINT to this process.
+    A job started in the background by a non-interactive shell (as CI runs the
+    suite) inherits SIGINT ignored, and Python then installs no handler: the
+    signal would be dropped and these tests could not see what they test."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
+@pytest.mark.usefixtures("ctrl_c_raises")
 @pytest.mark.parametrize("suffix,method", [(".nc", "to_netcdf"), (".zarr", "to_zarr")])
 def test_r8_ctrl_c_while_saving_never_lands_inside_the_writer(small_atlas, tmp_path, monkeypatch, suffix, method):
     """A KeyboardInterrupt raised inside xarray's netCDF writer left its HDF5 lock
@@ -571,6 +583,7 @@ def test_r8_the_console_script_ends_with_main_s_status_at_once(tmp_path):
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "e" in bad.stderr
 
 
+@pytest.mark.usefixtures("ctrl_c_raises")
 def test_r8_ctrl_c_stops_a_certify_job_at_its_next_kernel(monkeypatch):
     """certify runs off the main thread (run_interruptible): the main thread raises
     at once on Ctrl-C and the job, told by its halt flag, stops at its next kernel
