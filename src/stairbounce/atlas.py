@@ -609,56 +609,49 @@ def scan_to_zarr(
     if reason is not None:
         raise ValueError(f"cannot write {path}: folder {path.parent} is not writable ({reason})")
 
-    own = isinstance(client, str)
-    if own:  # connect before the store exists: an unreachable scheduler leaves nothing
-        client = _connect(client)
-    try:
-        with store_lock(path) as owner:
-            if path.exists():
-                _check_existing(path, template.attrs, tile, list(template.data_vars))
-                _check_coords(path, es, us, repair=True)
-            else:
-                _create(path, template, encoding, (len(rows), len(cols)), tile)
-                lock_store_folder(path, owner)  # its device and inode, whatever name it gets
+    with _connected_and_locked(path, client) as (client, owner):
+        if path.exists():
+            _check_existing(path, template.attrs, tile, list(template.data_vars))
+            _check_coords(path, es, us, repair=True)
+        else:
+            _create(path, template, encoding, (len(rows), len(cols)), tile)
+            lock_store_folder(path, owner)  # its device and inode, whatever name it gets
 
-            done, unreadable = _read_record(_tile_record(path)["done"], False)
-            if unreadable:
+        done, unreadable = _read_record(_tile_record(path)["done"], False)
+        if unreadable:
+            warnings.warn(
+                f"the done flag of {len(unreadable)} tile(s) of {path} cannot be read (a chunk "
+                f"damaged), e.g. tile {unreadable[0]}: computed again", RuntimeWarning, stacklevel=2,
+            )
+        todo = [(i, j) for i in range(len(rows)) for j in range(len(cols)) if not done[i, j]]
+        if todo and not _writable(path):
+            raise ValueError(f"cannot resume {path}: the store is not writable")
+        if verify and done.any():
+            damaged = _verify(path, rows, cols, done)
+            if damaged:
                 warnings.warn(
-                    f"the done flag of {len(unreadable)} tile(s) of {path} cannot be read (a chunk "
-                    f"damaged), e.g. tile {unreadable[0]}: computed again", RuntimeWarning, stacklevel=2,
+                    f"{len(damaged)} complete tile(s) of {path} no longer match their checksum "
+                    f"(a chunk deleted or damaged), e.g. tile {damaged[0]}: computed again",
+                    RuntimeWarning, stacklevel=2,
                 )
-            todo = [(i, j) for i in range(len(rows)) for j in range(len(cols)) if not done[i, j]]
-            if todo and not _writable(path):
-                raise ValueError(f"cannot resume {path}: the store is not writable")
-            if verify and done.any():
-                damaged = _verify(path, rows, cols, done)
-                if damaged:
-                    warnings.warn(
-                        f"{len(damaged)} complete tile(s) of {path} no longer match their checksum "
-                        f"(a chunk deleted or damaged), e.g. tile {damaged[0]}: computed again",
-                        RuntimeWarning, stacklevel=2,
-                    )
-                    todo = sorted(set(todo) | set(damaged))
-            total = done.size
-            if progress is not None:
-                progress(total - len(todo), total)
+                todo = sorted(set(todo) | set(damaged))
+        total = done.size
+        if progress is not None:
+            progress(total - len(todo), total)
 
-            record = _tile_record(path)
-            token = record.attrs["token"]
-            identity = _identity(_root_attrs(path), dict(record.attrs))
-            args = [
-                (str(path), token, owner, i, j, rows[i], cols[j], es[cols[j]], us[rows[i]],
-                 a["max_iter"], a["y0"], a["v0"], bool(prune), numba_threads, identity)
-                for i, j in todo
-            ]
-            if client is None:
-                _run_here(args, numba_threads, total - len(todo), total, progress)
-            else:
-                _run_on_dask(client, args, total - len(todo), total, progress)
-            _check_same_store(path, token)
-    finally:
-        if own:
-            client.close()
+        record = _tile_record(path)
+        token = record.attrs["token"]
+        identity = _identity(_root_attrs(path), dict(record.attrs))
+        args = [
+            (str(path), token, owner, i, j, rows[i], cols[j], es[cols[j]], us[rows[i]],
+             a["max_iter"], a["y0"], a["v0"], bool(prune), numba_threads, identity)
+            for i, j in todo
+        ]
+        if client is None:
+            _run_here(args, numba_threads, total - len(todo), total, progress)
+        else:
+            _run_on_dask(client, args, total - len(todo), total, progress)
+        _check_same_store(path, token)
     return xr.open_zarr(str(path), consolidated=False)
 
 
@@ -685,6 +678,24 @@ def _open_read_only(path, attrs, tile, es, us, rows, cols, verify, progress, rea
     if progress is not None:
         progress(done.size, done.size)
     return xr.open_zarr(str(path), consolidated=False)
+
+
+@contextlib.contextmanager
+def _connected_and_locked(path, client):
+    """``(client, owner)`` for a tiled writer (``scan_to_zarr``,
+    ``certify_to_zarr``): a scheduler address is connected to before the store
+    exists (an unreachable scheduler leaves nothing), then the store's lock is
+    taken (``owner``, ``_io.store_lock``); a client connected here is closed on
+    the way out, whatever happened."""
+    own = isinstance(client, str)
+    if own:  # connect before the store exists: an unreachable scheduler leaves nothing
+        client = _connect(client)
+    try:
+        with store_lock(path) as owner:
+            yield client, owner
+    finally:
+        if own:
+            client.close()
 
 
 def _connect(address):

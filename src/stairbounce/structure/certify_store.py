@@ -369,8 +369,8 @@ def certify_to_zarr(path, e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=
         missing or read-only, an existing store of other arguments, a store locked by
         another run, an unreachable scheduler.
     """
-    from .._io import lock_store_folder, store_lock
-    from ..atlas import _check_client, _check_path, _connect, _dask_each, _unwritable_reason
+    from .._io import lock_store_folder
+    from ..atlas import _check_client, _check_path, _connected_and_locked, _dask_each, _unwritable_reason
 
     path = _check_path(path)
     e_lo, e_hi, u_lo, u_hi, depth, max_iter, code = _check_request(e, u, depth, max_iter, form)
@@ -401,62 +401,55 @@ def certify_to_zarr(path, e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=
     positions = _positions_crc(ti, tj)
     attrs = _store_attrs(win, depth, max_iter, form, trap, classes, tile_level, tile_boxes, n_tiles, positions)
 
-    own = isinstance(client, str)
-    if own:  # connect before the store exists: an unreachable scheduler leaves nothing
-        client = _connect(client)
-    try:
-        with store_lock(path) as owner:
-            if path.exists():
-                _check_existing(path, attrs)
-                _clean_temporaries(path)
-            else:
-                _create(path, attrs, n_tiles)
-                lock_store_folder(path, owner)
-            stored, record, done, crc = R.store_state(path)
-            token = record["token"]
-            done = done.astype(bool)
-            if verify and done.any():
-                damaged = [k for k in np.flatnonzero(done) if R.check_tile(path, k, token, crc[k]) is None]
-                if damaged:
-                    warnings.warn(f"{len(damaged)} complete tile(s) of {path} no longer match their checksum "
-                                  f"(a chunk deleted or damaged), e.g. tile {damaged[0]}: computed again",
-                                  RuntimeWarning, stacklevel=2)
-                    _unmark(path, damaged)
-                    done[damaged] = False
-            n_done = int(done.sum())
+    with _connected_and_locked(path, client) as (client, owner):
+        if path.exists():
+            _check_existing(path, attrs)
+            _clean_temporaries(path)
+        else:
+            _create(path, attrs, n_tiles)
+            lock_store_folder(path, owner)
+        stored, record, done, crc = R.store_state(path)
+        token = record["token"]
+        done = done.astype(bool)
+        if verify and done.any():
+            damaged = [k for k in np.flatnonzero(done) if R.check_tile(path, k, token, crc[k]) is None]
+            if damaged:
+                warnings.warn(f"{len(damaged)} complete tile(s) of {path} no longer match their checksum "
+                              f"(a chunk deleted or damaged), e.g. tile {damaged[0]}: computed again",
+                              RuntimeWarning, stacklevel=2)
+                _unmark(path, damaged)
+                done[damaged] = False
+        n_done = int(done.sum())
+        if progress is not None:
+            progress(n_done, n_tiles)
+
+        def each(result):
+            nonlocal n_done
+            n_done += 1
             if progress is not None:
                 progress(n_done, n_tiles)
 
-            def each(result):
-                nonlocal n_done
-                n_done += 1
-                if progress is not None:
-                    progress(n_done, n_tiles)
+        if not done[0]:
+            ds = _compute_tile(win, depth, tile_level, None, None, max_iter, code, classes, trap, parts)
+            each(_write_tile(str(path), token, owner, 0, ds))
+            del ds
+        del parts
+        todo = [k for k in range(1, n_tiles) if not done[k]]
+        if todo and phase is not None:
+            phase(f"tiles of levels {tile_level}-{depth}")
+        args = [(str(path), token, owner, k, win, depth, tile_level, ti[cuts[k - 1]:cuts[k - 1] + tile_boxes],
+                 tj[cuts[k - 1]:cuts[k - 1] + tile_boxes], max_iter, code, bool(classes), bool(trap),
+                 numba_threads if client is None else (numba_threads or 1))
+                for k in todo]
+        if client is None:
+            for a in args:
+                each(_tile_task(*a))
+        else:
+            _dask_each(client, _tile_task, args, each, wait_cancelled=True)
+        from ..atlas import _check_same_store
 
-            if not done[0]:
-                ds = _compute_tile(win, depth, tile_level, None, None, max_iter, code, classes, trap, parts)
-                each(_write_tile(str(path), token, owner, 0, ds))
-                del ds
-            del parts
-            todo = [k for k in range(1, n_tiles) if not done[k]]
-            if todo and phase is not None:
-                phase(f"tiles of levels {tile_level}-{depth}")
-            args = [(str(path), token, owner, k, win, depth, tile_level, ti[cuts[k - 1]:cuts[k - 1] + tile_boxes],
-                     tj[cuts[k - 1]:cuts[k - 1] + tile_boxes], max_iter, code, bool(classes), bool(trap),
-                     numba_threads if client is None else (numba_threads or 1))
-                    for k in todo]
-            if client is None:
-                for a in args:
-                    each(_tile_task(*a))
-            else:
-                _dask_each(client, _tile_task, args, each, wait_cancelled=True)
-            from ..atlas import _check_same_store
-
-            _check_same_store(str(path), token)
-            _write_summary(path)
-    finally:
-        if own:
-            client.close()
+        _check_same_store(str(path), token)
+        _write_summary(path)
     return CertifiedStore(path)
 
 
