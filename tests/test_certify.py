@@ -14,6 +14,8 @@ import stairbounce as sb
 from stairbounce.structure import _kernel as K
 from stairbounce.structure.certificate import STATUSES
 
+from ._cli import run_cli as _cli
+
 FIG7 = dict(e=(0.155, 0.2138), u=(0.6, 0.658))
 
 
@@ -352,15 +354,6 @@ def test_the_paper_plane_edges_are_undecided_by_range():
 
 
 # ---- the command line -------------------------------------------------------
-
-
-def _cli(args, capsys):
-    from stairbounce.cli import main
-
-    with pytest.raises(SystemExit) as exit_:
-        main(args)
-    out = capsys.readouterr()
-    return exit_.value.code, out.out, out.err
 
 
 def test_cli_certify_prints_the_summary_and_writes(tmp_path, capsys):

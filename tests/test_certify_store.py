@@ -8,6 +8,8 @@ import pytest
 
 import stairbounce as sb
 
+from ._cli import run_cli as _cli
+
 C = importlib.import_module("stairbounce.structure.certify")
 S = importlib.import_module("stairbounce.structure.certify_store")
 
@@ -170,15 +172,6 @@ def test_dask_workers_write_the_same_tiles(tmp_path):
                                       dashboard_address=None) as cluster, distributed.Client(cluster) as c:
             sb.certify_to_zarr(tmp_path / "a.zarr", client=c, **kw)
     assert_same_atlas(sb.CertifiedAtlas.load(tmp_path / "a.zarr").boxes, reference(**FIG7, depth=6))
-
-
-def _cli(args, capsys):
-    from stairbounce.cli import main
-
-    with pytest.raises(SystemExit) as exit_:
-        main(args)
-    out = capsys.readouterr()
-    return exit_.value.code, out.out, out.err
 
 
 def test_cli_store_resume_verify_and_errors(tmp_path, capsys):
