@@ -86,6 +86,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from _campaign import raw_http as _raw_http  # scripts/_campaign.py
+from _campaign import stop as _stop
+
 CLI = [sys.executable, "-c", "from stairbounce.cli import main; main()"]
 
 
@@ -480,16 +483,6 @@ except ValueError as exc:
     return _py(code, cwd, timeout=90)
 
 
-def _stop(p):
-    if p is not None and p.poll() is None:
-        p.send_signal(signal.SIGTERM)
-        try:
-            p.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            p.wait()
-
-
 def part_alias(t, work, args):
     """N3: a store reached through a symlinked name holds the store's own lock."""
     n, tile = (1024, 64) if args.full else (256, 32)
@@ -653,20 +646,6 @@ for f in glob.glob("C/scan-*.nc"):
     r = sb(["cache", "clear", "--cache-dir", "C"], d)
     left = [p.name for p in (d / "C").iterdir()]
     t.case("cache", "cache clear", r.returncode == 0 and not left, f"{r.stdout} left {left}")
-
-
-def _raw_http(port, request, timeout=60):
-    import socket
-
-    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as s:
-        s.sendall(request.encode("latin-1"))
-        data = b""
-        while b"\r\n\r\n" not in data:
-            chunk = s.recv(65536)
-            if not chunk:
-                break
-            data += chunk
-    return data.split(b"\r\n", 1)[0].decode("latin-1")
 
 
 def _explorer(cwd, *extra):

@@ -1,4 +1,4 @@
-"""Importing a script of ``benchmarks/`` in the tests."""
+"""Importing a script of ``benchmarks/`` or ``scripts/`` in the tests."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
+SCRIPTS = BENCHMARKS.parent / "scripts"
 
 
 def import_benchmark(name: str):
@@ -16,8 +17,21 @@ def import_benchmark(name: str):
     compiled code by the module), with ``benchmarks/`` on ``sys.path`` only
     while it is imported.
     """
-    sys.path.insert(0, str(BENCHMARKS))
+    return _import_from(BENCHMARKS, name)
+
+
+def import_script(name: str):
+    """import_script(name) -> module
+
+    ``scripts/<name>.py`` imported as :func:`import_benchmark` imports a
+    benchmark.
+    """
+    return _import_from(SCRIPTS, name)
+
+
+def _import_from(folder: Path, name: str):
+    sys.path.insert(0, str(folder))
     try:
         return importlib.import_module(name)
     finally:
-        sys.path.remove(str(BENCHMARKS))
+        sys.path.remove(str(folder))

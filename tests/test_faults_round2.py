@@ -27,12 +27,16 @@ from stairbounce import _io
 from stairbounce.atlas import scan_to_zarr, tiles_done
 from stairbounce.plane import load, save, scan
 
+from ._benchmarks import import_script
 from ._stores import StopAfter, stop_after
 from .test_faults import SCAN, TILE, WINDOW, reference, run  # noqa: F401  (reference: a fixture)
 
 pytestmark = pytest.mark.filterwarnings("ignore:Port 8787 is already in use")
 
 SRC = str(Path(__file__).resolve().parents[1] / "src")
+
+_campaign = import_script("_campaign")  # scripts/_campaign.py: shared with the fault campaign
+_raw = _campaign.raw_http
 
 
 def one_line_error(err):
@@ -466,26 +470,7 @@ def explorer_port():
         port = int(proc.stdout.readline())
         yield port
     finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-
-
-def _raw(port, request, timeout=60):
-    import socket
-
-    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as s:
-        s.sendall(request.encode("latin-1"))
-        data = b""
-        while b"\r\n\r\n" not in data:
-            chunk = s.recv(65536)
-            if not chunk:
-                break
-            data += chunk
-    return data.split(b"\r\n", 1)[0].decode("latin-1")
+        _campaign.stop(proc, timeout=20)
 
 
 def _page(port, host):
