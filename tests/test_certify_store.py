@@ -461,3 +461,13 @@ def test_a_code_outside_a_tile_s_names_list_is_refused_naming_the_tile(plain_sto
     for f in (sb.verify, sb.CertifiedAtlas.load):
         with pytest.raises(ValueError, match="tile 3: word_code -1 at row 1 of a tile is outside its names list"):
             f(path)
+
+
+def test_a_store_s_tiles_checked_in_two_processes_give_the_same_verdict(plain_store, tmp_path):
+    assert_same_verdict(V._verify_store(plain_store, workers=2), sb.verify(plain_store))
+    path = _copy(plain_store, tmp_path)
+    atlas = _tile_atlas(path, TILE)
+    _rewrite_tile(path, TILE, lambda ds: _tva()._tamper("swapped word_code", ds, ".zarr", atlas))
+    v = V._verify_store(path, workers=2)
+    assert not v and v.check == "word"
+    assert_same_verdict(v, sb.verify(path))

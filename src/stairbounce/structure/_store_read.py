@@ -102,8 +102,8 @@ def _decode(arrays, attrs, key):
     integer = codes.dtype.kind in "iu"
     bad = np.flatnonzero((codes < 0) | (codes >= len(names))) if integer else np.arange(codes.size)
     if bad.size:
-        raise ValueError(f"{key}_code {codes[bad[0]].item()!r} at row {int(bad[0])} of a tile is outside its names list "
-                         f"{key}_names ({len(names)} names)")
+        raise ValueError(f"{key}_code {codes[bad[0]].item()!r} at row {int(bad[0])} of a tile is outside its "
+                         f"names list {key}_names ({len(names)} names)")
     return table[codes]
 
 

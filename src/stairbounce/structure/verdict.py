@@ -824,7 +824,9 @@ def verify(obj):
     window at the stated depth (edges bit for bit) and inside it, no two boxes
     overlapping (``structure/tiling.py``); the verdict says whether they cover the
     window and carries the derived numbers proven from the verified boxes
-    (:class:`Verdict`'s ``numbers``, of the covered part when they do not).
+    (:class:`Verdict`'s ``numbers``, of the covered part when they do not).  A streamed
+    atlas's store (:func:`stairbounce.certify_to_zarr`) is checked tile by tile, with the
+    memory of a tile, to the same verdict (``_verify_store``).
     """
     if isinstance(obj, Certificate):
         check_certificate_fields(obj)
