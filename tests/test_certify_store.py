@@ -464,7 +464,9 @@ def test_a_code_outside_a_tile_s_names_list_is_refused_naming_the_tile(plain_sto
 
 
 def test_a_store_s_tiles_checked_in_two_processes_give_the_same_verdict(plain_store, tmp_path):
-    assert_same_verdict(V._verify_store(plain_store, workers=2), sb.verify(plain_store))
+    assert_same_verdict(sb.verify(plain_store, workers=2), sb.verify(plain_store))
+    with pytest.raises(ValueError, match="workers"):
+        sb.verify(plain_store, workers=0)
     path = _copy(plain_store, tmp_path)
     atlas = _tile_atlas(path, TILE)
     _rewrite_tile(path, TILE, lambda ds: _tva()._tamper("swapped word_code", ds, ".zarr", atlas))
