@@ -257,7 +257,7 @@ def _tile_table(win, depth, tile_level, gi, gj, max_iter, code, classes, trap, n
 def _local_tiles(args, each):
     """The tiles ``args`` (``_tile_task``'s arguments) here, each computed while the one
     before is written by a writer thread: the kernels use every core, the writing
-    (coding, compressing, the read back and checksum: about a third of a tile's time at
+    (coding, compressing, the read back and checksum: about a fifth of a tile's time at
     depth 14, on one core) then overlaps the next tile's kernels.  Two tiles are held at
     a time.  The tiles are the same (computed as before, one after another; only their
     writing moved), and written, marked done and counted (``each``, in this thread) in
