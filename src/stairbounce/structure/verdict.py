@@ -630,7 +630,7 @@ def _verify_store(path, workers=None):
     return _accepted(n, depth, _numbers_of_sums(areas, window, complete), complete, 4 ** depth - covered)
 
 
-_WORDS_CACHE = ({}, {}, {})  # _check_words's, kept over the tiles a process checks
+_WORDS_CACHE: tuple[dict, dict, dict] = ({}, {}, {})  # _check_words's, kept over the tiles a process checks
 
 
 def _check_tile(job, k, crc, ds=None):
