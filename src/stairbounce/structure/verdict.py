@@ -577,6 +577,14 @@ def _verify_store(path, workers=None):
       level, then j, then i, then tile): a second pass reads the ``level, i, j`` of every
       tile, only when a box is rejected.
     """
+    try:
+        return _verify_tiles(path, workers)
+    finally:
+        for cache in _WORDS_CACHE:  # this process's (a worker's goes with it)
+            cache.clear()
+
+
+def _verify_tiles(path, workers):
     from . import _store_read as R
 
     root, token, crc = R.complete_state(path)
