@@ -203,3 +203,266 @@ def test_ragged_rows_are_taken_block_by_block():
     want = np.concatenate([values[starts[k]:starts[k] + lengths[k]] for k in order])
     for block in (1, 3, 7, 1 << 20):
         assert np.array_equal(R._take_rows(values, starts[order], lengths[order], block=block), want)
+
+
+# ------------------------------------------------- verify a store tile by tile
+
+V = importlib.import_module("stairbounce.structure.verdict")
+R = importlib.import_module("stairbounce.structure._store_read")
+
+
+def _tva():
+    """The tamperings of tests/test_verify_atlas.py (reused on a store's tiles)."""
+    import importlib.util
+    from pathlib import Path
+
+    if "_tva" not in _REFS:
+        spec = importlib.util.spec_from_file_location("_tamper_cases", Path(__file__).with_name("test_verify_atlas.py"))
+        _REFS["_tva"] = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(_REFS["_tva"])
+    return _REFS["_tva"]
+
+
+def _whole(path):
+    """Today's whole-atlas verdict: the store merged in memory, then checked."""
+    return V._verify_dataset(R.read_store(path))
+
+
+def _bits(x):
+    """A verdict's fields with every float as its bits (0.0 and -0.0 differ)."""
+    if isinstance(x, float):
+        return x.hex()
+    if isinstance(x, dict):
+        return {k: _bits(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_bits(v) for v in x]
+    return x
+
+
+def assert_same_verdict(got, want):
+    fields = ("ok", "check", "step", "message", "checked", "rejected", "atlas", "complete", "numbers")
+    assert {f: _bits(getattr(got, f)) for f in fields} == {f: _bits(getattr(want, f)) for f in fields}
+
+
+@pytest.mark.parametrize("kw, tiling", [
+    (dict(FIG7, depth=7), dict(tile_level=5, tile_boxes=40)),
+    (dict(FIG7, depth=6, trap=True), dict(tile_level=4, tile_boxes=20)),
+    (dict(OTHER, depth=6, classes=True), dict(tile_level=3, tile_boxes=7)),
+])
+def test_a_store_verified_tile_by_tile_gives_the_whole_atlas_s_verdict(tmp_path, kw, tiling, monkeypatch):
+    path = tmp_path / "a.zarr"
+    st = sb.certify_to_zarr(path, **kw, **tiling)
+    assert st.attrs["n_tiles"] > 2
+    merged = []
+    monkeypatch.setattr(R, "read_store", lambda p: merged.append(p))  # sb.verify never holds the whole table
+    v = sb.verify(path)
+    monkeypatch.undo()
+    assert not merged
+    assert v.ok and v.complete and v.checked == reference(**kw).sizes["box"]
+    assert v.numbers["of"] == "the window"
+    assert set(v.numbers["words"]) == set(sb.CertifiedAtlas(reference(**kw)).fraction("word"))
+    assert_same_verdict(v, _whole(path))
+    assert_same_verdict(v, sb.verify(sb.CertifiedAtlas.load(path)))  # and the in-memory atlas's
+
+
+def test_exact_sums_are_fsum_s_floats():
+    np = pytest.importorskip("numpy")
+    import math
+
+    rng = np.random.default_rng(44)
+    for n in (1, 2, 7, 1000):
+        for scale in (1e-3, 1e-300, 1e300, 5e-324):
+            x = rng.random(n) * scale
+            x[: n // 3] = np.float64(scale)  # repeated values: sums on the ties of rounding
+            areas = V._ExactAreas()
+            half = n // 2
+            areas.add(np.zeros(half, np.int64), ["g"], x[:half], x[:half])
+            areas.add(np.zeros(n - half, np.int64), ["g"], x[half:], x[half:])
+            _, lo, hi = areas.sums["g"]
+            assert lo / (1 << 1126) == math.fsum(x.tolist()) and lo == hi
+    # halfway between two floats: ties to even, as fsum
+    for parts in ([1.0, 2.0 ** -53], [1.0, 3 * 2.0 ** -53], [1.0 + 2.0 ** -52, 2.0 ** -53], [1e16, 1.0, 1e-16]):
+        areas = V._ExactAreas()
+        areas.add(np.zeros(len(parts), np.int64), ["g"], np.array(parts), np.array(parts))
+        assert areas.sums["g"][1] / (1 << 1126) == math.fsum(parts)
+
+
+def _rewrite_tile(path, k, change):
+    """Tile ``k`` of a store replaced by ``change(raw table)``, with a new checksum (as a
+    writer could forge it): what reaches the checker."""
+    import os
+    import shutil
+
+    import numpy as np
+    import xarray as xr
+    import zarr
+
+    from stairbounce.atlas import _checksum
+
+    arrays, attrs = R.read_tile(path, k)
+    ds = xr.Dataset({name: (R.DIMS.get(name, ("box",)), a) for name, a in arrays.items()}, attrs=attrs)
+    ds = change(ds)
+    ds.attrs = {a: (list(v) if isinstance(v, tuple) else v) for a, v in ds.attrs.items()}
+    folder = os.path.join(path, R.BOXES, R.tile_name(k))
+    shutil.rmtree(folder)
+    ds.to_zarr(folder, mode="w", consolidated=False, zarr_format=3)
+    arrays, attrs = R.read_tile(path, k)
+    record = zarr.open_group(str(path), mode="r+")[R.RECORD]
+    record["crc"][k] = _checksum(R.tile_values(arrays, attrs), R.tile_seed(record.attrs["token"], k))
+    assert np.asarray(record["done"][...]).all()
+
+
+@pytest.fixture(scope="module")
+def plain_store(tmp_path_factory):
+    path = tmp_path_factory.mktemp("store") / "plain.zarr"
+    sb.certify_to_zarr(path, **FIG7, depth=7, tile_level=5, tile_boxes=40)
+    return path
+
+
+@pytest.fixture(scope="module")
+def trapped_store(tmp_path_factory):
+    path = tmp_path_factory.mktemp("store") / "trapped.zarr"
+    sb.certify_to_zarr(path, e=(0.2, 0.4), u=(0.3, 0.5), depth=5, trap=True, tile_level=4, tile_boxes=8)
+    return path
+
+
+def _copy(store, tmp_path):
+    import shutil
+
+    shutil.copytree(store, tmp_path / "t.zarr")
+    return tmp_path / "t.zarr"
+
+
+def _tile_atlas(path, k):
+    arrays, attrs = R.read_tile(path, k)
+    return sb.CertifiedAtlas(R.merge_tiles([(arrays, attrs)], arrays["offsets"].size - 1, arrays["itinerary"].size))
+
+
+TILE = 2  # a tile of the plain store's with several words
+
+
+@pytest.mark.parametrize("kind", ["edited word_names", "reversed word_names", "swapped word_code", "duplicated boxes",
+                                  "boxes from another window", "permuted level/i/j", "removed boxes"])
+def test_a_store_tampered_within_a_tile_is_judged_as_the_whole_atlas(kind, plain_store, tmp_path):
+    tva = _tva()
+    path = _copy(plain_store, tmp_path)
+    atlas = _tile_atlas(path, TILE)
+    _rewrite_tile(path, TILE, lambda ds: tva._tamper(kind, ds, ".zarr", atlas))
+    v = sb.verify(path)
+    assert_same_verdict(v, _whole(path))
+    if kind == "removed boxes":
+        assert v.ok and v.complete is False and "do not cover the window" in v.message
+        assert v.numbers["of"] == "the covered part"
+    else:
+        assert not v and v.rejected >= 1 and v.numbers is None, v.message
+        assert v.check in ("word", "place", "overlap"), v.check
+
+
+def test_a_widened_window_in_tile_0_rejects_every_tile_s_boxes(plain_store, tmp_path):
+    tva = _tva()
+    path = _copy(plain_store, tmp_path)
+    _rewrite_tile(path, 0, lambda ds: tva._tamper("widened e_range", ds, ".zarr", None))
+    v = sb.verify(path)
+    assert_same_verdict(v, _whole(path))
+    assert not v and v.check == "place" and v.rejected == v.checked
+
+
+def _move(src, dst, rows, keep):
+    """Tamperings across tiles: boxes ``rows`` of tile ``src`` appended to tile ``dst``
+    (``keep``: left in ``src`` too, a duplicate; else moved)."""
+    import numpy as np
+
+    def change(path):
+        arrays, attrs = R.read_tile(path, src)
+        moved = {}
+        for name in ("e0", "e1", "u0", "u1", "status", "step", "level", "i", "j", "word_code", "reason_code"):
+            moved[name] = arrays[name][rows]
+        moved["words"] = np.array(attrs["word_names"] + [""], dtype=object)[:-1][arrays["word_code"][rows]]
+        moved["reasons"] = np.array(attrs["reason_names"] + [""], dtype=object)[:-1][arrays["reason_code"][rows]]
+        off = arrays["offsets"]
+        moved["pieces"] = [arrays["itinerary"][off[r]:off[r + 1]] for r in rows]
+        tva = _tva()
+
+        def add(ds):
+            n = ds.sizes["box"]
+            names = {key: list(ds.attrs[f"{key}_names"]) for key in ("word", "reason")}
+            out = ds.drop_vars(["offsets", "itinerary"])
+            cols = {}
+            for name in ("e0", "e1", "u0", "u1", "status", "step", "level", "i", "j"):
+                cols[name] = np.concatenate([ds[name].values, moved[name]])
+            for key, texts in (("word", moved["words"]), ("reason", moved["reasons"])):
+                for t in texts:
+                    if t not in names[key]:
+                        names[key].append(t)
+                codes = np.array([names[key].index(t) for t in texts], np.int32)
+                cols[f"{key}_code"] = np.concatenate([ds[f"{key}_code"].values, codes])
+                out.attrs[f"{key}_names"] = names[key]
+            out = out.drop_vars(list(cols)).assign({k: ("box", v) for k, v in cols.items()})
+            off = ds["offsets"].values
+            pieces = [ds["itinerary"].values[off[b]:off[b + 1]] for b in range(n)] + moved["pieces"]
+            lengths = np.array([p.size for p in pieces], np.int64)
+            return out.assign(offsets=("offset", np.concatenate([[0], np.cumsum(lengths)])),
+                              itinerary=("itinerary_step", np.concatenate(pieces)))
+
+        _rewrite_tile(path, dst, add)
+        if not keep:
+            _rewrite_tile(path, src, lambda ds: tva._take_boxes(ds, np.setdiff1d(np.arange(ds.sizes["box"]), rows)))
+    return change
+
+
+@pytest.mark.parametrize("how", ["duplicate", "moved"])
+def test_boxes_across_tiles_overlap_exactly_when_they_do(how, plain_store, tmp_path):
+    import numpy as np
+
+    path = _copy(plain_store, tmp_path)
+    rows = np.array([0, 3, 17])
+    _move(4, 1, rows, keep=how == "duplicate")(path)
+    v = sb.verify(path)
+    assert_same_verdict(v, _whole(path))
+    if how == "duplicate":  # the copies in tile 1 overlap their originals in tile 4
+        assert not v and v.check == "overlap" and v.rejected == rows.size, v.message
+    else:  # the same boxes cut into other tiles: still the atlas, verified
+        assert v.ok and v.complete, v.message
+        assert_same_verdict(v, sb.verify(plain_store))
+
+
+@pytest.mark.parametrize("kind", ["reason codes", "reason_names reversed"])
+def test_tampered_reasons_in_a_tile_of_a_trapped_store_are_rejected(kind, trapped_store, tmp_path):
+    import numpy as np
+
+    tva = _tva()
+    path = _copy(trapped_store, tmp_path)
+    k = next(k for k in range(1, sb.CertifiedStore(path).attrs["n_tiles"])
+             if (_tile_atlas(path, k).boxes["reason"].values == "trapping").any()
+             and (_tile_atlas(path, k).boxes["reason"].values == "").any())
+    _rewrite_tile(path, k, lambda ds: tva._tamper(kind, ds, ".zarr", None))
+    v = sb.verify(path)
+    assert_same_verdict(v, _whole(path))
+    assert not v and v.rejected >= 1 and v.check in ("reason", "corollary", "trapping"), v.message
+    assert np.all(np.isfinite([v.checked, v.rejected]))
+
+
+def test_a_code_outside_a_tile_s_names_list_is_refused_naming_the_tile(plain_store, tmp_path):
+    path = _copy(plain_store, tmp_path)
+
+    def negative(ds):
+        c = ds["word_code"].values.copy()
+        c[1] = -1  # numpy would take the last name
+        return ds.assign(word_code=("box", c))
+
+    _rewrite_tile(path, 3, negative)
+    for f in (sb.verify, sb.CertifiedAtlas.load):
+        with pytest.raises(ValueError, match="tile 3: word_code -1 at row 1 of a tile is outside its names list"):
+            f(path)
+
+
+def test_a_store_s_tiles_checked_in_two_processes_give_the_same_verdict(plain_store, tmp_path):
+    assert_same_verdict(sb.verify(plain_store, workers=2), sb.verify(plain_store))
+    with pytest.raises(ValueError, match="workers"):
+        sb.verify(plain_store, workers=0)
+    path = _copy(plain_store, tmp_path)
+    atlas = _tile_atlas(path, TILE)
+    _rewrite_tile(path, TILE, lambda ds: _tva()._tamper("swapped word_code", ds, ".zarr", atlas))
+    v = V._verify_store(path, workers=2)
+    assert not v and v.check == "word"
+    assert_same_verdict(v, sb.verify(path))

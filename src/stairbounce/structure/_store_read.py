@@ -91,9 +91,20 @@ def check_tile(path, k, token, crc):
 
 
 def _decode(arrays, attrs, key):
+    """The texts of a tile's ``{key}_code`` from its names list; a code outside the list
+    (a negative one too, which numpy's indexing would take from the end) refused with
+    ValueError naming the row of the tile."""
     names = list(attrs.get(f"{key}_names") or [])
     table = np.array(names + [""], dtype=object)[:-1] if names else np.zeros(0, dtype=object)
-    return table[arrays.pop(f"{key}_code")]
+    if f"{key}_code" not in arrays:
+        raise ValueError(f"a tile's {key}_code is missing: the store is damaged")
+    codes = np.asarray(arrays.pop(f"{key}_code"))
+    integer = codes.dtype.kind in "iu"
+    bad = np.flatnonzero((codes < 0) | (codes >= len(names))) if integer else np.arange(codes.size)
+    if bad.size:
+        raise ValueError(f"{key}_code {codes[bad[0]].item()!r} at row {int(bad[0])} of a tile is outside its "
+                         f"names list {key}_names ({len(names)} names)")
+    return table[codes]
 
 
 def store_sizes(path):
@@ -118,14 +129,9 @@ def read_summary(path):
     return None if text is None else json.loads(text)
 
 
-def read_store(path):
-    """read_store(path) -> xarray.Dataset: the whole atlas table of a streamed store,
-    in memory: every tile read, checked against its checksum, and the tiles merged in
-    the atlas's order (by level, then j, then i), the itineraries and trapping regions
-    renumbered.  The same rows, bit for bit, as :func:`stairbounce.certify`'s table
-    with the store's arguments; ``trap_tried`` and ``trap_seconds`` summed over the
-    tiles, ``trap_failures`` counted over them.  An incomplete or damaged store is
-    refused with ValueError naming the tile."""
+def complete_state(path):
+    """``(root attrs, token, checksums)`` of a complete store; an unreadable, damaged or
+    incomplete one refused with ValueError saying which."""
     try:
         root, record, done, crc = store_state(path)
     except Exception as exc:  # noqa: BLE001
@@ -137,7 +143,19 @@ def read_store(path):
     if not done.all():
         raise ValueError(f"{path} is incomplete: {int(done.sum())} of {n} tiles computed; run "
                          "certify_to_zarr (stairbounce certify --store) again with the same arguments to finish it")
-    token = record.get("token")
+    return root, record.get("token"), crc
+
+
+def read_store(path):
+    """read_store(path) -> xarray.Dataset: the whole atlas table of a streamed store,
+    in memory: every tile read, checked against its checksum, and the tiles merged in
+    the atlas's order (by level, then j, then i), the itineraries and trapping regions
+    renumbered.  The same rows, bit for bit, as :func:`stairbounce.certify`'s table
+    with the store's arguments; ``trap_tried`` and ``trap_seconds`` summed over the
+    tiles, ``trap_failures`` counted over them.  An incomplete or damaged store is
+    refused with ValueError naming the tile."""
+    root, token, crc = complete_state(path)
+    n = crc.size
     sizes = [_tile_sizes(path, k) for k in range(n)]
 
     def tiles():  # one at a time: read, checked, copied into the table, let go
@@ -164,12 +182,12 @@ def _tile_sizes(path, k):
                          "run certify_to_zarr with the same arguments to compute it again") from None
 
 
-def merge_tiles(tiles, n_boxes, n_steps):
+def merge_tiles(tiles, n_boxes, n_steps, first=0):
     """The atlas table of tiles ``(arrays, attrs)`` (:func:`read_tile`, an iterable, taken
     one at a time) holding ``n_boxes`` boxes and ``n_steps`` itinerary steps in all: each
     tile copied into the table's columns, allocated once (a list of the tiles' parts,
     concatenated, left the freed parts in the heap: 6 GiB of resident memory for a
-    2.2 GB table at depth 14)."""
+    2.2 GB table at depth 14).  ``first``: the index of the first tile (named in errors)."""
     import xarray as xr
 
     cols = {}
@@ -180,12 +198,15 @@ def merge_tiles(tiles, n_boxes, n_steps):
     first_attrs = None
     tried, seconds, failures = 0, 0.0, {}
     base = step = 0
-    for arrays, attrs in tiles:
+    for k, (arrays, attrs) in enumerate(tiles, first):
         arrays = dict(arrays)
         if trap is None:
             trap, first_attrs = "trap_box" in arrays, attrs
-        arrays["word"] = _decode(arrays, attrs, "word")
-        arrays["reason"] = _decode(arrays, attrs, "reason")
+        try:
+            arrays["word"] = _decode(arrays, attrs, "word")
+            arrays["reason"] = _decode(arrays, attrs, "reason")
+        except ValueError as exc:
+            raise ValueError(f"tile {k}: {exc}") from None
         off = arrays.pop("offsets")
         it = arrays.pop("itinerary")
         nb = off.size - 1
