@@ -292,3 +292,54 @@ def region_check(e0, e1, u0, u1, v0, v1, s0, s1, prefix, ev, es, cap):
         if not any_live:
             return 0
     return 2
+
+
+@njit(cache=True)
+def edges(lo, hi, n):
+    """The cell edges of an axis: ``lo + (hi - lo) * (i * (1/n))``, the last ``hi``
+    (``verify_trapping._edges``, the same operations)."""
+    e = np.empty(n + 1)
+    w = hi - lo
+    r = 1.0 / n
+    for i in range(n + 1):
+        e[i] = lo + w * (i * r)
+    e[n] = hi
+    return e
+
+
+@njit(cache=True)
+def regions(e0, e1, u0, u1, itinerary, offsets, grids, cell_off, cells, todo, cap, out):
+    """The ``entered``, ``slide`` and ``invariant`` checks of
+    ``verify_trapping.verify_region`` on the regions ``todo``, one after another:
+    region ``r`` of box ``(e0[r], e1[r], u0[r], u1[r])``, entry
+    ``itinerary[offsets[r]:offsets[r + 1]]``, grid ``grids[r]`` (``v_lo, v_hi, nv,
+    s_lo, s_hi, ns``, checked before) and cells ``cells[cell_off[r]:cell_off[r +
+    1]]``; writes 0 (all hold), 3 (``entered``), 4 (``slide``) or 5
+    (``invariant``) into ``out[r]``, the indices of ``verify_trapping.TRAP_CHECKS``."""
+    for t in range(todo.size):
+        r = todo[t]
+        nv = int(grids[r, 2])
+        ns = int(grids[r, 5])
+        ev = edges(grids[r, 0], grids[r, 1], nv)
+        es = edges(grids[r, 3], grids[r, 4], ns)
+        # a 2-D prefix sum of the flagged cells: P[j, i] counts those below row j, left of column i
+        flags = np.zeros((ns, nv), np.int64)
+        c0, c1 = cell_off[r], cell_off[r + 1]
+        for k in range(c0, c1):
+            flags[cells[k] // nv, cells[k] % nv] = 1
+        P = np.zeros((ns + 1, nv + 1), np.int64)
+        for j in range(ns):
+            for i in range(nv):
+                P[j + 1, i + 1] = flags[j, i] + P[j, i + 1] + P[j + 1, i] - P[j, i]
+        a0, a1, b0, b1 = entered(e0[r], e1[r], u0[r], u1[r], itinerary[offsets[r]:offsets[r + 1]])
+        if not covered(P, ev, es, a0, a1, b0, b1):
+            out[r] = 3
+            continue
+        m = c1 - c0
+        v0, v1, s0, s1 = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+        for k in range(m):
+            i = cells[c0 + k] % nv
+            j = cells[c0 + k] // nv
+            v0[k], v1[k], s0[k], s1[k] = ev[i], ev[i + 1], es[j], es[j + 1]
+        what = region_check(e0[r], e1[r], u0[r], u1[r], v0, v1, s0, s1, P, ev, es, cap)
+        out[r] = 0 if what == 0 else (4 if what == 1 else 5)

@@ -784,11 +784,11 @@ class CertifiedAtlas:
         """The proven areas of the boxes (:class:`tiling.AreaBook`), of the window when
         the boxes tile it (:func:`tiling.tiling`), else of the covered part."""
         if self._areas is None:
-            from .tiling import AreaBook, tiling
+            from .tiling import AreaBook, deepest_level, tiling
 
             ds = self.boxes
             cols = [ds[k].values for k in ("e0", "e1", "u0", "u1")]
-            t = tiling(self.window, self.depth, ds["level"].values, ds["i"].values, ds["j"].values, *cols)
+            t = tiling(self.window, deepest_level(self.depth, ds.attrs), ds["level"].values, ds["i"].values, ds["j"].values, *cols)
             bad = int(np.count_nonzero(~t.placed | t.overlapping))
             if bad:
                 raise ValueError(f"the atlas's boxes are not its window's quadtree ({bad} boxes misplaced or "
