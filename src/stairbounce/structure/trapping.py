@@ -345,7 +345,7 @@ def _try(e0, e1, u0, u1, max_iter, tries=_TRIES, max_cells=_MAX_CELLS):
 # the atlas's pass (trap_atlas): one float orbit (at the box's centre) places the
 # grid, the same three grid tries; a box that fails is split into its quadtree
 # children, down to SPLIT_LEVELS levels below the atlas's depth
-_FAST_HULL_STEPS = 300
+_FAST_HULL_STEPS = 100
 # (cells a side, padding, 1: tried only where the try before failed by less than a cell)
 _FAST_TRIES = _TRIES + ((256, 0.3), (512, 0.3))
 _TRY_CELLS = np.array([c for c, _ in _FAST_TRIES], np.int64)
