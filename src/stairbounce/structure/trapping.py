@@ -537,7 +537,7 @@ def trap_atlas(ds, progress=None, split=None):
     win = np.array([*ds.attrs["e_range"], *ds.attrs["u_range"]], np.float64)
     max_iter = int(ds.attrs["max_iter"])
     st0 = ds["status"].values
-    reason0 = ds["reason"].values.astype(str)
+    reason0 = ds["reason"].values
     e0c, e1c, u0c, u1c = (ds[k].values for k in ("e0", "e1", "u0", "u1"))
     sel = np.flatnonzero((st0 == UNDECIDED) & (reason0 == "nonsliding"))
     sel = sel[(e0c[sel] > 0.0) & (e1c[sel] < 1.0) & (u0c[sel] >= _U_MIN)]
@@ -594,18 +594,26 @@ def trap_atlas(ds, progress=None, split=None):
     node_of = np.full(st0.size, -1, np.int64)  # a kept row's node (a root tried)
     node_of[root[~has_parent]] = np.flatnonzero(~has_parent)
     leaves = np.flatnonzero(emit & has_parent)
-    src = np.concatenate([keep, root[leaves]])
-    node = np.concatenate([node_of[keep], leaves])  # -1: a row not tried
+    # the atlas's order: by level, then j, then i
+    L_out = np.concatenate([ds["level"].values[keep].astype(np.int64), lv[leaves]])
+    I_out = np.concatenate([ds["i"].values[keep].astype(np.int64), ii[leaves]])
+    J_out = np.concatenate([ds["j"].values[keep].astype(np.int64), jj[leaves]])
+    order = np.argsort((L_out << 56) | (J_out << 28) | I_out, kind="stable")
+    src = np.concatenate([keep, root[leaves]])[order]
+    node = np.concatenate([node_of[keep], leaves])[order]  # -1: a row not tried
+    leaf = np.concatenate([np.full(keep.size, -1, np.int64), np.arange(leaves.size)])[order]
     n_out = src.size
     box_vars = [k for k in ds.variables if ds[k].dims == ("box",)]
     cols = {k: ds[k].values[src] for k in box_vars}
-    new = np.arange(keep.size, n_out)
-    for k, vals in (("level", lv[leaves]), ("i", ii[leaves]), ("j", jj[leaves])):
+    new = np.flatnonzero(leaf >= 0)
+    pieces = leaves[leaf[new]]
+    for k, vals in (("level", lv[pieces]), ("i", ii[pieces]), ("j", jj[pieces])):
         cols[k][new] = vals.astype(cols[k].dtype)
-    e0n, e1n, u0n, u1n = (np.empty(leaves.size) for _ in range(4))
-    _box_edges(win, lv[leaves], ii[leaves], jj[leaves], e0n, e1n, u0n, u1n)
+    e0n, e1n, u0n, u1n = (np.empty(pieces.size) for _ in range(4))
+    _box_edges(win, lv[pieces], ii[pieces], jj[pieces], e0n, e1n, u0n, u1n)
     for k, vals in (("e0", e0n), ("e1", e1n), ("u0", u0n), ("u1", u1n)):
         cols[k][new] = vals
+
     def proven_at(nodes):  # whether each row's node (-1: not tried) was proven
         hit = np.zeros(nodes.size, bool)
         hit[nodes >= 0] = proven[nodes[nodes >= 0]]
@@ -613,15 +621,10 @@ def trap_atlas(ds, progress=None, split=None):
 
     got = np.flatnonzero(proven_at(node))
     cols["status"][got] = NO_SLIDING
-    reason = cols["reason"].astype(object)
+    reason = cols["reason"].astype(object, copy=False)
     reason[got] = "trapping"
     cols["reason"] = reason.astype(str)
     cols["step"][got] = 0
-    # the atlas's order: by level, then j, then i
-    order = np.argsort((cols["level"].astype(np.int64) << 56) | (cols["j"].astype(np.int64) << 28)
-                       | cols["i"].astype(np.int64), kind="stable")
-    cols = {k: v[order] for k, v in cols.items()}
-    src, node = src[order], node[order]
     trapped = np.flatnonzero(proven_at(node))
     tn = node[trapped]
     # itineraries: a proven box's entry, else its source row's
