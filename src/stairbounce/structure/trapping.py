@@ -262,23 +262,26 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, seed, flags, queue, miss, out
 
 
 @njit(cache=True)
-def _orbit_hull(e, u, y, v, skip, steps):
+def _orbit_hull(e, u, y, v, skip, steps, Th, Rl):
     """Numerical: the rectangle of ``(v, s)`` visited by the float map from ``(y,
     v)`` after step ``skip`` up to step ``skip + steps`` (``slid``: it slid on
-    the way)."""
+    the way), and the largest ``Th - v - Rl s`` over those states (the slide
+    margin of a cell holding the state, at the box's worst corner)."""
     T, ratio = _model._constants(e, u)
     h = np.array([np.inf, -np.inf, np.inf, -np.inf])
+    worst = -np.inf
     for n in range(skip + steps):
         y, v, k = _model._step(y, v, e, T, ratio)
         if k == _model.SLIDING:
-            return h, True
+            return h, True, worst
         if n >= skip:
             s = math.sqrt(v * v + 2.0 * y)
             h[0] = min(h[0], v)
             h[1] = max(h[1], v)
             h[2] = min(h[2], s)
             h[3] = max(h[3], s)
-    return h, False
+            worst = max(worst, Th - v - Rl * s)
+    return h, False, worst
 
 
 @njit(cache=True)
@@ -287,15 +290,17 @@ def _hull(e, u, n0, steps):
     between steps ``n0`` and ``n0 + steps`` (``slid``: it slid on the way).  Only
     chooses where the grid lies; nothing proven rests on it."""
     skip = max(n0 - 1, 0)
-    return _orbit_hull(e, u, 1.0, 0.0, skip, n0 + steps - skip)
+    h, slid, _ = _orbit_hull(e, u, 1.0, 0.0, skip, n0 + steps - skip, 0.0, 0.0)
+    return h, slid
 
 
 @njit(cache=True)
-def _hull_from(e, u, v, s, steps):
+def _hull_from(e, u, v, s, steps, Th, Rl):
     """Numerical: as :func:`_hull`, from the state ``(v, s)`` (``y = (s^2 - v^2)/2``,
     the middle of the entry's enclosure) for ``steps`` steps, so that the orbit's
-    first ``n`` steps are not iterated again.  Only chooses where the grid lies."""
-    return _orbit_hull(e, u, max(0.5 * (s * s - v * v), 0.0), v, 0, steps)
+    first ``n`` steps are not iterated again, with :func:`_orbit_hull`'s largest
+    slide margin.  Only chooses where the grid lies and which tries are skipped."""
+    return _orbit_hull(e, u, max(0.5 * (s * s - v * v), 0.0), v, 0, steps, Th, Rl)
 
 
 # grid tries: (cells a side, padding of the float orbits' rectangle, in its extent)
@@ -374,8 +379,14 @@ def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flag
     code, n, v0, v1, s0, s1 = _entry(e0, e1, u0, u1, max_iter, itin, out)
     if code != TRAP_OK:
         return (TRAP_ENTRY if code == TRAP_SLIDE else code), 0, 0
-    h, slid = _hull_from(0.5 * (e0 + e1), 0.5 * (u0 + u1), 0.5 * (v0 + v1), 0.5 * (s0 + s1), hull_steps)
-    if slid:
+    Th = 1.0 / u0
+    Rl = (1.0 + e0) / (1.0 - e0)
+    h, slid, worst = _hull_from(0.5 * (e0 + e1), 0.5 * (u0 + u1), 0.5 * (v0 + v1), 0.5 * (s0 + s1), hull_steps,
+                                Th, Rl)
+    if slid or worst > 1e-9 * (1.0 + abs(Th)):
+        # the float orbit slides, or passes a state whose cell cannot be proven clear of
+        # the sliding set over the box (its margin at the box's worst corner is positive
+        # by more than rounding): no region can close (numerical; it skips the tries only)
         return TRAP_SLIDE, 0, 0
     h0, h1, h2, h3 = min(v0, h[0]), max(v1, h[1]), min(s0, h[2]), max(s1, h[3])
     dT = _up(1.0 / u0) - _dn(1.0 / u1)
