@@ -351,11 +351,13 @@ def _try(e0, e1, u0, u1, max_iter, tries=_TRIES, max_cells=_MAX_CELLS):
 # grid, the same three grid tries; a box that fails is split into its quadtree
 # children, down to SPLIT_LEVELS levels below the atlas's depth
 _FAST_HULL_STEPS = 100
-# (cells a side, padding, 1: tried only where the try before failed by less than a cell)
+# (cells a side, padding); when each is tried: 0 always, 1 only where the try before
+# failed by less than a cell, 2 not where it failed by more than a cell, 3 only where an
+# image left the rectangle of an earlier try (numerical choices: which tries are made)
 _FAST_TRIES = _TRIES + ((256, 0.3), (512, 0.3))
 _TRY_CELLS = np.array([c for c, _ in _FAST_TRIES], np.int64)
 _TRY_PAD = np.array([p for _, p in _FAST_TRIES], np.float64)
-_TRY_GATE = np.array([0, 0, 0, 1, 1], np.int64)
+_TRY_GATE = np.array([0, 2, 3, 1, 1], np.int64)
 SPLIT_LEVELS = 1
 """Levels below the atlas's depth that :func:`trap_atlas` splits a box whose
 trapping region failed into (its quadtree children, tried in turn); an atlas
@@ -391,11 +393,17 @@ def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flag
     h0, h1, h2, h3 = min(v0, h[0]), max(v1, h[1]), min(s0, h[2]), max(s1, h[3])
     dT = _up(1.0 / u0) - _dn(1.0 / u1)
     failure = TRAP_SLIDE
+    escaped = False
     miss = np.full(1, np.inf)
     for t in range(t_cells.size):
         cells, pad = t_cells[t], t_pad[t]
-        if t_gate[t] and not (failure == TRAP_SLIDE and miss[0] <= 1.0):
+        g = t_gate[t]
+        if g == 1 and not (failure == TRAP_SLIDE and miss[0] <= 1.0):
             continue  # finer cells only where the region failed by less than a cell
+        if g == 2 and failure == TRAP_SLIDE and miss[0] > 1.0:
+            continue  # nor where it missed the sliding set by more than a cell
+        if g == 3 and not escaped:
+            continue  # a wider rectangle only where an image left the one before
         dv, ds = h1 - h0, h3 - h2
         g0, g1 = h0 - pad * dv - 2 * dT, h1 + pad * dv + 2 * dT
         g3, g4 = max(h2 - pad * ds - dT, 1.0), h3 + pad * ds + dT
@@ -403,6 +411,7 @@ def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flag
         j0, j1 = _cell_range(s0 - 1e-9 * s0, s1 + 1e-9 * s1, g3, g4, cells)
         if i0 < 0 or j0 < 0:
             failure = TRAP_ESCAPE
+            escaped = True
             continue
         miss[0] = np.inf
         code, m = _close(e0, e1, u0, u1, g0, g1, cells, g3, g4, cells,
@@ -414,6 +423,7 @@ def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flag
             cells_out[:m] = np.sort(queue[:m])
             return TRAP_OK, n, m
         failure = code
+        escaped = escaped or code == TRAP_ESCAPE or code == TRAP_CELLS
     return failure, 0, 0
 
 
