@@ -6,8 +6,11 @@ without ``trap=True`` (the same process), and prints: the time of each and of
 the trapping pass, the boxes tried and proven, the area proven ``no_sliding``
 by trapping, the area left undecided "nonsliding" (numerical), the share of
 the non-sliding area below the curve that trapping proves (trapping /
-(trapping + nonsliding)), and the checker's verdict and time on the trapped
-boxes.  Usage: ``python benchmarks/trapping.py [depth ...]`` (default 8).
+(trapping + nonsliding)), the independent checker's re-check of the regions
+(``certify._recheck_regions``, timed again on the result), and ``sb.verify``'s
+verdict and time on the trapped atlas.  Boxes split below the depth
+(``trap_split`` levels, issue 44 item 5) are counted by level.  Usage:
+``python benchmarks/trapping.py [depth ...]`` (default 8).
 """
 
 import os
@@ -35,9 +38,22 @@ def main(depths):
         t3 = time.perf_counter()
         verdict = sb.verify(trapped)
         t4 = time.perf_counter()
+        from stairbounce.structure.certify import _recheck_regions
+
+        _recheck_regions(ds)
+        t5 = time.perf_counter()
+        again = sb.certify(e=(0.0, 1.0), u=(0.0, 1.5), depth=depth, max_iter=1000)
+        t6 = time.perf_counter()
+        level = ds["level"].values
+        below = level > depth
         print(f"depth {depth}: certify {t1 - t0:.1f} s, with trap {t2 - t1:.1f} s "
               f"(trapping pass {ds.attrs['trap_seconds']:.1f} s, {ds.attrs['trap_tried']} boxes tried, "
-              f"{int((reason == 'trapping').sum())} proven)")
+              f"{int((reason == 'trapping').sum())} proven; {int(below.sum())} boxes below the depth, "
+              f"{int((below & (reason == 'trapping')).sum())} of them trapped; trap_split "
+              f"{ds.attrs.get('trap_split', 0)}); certify again {t6 - t5:.1f} s")
+        print(f"  the pass / the atlas: {ds.attrs['trap_seconds'] / min(t1 - t0, t6 - t5):.2f}; re-check of "
+              f"{int(ds['trap_box'].size)} regions {t5 - t4:.2f} s "
+              f"({1e3 * (t5 - t4) / max(int(ds['trap_box'].size), 1):.3f} ms a region)")
         print(f"  share of the plane: trapped (no_sliding by a region) {100 * by_trap:.3f} %, "
               f"nonsliding left undecided {100 * left:.3f} %, proven share of the non-sliding area below "
               f"the curve {100 * by_trap / max(by_trap + left, 1e-300):.1f} %")

@@ -76,17 +76,50 @@ def test_no_region_where_every_point_slides():
     assert sb.trapping_region((0.1, 0.101), (0.3, 0.301)) is None
 
 
+def _rows(ds):
+    """``{(level, i, j): row}`` of an atlas table."""
+    return {(int(L), int(i), int(j)): r for r, (L, i, j) in
+            enumerate(zip(ds["level"].values, ds["i"].values, ds["j"].values))}
+
+
+def _split_from(key, rows):
+    """The box of ``rows`` that ``key`` (level, i, j) lies in, or None."""
+    L, i, j = key
+    for up in range(0, L + 1):
+        k = (L - up, i >> up, j >> up)
+        if k in rows:
+            return k
+    return None
+
+
+def _assert_agree(ds0, ds):
+    """Every box of the trapped table ``ds`` is a box of the plain table ``ds0``,
+    unchanged or (was "nonsliding") trapped, or a piece of a split "nonsliding"
+    box, trapped or keeping its label."""
+    trapped = ds["reason"].values == "trapping"
+    assert trapped.any() and np.all(ds["status"].values[trapped] == 1)
+    rows0, rows = _rows(ds0), _rows(ds)
+    for key, r in rows.items():
+        if key in rows0:  # a box not split: unchanged, or a "nonsliding" box now trapped
+            r0 = rows0[key]
+            if trapped[r]:
+                assert ds0["reason"].values[r0] == "nonsliding"
+            else:
+                for k in ("status", "reason", "step", "word", "e0", "e1", "u0", "u1"):
+                    assert ds[k].values[r] == ds0[k].values[r0], k
+        else:  # a piece of a split "nonsliding" box, trapped or keeping its label
+            r0 = rows0[_split_from(key, rows0)]
+            assert ds0["reason"].values[r0] == "nonsliding"
+            assert trapped[r] or (ds["reason"].values[r] == "nonsliding" and ds["status"].values[r] == 3)
+    return trapped
+
+
 def test_atlas_with_trap():
     win = dict(e=(0.29, 0.31), u=(0.40, 0.42), depth=3, max_iter=300)
     plain = sb.certify(**win)
     atlas = sb.certify(**win, trap=True)
-    ds, ds0 = atlas.boxes, plain.boxes
-    trapped = ds["reason"].values == "trapping"
-    assert trapped.any()
-    # only undecided "nonsliding" boxes changed, to no_sliding
-    assert np.all(ds0["reason"].values[trapped] == "nonsliding")
-    assert np.all(ds["status"].values[trapped] == 1)
-    assert np.array_equal(ds["status"].values[~trapped], ds0["status"].values[~trapped])
+    ds = atlas.boxes
+    trapped = _assert_agree(plain.boxes, ds)
     assert sb.verify(atlas)
     certs = [c for c in atlas.certificates() if c.reason == "trapping"]
     assert len(certs) == trapped.sum() and all(sb.verify(c) for c in certs[:3])
@@ -96,6 +129,118 @@ def test_atlas_with_trap():
     cells[off[0]] = cells[off[0] + 1]  # the first region loses a cell
     bad["trap_cells"] = ("trap_cell", cells)
     assert not sb.verify(bad)
+
+
+@pytest.fixture(scope="module")
+def split_atlas():
+    """A window below the Corollary 2.1 curve (Fig. 4) at depth 6, trapped with
+    boxes split one level below the depth, and without trapping."""
+    win = dict(e=(0.28, 0.32), u=(0.38, 0.42), depth=6, max_iter=1000)
+    return sb.certify(**win), sb.certify(**win, trap=True)
+
+
+def test_split_boxes_are_quadtree_children_and_verify(split_atlas):
+    from stairbounce.structure.trapping import SPLIT_LEVELS
+
+    plain, atlas = split_atlas
+    ds = atlas.boxes
+    _assert_agree(plain.boxes, ds)  # the boxes not split are the plain atlas's
+    level, reason = ds["level"].values, ds["reason"].values
+    assert ds.attrs["trap_split"] == SPLIT_LEVELS >= 1
+    below = level > atlas.depth
+    assert (below & (reason == "trapping")).any()  # boxes proven only below the depth
+    assert level.max() <= atlas.depth + SPLIT_LEVELS
+    v = sb.verify(atlas)
+    assert v and v.rejected == 0 and v.complete and v.checked == ds.sizes["box"]
+    # the trapped area grew against the boxes tried whole only (split=0 keeps them at the depth)
+    from stairbounce.structure.trapping import trap_atlas
+
+    whole = trap_atlas(plain.boxes, split=0)
+    assert whole["level"].values.max() <= atlas.depth
+
+    def area(d):
+        t = d["reason"].values == "trapping"
+        return float(((d["e1"].values - d["e0"].values) * (d["u1"].values - d["u0"].values))[t].sum())
+
+    assert area(ds) > area(whole) > 0
+    # the boxes of the depth none of whose pieces was proven stay whole, as without trapping
+    rows0 = _rows(plain.boxes)
+    assert all(_split_from(k, rows0) is not None for k in _rows(ds))
+
+
+def test_split_beyond_the_stated_levels_is_rejected(split_atlas):
+    _, atlas = split_atlas
+    ds = atlas.boxes.copy()
+    ds.attrs["trap_split"] = 0  # the split boxes now lie below the deepest level stated
+    v = sb.verify(ds)
+    assert not v and v.check == "place"
+    ds.attrs["trap_split"] = 9  # more than MAX_TRAP_SPLIT: refused by name
+    with pytest.raises(ValueError, match="trap_split"):
+        sb.verify(ds)
+
+
+def test_tampered_split_region_is_rejected(split_atlas):
+    _, atlas = split_atlas
+    ds = atlas.boxes
+    below = np.flatnonzero((ds["level"].values > atlas.depth) & (ds["reason"].values == "trapping"))
+    r = int(np.flatnonzero(ds["trap_box"].values == below[0])[0])
+    bad = ds.copy(deep=True)
+    cells = bad["trap_cells"].values.copy()
+    off = bad["trap_cell_offsets"].values
+    cells[off[r]:off[r + 1] - 1] = cells[off[r] + 1:off[r + 1]]  # the region loses a cell (its last repeated)
+    bad["trap_cells"] = ("trap_cell", cells)
+    v = sb.verify(bad)
+    assert not v and v.check == "trapping" and v.rejected == 1
+    moved = ds.copy(deep=True)  # the sub-box's region claimed for its sibling
+    tb = moved["trap_box"].values.copy()
+    sib = [k for k in np.flatnonzero(moved["level"].values == moved["level"].values[below[0]])
+           if moved["reason"].values[k] != "trapping"]
+    if sib:
+        st = moved["status"].values.copy()
+        rs = moved["reason"].values.astype(object).copy()
+        st[sib[0]], rs[sib[0]] = 1, "trapping"
+        tb[r] = sib[0]
+        moved["status"] = ("box", st)
+        moved["reason"] = ("box", rs.astype(str))
+        moved["trap_box"] = ("trap", tb)
+        assert not sb.verify(moved)
+
+
+def test_points_of_newly_trapped_boxes_never_slide(split_atlas):
+    """Random float points inside boxes proven only by the split (below the depth)
+    never slide under the float map from (1, 0) within 10^5 steps."""
+    _, atlas = split_atlas
+    ds = atlas.boxes
+    sel = np.flatnonzero((ds["level"].values > atlas.depth) & (ds["reason"].values == "trapping"))
+    rng = np.random.default_rng(11)
+    for b in rng.choice(sel, min(8, sel.size), replace=False):
+        e0, e1, u0, u1 = (float(ds[k].values[b]) for k in ("e0", "e1", "u0", "u1"))
+        for e, u in zip(rng.uniform(e0, e1, 3), rng.uniform(u0, u1, 3)):
+            T, ratio = _constants(e, u)
+            assert _slide_or_steps(1.0, 0.0, e, T, ratio, 100_000)[0] == 0
+
+
+def test_regions_checked_in_one_batch_as_one_by_one(split_atlas):
+    """verify_regions (all regions at once) gives each region the verdict of
+    verify_region; a region damaged in the batch fails there alone."""
+    from stairbounce.structure.verify_trapping import TRAP_CHECKS, verify_regions
+
+    _, atlas = split_atlas
+    ds = atlas.boxes
+    tb = ds["trap_box"].values
+    off = ds["trap_cell_offsets"].values
+    io = ds["offsets"].values
+    cells = ds["trap_cells"].values.copy()
+    cells[off[2]] = cells[off[2] + 1]  # region 2 loses a cell
+    e = [ds[k].values[tb] for k in ("e0", "e1", "u0", "u1")]
+    lengths = io[tb + 1] - io[tb]
+    itin = np.concatenate([ds["itinerary"].values[io[b]:io[b + 1]] for b in tb])
+    got = verify_regions(*e, 1000, itin, np.concatenate([[0], np.cumsum(lengths)]), ds["trap_grid"].values, off,
+                         cells)
+    one = [verify_region(*(x[r] for x in e), 1000, ds["itinerary"].values[io[b]:io[b + 1]], ds["trap_grid"].values[r],
+                         cells[off[r]:off[r + 1]]) for r, b in enumerate(tb)]
+    assert [TRAP_CHECKS[c] for c in got] == one
+    assert one[2] != "ok" and one.count("ok") == len(one) - 1
 
 
 def test_cli_certify_trap_states_the_trapped_share(tmp_path, capsys):
@@ -179,3 +324,13 @@ def test_kernel_enclosures_against_arb(region):
             vn, sn = w_k - (T - t_k), (w_k * w_k + 2).sqrt()
         assert a0 <= vn.lower() and vn.upper() <= a1
         assert b0 <= sn.lower() and sn.upper() <= b1
+
+
+def test_streamed_store_holds_the_split_boxes(tmp_path, split_atlas):
+    from .test_certify_store import assert_same_atlas
+
+    _, atlas = split_atlas
+    assert (atlas.boxes["level"].values > atlas.depth).any()
+    sb.certify_to_zarr(tmp_path / "t.zarr", e=(0.28, 0.32), u=(0.38, 0.42), depth=6, max_iter=1000, trap=True,
+                       tile_level=4, tile_boxes=20)
+    assert_same_atlas(sb.CertifiedAtlas.load(tmp_path / "t.zarr").boxes, atlas.boxes)

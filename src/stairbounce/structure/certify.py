@@ -298,7 +298,12 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
         undecided ``"nonsliding"`` box; a box with one becomes ``no_sliding``
         with reason ``"trapping"`` (proven: the orbit of (1, 0) never slides
         there, so no periodic sliding solution), its region stored in the
-        table (``trap_*`` variables) for ``sb.verify``.
+        table (``trap_*`` variables) for ``sb.verify``.  A box whose region
+        fails is split into its quadtree children, tried in turn, down to
+        ``trapping.SPLIT_LEVELS`` (1) levels below ``depth`` (attribute
+        ``trap_split``); where a piece is proven the box is replaced by the
+        pieces, the unproven ones keeping its label
+        (:func:`stairbounce.structure.trapping.trap_atlas`).
 
     classes : bool, default False
         Class-level proofs (:mod:`stairbounce.structure.classes`): an undecided
@@ -784,11 +789,11 @@ class CertifiedAtlas:
         """The proven areas of the boxes (:class:`tiling.AreaBook`), of the window when
         the boxes tile it (:func:`tiling.tiling`), else of the covered part."""
         if self._areas is None:
-            from .tiling import AreaBook, tiling
+            from .tiling import AreaBook, deepest_level, tiling
 
             ds = self.boxes
             cols = [ds[k].values for k in ("e0", "e1", "u0", "u1")]
-            t = tiling(self.window, self.depth, ds["level"].values, ds["i"].values, ds["j"].values, *cols)
+            t = tiling(self.window, deepest_level(self.depth, ds.attrs), ds["level"].values, ds["i"].values, ds["j"].values, *cols)
             bad = int(np.count_nonzero(~t.placed | t.overlapping))
             if bad:
                 raise ValueError(f"the atlas's boxes are not its window's quadtree ({bad} boxes misplaced or "

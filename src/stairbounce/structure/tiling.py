@@ -142,6 +142,25 @@ def tiling(window, depth, level, i, j, e0, e1, u0, u1):
                   missing=total - covered if covered >= 0 else -1)
 
 
+MAX_TRAP_SPLIT = 4
+"""The most levels below its depth an atlas's trapping pass may split a box into
+(attribute ``trap_split``, ``structure/trapping.py``)."""
+
+
+def deepest_level(depth, attrs):
+    """The deepest level an atlas's boxes may have: ``depth`` plus the levels its
+    trapping pass split boxes below it (``attrs["trap_split"]``, 0 when absent; an
+    int in [0, :data:`MAX_TRAP_SPLIT`], the sum at most 26, else ValueError)."""
+    split = attrs.get("trap_split", 0)
+    if isinstance(split, np.ndarray) and split.size == 1:
+        split = split.item()
+    if not (isinstance(split, (int, np.integer)) and not isinstance(split, bool)
+            and 0 <= split <= MAX_TRAP_SPLIT and int(depth) + int(split) <= _MAX_DEPTH):
+        raise ValueError(f"atlas: the attribute trap_split must be an int in [0, {MAX_TRAP_SPLIT}] with depth + "
+                         f"trap_split <= {_MAX_DEPTH}, got {split!r} (depth {depth})")
+    return int(depth) + int(split)
+
+
 def _sum_bounds(lo, hi):
     """Bounds on the exact sums of the floats ``lo`` (below) and ``hi`` (above)."""
     if not len(lo):

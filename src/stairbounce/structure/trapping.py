@@ -165,17 +165,17 @@ def _cell_range(a, b, lo, hi, n):
 
 
 @njit(cache=True)
-def _entry(E0, E1, U0, U1, max_steps, itin):
+def _entry(E0, E1, U0, U1, max_steps, itin, out):
     """Follow the orbit of ``(0, sqrt 2)`` while every step is decided over the box.
 
     Returns ``(code, n, v0, v1, s0, s1)``: the enclosure of the state before
     the first step with more than one possible impact number (or after
-    ``max_steps``), the ``n`` decided steps written to ``itin``.
+    ``max_steps``), the ``n`` decided steps written to ``itin``; ``out``
+    (``(_CAP + 2, 5)``) is :func:`_branches`'s.
     """
     Tl = _dn(1.0 / U1)
     Th = _up(1.0 / U0)
     Rl = _dn(_dn(1.0 + E0) / _up(1.0 - E0))
-    out = np.empty((_CAP + 2, 5))
     v0 = 0.0
     v1 = 0.0
     s0 = _dn(math.sqrt(2.0))
@@ -205,21 +205,24 @@ def _enqueue(c, flags, queue, tail):
 
 
 @njit(cache=True)
-def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, seed, max_cells, flags):
+def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, seed, flags, queue, miss, out):
     """Grow the region from the cell rectangle ``seed = (i0, i1, j0, j1)``: the
     cells reachable by the branches' image enclosures (breadth first).
 
-    ``flags`` (``nv * ns``, zeroed) marks the region's cells (index ``j * nv +
-    i``).  Returns ``(code, cells)``; ``code`` is ``TRAP_OK`` when the region is
-    closed: every cell's images lie in it and no cell may slide.
+    ``flags`` (at least ``nv * ns``, zeroed) marks the region's cells (index ``j *
+    nv + i``), ``queue`` (its length the most cells allowed) lists them, in the
+    order found, the first ``cells`` of it; ``out`` (``(_CAP + 2, 5)``) is
+    :func:`_branches`'s.  Returns ``(code, cells)``; ``code`` is ``TRAP_OK`` when the region is
+    closed: every cell's images lie in it and no cell may slide.  Where a cell
+    may slide, ``miss[0]`` is the float estimate of its slide margin's largest
+    value over the cell's extent along the margin (``<= 1``: it fails by less
+    than a cell, so finer cells may close the region; numerical, a choice only).
     """
     Tl = _dn(1.0 / U1)
     Th = _up(1.0 / U0)
     Rl = _dn(_dn(1.0 + E0) / _up(1.0 - E0))
     wv = V1 - V0
     ws = S1 - S0
-    out = np.empty((_CAP + 2, 5))
-    queue = np.empty(max_cells, np.int64)
     head = 0
     tail = 0
     for j in range(seed[2], seed[3] + 1):
@@ -239,6 +242,8 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, seed, max_cells, flags):
         s1 = _cell_edge(S0, ws, S1, j + 1, ns)
         m = _branches(v0, v1, s0, s1, E0, E1, Tl, Th, Rl, out)
         if m < 0:
+            if m == -TRAP_SLIDE:  # by how much, in the cell's own extent along the margin
+                miss[0] = (Th - v0 - Rl * s0) / ((v1 - v0) + Rl * (s1 - s0))
             return -m, tail
         for r in range(m):
             i0, i1 = _cell_range(out[r, 0], out[r, 1], V0, V1, nv)
@@ -257,27 +262,45 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, seed, max_cells, flags):
 
 
 @njit(cache=True)
-def _hull(e, u, n0, steps):
-    """Numerical: the rectangle of ``(v, s)`` visited by the float map from (1, 0)
-    between steps ``n0`` and ``n0 + steps`` (``slid``: it slid on the way).  Only
-    chooses where the grid lies; nothing proven rests on it."""
+def _orbit_hull(e, u, y, v, skip, steps, Th, Rl):
+    """Numerical: the rectangle of ``(v, s)`` visited by the float map from ``(y,
+    v)`` after step ``skip`` up to step ``skip + steps`` (``slid``: it slid on
+    the way), and the largest ``Th - v - Rl s`` over those states (the slide
+    margin of a cell holding the state, at the box's worst corner)."""
     T, ratio = _model._constants(e, u)
-    y = 1.0
-    v = 0.0
     h = np.array([np.inf, -np.inf, np.inf, -np.inf])
-    for n in range(n0 + steps):
+    worst = -np.inf
+    for n in range(skip + steps):
         y, v, k = _model._step(y, v, e, T, ratio)
         if k == _model.SLIDING:
-            return h, True
-        if n + 1 >= n0:
+            return h, True, worst
+        if n >= skip:
             s = math.sqrt(v * v + 2.0 * y)
             h[0] = min(h[0], v)
             h[1] = max(h[1], v)
             h[2] = min(h[2], s)
             h[3] = max(h[3], s)
-    return h, False
+            worst = max(worst, Th - v - Rl * s)
+    return h, False, worst
 
 
+@njit(cache=True)
+def _hull(e, u, n0, steps):
+    """Numerical: the rectangle of ``(v, s)`` visited by the float map from (1, 0)
+    between steps ``n0`` and ``n0 + steps`` (``slid``: it slid on the way).  Only
+    chooses where the grid lies; nothing proven rests on it."""
+    skip = max(n0 - 1, 0)
+    h, slid, _ = _orbit_hull(e, u, 1.0, 0.0, skip, n0 + steps - skip, 0.0, 0.0)
+    return h, slid
+
+
+@njit(cache=True)
+def _hull_from(e, u, v, s, steps, Th, Rl):
+    """Numerical: as :func:`_hull`, from the state ``(v, s)`` (``y = (s^2 - v^2)/2``,
+    the middle of the entry's enclosure) for ``steps`` steps, so that the orbit's
+    first ``n`` steps are not iterated again, with :func:`_orbit_hull`'s largest
+    slide margin.  Only chooses where the grid lies and which tries are skipped."""
+    return _orbit_hull(e, u, max(0.5 * (s * s - v * v), 0.0), v, 0, steps, Th, Rl)
 
 
 # grid tries: (cells a side, padding of the float orbits' rectangle, in its extent)
@@ -289,7 +312,8 @@ _HULL_STEPS = 2000
 def _try(e0, e1, u0, u1, max_iter, tries=_TRIES, max_cells=_MAX_CELLS):
     """``(region or None, failure)``: the first try of ``tries`` that closes."""
     itin = np.empty(max(max_iter, 1), np.int64)
-    code, n, v0, v1, s0, s1 = _entry(e0, e1, u0, u1, max_iter, itin)
+    out = np.empty((_CAP + 2, 5))
+    code, n, v0, v1, s0, s1 = _entry(e0, e1, u0, u1, max_iter, itin, out)
     if code != TRAP_OK:
         return None, "entry" if code == TRAP_SLIDE else TRAP_FAILURES[code]
     hull = np.array([v0, v1, s0, s1])
@@ -313,13 +337,127 @@ def _try(e0, e1, u0, u1, max_iter, tries=_TRIES, max_cells=_MAX_CELLS):
             continue
         flags = np.zeros(cells * cells, np.uint8)
         code, m = _close(e0, e1, u0, u1, grid[0], grid[1], cells, grid[3], grid[4], cells,
-                         np.array([i0, i1, j0, j1], np.int64), max_cells, flags)
+                         np.array([i0, i1, j0, j1], np.int64), flags, np.empty(max_cells, np.int64), np.zeros(1),
+                         out)
         if code == TRAP_OK:
             return TrappingRegion(e=(e0, e1), u=(u0, u1), itinerary=tuple(int(k) for k in itin[:n]),
                                   grid=grid, cells=np.flatnonzero(flags).astype(np.int64),
                                   entry=(float(v0), float(v1), float(s0), float(s1))), "ok"
         failure = TRAP_FAILURES[code]
     return None, failure
+
+
+# the atlas's pass (trap_atlas): one float orbit (at the box's centre) places the
+# grid, the same three grid tries; a box that fails is split into its quadtree
+# children, down to SPLIT_LEVELS levels below the atlas's depth
+_FAST_HULL_STEPS = 100
+# (cells a side, padding); when each is tried: 0 always, 1 only where the try before
+# failed by less than a cell, 2 not where it failed by more than a cell, 3 only where an
+# image left the rectangle of an earlier try (numerical choices: which tries are made)
+_FAST_TRIES = _TRIES + ((256, 0.3), (512, 0.3))
+_TRY_CELLS = np.array([c for c, _ in _FAST_TRIES], np.int64)
+_TRY_PAD = np.array([p for _, p in _FAST_TRIES], np.float64)
+_TRY_GATE = np.array([0, 2, 3, 1, 1], np.int64)
+SPLIT_LEVELS = 1
+"""Levels below the atlas's depth that :func:`trap_atlas` splits a box whose
+trapping region failed into (its quadtree children, tried in turn); an atlas
+states its own in the attribute ``trap_split``, and ``sb.verify`` accepts boxes
+down to ``depth + trap_split``."""
+MAX_SPLIT_LEVELS = 4
+"""The most ``trap_split`` an atlas may state (``verify`` refuses more)."""
+
+
+@njit(cache=True)
+def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flags, queue, out, itin, grid,
+              cells_out):
+    """:func:`_try` compiled, the grid placed by one float orbit at the box's
+    centre (``hull_steps`` steps after the entry): ``(code, n, m)``, the failure
+    code (``TRAP_OK`` when a region closed), the entry's length ``n`` (in
+    ``itin``) and the region's ``m`` cells (sorted, in ``cells_out``), its grid
+    in ``grid``; ``flags`` (zeroed, at least the largest grid's cells) and
+    ``queue`` (the most cells allowed) are :func:`_close`'s, left zeroed.  The
+    grid's place is a numerical choice only: the region is proven by
+    :func:`_close` whatever it is."""
+    code, n, v0, v1, s0, s1 = _entry(e0, e1, u0, u1, max_iter, itin, out)
+    if code != TRAP_OK:
+        return (TRAP_ENTRY if code == TRAP_SLIDE else code), 0, 0
+    Th = 1.0 / u0
+    Rl = (1.0 + e0) / (1.0 - e0)
+    h, slid, worst = _hull_from(0.5 * (e0 + e1), 0.5 * (u0 + u1), 0.5 * (v0 + v1), 0.5 * (s0 + s1), hull_steps,
+                                Th, Rl)
+    if slid or worst > 1e-9 * (1.0 + abs(Th)):
+        # the float orbit slides, or passes a state whose cell cannot be proven clear of
+        # the sliding set over the box (its margin at the box's worst corner is positive
+        # by more than rounding): no region can close (numerical; it skips the tries only)
+        return TRAP_SLIDE, 0, 0
+    h0, h1, h2, h3 = min(v0, h[0]), max(v1, h[1]), min(s0, h[2]), max(s1, h[3])
+    dT = _up(1.0 / u0) - _dn(1.0 / u1)
+    failure = TRAP_SLIDE
+    escaped = False
+    miss = np.full(1, np.inf)
+    for t in range(t_cells.size):
+        cells, pad = t_cells[t], t_pad[t]
+        g = t_gate[t]
+        if g == 1 and not (failure == TRAP_SLIDE and miss[0] <= 1.0):
+            continue  # finer cells only where the region failed by less than a cell
+        if g == 2 and failure == TRAP_SLIDE and miss[0] > 1.0:
+            continue  # nor where it missed the sliding set by more than a cell
+        if g == 3 and not escaped:
+            continue  # a wider rectangle only where an image left the one before
+        dv, ds = h1 - h0, h3 - h2
+        g0, g1 = h0 - pad * dv - 2 * dT, h1 + pad * dv + 2 * dT
+        g3, g4 = max(h2 - pad * ds - dT, 1.0), h3 + pad * ds + dT
+        i0, i1 = _cell_range(v0 - 1e-9 * (1 + abs(v0)), v1 + 1e-9 * (1 + abs(v1)), g0, g1, cells)
+        j0, j1 = _cell_range(s0 - 1e-9 * s0, s1 + 1e-9 * s1, g3, g4, cells)
+        if i0 < 0 or j0 < 0:
+            failure = TRAP_ESCAPE
+            escaped = True
+            continue
+        miss[0] = np.inf
+        code, m = _close(e0, e1, u0, u1, g0, g1, cells, g3, g4, cells,
+                         np.array([i0, i1, j0, j1], np.int64), flags, queue, miss, out)
+        for c in range(m):  # flags zeroed again for the next try
+            flags[queue[c]] = 0
+        if code == TRAP_OK:
+            grid[0], grid[1], grid[2], grid[3], grid[4], grid[5] = g0, g1, cells, g3, g4, cells
+            cells_out[:m] = np.sort(queue[:m])
+            return TRAP_OK, n, m
+        failure = code
+        escaped = escaped or code == TRAP_ESCAPE or code == TRAP_CELLS
+    return failure, 0, 0
+
+
+@njit(cache=True)
+def _try_batch(E0, E1, U0, U1, start, max_iter, hull_steps, t_cells, t_pad, t_gate, max_cells,
+               codes, grids, itin_len, itin_buf, cell_len, cell_buf):
+    """:func:`_try_fast` on the boxes ``start, start + 1, ..`` while the buffers
+    have room for one more: the entries one after another in ``itin_buf``, the
+    cells in ``cell_buf`` (their lengths ``itin_len``, ``cell_len``, zero for a
+    failure).  Returns ``(next box, itinerary steps, cells)`` written."""
+    itin = np.empty(max(max_iter, 1), np.int64)
+    found = np.empty(max_cells, np.int64)
+    flags = np.zeros(np.max(t_cells) ** 2, np.uint8)
+    queue = np.empty(max_cells, np.int64)
+    out = np.empty((_CAP + 2, 5))
+    ip = 0
+    cp = 0
+    b = start
+    while b < E0.size and ip + max_iter <= itin_buf.size and cp + max_cells <= cell_buf.size:
+        code, n, m = _try_fast(E0[b], E1[b], U0[b], U1[b], max_iter, hull_steps, t_cells, t_pad, t_gate, flags,
+                               queue, out, itin, grids[b], found)
+        codes[b] = code
+        if code == TRAP_OK:
+            itin_buf[ip:ip + n] = itin[:n]
+            cell_buf[cp:cp + m] = found[:m]
+            ip += n
+            cp += m
+            itin_len[b] = n
+            cell_len[b] = m
+        else:
+            itin_len[b] = 0
+            cell_len[b] = 0
+        b += 1
+    return b, ip, cp
 
 
 def trapping_region(e, u, max_iter=1000):
@@ -354,65 +492,189 @@ def trapping_region(e, u, max_iter=1000):
     return _try(e0, e1, u0, u1, max_iter)[0]
 
 
-def trap_atlas(ds, progress=None):
+def _try_all(e0, e1, u0, u1, max_iter, progress=None, done=0, total=0):
+    """:func:`_try_fast` on every box, in compiled batches (Ctrl-C and ``progress``
+    between them): ``(codes, grids, itinerary lengths, itineraries, cell counts,
+    cells)``, the entries and the cells concatenated box after box."""
+    n = e0.size
+    codes = np.zeros(n, np.int64)
+    grids = np.zeros((n, 6))
+    itin_len = np.zeros(n, np.int64)
+    cell_len = np.zeros(n, np.int64)
+    itin_buf = np.empty(max(max_iter, 1 << 18), np.int64)
+    cell_buf = np.empty(max(_MAX_CELLS, 1 << 20), np.int64)
+    itins, cells = [], []
+    pos = 0
+    while pos < n:
+        hi = min(n, pos + 256)
+        got, ip, cp = _try_batch(e0[pos:hi], e1[pos:hi], u0[pos:hi], u1[pos:hi], 0, max_iter, _FAST_HULL_STEPS,
+                                 _TRY_CELLS, _TRY_PAD, _TRY_GATE, _MAX_CELLS, codes[pos:hi], grids[pos:hi],
+                                 itin_len[pos:hi], itin_buf, cell_len[pos:hi], cell_buf)
+        itins.append(itin_buf[:ip].copy())
+        cells.append(cell_buf[:cp].copy())
+        pos += got
+        check_halt()   # a Ctrl-C of certify's caller (run_interruptible) stops the pass here
+        if progress is not None:
+            progress(done + pos, total)
+    cat = (lambda parts: np.concatenate(parts) if parts else np.zeros(0, np.int64))
+    return codes, grids, itin_len, cat(itins), cell_len, cat(cells)
+
+
+def trap_atlas(ds, progress=None, split=None):
     """The atlas table ``ds`` (``certify``'s Dataset) with its undecided
-    ``"nonsliding"`` boxes tried by :func:`_try`: those with a trapping region
-    become ``no_sliding`` with reason ``"trapping"``, their entry itinerary in
-    ``itinerary``/``offsets`` and the region in ``trap_box`` (the box's row),
-    ``trap_grid`` (``v_lo, v_hi, nv, s_lo, s_hi, ns``), ``trap_cell_offsets``
-    and ``trap_cells``; ``attrs["trap_seconds"]``, ``attrs["trap_tried"]`` and
-    ``attrs["trap_failures"]`` (why the others failed, :data:`TRAP_FAILURES`)."""
+    ``"nonsliding"`` boxes tried for a trapping region (:func:`_try_fast`): a box
+    whose region closes becomes ``no_sliding`` with reason ``"trapping"``; a box
+    whose region fails is split into its four quadtree children, each tried in
+    turn, down to ``split`` levels below the atlas's depth (default
+    :data:`SPLIT_LEVELS`; a box coarser than the depth is split down to it and
+    beyond).  A box some of whose descendants were proven is replaced by the
+    leaves of its split: the proven ones ``no_sliding``, the others keeping the
+    split box's status, reason and step (so ``"nonsliding"`` there was checked
+    at the corners and centre of the box split, not of the leaf); a box none of
+    whose descendants was proven stays one row.  The rows are in the atlas's
+    order (level, then j, then i), each a quadtree box of the window at its
+    level; ``attrs["trap_split"]`` states ``split`` (``sb.verify`` accepts boxes
+    down to ``depth + trap_split``).
+
+    The regions: entry itinerary in ``itinerary``/``offsets``, the region in
+    ``trap_box`` (the box's row), ``trap_grid`` (``v_lo, v_hi, nv, s_lo, s_hi,
+    ns``), ``trap_cell_offsets`` and ``trap_cells``; ``attrs["trap_seconds"]``,
+    ``attrs["trap_tried"]`` (boxes tried, the split's included) and
+    ``attrs["trap_failures"]`` (why the tries failed, :data:`TRAP_FAILURES`)."""
     import time
 
-    from ._kernel import NO_SLIDING, UNDECIDED, _U_MIN
+    import xarray as xr
+
+    from ._kernel import NO_SLIDING, UNDECIDED, _U_MIN, _box_edges
+    from ._store_read import _take_rows
+    from .tiling import MAX_TRAP_SPLIT
 
     t0 = time.perf_counter()
-    st = ds["status"].values.copy()
-    reason = ds["reason"].values.astype(object).copy()
-    cols = [ds[k].values for k in ("e0", "e1", "u0", "u1")]
+    split = SPLIT_LEVELS if split is None else split
+    if not (isinstance(split, (int, np.integer)) and 0 <= split <= MAX_TRAP_SPLIT):
+        raise ValueError(f"split must be an int in [0, {MAX_TRAP_SPLIT}], got {split!r}")
+    depth = int(ds.attrs["depth"])
+    lmax = min(depth + int(split), 26)
+    win = np.array([*ds.attrs["e_range"], *ds.attrs["u_range"]], np.float64)
     max_iter = int(ds.attrs["max_iter"])
-    sel = np.flatnonzero((st == UNDECIDED) & (reason == "nonsliding"))
-    found = {}
-    failures = {}
-    for n, b in enumerate(sel):
-        e0, e1, u0, u1 = (float(c[b]) for c in cols)
-        if e0 > 0.0 and e1 < 1.0 and u0 >= _U_MIN:
-            r, why = _try(e0, e1, u0, u1, max_iter)
-            if r is not None:
-                found[int(b)] = r
-            else:
-                failures[why] = failures.get(why, 0) + 1
-        if (n + 1) % 256 == 0:
-            check_halt()   # a Ctrl-C of certify's caller (run_interruptible) stops the pass here
-            if progress is not None:
-                progress(n + 1, sel.size)
-    off = ds["offsets"].values
-    itin = ds["itinerary"].values
-    pieces = [itin[off[b]:off[b + 1]] if b not in found else np.asarray(found[b].itinerary, np.int64)
-              for b in range(st.size)]
-    lengths = np.array([p.size for p in pieces], np.int64)
-    offsets = np.zeros(st.size + 1, np.int64)
+    st0 = ds["status"].values
+    reason0 = ds["reason"].values
+    e0c, e1c, u0c, u1c = (ds[k].values for k in ("e0", "e1", "u0", "u1"))
+    sel = np.flatnonzero((st0 == UNDECIDED) & (reason0 == "nonsliding"))
+    sel = sel[(e0c[sel] > 0.0) & (e1c[sel] < 1.0) & (u0c[sel] >= _U_MIN)]
+    # the tree of tries, level by level: node -> (level, i, j, parent node, root row)
+    lv = [ds["level"].values[sel].astype(np.int64)]
+    ii = [ds["i"].values[sel].astype(np.int64)]
+    jj = [ds["j"].values[sel].astype(np.int64)]
+    parent = [np.full(sel.size, -1, np.int64)]
+    root = [sel.astype(np.int64)]
+    res = []
+    base = 0
+    done = 0
+    while lv[-1].size:
+        L, I, J = lv[-1], ii[-1], jj[-1]
+        e0, e1, u0, u1 = (np.empty(L.size) for _ in range(4))
+        _box_edges(win, L, I, J, e0, e1, u0, u1)
+        r = _try_all(e0, e1, u0, u1, max_iter, progress, done, done + L.size)
+        done += L.size
+        res.append(r)
+        fail = np.flatnonzero((r[0] != TRAP_OK) & (L < lmax))
+        i2, j2 = 2 * I[fail], 2 * J[fail]
+        lv.append(np.repeat(L[fail] + 1, 4))
+        ii.append(np.stack([i2, i2 + 1, i2, i2 + 1], 1).ravel())
+        jj.append(np.stack([j2, j2, j2 + 1, j2 + 1], 1).ravel())
+        parent.append(np.repeat(base + fail, 4))
+        root.append(np.repeat(root[-1][fail], 4))
+        base += L.size
+    lv, ii, jj, parent, root = (np.concatenate(x) for x in (lv, ii, jj, parent, root))
+    codes = np.concatenate([r[0] for r in res]) if res else np.zeros(0, np.int64)
+    grids = np.concatenate([r[1] for r in res]) if res else np.zeros((0, 6))
+    ilen = np.concatenate([r[2] for r in res]) if res else np.zeros(0, np.int64)
+    entries = np.concatenate([r[3] for r in res]) if res else np.zeros(0, np.int64)
+    clen = np.concatenate([r[4] for r in res]) if res else np.zeros(0, np.int64)
+    cells = np.concatenate([r[5] for r in res]) if res else np.zeros(0, np.int64)
+    proven = codes == TRAP_OK
+    # a node is useful when it or a descendant is proven (children come after parents)
+    useful = proven.copy()
+    for k in np.flatnonzero(useful)[::-1]:
+        p = parent[k]
+        while p >= 0 and not useful[p]:
+            useful[p] = True
+            p = parent[p]
+    is_split = useful & ~proven
+    has_parent = parent >= 0
+    emit = np.zeros(lv.size, bool)
+    emit[has_parent] = is_split[parent[has_parent]] & (proven[has_parent] | ~useful[has_parent])
+    emit[~has_parent] = ~is_split[~has_parent]  # roots not split stay (changed if proven)
+    why, count = np.unique(codes[~proven], return_counts=True)
+    failures = {TRAP_FAILURES[int(c)]: int(n) for c, n in zip(why, count)}
+    # the new table: the rows not split, then the leaves of the splits; each from a source row
+    split_rows = np.zeros(st0.size, bool)
+    split_rows[root[~has_parent & is_split]] = True
+    keep = np.flatnonzero(~split_rows)
+    node_of = np.full(st0.size, -1, np.int64)  # a kept row's node (a root tried)
+    node_of[root[~has_parent]] = np.flatnonzero(~has_parent)
+    leaves = np.flatnonzero(emit & has_parent)
+    # the atlas's order: by level, then j, then i
+    L_out = np.concatenate([ds["level"].values[keep].astype(np.int64), lv[leaves]])
+    I_out = np.concatenate([ds["i"].values[keep].astype(np.int64), ii[leaves]])
+    J_out = np.concatenate([ds["j"].values[keep].astype(np.int64), jj[leaves]])
+    order = np.argsort((L_out << 56) | (J_out << 28) | I_out, kind="stable")
+    src = np.concatenate([keep, root[leaves]])[order]
+    node = np.concatenate([node_of[keep], leaves])[order]  # -1: a row not tried
+    leaf = np.concatenate([np.full(keep.size, -1, np.int64), np.arange(leaves.size)])[order]
+    n_out = src.size
+    box_vars = [k for k in ds.variables if ds[k].dims == ("box",)]
+    cols = {k: ds[k].values[src] for k in box_vars}
+    new = np.flatnonzero(leaf >= 0)
+    pieces = leaves[leaf[new]]
+    for k, vals in (("level", lv[pieces]), ("i", ii[pieces]), ("j", jj[pieces])):
+        cols[k][new] = vals.astype(cols[k].dtype)
+    e0n, e1n, u0n, u1n = (np.empty(pieces.size) for _ in range(4))
+    _box_edges(win, lv[pieces], ii[pieces], jj[pieces], e0n, e1n, u0n, u1n)
+    for k, vals in (("e0", e0n), ("e1", e1n), ("u0", u0n), ("u1", u1n)):
+        cols[k][new] = vals
+
+    def proven_at(nodes):  # whether each row's node (-1: not tried) was proven
+        hit = np.zeros(nodes.size, bool)
+        hit[nodes >= 0] = proven[nodes[nodes >= 0]]
+        return hit
+
+    got = np.flatnonzero(proven_at(node))
+    cols["status"][got] = NO_SLIDING
+    reason = cols["reason"].astype(object, copy=False)
+    reason[got] = "trapping"
+    cols["reason"] = reason.astype(str)
+    cols["step"][got] = 0
+    trapped = np.flatnonzero(proven_at(node))
+    tn = node[trapped]
+    # itineraries: a proven box's entry, else its source row's
+    off0 = ds["offsets"].values
+    itin0 = ds["itinerary"].values
+    ioff = np.zeros(ilen.size + 1, np.int64)
+    np.cumsum(ilen, out=ioff[1:])
+    starts = off0[src].copy()
+    lengths = np.diff(off0)[src]
+    starts[trapped] = itin0.size + ioff[tn]
+    lengths[trapped] = ilen[tn]
+    offsets = np.zeros(n_out + 1, np.int64)
     np.cumsum(lengths, out=offsets[1:])
-    boxes = np.array(sorted(found), np.int64)
-    for b in boxes:
-        st[b] = NO_SLIDING
-        reason[b] = "trapping"
-    step = ds["step"].values.copy()
-    step[boxes] = 0
-    regions = [found[int(b)] for b in boxes]
-    counts = np.array([r.cells.size for r in regions], np.int64)
-    cell_off = np.zeros(boxes.size + 1, np.int64)
-    np.cumsum(counts, out=cell_off[1:])
-    out = ds.drop_vars(["offsets", "itinerary"]).assign(
-        status=("box", st.astype(np.int8)), reason=("box", reason.astype(str)), step=("box", step),
-        offsets=("offset", offsets),
-        itinerary=("itinerary_step", np.concatenate(pieces) if pieces else np.zeros(0, np.int64)),
-        trap_box=("trap", boxes),
-        trap_grid=(("trap", "trap_grid_field"), np.array([r.grid for r in regions], np.float64).reshape(-1, 6)),
-        trap_cell_offsets=("trap_offset", cell_off),
-        trap_cells=("trap_cell", np.concatenate([r.cells for r in regions]) if regions else np.zeros(0, np.int64)),
-    )
-    out.attrs = dict(ds.attrs, trap_tried=int(sel.size), trap_seconds=time.perf_counter() - t0,
+    itinerary = _take_rows(np.concatenate([itin0, entries]).astype(np.int64), starts, lengths)
+    coff = np.zeros(clen.size + 1, np.int64)
+    np.cumsum(clen, out=coff[1:])
+    cell_off = np.zeros(trapped.size + 1, np.int64)
+    np.cumsum(clen[tn], out=cell_off[1:])
+    data = {k: ("box", cols[k]) for k in box_vars}
+    data.update(offsets=("offset", offsets), itinerary=("itinerary_step", itinerary),
+                trap_box=("trap", trapped.astype(np.int64)),
+                trap_grid=(("trap", "trap_grid_field"), grids[tn].reshape(-1, 6)),
+                trap_cell_offsets=("trap_offset", cell_off),
+                trap_cells=("trap_cell", _take_rows(cells, coff[tn], clen[tn]).astype(np.int64)))
+    out = xr.Dataset(data)
+    for k in box_vars:
+        out[k].attrs = ds[k].attrs
+    out.attrs = dict(ds.attrs, trap_split=int(split), trap_tried=int(lv.size),
+                     trap_seconds=time.perf_counter() - t0,
                      trap_failures=", ".join(f"{k} {v}" for k, v in sorted(failures.items())))
     return out
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..symbolic import Word, parse_word, word_from_impacts
 from .certificate import ATLAS_REASONS, STATUSES, Certificate, check_certificate_fields, decode_atlas, read_atlas_file
-from .tiling import AreaBook, tiling
+from .tiling import AreaBook, deepest_level, tiling
 from .verify import _BRANCHES, _COR, _ITIN, _OK, _TRAP, _WORD, _WORD_S, CHECKS, check_work, verify_codes
 from .verify_branches import check_atlas_branches
 from .verify_trapping import check_atlas_regions, verify_certificate_region
@@ -225,7 +225,8 @@ def _check_trap_layout(data):
 
 
 def _window(data):
-    """An atlas's window and depth from its attributes, refused by name."""
+    """An atlas's window and deepest level (its depth, plus the levels its trapping
+    pass split boxes below it: ``trap_split``) from its attributes, refused by name."""
     for key in ("e_range", "u_range", "depth"):
         if key not in data.attrs:
             raise ValueError(f"atlas: the attribute {key} is missing (a certified atlas states its window and depth)")
@@ -243,7 +244,8 @@ def _window(data):
         depth = depth.item()
     if not isinstance(depth, (int, np.integer)):
         raise ValueError(f"atlas: the attribute depth must be an int, got {depth!r}")
-    return tuple(pairs), int(depth)
+    # boxes may lie below the depth where the trapping pass split them (trap_split levels)
+    return tuple(pairs), deepest_level(int(depth), data.attrs)
 
 
 def _numbers(data, arrays, window, complete):

@@ -37,6 +37,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _check_kernel as _ck
+from ._store_read import _take_rows
 from .verify import WorkLimitError, check_work, verify_codes
 
 __all__ = ["TRAP_CHECKS", "verify_region"]
@@ -55,10 +56,11 @@ def _edges(lo, hi, n):
 
 
 def _region_inputs(e0, e1, u0, u1, max_iter, itinerary, grid, cells):
-    """The region's arguments checked and converted: ``(e0, e1, u0, u1,
+    """One region's arguments checked and converted: ``(e0, e1, u0, u1,
     itinerary, nv, ns, cells, ev, es, flags)`` (``ev``, ``es`` the cell edges,
     ``flags`` 1 on the region's cells), or ``None`` when they are not a box and
-    a grid (the check ``"box"``)."""
+    a grid (the check ``"box"``; :func:`verify_regions` makes the same checks on
+    many regions at once)."""
     e0, e1, u0, u1 = (float(x) for x in (e0, e1, u0, u1))
     itinerary = np.asarray(itinerary, dtype=np.int64).ravel()
     v_lo, v_hi, nv, s_lo, s_hi, ns = grid
@@ -75,32 +77,81 @@ def _region_inputs(e0, e1, u0, u1, max_iter, itinerary, grid, cells):
     return e0, e1, u0, u1, itinerary, nv, ns, cells, ev, es, flags
 
 
+def verify_regions(e0, e1, u0, u1, max_iter, itinerary, offsets, grids, cell_off, cells):
+    """verify_regions(e0, e1, u0, u1, max_iter, itinerary, offsets, grids, cell_off, cells) -> int array
+
+    :func:`verify_region` on many regions at once: region ``r`` of the box
+    ``(e0[r], e1[r], u0[r], u1[r])``, entry ``itinerary[offsets[r]:offsets[r +
+    1]]``, grid ``grids[r]`` and cells ``cells[cell_off[r]:cell_off[r + 1]]``.
+    Per region the index into :data:`TRAP_CHECKS` of the first failed check (0:
+    ``"ok"``).  The same checks and floats as one region at a time: the box
+    checks vectorised, the entries re-decided in one ``verify_codes`` call, the
+    cells in one compiled loop over the regions (``_check_kernel.regions``).  The
+    work limit applies to each region (``verify.MAX_WORK``)."""
+    e0, e1, u0, u1 = (np.ascontiguousarray(np.asarray(a, dtype=np.float64).ravel()) for a in (e0, e1, u0, u1))
+    n = e0.size
+    itinerary = np.ascontiguousarray(np.asarray(itinerary, dtype=np.int64).ravel())
+    offsets = np.ascontiguousarray(np.asarray(offsets, dtype=np.int64).ravel())
+    grids = np.ascontiguousarray(np.asarray(grids, dtype=np.float64).reshape(-1, 6))
+    cell_off = np.ascontiguousarray(np.asarray(cell_off, dtype=np.int64).ravel())
+    cells = np.ascontiguousarray(np.asarray(cells, dtype=np.int64).ravel())
+    max_iter = int(max_iter)
+    if not (e1.size == u0.size == u1.size == n and offsets.size == n + 1 and cell_off.size == n + 1
+            and grids.shape[0] == n):
+        raise ValueError("verify_regions: one box, grid, offset and cell offset per region (plus one) expected")
+    if n and not (offsets[0] == 0 and offsets[-1] == itinerary.size and np.all(np.diff(offsets) >= 0)
+                  and cell_off[0] == 0 and cell_off[-1] == cells.size and np.all(np.diff(cell_off) >= 0)):
+        raise ValueError("verify_regions: offsets must start at 0, never decrease and end at the arrays' lengths")
+    out = np.zeros(n, np.int64)
+    if not n:
+        return out
+    # the check "box": a box and a grid (verify_region's _region_inputs, region by region)
+    with np.errstate(invalid="ignore"):
+        g = grids
+        fin = np.isfinite(g).all(axis=1)
+        nv = np.where(fin, g[:, 2], 0).astype(np.int64)
+        ns = np.where(fin, g[:, 5], 0).astype(np.int64)
+        counts = np.diff(cell_off)
+        region_of = np.repeat(np.arange(n), counts)
+        size = nv * ns
+        cell_ok = np.ones(n, bool)
+        np.logical_and.at(cell_ok, region_of, (cells >= 0) & (cells < size[region_of]))
+        good = ((0.0 < e0) & (e0 <= e1) & (e1 < 1.0) & (0.0 < u0) & (u0 <= u1) & (nv >= 1) & (ns >= 1)
+                & (counts > 0) & cell_ok & (np.diff(offsets) <= max_iter) & fin
+                & (g[:, 0] < g[:, 1]) & (0.0 < g[:, 3]) & (g[:, 3] < g[:, 4]))
+    out[~good] = TRAP_CHECKS.index("box")
+    run = np.flatnonzero(good)
+    if not run.size:
+        return out
+    work = 1 + np.diff(offsets)[run] + counts[run] + size[run]
+    r = run[int(np.argmax(work))]
+    check_work(1, offsets[r + 1] - offsets[r], counts[r] + size[r], what="the trapping region")
+    code, _ = verify_codes(e0[run], e1[run], u0[run], u1[run], ["undecided"] * run.size, max_iter,
+                           _take_rows(itinerary, offsets[run], np.diff(offsets)[run]),
+                           np.concatenate([[0], np.cumsum(np.diff(offsets)[run])]))
+    out[run[code != 0]] = TRAP_CHECKS.index("entry")
+    run = run[code == 0]
+    _ck.regions(e0, e1, u0, u1, itinerary, offsets, grids, cell_off, cells, run, _IMPACT_CAP, out)
+    return out
+
+
 def verify_region(e0, e1, u0, u1, max_iter, itinerary, grid, cells):
     """verify_region(e0, e1, u0, u1, max_iter, itinerary, grid, cells) -> str
 
     Re-verify that the cells ``cells`` (indices ``j * nv + i``) of ``grid =
     (v_lo, v_hi, nv, s_lo, s_hi, ns)`` form a trapping region of the box that
     the orbit of (1, 0) enters after ``itinerary``: ``"ok"``, or the name of the
-    first failed check (:data:`TRAP_CHECKS`; the module's docstring).
+    first failed check (:data:`TRAP_CHECKS`; the module's docstring); one region
+    of :func:`verify_regions`.
     """
-    args = _region_inputs(e0, e1, u0, u1, max_iter, itinerary, grid, cells)
-    if args is None:
+    if _region_inputs(e0, e1, u0, u1, max_iter, itinerary, grid, cells) is None:
         return "box"
-    e0, e1, u0, u1, itinerary, nv, ns, cells, ev, es, flags = args
-    code, _ = verify_codes([e0], [e1], [u0], [u1], ["undecided"], max_iter, itinerary, [0, len(itinerary)])
-    if code[0] != 0:
-        return "entry"
-    # a 2-D prefix sum of the flagged cells: P[j, i] counts those below row j, left of column i
-    P = np.zeros((ns + 1, nv + 1), np.int64)
-    P[1:, 1:] = np.cumsum(np.cumsum(flags.reshape(ns, nv), axis=0), axis=1)
-    a0, a1, b0, b1 = _ck.entered(e0, e1, u0, u1, itinerary)
-    if not _ck.covered(P, ev, es, a0, a1, b0, b1):
-        return "entered"
-    i, j = cells % nv, cells // nv
-    # per cell the corners (v0, s0, e0, u0) and (v1, s1, e1, u1), per impact
-    # number k the branch's image (structure/_check_kernel.py, region_check)
-    what = _ck.region_check(e0, e1, u0, u1, ev[i], ev[i + 1], es[j], es[j + 1], P, ev, es, _IMPACT_CAP)
-    return ("ok", "slide", "invariant")[what]
+    itinerary = np.asarray(itinerary, dtype=np.int64).ravel()
+    cells = np.asarray(cells, dtype=np.int64).ravel()
+    grid = np.array([float(x) for x in grid], dtype=np.float64)
+    code = verify_regions([e0], [e1], [u0], [u1], max_iter, itinerary, [0, itinerary.size], grid[None, :],
+                          [0, cells.size], cells)
+    return TRAP_CHECKS[int(code[0])]
 
 
 def verify_certificate_region(cert, verdict):
@@ -132,17 +183,23 @@ def check_atlas_regions(data, arrays, code, trap_code):
     trapped = np.flatnonzero(nos & (np.asarray(data["reason"].values).astype(str) == "trapping"))
     if not trapped.size:
         return
-    have = {}
-    if "trap_box" in data.variables:
-        boxes = np.asarray(data["trap_box"].values, dtype=np.int64)
-        grid = np.asarray(data["trap_grid"].values, dtype=np.float64)
-        off = np.asarray(data["trap_cell_offsets"].values, dtype=np.int64)
-        cells = np.asarray(data["trap_cells"].values, dtype=np.int64)
-        have = {int(b): (grid[r], cells[off[r]:off[r + 1]]) for r, b in enumerate(boxes)}
     itin, ioff = np.asarray(arrays["itinerary"], dtype=np.int64), np.asarray(arrays["offsets"], dtype=np.int64)
-    for b in trapped:
-        ev = have.get(int(b))
-        ok = ev is not None and verify_region(
-            arrays["e0"][b], arrays["e1"][b], arrays["u0"][b], arrays["u1"][b], arrays["max_iter"],
-            itin[ioff[b]:ioff[b + 1]], ev[0], ev[1]) == "ok"
-        code[b] = 0 if ok else trap_code
+    # the trapped boxes that have a region, each checked with its own (one batch)
+    rows = {int(b): r for r, b in enumerate(np.asarray(data["trap_box"].values, dtype=np.int64))} \
+        if "trap_box" in data.variables else {}
+    code[trapped] = trap_code
+    mine = np.array([rows.get(int(b), -1) for b in trapped], np.int64)
+    sel = trapped[mine >= 0]
+    if not sel.size:
+        return
+    r = mine[mine >= 0]
+    grid = np.asarray(data["trap_grid"].values, dtype=np.float64).reshape(-1, 6)[r]
+    off = np.asarray(data["trap_cell_offsets"].values, dtype=np.int64)
+    cells = np.asarray(data["trap_cells"].values, dtype=np.int64)
+    counts = off[r + 1] - off[r]
+    lengths = ioff[sel + 1] - ioff[sel]
+    e = [np.asarray(arrays[k], dtype=np.float64)[sel] for k in ("e0", "e1", "u0", "u1")]
+    got = verify_regions(*e, arrays["max_iter"], _take_rows(itin, ioff[sel], lengths),
+                         np.concatenate([[0], np.cumsum(lengths)]), grid, np.concatenate([[0], np.cumsum(counts)]),
+                         _take_rows(cells, off[r], counts))
+    code[sel[got == 0]] = 0
