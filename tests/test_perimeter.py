@@ -111,9 +111,17 @@ def test_a_zero_lower_count_leaves_the_slope_open_and_says_so():
     assert "no upper bound" not in text
     # an upper count 0: no cell can meet the border there, the slope is undefined
     assert "undefined" in CERTIFY.slope_text(float("nan"), float("nan"), 0, 1, np.array([0, 0]), np.array([0, 3]))
-    # the finite range: the widest scales whose lower counts are > 0
-    assert CERTIFY._finite_scales(lower, 1, 4) == (1, 3)
-    assert CERTIFY._finite_scales(lower, 2, 4) is None
+    # the finite bracket: of the pairs of scales whose lower counts are > 0, the narrowest
+    assert CERTIFY._finite_scales(lower, upper, 1, 4) == (1, 3)
+    assert CERTIFY._finite_scales(lower, upper, 2, 4) is None
+    lower, upper = np.array([10, 20, 60, 1]), np.array([30, 90, 300, 1000])
+    # (0, 3) spans the most scales, but its lower count 1 at k = 3 makes it wide: (0, 2) is
+    # [0.5, 2.454] against [-1.636, 2.215]
+    widths = {}
+    for a, b in ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)):
+        lo, hi = CERTIFY._slope_bounds(lower[[a, b]].astype(float), upper[[a, b]].astype(float), b - a)
+        widths[a, b] = hi[1] - lo[1]
+    assert CERTIFY._finite_scales(lower, upper, 0, 3) == min(widths, key=widths.get) == (0, 2)
 
 
 def test_slope_verdict_can_fail_and_says_when_it_cannot_decide():

@@ -539,7 +539,7 @@ def _print_proven_counts(ew, uw, depth, max_iter, dimension):
     for k, lo, up in zip(r["k"], r["lower"], r["upper"]):
         typer.echo(f"  k = {k:2d}  window/{1 << k:<7d} lower {lo:>9,}  upper {up:>9,}")
     typer.echo(f"  slope {r['slope_text']}")
-    typer.echo(f"  over the scales with lower counts > 0: {r['finite_text']}")
+    typer.echo(f"  narrowest between two scales with lower counts > 0: {r['finite_text']}")
     verdict, why = slope_verdict(dimension, r["finite"])
     typer.echo(f"  beside the numerical D = {dimension:.4f}: {verdict} ({why})")
     typer.echo(f"  {r['basis']}: {r['proof']}")

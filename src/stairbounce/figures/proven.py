@@ -159,8 +159,8 @@ def _border_bracket_row(s, name, certified, est):
     """The proven box counts of the sliding region's border (the paper's perimeter:
     ``CertifiedAtlas.perimeter_bracket``) and the slope bracket between the scales
     k = 3 .. depth, beside the numerical dimension ``est`` of this picture: it
-    differs when the numerical D lies outside the bracket over the scales where
-    both of its ends are finite (a zero lower count leaves an end open), and is
+    differs when the numerical D lies outside the narrowest bracket between two
+    scales where both of its ends are finite (a zero lower count leaves an end open), and is
     not comparable when there is no such bracket or when it holds all of [1, 2]
     (too wide to decide)."""
     from ..structure.certify import slope_verdict
@@ -176,8 +176,8 @@ def _border_bracket_row(s, name, certified, est):
                f"{depth}, {classes}max_iter {atlas.max_iter})",
                f"D = {DIMENSION_WINDOWS[name][1]} (numerical, box counting on pictures)",
                f"{_window_text(*atlas.window)}: closed cells of side window/2^k meeting the border of the region "
-               f"sliding within max_iter, proven lower..upper counts, {table}; slope {r['slope_text']}; over the "
-               f"scales with lower counts > 0: {r['finite_text']}; this picture's fit: D = {est.dimension:.3f} "
+               f"sliding within max_iter, proven lower..upper counts, {table}; slope {r['slope_text']}; narrowest "
+               f"between two scales with lower counts > 0: {r['finite_text']}; this picture's fit: D = {est.dimension:.3f} "
                f"(numerical); not proven: {r['not_proven']}",
                verdict=verdict, why=why, basis=basis,
                proof=proof + " (the counts bound N(s); the slope brackets are rounded outward)")

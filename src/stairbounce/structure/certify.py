@@ -748,12 +748,21 @@ def _slope_bounds(lower, upper, dk):
     return np.concatenate([[np.nan], lo]), np.concatenate([[np.nan], hi])
 
 
-def _finite_scales(lower, k1, k2):
-    """``(a, b)``: the widest ``k1 <= a < b <= k2`` whose lower counts are both > 0, so
-    that both bounds of the slope between them are finite; None when fewer than two
+def _finite_scales(lower, upper, k1, k2):
+    """``(a, b)``: of the scales ``k1 <= a < b <= k2`` whose lower counts are both > 0
+    (so that both ends of the slope bracket between them are finite), the pair with the
+    narrowest bracket (ties: the wider range of scales); None when fewer than two
     scales of ``k1 .. k2`` have a lower count > 0."""
     ks = [k for k in range(k1, k2 + 1) if lower[k] > 0]
-    return (ks[0], ks[-1]) if len(ks) >= 2 else None
+    best, key = None, None
+    for i, a in enumerate(ks):
+        for b in ks[i + 1:]:
+            lo, hi = _slope_bounds(np.array([lower[a], lower[b]], float), np.array([upper[a], upper[b]], float),
+                                   b - a)
+            k = (hi[1] - lo[1], a - b)
+            if key is None or k < key:
+                best, key = (a, b), k
+    return best
 
 
 def slope_text(lo, hi, k1, k2, lower, upper):
@@ -1075,9 +1084,9 @@ class CertifiedAtlas:
         Keys: ``k1``, ``k2``, ``k`` (the scales), ``lower``, ``upper`` (lists of
         ints); ``slope`` ``(lo, hi)`` between ``k1`` and ``k2`` (``inf``/``-inf``
         where a zero lower count leaves an end open) and ``slope_text``;
-        ``finite``: ``(a, b, lo, hi)`` over the widest scales ``k1 <= a < b <= k2``
-        whose lower counts are both > 0 (both ends finite), or None, and
-        ``finite_text``; ``depth``, ``max_iter``; ``verified`` (True when the
+        ``finite``: ``(a, b, lo, hi)``, the narrowest bracket between two scales
+        ``k1 <= a < b <= k2`` whose lower counts are both > 0 (both ends finite), or
+        None, and ``finite_text``; ``depth``, ``max_iter``; ``verified`` (True when the
         independent checker ``sb.verify`` passed every box and the boxes cover
         the window, False when it rejected some, None with ``verify=False``);
         ``basis`` ``"proven"`` only when verified, else ``"numerical"``, with
@@ -1090,7 +1099,7 @@ class CertifiedAtlas:
         df = self.border_box_counts("sliding")
         lower, upper = df["lower"].to_numpy(), df["upper"].to_numpy()
         lo, hi = self._slope_between(df, k1, k2)
-        span = _finite_scales(lower, k1, k2)
+        span = _finite_scales(lower, upper, k1, k2)
         if span is None:
             finite, finite_text = None, (f"no two scales of k = {k1} .. {k2} have a lower count > 0: every "
                                          "slope bracket there has an open end")
