@@ -84,3 +84,19 @@ def test_a_saved_atlas_with_class_proofs_verifies(atlas, tmp_path, ext):
     assert v.ok, v
     back = sb.CertifiedAtlas.load(path).boxes
     assert (back["status"].values == SLIDING).sum() == (atlas.boxes["status"].values == SLIDING).sum()
+
+
+def test_the_branch_checker_keeps_word_texts_as_python_strings():
+    # a fixed-width copy of the words takes the longest one's width for every row: at depth
+    # 12 of Fig. 7 a 34,733-character word list made it 191 GiB and the checker failed
+    import xarray as xr
+
+    from stairbounce.structure.verify_branches import _texts
+
+    long = " | ".join(["(1, 1, 2, 0^inf)"] * 3000)
+    for values in (np.array([long, "(2, 0^inf)"], dtype=object), np.array([long, "(2, 0^inf)"])):
+        got = _texts(xr.Dataset({"word": ("box", values)}), "word")
+        assert got.dtype == object and got[0] == long and got[1] == "(2, 0^inf)"
+    coded = xr.Dataset({"word_code": ("box", np.array([1, 0, 1]))}, attrs={"word_names": ["", long]})
+    got = _texts(coded, "word")
+    assert got.dtype == object and list(got) == [long, "", long]

@@ -267,3 +267,57 @@ def test_a_small_store_says_which_range_it_fits(small_store, capsys):
     code, out, err = run(["--store", str(small_store)], capsys)
     assert code == 0, err
     assert "too small for a fit clear of the pixel scale" in out
+
+
+# --------------------------------------------------------------------------- #
+# issue 44 item 4: proven box counts of the perimeter beside the numerical D   #
+# --------------------------------------------------------------------------- #
+
+
+def test_the_proven_box_counts_are_printed_with_their_basis(capsys):
+    import stairbounce as sb
+
+    code, out, err = run([*FIG7, "--lines", "8", "--max-iter", "200", "--proven-depth", "8"], capsys)
+    assert code == 0, err
+    head = "proven box counts of the sliding border (basis: proven, certify depth 8, max_iter 200)"
+    assert head in out and out.index("D = ") < out.index(head)
+    r = sb.certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=8, max_iter=200, classes=True).perimeter_bracket()
+    for k, lo, up in zip(r["k"], r["lower"], r["upper"]):
+        assert re.search(rf"k = +{k}  window/{1 << k} +lower +{lo:,}  upper +{up:,}\n", out), (k, out)
+    assert f"slope {r['slope_text']}" in out and r["finite_text"] in out
+    assert "re-verified by the independent checker sb.verify" in out
+    assert "not proven: the border of the region sliding at all (the limit max_iter -> infinity)" in out
+    # beside the numerical D: the verdict of slope_verdict, said
+    d = number(r"\nD = ([\d.]+)", out)
+    assert re.search(r"beside the numerical D = [\d.]+: (agrees|differs|not comparable) \(", out)
+    from stairbounce.structure.certify import slope_verdict
+    assert f": {slope_verdict(d, r['finite'])[0]} (" in out
+
+
+def test_proven_depth_0_leaves_the_counts_out_and_wrong_uses_are_one_line(capsys, tmp_path):
+    code, out, err = run([*FIG7, "--lines", "8", "--max-iter", "200", "--proven-depth", "0"], capsys)
+    assert code == 0 and "proven box counts" not in out
+    path = tmp_path / "disk.png"
+    write_picture(path, disk(64))
+    # a picture: no default counts, and the option refused by name
+    code, out, err = run(["--image", str(path)], capsys)
+    assert code == 0 and "proven box counts" not in out
+    for argv, message in ((["--image", str(path), "--proven-depth", "6"], "not with --image or --store"),
+                          ([*FIG7, "--which", "words", "--proven-depth", "6"], "not with --which words"),
+                          ([*FIG7, "--proven-depth", "-1"], "--proven-depth must be an integer in [0, 16]"),
+                          ([*FIG7, "--proven-depth", "17"], "--proven-depth must be an integer in [0, 16]")):
+        code, out, err = run(argv, capsys)
+        assert code == 2 and message in err and len(err.strip().splitlines()) == 1, (argv, err)
+
+
+def test_the_counts_are_numerical_when_the_checker_rejects(capsys, monkeypatch):
+    import sys as _sys
+
+    from stairbounce.structure.verdict import Verdict
+
+    monkeypatch.setattr(_sys.modules["stairbounce.structure.verdict"], "verify",
+                        lambda obj: Verdict(False, "word", None, "tampered", checked=9, rejected=1, atlas=True))
+    code, out, err = run([*FIG7, "--lines", "8", "--max-iter", "200", "--proven-depth", "5"], capsys)
+    assert code == 0, err
+    assert "proven box counts of the sliding border (basis: numerical, certify depth 5" in out
+    assert "NOT proven: sb.verify did not pass the atlas (tampered)" in out

@@ -53,7 +53,8 @@ UsageError = importlib.import_module(_Context.__module__.rsplit(".", 1)[0] + ".e
 # capped at this value; ADDED gives the options added where a command's default
 # is large (per command, and per --method for `dimension`).
 TINY = {"--size": 48, "--resolution": 64, "--max-iter": 200, "--points": 2000, "--lines": 8,
-        "--n": 40, "--transient": 100, "--keep": 50, "--steps": 200, "--tile": 16, "--scale": 0.05}
+        "--n": 40, "--transient": 100, "--keep": 50, "--steps": 200, "--tile": 16, "--scale": 0.05,
+        "--proven-depth": 6}
 # options left out of a run (each still parsed): the trajectory's GIF takes tens of
 # seconds whatever the sizes (tests/test_cli_model.py writes one)
 LEFT_OUT = {"--animate": "the GIF animation"}

@@ -280,6 +280,7 @@ def dimension(
     fit_range: str = typer.Option(None, "--fit-range", help="Boxes: box sides to fit, MIN:MAX pixels (default: largest linear region, a heuristic; with --store 16 px to 1/32 of the picture). The paper's numbers: 1:64 at 500 px. Uncertainty: eps to fit, MIN:MAX (default: all with >= 25 uncertain points)."),
     offsets: int = typer.Option(1, "--offsets", help="Boxes: grid shifts per axis, counts averaged over them (>= 1)."),
     connectivity: int = typer.Option(4, "--connectivity", help="Boxes: neighbours that define the border: 4 or 8."),
+    proven_depth: int = typer.Option(None, "--proven-depth", help="A window of the model with --which sliding: also print proven box counts of the sliding region's border (the paper's perimeter), lower/upper per scale window/2^k and the slope bracket, from a certified atlas of this depth at --max-iter (class-level proofs, every box re-verified by sb.verify), beside the numerical D. 0: off. Default 8: about 9 s more on the Fig. 7 window on 2 cores (18 s in all); 9: about 14-25 s more; each level about 3x more."),
     png: Path = typer.Option(None, "--png", help="Draw the result (border and log-log plot, or f(eps) and local dimensions) to this file (.png, .pdf, .svg)."),
     dpi: int = typer.Option(120, "--dpi", help="Resolution of raster output (10-1200)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
@@ -301,6 +302,7 @@ def dimension(
         raise CLIError("--image and --store: give one of them")
     if scheduler is not None and store is None:
         raise CLIError("--scheduler counts the tiles of a --store: give --store too")
+    proven_depth = _check_proven_depth(proven_depth, image is not None or store is not None, which)
     if method is None:
         # the options of one method select it; none: slicing (issue 37; before, the uncertainty exponent)
         if image is not None or store is not None or resolution is not None:
@@ -369,6 +371,7 @@ def dimension(
             f"uncertainty exponent of {points} random points (seed {seed}, random directions)"
         )
         _print_result(result, ew, uw, at_defaults, check_max_iter, which)
+        _print_proven_counts(ew, uw, proven_depth, max_iter, result.dimension)
         typer.echo(f"r = {result.r:.5f}; fit: eps {result.fit_range[0]:.3g}..{result.fit_range[1]:.3g} of the "
                    f"window, {result.fit.n} values, alpha = {result.alpha:.4f}, D = 2 - alpha (stderr "
                    f"binomial {result.stderr_binomial:.4f}, scatter about the line {result.stderr_fit:.4f})")
@@ -411,6 +414,7 @@ def dimension(
             f"slicing, {lines} random lines (seed {seed}), {result.evaluations} points classified"
         )
         _print_result(result, ew, uw, at_defaults, check_max_iter, which)
+        _print_proven_counts(ew, uw, proven_depth, max_iter, result.dimension)
         # the same seed: the same lines
         compare = _measure_again(result, run, max_iter) if check_max_iter else ()
         if png is not None:
@@ -480,6 +484,8 @@ def dimension(
     typer.echo(f"fit: boxes of {result.fit_range[0]}..{result.fit_range[1]} px, {result.fit.n} sizes{auto}")
     typer.echo("sizes:  " + " ".join(f"{int(s)}" for s in result.sizes))
     typer.echo("counts: " + " ".join(f"{c:g}" for c in np.asarray(result.counts, dtype=float)))
+    if image is None and store is None:
+        _print_proven_counts(ew, uw, proven_depth, max_iter, result.dimension)
 
     if check_max_iter:
         # the same picture at 4 x max_iter; box counts have no per-size band,
@@ -490,6 +496,55 @@ def dimension(
 
         _draw(png, dpi, force, lambda: plot_box_dimension(
             result, image=plot_image, title=str(image) if image is not None else None))
+
+
+PROVEN_DEPTH = 8
+"""``stairbounce dimension --proven-depth``'s default: the certified atlas of the
+proven box counts (about 9 s more on the Fig. 7 window on 2 cores, 18 s in all with the
+default slicing; benchmarks/README.md)."""
+
+
+def _check_proven_depth(depth, picture, which):
+    """The depth of the proven box counts (0: none): the default for a window of
+    the model and the sliding border, refused by name where it cannot apply."""
+    if depth is None:
+        return 0 if picture or which != "sliding" else PROVEN_DEPTH
+    if depth < 0 or depth > 16:
+        raise CLIError(f"--proven-depth must be an integer in [0, 16] (0: off), got {depth}")
+    if depth and picture:
+        raise CLIError("--proven-depth certifies a window of the model: not with --image or --store")
+    if depth and which != "sliding":
+        raise CLIError("--proven-depth counts the border of the sliding region: not with --which words")
+    return depth
+
+
+def _print_proven_counts(ew, uw, depth, max_iter, dimension):
+    """Proven lower/upper box counts of the sliding region's border (the paper's
+    perimeter) and the slope bracket, from a certified atlas of ``depth`` whose
+    boxes the independent checker re-verifies (its basis says whether it did),
+    beside the numerical ``dimension``."""
+    if not depth:
+        return
+    import stairbounce as sb
+    from ..structure.certify import slope_verdict
+
+    try:
+        atlas = _with_bar(f"certifying (depth {depth})", lambda progress: sb.certify(
+            e=ew, u=uw, depth=depth, max_iter=max_iter, classes=True, progress=progress))
+        r = atlas.perimeter_bracket(0 if depth == 1 else None)
+    except ValueError as exc:
+        raise CLIError(f"--proven-depth: {exc}") from None
+    typer.echo(f"proven box counts of the sliding border (basis: {r['basis']}, certify depth {depth}, "
+               f"max_iter {max_iter}): closed cells of side window/2^k meeting the border of the region "
+               "sliding within max_iter")
+    for k, lo, up in zip(r["k"], r["lower"], r["upper"]):
+        typer.echo(f"  k = {k:2d}  window/{1 << k:<7d} lower {lo:>9,}  upper {up:>9,}")
+    typer.echo(f"  slope {r['slope_text']}")
+    typer.echo(f"  narrowest between two scales with lower counts > 0: {r['finite_text']}")
+    verdict, why = slope_verdict(dimension, r["finite"])
+    typer.echo(f"  beside the numerical D = {dimension:.4f}: {verdict} ({why})")
+    typer.echo(f"  {r['basis']}: {r['proof']}")
+    typer.echo(f"  not proven: {r['not_proven']}")
 
 
 def _plot_uncertainty(result, ew, uw, compare=()):

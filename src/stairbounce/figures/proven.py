@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from ..structure.certificate import STATUSES
 from .rows import Row
 from .settings import DIMENSION_WINDOWS
 
@@ -40,16 +41,18 @@ def _proof(n_certs, rejected, first):
     return ("proven", f"interval arithmetic; {n_certs} certificates re-verified by sb.verify", None)
 
 
-def _certified_atlas(s, name, e, u):
+def _certified_atlas(s, name, e, u, classes=False):
     """The certified atlas of a window at :func:`_certify_depth` and the
     checker's verdict on it: ``(atlas, depth, n_proven, basis, proof, override)``.
     A window from e = 0 is certified as it is: its boxes touching e = 0 are
-    undecided ("range"), outside the checker's domain 0 < e of a proven box."""
+    undecided ("range"), outside the checker's domain 0 < e of a proven box.
+    ``classes``: with class-level proofs (``certify(classes=True)``), for the
+    proven box counts of the sliding region's border."""
     import stairbounce as sb
 
     depth = _certify_depth(s)
-    s.note(f"{name}: certified atlas, depth {depth}")
-    atlas = sb.certify(e=e, u=u, depth=depth, max_iter=s.max_iter)
+    s.note(f"{name}: certified atlas, depth {depth}" + (", class-level proofs" if classes else ""))
+    atlas = sb.certify(e=e, u=u, depth=depth, max_iter=s.max_iter, classes=classes)
     n_proven = int((atlas.boxes["status"].values != _undecided_code()).sum())
     v = sb.verify(atlas)
     rejected = 0 if v.ok else max(v.rejected, 1)
@@ -85,7 +88,9 @@ def _pixels_in_proven_boxes(atlas, ds):
     fj = np.floor((U - u_lo) / (u_hi - u_lo) * n).astype(np.int64)
     inside = (fi >= 0) & (fi < n) & (fj >= 0) & (fj < n)
     st = b["status"].values
-    keep = st != _undecided_code()
+    # one word, or proven not to slide (a "sliding" box of the class-level proofs has
+    # several possible words: its pixels are not checked against one)
+    keep = (st != _undecided_code()) & (st != STATUSES.index("sliding"))
     level, ii, jj = (b[k].values.astype(np.int64)[keep] for k in ("level", "i", "j"))
     words, st = b["word"].values[keep], st[keep]
     # the proven word's period and jump count per box (-1: proven not sliding)
@@ -142,45 +147,37 @@ def _proven_area_row(s, name, e, u, ds, certified):
                f"{_window_text(*atlas.window)}, boxes down to 1/{1 << depth} of the window: at least "
                f"{floor:.1f}% of the window proven to slide, with at least {len(words)} distinct words "
                f"(by period: {', '.join(f'{p}: {c}' for p, c in by_period.items())}); "
+               + (f"{100 * f['sliding']:.1f}% proven to slide with one of several words (class-level proofs); "
+                  if f["sliding"] > 0 else "") +
                f"{100 * (f['no_sliding'] + f['no_slide_within']):.1f}% proven not to slide; undecided "
                f"{100 * f['undecided']:.1f}% ({und}); the {ds.sizes['e']} x {ds.sizes['u']} pixel scan: "
                f"{100 * pixel_share:.1f}% sliding (numerical)",
                verdict=verdict, why=why, basis=basis, proof=proof + " (areas rounded down)")
 
 
-def _slope_scales(depth):
-    """The scales k1 < k2 of the proven slope bracket: k = 3 .. depth - 2 (the
-    lower bound is 0 at the last two levels by construction), at small depths
-    the two coarsest informative levels."""
-    k2 = max(2, depth - 2)
-    return min(3, k2 - 1), k2
-
-
 def _border_bracket_row(s, name, certified, est):
-    """The proven bracket on the border's box counts N(s) and on the
-    box-counting slope between two scales, beside the numerical dimension
-    ``est`` of this picture: does it lie inside the bracket?"""
+    """The proven box counts of the sliding region's border (the paper's perimeter:
+    ``CertifiedAtlas.perimeter_bracket``) and the slope bracket between the scales
+    k = 3 .. depth, beside the numerical dimension ``est`` of this picture: it
+    differs when the numerical D lies outside the narrowest bracket between two
+    scales where both of its ends are finite (a zero lower count leaves an end open), and is
+    not comparable when there is no such bracket or when it holds all of [1, 2]
+    (too wide to decide)."""
+    from ..structure.certify import slope_verdict
+
     atlas, depth, n_proven, basis, proof, override = certified
-    counts = atlas.border_box_counts()
-    k1, k2 = _slope_scales(depth)
-    low, up = counts["lower"].to_numpy(float), counts["upper"].to_numpy(float)
-    with np.errstate(divide="ignore"):  # as CertifiedAtlas.slope_bracket, on these counts
-        lo = float(np.log2(low[k2] / up[k1]) / (k2 - k1))
-        hi = float(np.log2(up[k2] / low[k1]) / (k2 - k1))
-    lo_r, hi_r = math.floor(lo * 1000) / 1000, math.ceil(hi * 1000) / 1000  # outward
-    inside = lo_r <= est.dimension <= hi_r
-    verdict, why = ("agrees" if inside else "differs",
-                    f"the numerical D = {est.dimension:.3f} is {'inside' if inside else 'outside'} the "
-                    f"proven bracket [{lo_r:.3f}, {hi_r:.3f}]")
+    r = atlas.perimeter_bracket(verify=False)  # the checker's verdict is the certified one's
+    verdict, why = slope_verdict(est.dimension, r["finite"])
     if override:
         verdict, why = override
-    table = "; ".join(f"k = {int(r.k)}: {int(r.lower)}..{int(r.upper)}" for r in counts.itertuples()
-                      if k1 <= r.k <= k2)
-    return Row(f"proven bracket on the border's box counts and slope (certified atlas, depth {depth})",
+    table = "; ".join(f"k = {k}: {lo}..{up}" for k, lo, up in zip(r["k"], r["lower"], r["upper"]))
+    classes = "class-level proofs, " if (atlas.boxes["status"].values == STATUSES.index("sliding")).any() else ""
+    return Row(f"proven box counts of the sliding region's border and their slope (certified atlas, depth "
+               f"{depth}, {classes}max_iter {atlas.max_iter})",
                f"D = {DIMENSION_WINDOWS[name][1]} (numerical, box counting on pictures)",
-               f"{_window_text(*atlas.window)}: s-boxes of side window/2^k meeting the border of the "
-               f"sliding region, proven lower..upper bounds, {table}; box-counting slope between k = "
-               f"{k1} and {k2} proven in [{lo_r:.3f}, {hi_r:.3f}] (wide: the dimension stays numerical); "
-               f"this picture's fit: D = {est.dimension:.3f} (numerical)",
+               f"{_window_text(*atlas.window)}: closed cells of side window/2^k meeting the border of the region "
+               f"sliding within max_iter, proven lower..upper counts, {table}; slope {r['slope_text']}; narrowest "
+               f"between two scales with lower counts > 0: {r['finite_text']}; this picture's fit: D = {est.dimension:.3f} "
+               f"(numerical); not proven: {r['not_proven']}",
                verdict=verdict, why=why, basis=basis,
-               proof=proof + " (the counts bound N(s); the slope bracket is rounded outward)")
+               proof=proof + " (the counts bound N(s); the slope brackets are rounded outward)")

@@ -732,6 +732,11 @@ def _border_classes(st, words, border):
     return cls
 
 
+NOT_PROVEN = ("the border of the region sliding at all (the limit max_iter -> infinity), nor the dimension "
+              "(the limit of small scales: a slope between finite scales is not the dimension)")
+"""What the proven box counts of the perimeter (:meth:`CertifiedAtlas.perimeter_bracket`) do not prove."""
+
+
 def _slope_bounds(lower, upper, dk):
     """Brackets on the slopes ``log2(N_k / N_{k-1}) / dk`` between consecutive rows
     of proven counts ``lower <= N <= upper`` (nan first), rounded outward
@@ -746,6 +751,62 @@ def _slope_bounds(lower, upper, dk):
     if dk & (dk - 1):
         lo, hi = np.nextafter(lo, -np.inf), np.nextafter(hi, np.inf)
     return np.concatenate([[np.nan], lo]), np.concatenate([[np.nan], hi])
+
+
+def _finite_scales(lower, upper, k1, k2):
+    """``(a, b)``: of the scales ``k1 <= a < b <= k2`` whose lower counts are both > 0
+    (so that both ends of the slope bracket between them are finite), the pair with the
+    narrowest bracket (ties: the wider range of scales); None when fewer than two
+    scales of ``k1 .. k2`` have a lower count > 0."""
+    ks = [k for k in range(k1, k2 + 1) if lower[k] > 0]
+    best, key = None, None
+    for i, a in enumerate(ks):
+        for b in ks[i + 1:]:
+            lo, hi = _slope_bounds(np.array([lower[a], lower[b]], float), np.array([upper[a], upper[b]], float),
+                                   b - a)
+            k = (hi[1] - lo[1], a - b)
+            if key is None or k < key:
+                best, key = (a, b), k
+    return best
+
+
+def slope_text(lo, hi, k1, k2, lower, upper):
+    """The proven bracket ``(lo, hi)`` on the box-counting slope between the scales
+    ``k1 < k2`` as text, its ends rounded outward to 3 decimals; an end that a zero
+    count leaves open is said so (``lower``, ``upper``: the counts, indexed by k): a
+    zero lower count at ``k1`` gives no upper bound, one at ``k2`` no lower bound, and
+    an upper count 0 at ``k1`` means no cell there can meet the border."""
+    if upper[k1] == 0:
+        return (f"undefined between k = {k1} and {k2}: the upper count at k = {k1} is 0 (no cell there "
+                "can meet the border)")
+    a = f"{math.floor(lo * 1000) / 1000:.3f}" if math.isfinite(lo) else "-inf"
+    b = f"{math.ceil(hi * 1000) / 1000:.3f}" if math.isfinite(hi) else "+inf"
+    open_ = [f"no upper bound: the lower count at k = {k1} is 0"] if not math.isfinite(hi) else []
+    open_ += [f"no lower bound: the lower count at k = {k2} is 0"] if not math.isfinite(lo) else []
+    text = f"in [{a}, {b}] between k = {k1} and {k2}"
+    return text + (f" ({'; '.join(open_)})" if open_ else "")
+
+
+def slope_verdict(dimension, finite):
+    """``(verdict, why)``: does a numerical dimension lie inside the proven slope
+    bracket ``finite = (a, b, lo, hi)`` (:meth:`CertifiedAtlas.perimeter_bracket`'s
+    ``finite``: the scales where both ends are finite), its ends rounded outward to 3
+    decimals?  "differs" when outside, "not comparable" when there is no finite
+    bracket or when it holds all of [1, 2] (too wide to decide: every dimension a
+    border in the plane can have), "agrees" when inside a narrower one.  A slope
+    between finite scales is not the dimension: the verdict compares the two."""
+    if finite is None:
+        return "not comparable", ("no finite proven bracket: fewer than two scales have a lower count > 0, "
+                                  "and a zero lower count leaves the slope unbounded")
+    a, b, lo, hi = finite
+    lo_r, hi_r = math.floor(lo * 1000) / 1000, math.ceil(hi * 1000) / 1000
+    where = f"the proven bracket [{lo_r:.3f}, {hi_r:.3f}] of the slope between k = {a} and {b}"
+    if not lo_r <= dimension <= hi_r:
+        return "differs", f"the numerical D = {dimension:.3f} is outside {where}"
+    if lo_r <= 1.0 and hi_r >= 2.0:
+        return "not comparable", (f"bracket too wide to decide: {where} holds every dimension 1 .. 2 a border "
+                                  f"in the plane can have (the numerical D = {dimension:.3f} is inside it)")
+    return "agrees", f"the numerical D = {dimension:.3f} is inside {where}"
 
 
 class CertifiedAtlas:
@@ -907,21 +968,21 @@ class CertifiedAtlas:
             s, rs, sp, it, dec, marg = _run_box(e0, e1, u0, u1, self.max_iter, form, itin)
             yield _certificate(e0, e1, u0, u1, self.max_iter, s, rs, sp, it, dec, marg)
 
-    def border_box_counts(self, border="words"):
-        """border_box_counts(border="words") -> pandas.DataFrame: for each scale
-        s = window/2^k (k = 0 .. depth) proven bounds on N(s), the number of s-boxes
-        of the window's grid that meet a border between classes of boxes.
+    def border_box_counts(self, border="sliding"):
+        """border_box_counts(border="sliding") -> pandas.DataFrame: for each scale
+        s = window/2^k (k = 0 .. depth) proven bounds on N(s), the number of closed
+        s-boxes of the window's grid that meet a border between classes of boxes.
 
-        ``border="sliding"`` (the paper's perimeter, Figs. 6 and 7; not yet the
-        default, the report's row reads the default and cannot take a zero lower
-        count, which this border has wherever the non-sliding side is unproven): two classes,
-        the points whose orbit of (1, 0) slides within ``max_iter`` steps (boxes
-        ``word`` and ``sliding``) and those where it does not (``no_sliding``,
-        ``no_slide_within``): the border of the region sliding within
-        ``max_iter``.  ``border="words"``: each word its own class (``sliding``
-        boxes, with several possible words, count as undecided there),
-        ``no_sliding`` and ``no_slide_within`` together "not sliding": the union
-        of all borders.
+        ``border="sliding"`` (the default since issue 44; the paper's perimeter,
+        Figs. 6 and 7): two classes, the points whose orbit of (1, 0) slides
+        within ``max_iter`` steps (boxes ``word``, and ``sliding`` of the
+        class-level proofs, ``certify(classes=True)``) and those where it does not
+        (``no_sliding``, ``no_slide_within``); ``undecided`` boxes (the numerical
+        ``nonsliding`` ones too) are neither: the border of the region sliding
+        within ``max_iter``.  ``border="words"`` (the default before): each word
+        its own class (``sliding`` boxes, with several possible words, count as
+        undecided there), ``no_sliding`` and ``no_slide_within`` together "not
+        sliding": the union of all borders.
 
         ``lower``: s-boxes holding proven boxes of two classes (a segment
         between them, inside the s-box, crosses the border).  ``upper``:
@@ -929,12 +990,24 @@ class CertifiedAtlas:
         (two proven boxes of different classes never touch, so every border
         point lies in an undecided box).  ``slope_lo, slope_hi``: the bracket
         on the finite-scale box-counting slope ``log2(N(s_k)/N(s_{k-1}))``
-        between this scale and the one before.
+        between this scale and the one before: ``inf`` where the lower count
+        of the scale before is 0 (no upper bound), ``-inf`` where this one's is
+        (no lower bound); :func:`slope_text` says so in words.
+
+        The counts are integers computed from the boxes; they are proven when the
+        boxes are (:meth:`perimeter_bracket` runs the independent checker
+        ``sb.verify`` and says whether it passed).  An atlas whose boxes are not
+        its window's quadtree, or do not cover the window (an uncovered part may
+        hold the border, so no upper count would hold), is refused (ValueError).
 
         What it does not prove: the border of the region sliding *at all* (the
         limit ``max_iter -> infinity``), nor the dimension (the limit of small
         scales): the bounds hold at the scales listed.
         """
+        book = self._book()  # refuses boxes that are not the window's quadtree, before the work
+        if not book.complete:
+            raise ValueError("border_box_counts: the boxes do not cover the window (sb.verify says how much is "
+                             "uncovered): an uncovered part may hold the border, so no upper count is proven")
         import pandas as pd
 
         ds = self.boxes
@@ -986,39 +1059,78 @@ class CertifiedAtlas:
                          "lower": int(two.size), "upper": int(upper)})
         df = pd.DataFrame(rows)
         df["slope_lo"], df["slope_hi"] = _slope_bounds(df["lower"].to_numpy(float), df["upper"].to_numpy(float), 1)
-        df.attrs["of"] = self._book().of
+        df.attrs["of"] = book.of
+        df.attrs["border"] = border
         return df
 
-    def slope_bracket(self, k1, k2, border="words"):
-        """slope_bracket(k1, k2, border="words") -> (lo, hi): proven bracket on the
+    def slope_bracket(self, k1, k2, border="sliding"):
+        """slope_bracket(k1, k2, border="sliding") -> (lo, hi): proven bracket on the
         box-counting slope ``log2(N(s_k2)/N(s_k1)) / (k2 - k1)`` between two scales
-        of the border :meth:`border_box_counts` counts."""
-        df = self.border_box_counts(border)
+        of the border :meth:`border_box_counts` counts; ``hi`` is ``inf`` when the
+        lower count at ``k1`` is 0 (no upper bound), ``lo`` is ``-inf`` when the one
+        at ``k2`` is (no lower bound)."""
         k1 = check_count("k1", k1, 0, self.depth)
         k2 = check_count("k2", k2, k1 + 1, self.depth)
+        df = self.border_box_counts(border)
+        return self._slope_between(df, k1, k2)
+
+    @staticmethod
+    def _slope_between(df, k1, k2):
         L, U = df["lower"].to_numpy(float), df["upper"].to_numpy(float)
         lo, hi = _slope_bounds(L[[k1, k2]], U[[k1, k2]], k2 - k1)
         return float(lo[1]), float(hi[1])
 
-    def perimeter_bracket(self, k1, k2):
-        """perimeter_bracket(k1, k2) -> dict: what a report row "proven" on the paper's
-        perimeter states: the counts of :meth:`border_box_counts` with
-        ``border="sliding"`` at the scales ``k1 .. k2`` (``lower``, ``upper``
-        lists), the slope bracket between them (``slope``, ``(lo, hi)``; ``-inf``
-        when a lower count is 0), ``basis`` ``"proven"`` with ``proof`` (by what)
-        and ``not_proven`` (what it does not prove)."""
-        k1 = check_count("k1", k1, 0, self.depth)
-        k2 = check_count("k2", k2, k1 + 1, self.depth)
+    def perimeter_bracket(self, k1=None, k2=None, *, verify=True):
+        """perimeter_bracket(k1=None, k2=None, *, verify=True) -> dict: the proven
+        box counts of the paper's perimeter (:meth:`border_box_counts` with
+        ``border="sliding"``) at the scales ``k1 .. k2`` (default ``min(3, depth - 1)
+        .. depth``) and the slope brackets, with their basis.
+
+        Keys: ``k1``, ``k2``, ``k`` (the scales), ``lower``, ``upper`` (lists of
+        ints); ``slope`` ``(lo, hi)`` between ``k1`` and ``k2`` (``inf``/``-inf``
+        where a zero lower count leaves an end open) and ``slope_text``;
+        ``finite``: ``(a, b, lo, hi)``, the narrowest bracket between two scales
+        ``k1 <= a < b <= k2`` whose lower counts are both > 0 (both ends finite), or
+        None, and ``finite_text``; ``depth``, ``max_iter``; ``verified`` (True when the
+        independent checker ``sb.verify`` passed every box and the boxes cover
+        the window, False when it rejected some, None with ``verify=False``);
+        ``basis`` ``"proven"`` only when verified, else ``"numerical"``, with
+        ``proof`` (by what, or why not) and ``not_proven`` (what it does not prove).
+        """
+        if verify not in (True, False):
+            raise ValueError(f"verify must be True or False, got {verify!r}")
+        k1 = check_count("k1", min(3, self.depth - 1) if k1 is None else k1, 0, self.depth)
+        k2 = check_count("k2", self.depth if k2 is None else k2, k1 + 1, self.depth)
         df = self.border_box_counts("sliding")
-        sel = (df["k"] >= k1) & (df["k"] <= k2)
-        return {"k1": k1, "k2": k2, "lower": [int(x) for x in df["lower"][sel]],
-                "upper": [int(x) for x in df["upper"][sel]], "slope": self.slope_bracket(k1, k2, "sliding"),
-                "basis": "proven",
-                "proof": (f"certified boxes (interval arithmetic, depth {self.depth}, max_iter {self.max_iter}); "
-                          "the counts bound the number of window/2^k cells meeting the border of the region "
-                          "sliding within max_iter"),
-                "not_proven": ("the border of the region sliding at all (the limit max_iter -> infinity), and "
-                               "the dimension (the limit of small scales)")}
+        lower, upper = df["lower"].to_numpy(), df["upper"].to_numpy()
+        lo, hi = self._slope_between(df, k1, k2)
+        span = _finite_scales(lower, upper, k1, k2)
+        if span is None:
+            finite, finite_text = None, (f"no two scales of k = {k1} .. {k2} have a lower count > 0: every "
+                                         "slope bracket there has an open end")
+        else:
+            a, b = span
+            flo, fhi = self._slope_between(df, a, b)
+            finite, finite_text = (a, b, flo, fhi), slope_text(flo, fhi, a, b, lower, upper)
+        what = f"certified boxes (interval arithmetic, certify depth {self.depth}, max_iter {self.max_iter})"
+        if not verify:
+            verified, basis = None, "numerical"
+            proof = what + ", NOT re-verified (verify=False): the certifier's claim, not yet the checker's"
+        else:
+            from .verdict import verify as check
+
+            v = check(self)
+            verified = bool(v.ok and v.atlas and v.complete)
+            basis = "proven" if verified else "numerical"
+            proof = (what + f"; all {v.checked} boxes re-verified by the independent checker sb.verify"
+                     if verified else f"NOT proven: sb.verify did not pass the atlas ({v.message})")
+        proof += ("; the counts bound the number of closed window/2^k cells meeting the border of the region "
+                  "sliding within max_iter")
+        return {"k1": k1, "k2": k2, "k": list(range(k1, k2 + 1)),
+                "lower": [int(x) for x in lower[k1:k2 + 1]], "upper": [int(x) for x in upper[k1:k2 + 1]],
+                "slope": (lo, hi), "slope_text": slope_text(lo, hi, k1, k2, lower, upper),
+                "finite": finite, "finite_text": finite_text, "depth": self.depth, "max_iter": self.max_iter,
+                "verified": verified, "basis": basis, "proof": proof, "not_proven": NOT_PROVEN}
 
     # -- files -------------------------------------------------------------
 
