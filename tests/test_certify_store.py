@@ -174,6 +174,35 @@ def test_dask_workers_write_the_same_tiles(tmp_path):
     assert_same_atlas(sb.CertifiedAtlas.load(tmp_path / "a.zarr").boxes, reference(**FIG7, depth=6))
 
 
+@pytest.mark.slow
+def test_a_killed_dask_worker_s_tiles_are_computed_again(tmp_path):
+    """Issue 44 item 2: a worker process killed (SIGKILL) while tiles are in flight; Dask
+    reschedules its tasks on the worker left and the store ends equal to sb.certify's
+    atlas, box for box (long orbits, max_iter 20000, so that tiles are still running)."""
+    import os
+    import signal
+
+    distributed = pytest.importorskip("distributed")
+    kw = dict(FIG7, depth=8, tile_level=5, tile_boxes=6, max_iter=20_000)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                      dashboard_address=None) as cluster, distributed.Client(cluster) as c:
+            pids = list(c.run(os.getpid).values())
+            killed, totals = [], []
+
+            def progress(done, total):
+                totals.append(total)
+                if done >= 2 and not killed:  # tile 0 is computed here; one task has ended
+                    os.kill(pids[0], signal.SIGKILL)
+                    killed.append(done)
+
+            sb.certify_to_zarr(tmp_path / "a.zarr", client=c, progress=progress, **kw)
+            assert killed and killed[0] < totals[-1] - 2  # the kill came with tiles still to do
+            assert pids[0] not in c.run(os.getpid).values()
+    assert_same_atlas(sb.CertifiedAtlas.load(tmp_path / "a.zarr").boxes, reference(**FIG7, depth=8, max_iter=20_000))
+
+
 def test_cli_store_resume_verify_and_errors(tmp_path, capsys):
     store = str(tmp_path / "s.zarr")
     args = ["certify", "--depth", "5", "--top", "2"]
