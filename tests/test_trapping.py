@@ -243,6 +243,29 @@ def test_regions_checked_in_one_batch_as_one_by_one(split_atlas):
     assert one[2] != "ok" and one.count("ok") == len(one) - 1
 
 
+def test_the_pass_in_threads_is_the_pass_in_one_bit_for_bit(split_atlas, monkeypatch):
+    """The trapping pass's batches run in threads (_try_all, threads=2) and give the
+    same codes, grids, entries and cells as in one thread, bit for bit; batches of 7
+    boxes so that many run at once, and some boxes fail, some are proven."""
+    import importlib
+
+    T = importlib.import_module("stairbounce.structure.trapping")
+    plain, _ = split_atlas
+    ds = plain.boxes
+    e0, e1, u0, u1 = (ds[k].values for k in ("e0", "e1", "u0", "u1"))
+    monkeypatch.setattr(T, "_BATCH", 7)
+    seen = []
+    one = T._try_all(e0, e1, u0, u1, 1000, threads=1)
+    two = T._try_all(e0, e1, u0, u1, 1000, lambda d, t: seen.append(d), 0, e0.size, threads=2)
+    assert e0.size > 4 * 7
+    for a, b in zip(one, two):
+        assert a.dtype == b.dtype and a.shape == b.shape
+        assert np.array_equal(a.view(np.uint8), b.view(np.uint8))
+    codes = one[0]
+    assert (codes == T.TRAP_OK).any() and (codes != T.TRAP_OK).any()
+    assert seen == sorted(seen) and seen[-1] == e0.size
+
+
 def test_cli_certify_trap_states_the_trapped_share(tmp_path, capsys):
     from stairbounce.cli import main
 

@@ -427,7 +427,7 @@ def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flag
     return failure, 0, 0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _try_batch(E0, E1, U0, U1, start, max_iter, hull_steps, t_cells, t_pad, t_gate, max_cells,
                codes, grids, itin_len, itin_buf, cell_len, cell_buf):
     """:func:`_try_fast` on the boxes ``start, start + 1, ..`` while the buffers
@@ -492,30 +492,79 @@ def trapping_region(e, u, max_iter=1000):
     return _try(e0, e1, u0, u1, max_iter)[0]
 
 
-def _try_all(e0, e1, u0, u1, max_iter, progress=None, done=0, total=0):
-    """:func:`_try_fast` on every box, in compiled batches (Ctrl-C and ``progress``
-    between them): ``(codes, grids, itinerary lengths, itineraries, cell counts,
-    cells)``, the entries and the cells concatenated box after box."""
+# boxes a compiled call tries between two checks of Ctrl-C and progress (and a thread's task)
+_BATCH = 256
+
+
+def _try_all(e0, e1, u0, u1, max_iter, progress=None, done=0, total=0, threads=None):
+    """:func:`_try_fast` on every box, in compiled batches of ``_BATCH`` boxes (Ctrl-C and
+    ``progress`` between them): ``(codes, grids, itinerary lengths, itineraries, cell
+    counts, cells)``, the entries and the cells concatenated box after box.
+
+    ``threads`` (default: numba's thread count, so ``numba_threads`` of
+    ``certify_to_zarr`` holds here too) runs the batches in that many threads (the
+    kernel releases the GIL). Each box's try depends on that box alone and each
+    batch writes only its own rows, and the parts are joined in box order, so the
+    result is the same, bit for bit, for any number of threads (a test compares 1
+    and 2)."""
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    import numba
+
     n = e0.size
+    threads = numba.get_num_threads() if threads is None else int(threads)
     codes = np.zeros(n, np.int64)
     grids = np.zeros((n, 6))
     itin_len = np.zeros(n, np.int64)
     cell_len = np.zeros(n, np.int64)
-    itin_buf = np.empty(max(max_iter, 1 << 18), np.int64)
-    cell_buf = np.empty(max(_MAX_CELLS, 1 << 20), np.int64)
+    local = threading.local()
+
+    def run(lo, hi):
+        """The boxes lo .. hi - 1: (entries, cells) in box order, through this
+        thread's buffers (a call stops early when they are full; the next goes on)."""
+        if not hasattr(local, "itin"):
+            local.itin = np.empty(max(max_iter, 1 << 18), np.int64)
+            local.cell = np.empty(max(_MAX_CELLS, 1 << 20), np.int64)
+        itins, cells = [], []
+        pos = lo
+        while pos < hi:
+            got, ip, cp = _try_batch(e0[pos:hi], e1[pos:hi], u0[pos:hi], u1[pos:hi], 0, max_iter, _FAST_HULL_STEPS,
+                                     _TRY_CELLS, _TRY_PAD, _TRY_GATE, _MAX_CELLS, codes[pos:hi], grids[pos:hi],
+                                     itin_len[pos:hi], local.itin, cell_len[pos:hi], local.cell)
+            itins.append(local.itin[:ip].copy())
+            cells.append(local.cell[:cp].copy())
+            pos += got
+        return itins, cells
+
+    bounds = [(lo, min(n, lo + _BATCH)) for lo in range(0, n, _BATCH)]
     itins, cells = [], []
-    pos = 0
-    while pos < n:
-        hi = min(n, pos + 256)
-        got, ip, cp = _try_batch(e0[pos:hi], e1[pos:hi], u0[pos:hi], u1[pos:hi], 0, max_iter, _FAST_HULL_STEPS,
-                                 _TRY_CELLS, _TRY_PAD, _TRY_GATE, _MAX_CELLS, codes[pos:hi], grids[pos:hi],
-                                 itin_len[pos:hi], itin_buf, cell_len[pos:hi], cell_buf)
-        itins.append(itin_buf[:ip].copy())
-        cells.append(cell_buf[:cp].copy())
-        pos += got
+
+    def take(parts, hi):
+        itins.extend(parts[0])
+        cells.extend(parts[1])
         check_halt()   # a Ctrl-C of certify's caller (run_interruptible) stops the pass here
         if progress is not None:
-            progress(done + pos, total)
+            progress(done + hi, total)
+
+    if threads <= 1 or len(bounds) <= 1:
+        for lo, hi in bounds:
+            take(run(lo, hi), hi)
+    else:
+        with ThreadPoolExecutor(threads) as pool:
+            ahead = []   # at most 2 x threads batches in flight, taken in box order
+            try:
+                for lo, hi in bounds:
+                    ahead.append((pool.submit(run, lo, hi), hi))
+                    if len(ahead) >= 2 * threads:
+                        f, h = ahead.pop(0)
+                        take(f.result(), h)
+                while ahead:
+                    f, h = ahead.pop(0)
+                    take(f.result(), h)
+            finally:
+                for f, _ in ahead:
+                    f.cancel()
     cat = (lambda parts: np.concatenate(parts) if parts else np.zeros(0, np.int64))
     return codes, grids, itin_len, cat(itins), cell_len, cat(cells)
 
