@@ -182,6 +182,14 @@ def _tile_sizes(path, k):
                          "run certify_to_zarr with the same arguments to compute it again") from None
 
 
+def row_key(level, i, j):
+    """The atlas's order of rows as one int64 key a box: by level, then j, then i
+    (``i, j < 2^27`` at depth <= 26); ``certify``'s table, the trapping pass's, a
+    store's merge and the store's verification sort by it."""
+    return ((np.asarray(level).astype(np.int64) << 56) | (np.asarray(j).astype(np.int64) << 28)
+            | np.asarray(i).astype(np.int64))
+
+
 def merge_tiles(tiles, n_boxes, n_steps, first=0):
     """The atlas table of tiles ``(arrays, attrs)`` (:func:`read_tile`, an iterable, taken
     one at a time) holding ``n_boxes`` boxes and ``n_steps`` itinerary steps in all: each
@@ -234,10 +242,7 @@ def merge_tiles(tiles, n_boxes, n_steps, first=0):
     old_off = np.zeros(lengths.size + 1, np.int64)
     np.cumsum(lengths, out=old_off[1:])
     # the atlas's order: by level, then j, then i (certify._box_table's key)
-    level, ii, jj = cols["level"], cols["i"], cols["j"]
-    order = np.argsort((level.astype(np.int64) << 56) | (jj.astype(np.int64) << 28) | ii.astype(np.int64),
-                       kind="stable")
-    del level, ii, jj
+    order = np.argsort(row_key(cols["level"], cols["i"], cols["j"]), kind="stable")
     for name in list(cols):  # one column at a time
         cols[name] = cols[name][order]
     new_len = lengths[order]

@@ -502,9 +502,10 @@ def _box_table(parts):
     :func:`_atlas_dataset`."""
     cols = [np.concatenate([p[k] for p in parts]) for k in range(8)]
     level, ii, jj = cols[:3]
-    # by level, then j, then i (np.lexsort((ii, jj, level))'s order) by one int64 key:
-    # i, j < 2^27 at depth <= 26
-    order = np.argsort((level.astype(np.int64) << 56) | (jj << 28) | ii)
+    # by level, then j, then i (np.lexsort((ii, jj, level))'s order) by one int64 key
+    from ._store_read import row_key
+
+    order = np.argsort(row_key(level, ii, jj))
     # the kept rows follow their proven boxes (kept for the proven boxes only, in box order)
     st = cols[3]
     keep = ((st == K.WORD) | (st == K.NO_SLIDE_WITHIN)) & (cols[6] <= _KEPT)
@@ -854,7 +855,8 @@ class CertifiedAtlas:
 
             ds = self.boxes
             cols = [ds[k].values for k in ("e0", "e1", "u0", "u1")]
-            t = tiling(self.window, deepest_level(self.depth, ds.attrs), ds["level"].values, ds["i"].values, ds["j"].values, *cols)
+            t = tiling(self.window, deepest_level(self.depth, ds.attrs), ds["level"].values, ds["i"].values,
+                       ds["j"].values, *cols)
             bad = int(np.count_nonzero(~t.placed | t.overlapping))
             if bad:
                 raise ValueError(f"the atlas's boxes are not its window's quadtree ({bad} boxes misplaced or "

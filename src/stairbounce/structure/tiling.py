@@ -244,18 +244,27 @@ class AreaBook:
         ``max_iter``)."""
         is_word = status == _WORD_S
         sums = self.groups(words, is_word)
-        nos = self.area(status == _NOSLIDING_S)[0]
-        within = self.area(status == _WITHIN_S)[0]
-        all_words = self.area(is_word)[0]
-        out = {}
-        for w in (sums if only is None else [only]):
-            lo, hi = sums.get(w, (0.0, 0.0))
-            # the other words' boxes: at least all the words' less an upper bound on this one's
-            other = _down(max(float(_down(all_words - hi)), 0.0) + nos)
-            if period(w) <= max_iter:
-                other = _down(other + within)
-            out[w] = (lo, float(_up(self.covered[1] - other)))
-        return out
+        if only is not None:
+            sums = {only: sums.get(only, (0.0, 0.0))}
+        return word_area_bounds(sums, self.area(is_word)[0], self.area(status == _NOSLIDING_S)[0],
+                                self.area(status == _WITHIN_S)[0], self.covered[1], max_iter, period)
+
+
+def word_area_bounds(bounds, all_words, nos, within, covered_hi, max_iter, period):
+    """``{word: (lower, upper)}`` from each word's ``(lower, upper)`` on the area of its
+    proven boxes (``bounds``): lower, that of its boxes; upper, ``covered_hi`` less
+    every box proven to be something else: the other words' (at least the lower bound
+    ``all_words`` on all the words' boxes less this word's upper bound), ``no_sliding``'s
+    (``nos``, a lower bound) and ``no_slide_within``'s (``within``) when the word's
+    ``period(word)`` is at most ``max_iter``; rounded outward.  :meth:`AreaBook.word_bounds`
+    and a streamed store's verdict (its exact sums) give it their bounds."""
+    out = {}
+    for w, (lo, hi) in bounds.items():
+        other = _down(max(float(_down(all_words - hi)), 0.0) + nos)
+        if period(w) <= max_iter:
+            other = _down(other + within)
+        out[w] = (lo, float(_up(covered_hi - other)))
+    return out
 
 
 def log2_ratio_bounds(num, den):

@@ -363,8 +363,6 @@ SPLIT_LEVELS = 1
 trapping region failed into (its quadtree children, tried in turn); an atlas
 states its own in the attribute ``trap_split``, and ``sb.verify`` accepts boxes
 down to ``depth + trap_split``."""
-MAX_SPLIT_LEVELS = 4
-"""The most ``trap_split`` an atlas may state (``verify`` refuses more)."""
 
 
 @njit(cache=True)
@@ -595,7 +593,7 @@ def trap_atlas(ds, progress=None, split=None):
     import xarray as xr
 
     from ._kernel import NO_SLIDING, UNDECIDED, _U_MIN, _box_edges
-    from ._store_read import _take_rows
+    from ._store_read import _take_rows, row_key
     from .tiling import MAX_TRAP_SPLIT
 
     t0 = time.perf_counter()
@@ -668,7 +666,7 @@ def trap_atlas(ds, progress=None, split=None):
     L_out = np.concatenate([ds["level"].values[keep].astype(np.int64), lv[leaves]])
     I_out = np.concatenate([ds["i"].values[keep].astype(np.int64), ii[leaves]])
     J_out = np.concatenate([ds["j"].values[keep].astype(np.int64), jj[leaves]])
-    order = np.argsort((L_out << 56) | (J_out << 28) | I_out, kind="stable")
+    order = np.argsort(row_key(L_out, I_out, J_out), kind="stable")
     src = np.concatenate([keep, root[leaves]])[order]
     node = np.concatenate([node_of[keep], leaves])[order]  # -1: a row not tried
     leaf = np.concatenate([np.full(keep.size, -1, np.int64), np.arange(leaves.size)])[order]
@@ -689,13 +687,12 @@ def trap_atlas(ds, progress=None, split=None):
         hit[nodes >= 0] = proven[nodes[nodes >= 0]]
         return hit
 
-    got = np.flatnonzero(proven_at(node))
-    cols["status"][got] = NO_SLIDING
-    reason = cols["reason"].astype(object, copy=False)
-    reason[got] = "trapping"
-    cols["reason"] = reason.astype(str)
-    cols["step"][got] = 0
     trapped = np.flatnonzero(proven_at(node))
+    cols["status"][trapped] = NO_SLIDING
+    reason = cols["reason"].astype(object, copy=False)
+    reason[trapped] = "trapping"
+    cols["reason"] = reason.astype(str)
+    cols["step"][trapped] = 0
     tn = node[trapped]
     # itineraries: a proven box's entry, else its source row's
     off0 = ds["offsets"].values

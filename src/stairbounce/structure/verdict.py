@@ -17,8 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from ..symbolic import Word, parse_word, word_from_impacts
+from ._store_read import row_key
 from .certificate import ATLAS_REASONS, STATUSES, Certificate, check_certificate_fields, decode_atlas, read_atlas_file
-from .tiling import AreaBook, deepest_level, tiling
+from .tiling import AreaBook, deepest_level, tiling, word_area_bounds
 from .verify import _BRANCHES, _COR, _ITIN, _OK, _TRAP, _WORD, _WORD_S, CHECKS, check_work, verify_codes
 from .verify_branches import check_atlas_branches
 from .verify_trapping import check_atlas_regions, verify_certificate_region
@@ -467,23 +468,15 @@ def _tile_areas(areas, arrays, status):
 
 def _numbers_of_sums(areas, window, complete):
     """:func:`_numbers` from the exact sums of the tiles (the same floats, bit for bit)."""
-    from .tiling import AreaBook
-
     empty = np.zeros(0)
     book = AreaBook(empty, empty, empty, empty, window, complete)
     if not complete:
         book.covered = areas.bounds(("all", 0))
-    down = lambda x: float(np.nextafter(x, -np.inf))  # noqa: E731
-    nos = areas.bounds(("status", STATUSES.index("no_sliding")))[0]
-    within = areas.bounds(("status", STATUSES.index("no_slide_within")))[0]
-    all_words = areas.bounds(("status", _WORD_S))[0]
-    words = {}
-    for w in areas.names("word"):  # AreaBook.word_bounds
-        lo, hi = areas.bounds(("word", w))
-        other = down(max(down(all_words - hi), 0.0) + nos)
-        if parse_word(w).period <= areas.max_iter:
-            other = down(other + within)
-        words[w] = (lo, float(np.nextafter(book.covered[1] - other, np.inf)))
+    words = word_area_bounds({w: areas.bounds(("word", w)) for w in areas.names("word")},
+                             areas.bounds(("status", _WORD_S))[0],
+                             areas.bounds(("status", STATUSES.index("no_sliding")))[0],
+                             areas.bounds(("status", STATUSES.index("no_slide_within")))[0],
+                             book.covered[1], areas.max_iter, lambda w: parse_word(w).period)
     return _numbers_dict(book, complete,
                          {name: book._ratio(*areas.bounds(("status", k))) for k, name in enumerate(STATUSES)},
                          {r: book._ratio(*areas.bounds(("reason", r))) for r in areas.names("reason")}, words)
@@ -512,12 +505,6 @@ def _cells(start, end, shift):
     new = np.r_[True, lo[1:] > hi[:-1]]  # an interval starts where it does not touch the ones before
     first = np.flatnonzero(new)
     return lo[first], np.maximum.reduceat(hi, first)
-
-
-def _keys(level, i, j):
-    """The atlas's order of rows (``_store_read.merge_tiles``'s key)."""
-    return ((np.asarray(level).astype(np.int64) << 56) | (np.asarray(j).astype(np.int64) << 28)
-            | np.asarray(i).astype(np.int64))
 
 
 def _store_tile(path, k, token, crc, base_attrs):
@@ -662,7 +649,7 @@ def _check_tile(job, k, crc, ds=None):
     bad = np.flatnonzero(code != _OK)
     out["bad"] = bad
     if bad.size:
-        key = int(_keys(*(data[v].values[bad[:1]] for v in ("level", "i", "j")))[0])
+        key = int(row_key(*(data[v].values[bad[:1]] for v in ("level", "i", "j")))[0])
         out["first"] = (key, k, int(bad[0]), int(code[bad[0]]), int(step[bad[0]]))
     else:
         out["areas"] = areas = _ExactAreas()
@@ -740,7 +727,7 @@ def _overlaps_across_tiles(path, token, crc, base, cells, shift, window, depth):
         start, end = _runs(depth, lv, ii, jj)
         at = np.searchsorted(s_lo, end, side="left") - 1
         meet = (at >= 0) & (s_hi[np.maximum(at, 0)] > start)
-        keys = _keys(lv, ii, jj)
+        keys = row_key(lv, ii, jj)
         boxes += [(int(a), int(b), k, int(r), int(e)) for a, b, r, e in
                   zip(start[meet], keys[meet], sel[meet], end[meet])]
     boxes.sort()
@@ -771,7 +758,7 @@ def _row_in_atlas(path, n_tiles, first):
     before = 0
     for k in range(n_tiles):
         g = zarr.open_group(str(Path(path) / R.BOXES / R.tile_name(k)), mode="r")
-        keys = np.sort(_keys(*(np.asarray(g[v][...]) for v in ("level", "i", "j"))))
+        keys = np.sort(row_key(*(np.asarray(g[v][...]) for v in ("level", "i", "j"))))
         if k < tile:
             before += int(np.searchsorted(keys, key, side="right"))
         elif k == tile:
