@@ -8,3 +8,28 @@ import os
 # stderr) would see those lines at random; the tests of the lines themselves
 # set a short interval (tests/test_conventions.py).  Subprocesses inherit it.
 os.environ.setdefault("STAIRBOUNCE_PROGRESS_INTERVAL", "1e9")
+
+# The suite in two processes (README: pytest -n 2 --dist loadfile) ends when its
+# slower process ends.  pytest-xdist hands out whole files, by default the files
+# with the most tests first; a few files with few but long tests (the site build,
+# Chromium, the wheel) then start late and run alone at the end.  The files are
+# handed out longest first instead (longest-processing-time scheduling), by the
+# seconds each took in a fresh clone's suite on the 2-core machine (2026-11-29,
+# summed --durations); any file not named here comes after them, in its order.
+# Only the order changes: every test still runs, each file in one process.
+_SECONDS = {
+    "test_docs.py": 265, "test_explorer_browser.py": 153, "test_wheel.py": 71, "test_certify_store.py": 63,
+    "test_figures.py": 58, "test_atlas.py": 50, "test_regions.py": 41, "test_faults.py": 38,
+    "test_architecture.py": 34, "test_cli_fractal.py": 33, "test_faults_round2.py": 26,
+    "test_dimension_protocol.py": 22, "test_explorer.py": 22, "test_docs_commands.py": 22,
+    "test_kernel_paths.py": 20, "test_faults_round3.py": 17, "test_api.py": 17,
+}
+
+
+def pytest_configure(config):
+    if getattr(config.option, "loadscopereorder", None) is not None:
+        config.option.loadscopereorder = False  # keep the order made below
+
+
+def pytest_collection_modifyitems(config, items):
+    items.sort(key=lambda item: -_SECONDS.get(item.path.name, 0))  # stable: a file's own order is kept
