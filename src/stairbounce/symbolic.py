@@ -47,7 +47,10 @@ class Word:
     def __post_init__(self):
         if isinstance(self.letters, (str, bytes)) or not isinstance(self.letters, (tuple, list, np.ndarray)):
             raise ValueError(f"letters must be a tuple of integer jump numbers, got {self.letters!r}")
-        letters = tuple(check_count(f"letters[{i}]", a, 0) for i, a in enumerate(self.letters))
+        letters = tuple(self.letters)
+        if not all(type(a) is int and 0 <= a <= _v._INT64_MAX for a in letters):
+            # the general check (numpy integers, integral floats; names the bad letter)
+            letters = tuple(check_count(f"letters[{i}]", a, 0) for i, a in enumerate(letters))
         if not letters or letters[0] < 1 or letters[-1] < 1 or min(letters) < 0:
             raise ValueError(
                 "letters must be non-negative jump numbers, the first and last >= 1, "
