@@ -100,3 +100,30 @@ def test_the_branch_checker_keeps_word_texts_as_python_strings():
     coded = xr.Dataset({"word_code": ("box", np.array([1, 0, 1]))}, attrs={"word_names": ["", long]})
     got = _texts(coded, "word")
     assert got.dtype == object and list(got) == [long, "", long]
+
+
+@pytest.mark.parametrize("max_live, max_leaves", [(None, None), (1, 64), (2, 1), (8, 2)])
+def test_the_compiled_branch_follower_is_the_python_rule_box_for_box(atlas, max_live, max_leaves):
+    """``_check_kernel.follow_boxes`` (what ``sb.verify`` runs) against
+    ``verify_branches.follow`` (the rule in Python): the same claim and the same
+    words on boxes of every status, with the atlas's limits and with small ones
+    that force merges (max_live 1, 2) and the leaf cap (max_leaves 1, 2)."""
+    from stairbounce.structure._check_kernel import follow_boxes
+    from stairbounce.structure.verify_branches import _word_text, follow
+
+    b = atlas.boxes
+    live = int(b.attrs["branch_max_live"]) if max_live is None else max_live
+    leaves = int(b.attrs["branch_max_leaves"]) if max_leaves is None else max_leaves
+    rng = np.random.default_rng(11)
+    rows = rng.choice(b.sizes["box"], 300, replace=False)
+    rows = np.union1d(rows, np.flatnonzero(b["status"].values == SLIDING)[:200])
+    e0, e1, u0, u1 = (b[k].values[rows].astype(np.float64) for k in ("e0", "e1", "u0", "u1"))
+    claims, leaf_off, it_off, impacts = follow_boxes(e0, e1, u0, u1, atlas.max_iter, live, leaves, 4096)
+    names = {0: None, 1: "sliding", 2: "no_slide_within"}
+    seen = set()
+    for n in range(rows.size):
+        claim, words = follow(e0[n], e1[n], u0[n], u1[n], atlas.max_iter, live, leaves)
+        got = {_word_text(tuple(impacts[it_off[q]:it_off[q + 1]].tolist())) for q in range(leaf_off[n], leaf_off[n + 1])}
+        assert (names[int(claims[n])], got if claims[n] == 1 else set()) == (claim, words), rows[n]
+        seen.add(claim)
+    assert "sliding" in seen and None in seen  # both outcomes were compared

@@ -357,3 +357,167 @@ def regions(e0, e1, u0, u1, itinerary, offsets, grids, cell_off, cells, todo, ca
             v0[k], v1[k], s0[k], s1[k] = ev[i], ev[i + 1], es[j], es[j + 1]
         what = region_check(e0[r], e1[r], u0[r], u1[r], v0, v1, s0, s1, P, ev, es, cap, oi, oj)
         out[r] = 0 if what == 0 else (4 if what == 1 else 5)
+
+
+# --------------------------------------------------------------------------- #
+# the branch rule (verify_branches.follow, compiled)                          #
+# --------------------------------------------------------------------------- #
+
+
+@njit(cache=True, inline="always")
+def _pmax(a, b):  # Python's max(a, b): b only when b > a (a NaN first argument stays)
+    return b if b > a else a
+
+
+@njit(cache=True, inline="always")
+def _pmin(a, b):  # Python's min(a, b)
+    return b if b < a else a
+
+
+@njit(cache=True, inline="always")
+def _root_lo(x):  # verify_branches._sqrt_lo
+    return _pmax(_dn(np.sqrt(_pmax(x, 0.0))), 0.0)
+
+
+@njit(cache=True)
+def _grow(a, n):
+    """``a`` with room for at least ``n`` rows (doubled), its rows kept."""
+    if n <= a.shape[0]:
+        return a
+    b = np.empty((max(n, 2 * a.shape[0]),) + a.shape[1:], a.dtype)
+    b[:a.shape[0]] = a
+    return b
+
+
+@njit(cache=True)
+def _follow_one(e0, e1, u0, u1, max_iter, max_live, max_leaves, cap, nodes, leaves):
+    """``verify_branches.follow`` on one box, operation for operation: ``(claim, n
+    nodes, n leaves, nodes, leaves)``, claim 0 (None), 1 ("sliding") or 2
+    ("no_slide_within"); the itineraries as a tree, ``nodes[i] = (parent, k)`` (node 0
+    the empty itinerary), a leaf the node of a branch that may slide."""
+    T0, T1 = _dn(1.0 / u1), _up(1.0 / u0)
+    R0 = _dn(_dn(1.0 + e0) / _up(1.0 - e0))
+    R1 = _up(_up(1.0 + e1) / _dn(1.0 - e1))
+    r2 = np.sqrt(2.0)
+    live = np.empty((max_live + 1, 4))
+    live_node = np.empty(max_live + 1, np.int64)
+    live[0, 0], live[0, 1], live[0, 2], live[0, 3] = 0.0, 0.0, _dn(r2), _up(r2)
+    live_node[0] = 0
+    nodes[0, 0], nodes[0, 1] = -1, 0
+    nn, nl, n_live = 1, 0, 1
+    nxt = np.empty((2 * max_live + 2, 4))
+    nxt_node = np.empty(2 * max_live + 2, np.int64)
+    for _ in range(max_iter):
+        nx = 0
+        for b in range(n_live):
+            v0, v1, s0, s1 = live[b, 0], live[b, 1], live[b, 2], live[b, 3]
+            it = live_node[b]
+            tv0, tv1 = _dn(T0 - v1), _up(T1 - v0)
+            m0, m1 = _dn(tv0 - _up(R1 * s1)), _up(tv1 - _pmax(_dn(R0 * s0), 0.0))
+            if not m1 < 0.0:  # may slide
+                if it < 0 or nl >= max_leaves:
+                    return 0, nn, nl, nodes, leaves
+                leaves = _grow(leaves, nl + 1)
+                leaves[nl] = it
+                nl += 1
+                if m0 >= 0.0:
+                    continue
+            t0, t1 = _dn(v0 + s0), _up(v1 + s1)
+            m0, m1 = _dn(T0 - t1), _up(T1 - t0)
+            if not m0 >= 0.0:  # may fly over
+                nxt = _grow(nxt, nx + 1)
+                nxt_node = _grow(nxt_node, nx + 1)
+                nxt[nx, 0], nxt[nx, 1] = _dn(v0 - T1), _up(v1 - T0)
+                nxt[nx, 2] = _root_lo(_dn(2.0 + _dn(s0 * s0)))
+                nxt[nx, 3] = _up(np.sqrt(_up(2.0 + _up(s1 * s1))))
+                if it < 0:
+                    nxt_node[nx] = -1
+                else:
+                    nodes = _grow(nodes, nn + 1)
+                    nodes[nn, 0], nodes[nn, 1] = it, 0
+                    nxt_node[nx] = nn
+                    nn += 1
+                nx += 1
+            if m1 < 0.0:
+                continue
+            w0, w1 = _pmax(_dn(e0 * s0), 0.0), _up(e1 * s1)
+            k = 1
+            while True:
+                n0, n1 = _dn(t0 + 2.0 * w0), _up(t1 + 2.0 * w1)
+                m0, m1 = _dn(T0 - n1), _up(T1 - n0)
+                if not m0 >= 0.0:  # may stop after k impacts
+                    nxt = _grow(nxt, nx + 1)
+                    nxt_node = _grow(nxt_node, nx + 1)
+                    nxt[nx, 0], nxt[nx, 1] = _dn(_dn(w0 + t0) - T1), _up(_up(w1 + t1) - T0)
+                    nxt[nx, 2] = _root_lo(_dn(2.0 + _dn(w0 * w0)))
+                    nxt[nx, 3] = _up(np.sqrt(_up(2.0 + _up(w1 * w1))))
+                    if it < 0:
+                        nxt_node[nx] = -1
+                    else:
+                        nodes = _grow(nodes, nn + 1)
+                        nodes[nn, 0], nodes[nn, 1] = it, k
+                        nxt_node[nx] = nn
+                        nn += 1
+                    nx += 1
+                if m1 < 0.0:
+                    break
+                if k >= cap:
+                    return 0, nn, nl, nodes, leaves
+                t0, t1 = n0, n1
+                w0, w1 = _pmax(_dn(e0 * w0), 0.0), _up(e1 * w1)
+                k += 1
+        if nx > max_live:  # merged: the hull, in the order Python's min and max take it
+            a0, a1, a2, a3 = nxt[0, 0], nxt[0, 1], nxt[0, 2], nxt[0, 3]
+            for b in range(1, nx):
+                a0, a1 = _pmin(a0, nxt[b, 0]), _pmax(a1, nxt[b, 1])
+                a2, a3 = _pmin(a2, nxt[b, 2]), _pmax(a3, nxt[b, 3])
+            live[0, 0], live[0, 1], live[0, 2], live[0, 3] = a0, a1, a2, a3
+            live_node[0] = -1
+            n_live = 1
+        else:
+            for b in range(nx):
+                live[b, 0], live[b, 1], live[b, 2], live[b, 3] = nxt[b, 0], nxt[b, 1], nxt[b, 2], nxt[b, 3]
+                live_node[b] = nxt_node[b]
+            n_live = nx
+        if n_live == 0:
+            return 1, nn, nl, nodes, leaves
+    return (2 if nl == 0 else 0), nn, nl, nodes, leaves
+
+
+@njit(cache=True)
+def follow_boxes(e0, e1, u0, u1, max_iter, max_live, max_leaves, cap):
+    """:func:`_follow_one` on every box: ``(claims, leaf offsets, leaf itineraries'
+    offsets, impact numbers)``: box ``b``'s leaves are ``leaf_off[b] ..
+    leaf_off[b + 1] - 1``, leaf ``l``'s itinerary ``impacts[it_off[l]:it_off[l + 1]]``
+    (the claim 0 boxes have no leaves)."""
+    n = e0.size
+    claims = np.zeros(n, np.int64)
+    leaf_off = np.zeros(n + 1, np.int64)
+    it_off = np.zeros(1, np.int64)
+    impacts = np.empty(64, np.int64)
+    nodes = np.empty((1024, 2), np.int64)
+    leaves = np.empty(64, np.int64)
+    path = np.empty(64, np.int64)
+    nlt, ni = 0, 0
+    for b in range(n):
+        claim, nn, nl, nodes, leaves = _follow_one(e0[b], e1[b], u0[b], u1[b], max_iter, max_live, max_leaves,
+                                                   cap, nodes, leaves)
+        claims[b] = claim
+        if claim == 1:
+            it_off = _grow(it_off, nlt + nl + 1)
+            for l in range(nl):
+                d = 0
+                x = leaves[l]
+                while x > 0:  # the path from the leaf up to the root, then reversed
+                    path = _grow(path, d + 1)
+                    path[d] = nodes[x, 1]
+                    d += 1
+                    x = nodes[x, 0]
+                impacts = _grow(impacts, ni + d)
+                for q in range(d):
+                    impacts[ni + q] = path[d - 1 - q]
+                ni += d
+                nlt += 1
+                it_off[nlt] = ni
+        leaf_off[b + 1] = nlt
+    return claims, leaf_off, it_off[:nlt + 1].copy(), impacts[:ni].copy()

@@ -19,15 +19,23 @@ branches after a step, itinerary unknown; the atlas's attribute
 ``branch_max_live``).  ``sliding`` holds when every branch ends in a slide
 within ``max_iter`` steps, none of a merged branch, and the leaves' words are
 among the stated ones; ``no_slide_within`` when no branch may slide.
+
+:func:`follow` states the rule in Python; the atlas's rows are checked by its
+compiled twin ``_check_kernel.follow_boxes`` (the same operations in the same
+order, ``np.nextafter`` for ``math.nextafter``; the leaves' itineraries come back
+as a tree and are made words here), which ``tests/test_classes.py`` compares with
+:func:`follow` box for box.
 """
 
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 
 from ..symbolic import word_from_impacts
+from ._check_kernel import follow_boxes
 
 _INF = math.inf
 
@@ -42,6 +50,13 @@ def _u(x):
 
 def _sqrt_lo(x):
     return max(_d(math.sqrt(max(x, 0.0))), 0.0)
+
+
+@lru_cache(maxsize=1 << 16)
+def _word_text(itinerary):
+    """The word's text of a branch that slides after ``itinerary`` (a tuple of impact
+    numbers); remembered, since the leaves of neighbouring boxes repeat their words."""
+    return word_from_impacts(list(itinerary) + [-1]).format(ascii=True)
 
 
 def follow(e0, e1, u0, u1, max_iter, max_live, max_leaves, cap=4096):
@@ -62,7 +77,7 @@ def follow(e0, e1, u0, u1, max_iter, max_live, max_leaves, cap=4096):
             if not m[1] < 0.0:  # may slide
                 if it is None or len(words) >= max_leaves:
                     return None, set()
-                words.add(word_from_impacts(list(it) + [-1]).format(ascii=True))
+                words.add(_word_text(it))
                 if m[0] >= 0.0:
                     continue
             t = (_d(v[0] + s[0]), _u(v[1] + s[1]))  # t_1 = v + s
@@ -137,16 +152,22 @@ def check_atlas_branches(data, arrays, code, failed_code):
     max_leaves = int(data.attrs.get("branch_max_leaves", 0))
     off = np.asarray(arrays["offsets"])
     words = _texts(data, "word")
-    cols = [np.asarray(arrays[k], dtype=float) for k in ("e0", "e1", "u0", "u1")]
-    for b in rows:
-        e0, e1, u0, u1 = (float(c[b]) for c in cols)
-        ok = (off[b + 1] == off[b] and 0.0 < e0 <= e1 < 1.0 and 0.0 < u0 <= u1 and max_live >= 1
-              and max_leaves >= 1)
-        if ok:
-            claim, got = follow(e0, e1, u0, u1, arrays["max_iter"], max_live, max_leaves)
-            if sliding[b]:
-                stated = set(str(words[b]).split(" | ")) if words is not None else set()
-                ok = claim == "sliding" and got <= stated and len(got) > 0
-            else:
-                ok = claim == "no_slide_within"
-        code[b] = 0 if ok else failed_code
+    cols = [np.asarray(arrays[k], dtype=np.float64)[rows] for k in ("e0", "e1", "u0", "u1")]
+    e0, e1, u0, u1 = cols
+    ok = ((off[rows + 1] == off[rows]) & (0.0 < e0) & (e0 <= e1) & (e1 < 1.0) & (0.0 < u0) & (u0 <= u1)
+          & (max_live >= 1) & (max_leaves >= 1))
+    code[rows[~ok]] = failed_code
+    rows, e0, e1, u0, u1 = rows[ok], e0[ok], e1[ok], u0[ok], u1[ok]
+    # follow compiled (_check_kernel.follow_boxes: the same operations as follow above, in
+    # the same order; tests/test_classes.py compares the two box for box)
+    claims, leaf_off, it_off, impacts = follow_boxes(e0, e1, u0, u1, int(arrays["max_iter"]), max_live,
+                                                     max_leaves, 4096)
+    for n, b in enumerate(rows):
+        if sliding[b]:
+            got = {_word_text(tuple(impacts[it_off[q]:it_off[q + 1]].tolist()))
+                   for q in range(leaf_off[n], leaf_off[n + 1])}
+            stated = set(str(words[b]).split(" | ")) if words is not None else set()
+            good = claims[n] == 1 and got <= stated and len(got) > 0
+        else:
+            good = claims[n] == 2
+        code[b] = 0 if good else failed_code
