@@ -232,8 +232,9 @@ def test_no_blank_line_on_stderr_when_not_a_terminal(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def drawn(tmp_path_factory):
-    """Every figure, kept as a matplotlib Figure after it is saved at 60 dpi."""
+def drawn(made, tmp_path_factory):
+    """Every figure, kept as a matplotlib Figure after it is saved at 60 dpi (the
+    computed arrays read from ``made``'s cache: only the drawing is done again)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -253,7 +254,7 @@ def drawn(tmp_path_factory):
     mp = pytest.MonkeyPatch()
     patch_figures(mp, "_save", keep)
     try:
-        settings = F.Settings(out=out, scale=SCALE, dpi=60, border_dimension=study)
+        settings = F.Settings(out=out, scale=SCALE, dpi=60, border_dimension=study, cache_dir=made[1])
         results = F.make_figures(settings)
     finally:
         mp.undo()
