@@ -29,6 +29,37 @@ _SECONDS = {
 def pytest_configure(config):
     if getattr(config.option, "loadscopereorder", None) is not None:
         config.option.loadscopereorder = False  # keep the order made below
+    if _is_xdist_controller(config):
+        _warm_kernels()
+
+
+def _is_xdist_controller(config):
+    n = getattr(config.option, "numprocesses", None)
+    return bool(n) and not hasattr(config, "workerinput") and not config.option.collectonly
+
+
+def _warm_kernels():
+    """The numba kernels compiled into their on-disk cache once, in two processes at
+    once, before pytest-xdist starts its processes (tests/_warm_kernels.py says why);
+    about 60 s in a fresh clone, 3 s once cached.  A part that fails is reported here
+    and the suite goes on: its kernels are then compiled where a test meets them."""
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    script = Path(__file__).with_name("_warm_kernels.py")
+    t0 = time.perf_counter()
+    procs = {part: subprocess.Popen([sys.executable, str(script), part], stdout=subprocess.PIPE,
+                                    stderr=subprocess.STDOUT, text=True)
+             for part in ("proofs", "scans")}
+    lines = []
+    for part, proc in procs.items():
+        out, _ = proc.communicate()
+        lines.append(out.strip().splitlines()[-1] if proc.returncode == 0 and out.strip()
+                     else f"{part}: failed ({proc.returncode}): {out.strip()[-500:]}")
+    print(f"numba kernels compiled or loaded in {time.perf_counter() - t0:.0f} s ({'; '.join(lines)})",
+          file=sys.stderr)
 
 
 def pytest_collection_modifyitems(config, items):
