@@ -855,3 +855,21 @@ def test_outputs_of_big_scans_are_not_kept(monkeypatch):
     assert all(not v for v in sc._spare.values())
     scan(e=(0.1, 0.9, 5), u=(0.1, 1.0, 5), max_iter=5)  # 625: kept
     assert all(len(v) == 1 and v[0].shape == (25,) for v in sc._spare.values())
+
+
+def test_read_only_coordinates_reuse_the_compiled_scan_kernel():
+    """An xarray coordinate's values are read-only; numba would compile the scan kernel
+    again for them (about 15 s in a fresh install). scan_coords and scan_points hand the
+    kernel a writeable C-contiguous copy, so every signature it was compiled for takes
+    writeable arrays, and the answer is the scan's."""
+    import stairbounce.plane as P
+
+    sb = stairbounce
+    ds = sb.scan(e=(0.1, 0.5, 6), u=(0.3, 1.2, 5), max_iter=100)
+    assert not ds.e.values.flags.writeable
+    c = sb.scan_coords(ds.e.values, ds.u.values, max_iter=100)
+    assert c.word_length.equals(ds.word_length)
+    p = sb.scan_points(ds.e.values[::2], np.full(3, 0.7), max_iter=100)  # a strided, read-only view
+    assert p.sizes["point"] == 3
+    sigs = P._scan_fast.signatures
+    assert sigs and all(s[0].mutable and s[1].mutable and s[0].layout == "C" for s in sigs), sigs

@@ -863,16 +863,27 @@ def square_counts(e, u, side=DEFAULT_SIDE):
 
 def _coords(name, values):
     _v.check_array_memory(f"{name} of {{n}} values", values, 8)  # the float copy, before it is made
-    a = np.asarray(values, dtype=np.float64)
+    a = _kernel_array(values)
     if a.ndim != 1 or a.size == 0:
         raise ValueError(f"{name} values must be a non-empty 1-D array, got shape {a.shape}")
     return _check_values(name, a)
 
 
+def _kernel_array(values):
+    """``values`` as a C-contiguous, writeable float64 array (a copy when they are
+    not): numba compiles a kernel again for each array layout and flag, and an
+    xarray coordinate's ``.values`` is read-only (scan_coords(ds.e.values, ..)
+    compiled the scan kernel a second time, about 15 s in a fresh install)."""
+    a = np.asarray(values, dtype=np.float64)
+    if not (a.flags.writeable and a.flags.c_contiguous):
+        a = np.array(a, dtype=np.float64, order="C")
+    return a
+
+
 def _point_coords(name, values):
     _v.check_array_memory(f"{name} of {{n}} values", values, 8)  # the float copy, before it is made
     try:
-        a = np.asarray(values, dtype=np.float64)
+        a = _kernel_array(values)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a 1-D array of real numbers") from None
     if a.ndim != 1:
