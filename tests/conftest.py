@@ -1,6 +1,9 @@
 """Settings every test shares."""
 
 import os
+import time
+
+_STARTED = time.monotonic()  # this file is read as pytest starts, before any hook below
 
 # Off a terminal, long commands write a progress line every 10 s to stderr
 # (stairbounce._progress).  On a loaded machine a test's command can run that
@@ -64,3 +67,11 @@ def _warm_kernels():
 
 def pytest_collection_modifyitems(config, items):
     items.sort(key=lambda item: -_SECONDS.get(item.path.name, 0))  # stable: a file's own order is kept
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config):
+    # pytest's own "in N s" starts at the session, after the kernels' warm-up above: the
+    # whole run's wall time is printed too (what the README and CI state)
+    if not hasattr(config, "workerinput"):
+        terminalreporter.write_line(f"wall time of this pytest run, the kernels' warm-up included: "
+                                    f"{time.monotonic() - _STARTED:.0f} s")
