@@ -10,7 +10,14 @@ defined on the page above it):
   and their printed output must match (``ELLIPSIS``, ``NORMALIZE_WHITESPACE``).
 
 A block may be left out only with a stated reason, on the line right above its
-fence: ``<!-- not run: REASON -->``.  The last line printed is a JSON summary
+fence: ``<!-- not run: REASON -->``.
+
+``python tests/pasted.py PAGE.md --without-cells`` leaves the ```` ```{code-cell} ````
+blocks to the site build, which executes them (MyST-NB: the page's cells in a fresh
+kernel, top to bottom, an error failing the build) and shows their output on the page;
+tests/test_docs.py runs both, so each block is executed once.  The other blocks then
+run without the cells' names: a block that needs one fails here, as it would for a
+reader who skipped the cell.  The last line printed is a JSON summary
 (blocks run, examples checked, blocks not run with their reasons, failures).
 """
 
@@ -54,14 +61,17 @@ def blocks(text):
         i = j + 1
 
 
-def run(path):
+def run(path, cells=True):
     path = Path(path)
     text = path.read_text()
     namespace = {"__name__": "__main__"}
     flags = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
     parser = doctest.DocTestParser()
-    summary = {"page": str(path), "blocks": 0, "examples": 0, "not_run": [], "failures": []}
+    summary = {"page": str(path), "blocks": 0, "examples": 0, "not_run": [], "failures": [], "cells_left": 0}
     for kind, source, line, reason in blocks(text):
+        if kind == "{code-cell}" and not cells and reason is None:
+            summary["cells_left"] += 1  # the site build's (see the module's docstring)
+            continue
         if reason is not None:
             if not reason:
                 summary["failures"].append(f"{path}:{line}: '<!-- not run: -->' without a reason")
@@ -93,4 +103,4 @@ def run(path):
 
 
 if __name__ == "__main__":
-    print(json.dumps(run(sys.argv[1])))
+    print(json.dumps(run(sys.argv[1], cells="--without-cells" not in sys.argv[2:])))

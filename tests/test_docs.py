@@ -1,9 +1,10 @@
 """The documentation: the Sphinx site builds with warnings as errors while
 executing its examples (MyST-NB runs the pages' figure cells and the tutorial
 notebook, each in a fresh kernel; the gallery runs the figure recipes), and
-every Python example of the README and of the pages runs as a reader would
-paste it: each page in a fresh interpreter, top to bottom, with no hidden
-set-up (``tests/pasted.py``), printed outputs checked."""
+every other Python example of the README and of the pages runs as a reader
+would paste it: each page in a fresh interpreter, top to bottom, with no hidden
+set-up (``tests/pasted.py``), printed outputs checked.  Each block runs once:
+the ``{code-cell}`` blocks in the site build, the others in the pasted run."""
 
 from __future__ import annotations
 
@@ -31,7 +32,9 @@ pytest.importorskip("myst_nb")
 
 
 def _env():
-    env = dict(os.environ, MPLBACKEND="Agg")
+    # SB_DOCS_EXECUTE=force: the site build executes every page's {code-cell} blocks (the
+    # pasted runner leaves them to it), whatever the caller's environment says
+    env = dict(os.environ, MPLBACKEND="Agg", SB_DOCS_EXECUTE="force")
     # the pages document this checkout: conf.py puts src/ first on the path
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
     return env
@@ -242,9 +245,11 @@ def _examples_of(page):
 @pytest.mark.parametrize("page", [p for p in PAGES if _examples_of(p)], ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_example_runs_as_pasted(page, tmp_path):
     # a fresh interpreter per page, in an empty folder (examples that write files
-    # write there), with nothing defined beforehand
-    r = subprocess.run([sys.executable, str(ROOT / "tests" / "pasted.py"), str(page)], capture_output=True,
-                       text=True, env=_env(), cwd=tmp_path)
+    # write there), with nothing defined beforehand; the {code-cell} blocks are left to
+    # the site build (test_html_site_builds_without_warnings executes each page's cells
+    # in a fresh kernel, top to bottom), so that each block runs once in the suite
+    r = subprocess.run([sys.executable, str(ROOT / "tests" / "pasted.py"), str(page), "--without-cells"],
+                       capture_output=True, text=True, env=_env(), cwd=tmp_path)
     assert r.returncode == 0, r.stderr[-4000:]
     summary = json.loads(r.stdout.strip().splitlines()[-1])
     assert not summary["failures"], "\n".join(summary["failures"])[-6000:]
@@ -274,6 +279,16 @@ def test_the_runner_checks_outputs_and_refuses_hidden_names(tmp_path):
     assert summary["blocks"] == 3 and len(summary["failures"]) == 2
     assert "Expected:\n    4\nGot:\n    3" in summary["failures"][0]
     assert "NameError: name 'sb' is not defined" in summary["failures"][1]
+
+
+def test_the_runner_leaves_the_cells_to_the_site_build_only_when_asked(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text("```{code-cell} ipython3\nraise SystemExit(3)\n```\n\n```python\nx = 2\n```\n\n"
+                    "```{doctest}\n>>> x + 1\n3\n```\n")
+    left = pasted.run(page, cells=False)
+    assert (left["blocks"], left["cells_left"], left["failures"]) == (2, 1, [])
+    every = pasted.run(page)  # a reader pasting the page runs the cell too
+    assert every["blocks"] == 3 and every["cells_left"] == 0 and "SystemExit: 3" in every["failures"][0]
 
 
 def test_notebook_is_committed_without_outputs():
