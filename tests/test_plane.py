@@ -861,15 +861,19 @@ def test_read_only_coordinates_reuse_the_compiled_scan_kernel():
     """An xarray coordinate's values are read-only; numba would compile the scan kernel
     again for them (about 15 s in a fresh install). scan_coords and scan_points hand the
     kernel a writeable C-contiguous copy, so every signature it was compiled for takes
-    writeable arrays, and the answer is the scan's."""
-    import stairbounce.plane as P
-
-    sb = stairbounce
-    ds = sb.scan(e=(0.1, 0.5, 6), u=(0.3, 1.2, 5), max_iter=100)
-    assert not ds.e.values.flags.writeable
-    c = sb.scan_coords(ds.e.values, ds.u.values, max_iter=100)
-    assert c.word_length.equals(ds.word_length)
-    p = sb.scan_points(ds.e.values[::2], np.full(3, 0.7), max_iter=100)  # a strided, read-only view
-    assert p.sizes["point"] == 3
-    sigs = P._scan_fast.signatures
-    assert sigs and all(s[0].mutable and s[1].mutable and s[0].layout == "C" for s in sigs), sigs
+    writeable arrays, and the answer is the scan's. In a fresh interpreter: another
+    test of this process may call the kernel itself with other arrays."""
+    code = """
+import numpy as np, stairbounce as sb, stairbounce.plane as P
+ds = sb.scan(e=(0.1, 0.5, 6), u=(0.3, 1.2, 5), max_iter=100)
+assert not ds.e.values.flags.writeable
+c = sb.scan_coords(ds.e.values, ds.u.values, max_iter=100)
+assert c.word_length.equals(ds.word_length)
+p = sb.scan_points(ds.e.values[::2], np.full(3, 0.7), max_iter=100)  # a strided, read-only view
+assert p.sizes["point"] == 3
+sigs = P._scan_fast.signatures
+print(len(sigs), all(s[0].mutable and s[1].mutable and s[0].layout == "C" for s in sigs))
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert r.stdout.split() == ["1", "True"], r.stdout
