@@ -38,6 +38,7 @@ from ..symbolic import word_from_impacts
 from ._check_kernel import follow_boxes
 
 _INF = math.inf
+_CHUNK = 1 << 15  # rows followed by one compiled call
 
 
 def _d(x):
@@ -160,14 +161,17 @@ def check_atlas_branches(data, arrays, code, failed_code):
     rows, e0, e1, u0, u1 = rows[ok], e0[ok], e1[ok], u0[ok], u1[ok]
     # follow compiled (_check_kernel.follow_boxes: the same operations as follow above, in
     # the same order; tests/test_classes.py compares the two box for box)
-    claims, leaf_off, it_off, impacts = follow_boxes(e0, e1, u0, u1, int(arrays["max_iter"]), max_live,
-                                                     max_leaves, 4096)
-    for n, b in enumerate(rows):
-        if sliding[b]:
-            got = {_word_text(tuple(impacts[it_off[q]:it_off[q + 1]].tolist()))
-                   for q in range(leaf_off[n], leaf_off[n + 1])}
-            stated = set(str(words[b]).split(" | ")) if words is not None else set()
-            good = claims[n] == 1 and got <= stated and len(got) > 0
-        else:
-            good = claims[n] == 2
-        code[b] = 0 if good else failed_code
+    # in chunks of _CHUNK rows: the leaves' itineraries of a chunk are held at once
+    for c in range(0, rows.size, _CHUNK):
+        part = slice(c, c + _CHUNK)
+        claims, leaf_off, it_off, impacts = follow_boxes(e0[part], e1[part], u0[part], u1[part],
+                                                         int(arrays["max_iter"]), max_live, max_leaves, 4096)
+        for n, b in enumerate(rows[part]):
+            if sliding[b]:
+                got = {_word_text(tuple(impacts[it_off[q]:it_off[q + 1]].tolist()))
+                       for q in range(leaf_off[n], leaf_off[n + 1])}
+                stated = set(str(words[b]).split(" | ")) if words is not None else set()
+                good = claims[n] == 1 and got <= stated and len(got) > 0
+            else:
+                good = claims[n] == 2
+            code[b] = 0 if good else failed_code
