@@ -389,6 +389,26 @@ def _grow(a, n):
     return b
 
 
+@njit(cache=True, inline="always")
+def _push(nxt, nxt_node, nodes, nx, nn, it, k, v0, v1, r0, r1):
+    """Append the branch ``v in [v0, v1]``, ``s^2 = 2 + r^2`` for ``r in [r0, r1]`` (``r`` the
+    speed before the step: ``s`` for a fly-over, ``w_k`` after k impacts) to ``nxt``, its
+    itinerary the node of ``it`` followed by ``k`` (none when ``it`` is merged, -1)."""
+    nxt = _grow(nxt, nx + 1)
+    nxt_node = _grow(nxt_node, nx + 1)
+    nxt[nx, 0], nxt[nx, 1] = v0, v1
+    nxt[nx, 2] = _root_lo(_dn(2.0 + _dn(r0 * r0)))
+    nxt[nx, 3] = _up(np.sqrt(_up(2.0 + _up(r1 * r1))))
+    if it < 0:
+        nxt_node[nx] = -1
+    else:
+        nodes = _grow(nodes, nn + 1)
+        nodes[nn, 0], nodes[nn, 1] = it, k
+        nxt_node[nx] = nn
+        nn += 1
+    return nxt, nxt_node, nodes, nx + 1, nn
+
+
 @njit(cache=True)
 def _follow_one(e0, e1, u0, u1, max_iter, max_live, max_leaves, cap, nodes, leaves):
     """``verify_branches.follow`` on one box, operation for operation: ``(claim, n
@@ -425,19 +445,8 @@ def _follow_one(e0, e1, u0, u1, max_iter, max_live, max_leaves, cap, nodes, leav
             t0, t1 = _dn(v0 + s0), _up(v1 + s1)
             m0, m1 = _dn(T0 - t1), _up(T1 - t0)
             if not m0 >= 0.0:  # may fly over
-                nxt = _grow(nxt, nx + 1)
-                nxt_node = _grow(nxt_node, nx + 1)
-                nxt[nx, 0], nxt[nx, 1] = _dn(v0 - T1), _up(v1 - T0)
-                nxt[nx, 2] = _root_lo(_dn(2.0 + _dn(s0 * s0)))
-                nxt[nx, 3] = _up(np.sqrt(_up(2.0 + _up(s1 * s1))))
-                if it < 0:
-                    nxt_node[nx] = -1
-                else:
-                    nodes = _grow(nodes, nn + 1)
-                    nodes[nn, 0], nodes[nn, 1] = it, 0
-                    nxt_node[nx] = nn
-                    nn += 1
-                nx += 1
+                nxt, nxt_node, nodes, nx, nn = _push(nxt, nxt_node, nodes, nx, nn, it, 0, _dn(v0 - T1),
+                                                     _up(v1 - T0), s0, s1)
             if m1 < 0.0:
                 continue
             w0, w1 = _pmax(_dn(e0 * s0), 0.0), _up(e1 * s1)
@@ -446,19 +455,8 @@ def _follow_one(e0, e1, u0, u1, max_iter, max_live, max_leaves, cap, nodes, leav
                 n0, n1 = _dn(t0 + 2.0 * w0), _up(t1 + 2.0 * w1)
                 m0, m1 = _dn(T0 - n1), _up(T1 - n0)
                 if not m0 >= 0.0:  # may stop after k impacts
-                    nxt = _grow(nxt, nx + 1)
-                    nxt_node = _grow(nxt_node, nx + 1)
-                    nxt[nx, 0], nxt[nx, 1] = _dn(_dn(w0 + t0) - T1), _up(_up(w1 + t1) - T0)
-                    nxt[nx, 2] = _root_lo(_dn(2.0 + _dn(w0 * w0)))
-                    nxt[nx, 3] = _up(np.sqrt(_up(2.0 + _up(w1 * w1))))
-                    if it < 0:
-                        nxt_node[nx] = -1
-                    else:
-                        nodes = _grow(nodes, nn + 1)
-                        nodes[nn, 0], nodes[nn, 1] = it, k
-                        nxt_node[nx] = nn
-                        nn += 1
-                    nx += 1
+                    nxt, nxt_node, nodes, nx, nn = _push(nxt, nxt_node, nodes, nx, nn, it, k,
+                                                         _dn(_dn(w0 + t0) - T1), _up(_up(w1 + t1) - T0), w0, w1)
                 if m1 < 0.0:
                     break
                 if k >= cap:
