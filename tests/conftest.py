@@ -48,7 +48,6 @@ def _warm_kernels():
     and the suite goes on: its kernels are then compiled where a test meets them."""
     import subprocess
     import sys
-    import time
     from pathlib import Path
 
     script = Path(__file__).with_name("_warm_kernels.py")

@@ -863,27 +863,16 @@ def square_counts(e, u, side=DEFAULT_SIDE):
 
 def _coords(name, values):
     _v.check_array_memory(f"{name} of {{n}} values", values, 8)  # the float copy, before it is made
-    a = _kernel_array(values)
+    a = np.asarray(values, dtype=np.float64)
     if a.ndim != 1 or a.size == 0:
         raise ValueError(f"{name} values must be a non-empty 1-D array, got shape {a.shape}")
     return _check_values(name, a)
 
 
-def _kernel_array(values):
-    """``values`` as a C-contiguous, writeable float64 array (a copy when they are
-    not): numba compiles a kernel again for each array layout and flag, and an
-    xarray coordinate's ``.values`` is read-only (scan_coords(ds.e.values, ..)
-    compiled the scan kernel a second time, about 15 s in a fresh install)."""
-    a = np.asarray(values, dtype=np.float64)
-    if not (a.flags.writeable and a.flags.c_contiguous):
-        a = np.array(a, dtype=np.float64, order="C")
-    return a
-
-
 def _point_coords(name, values):
     _v.check_array_memory(f"{name} of {{n}} values", values, 8)  # the float copy, before it is made
     try:
-        a = _kernel_array(values)
+        a = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a 1-D array of real numbers") from None
     if a.ndim != 1:
@@ -908,7 +897,11 @@ def _check_values(name, a):
         raise ValueError(f"{name} values must be finite")
     tiny = a[_v.e_too_small(a)] if name == "e" else a[:0]
     _check_range(name, a.min(), a.max(), tiny.flat[0] if tiny.size else None)
-    return np.ascontiguousarray(a)
+    # C-contiguous and writeable (a copy only when not): numba compiles a kernel again for
+    # each array layout and flag, and an xarray coordinate's .values is read-only
+    # (scan_coords(ds.e.values, ..) compiled the scan kernel a second time, about 15 s in
+    # a fresh install)
+    return np.require(a, requirements=["C", "W"])
 
 
 def _check_range(name, lo, hi, tiny=None):

@@ -39,6 +39,7 @@ from ._check_kernel import follow_boxes
 
 _INF = math.inf
 _CHUNK = 1 << 15  # rows followed by one compiled call
+_CAP = 4096  # impacts followed on one step (as the certifier's IMPACT_CAP)
 
 
 def _d(x):
@@ -60,7 +61,7 @@ def _word_text(itinerary):
     return word_from_impacts(list(itinerary) + [-1]).format(ascii=True)
 
 
-def follow(e0, e1, u0, u1, max_iter, max_live, max_leaves, cap=4096):
+def follow(e0, e1, u0, u1, max_iter, max_live, max_leaves, cap=_CAP):
     """follow(e0, e1, u0, u1, max_iter, max_live, max_leaves) -> (claim, words)
 
     ``claim``: "sliding" (``words``: the set of the leaves' word texts),
@@ -165,7 +166,7 @@ def check_atlas_branches(data, arrays, code, failed_code):
     for c in range(0, rows.size, _CHUNK):
         part = slice(c, c + _CHUNK)
         claims, leaf_off, it_off, impacts = follow_boxes(e0[part], e1[part], u0[part], u1[part],
-                                                         int(arrays["max_iter"]), max_live, max_leaves, 4096)
+                                                         int(arrays["max_iter"]), max_live, max_leaves, _CAP)
         for n, b in enumerate(rows[part]):
             if sliding[b]:
                 got = {_word_text(tuple(impacts[it_off[q]:it_off[q + 1]].tolist()))
