@@ -1370,8 +1370,9 @@ def prunable(e, u, y0=1.0, v0=0.0):
     v0 = _finite("v0", v0)
     e, u = np.broadcast_arrays(np.asarray(e, dtype=np.float64), np.asarray(u, dtype=np.float64))
     shape = e.shape
-    es = np.ascontiguousarray(e.ravel())
-    us = np.ascontiguousarray(u.ravel())
+    # copies: broadcast views warn when their flags are read (_check_values reads them)
+    es = np.array(e.ravel())
+    us = np.array(u.ravel())
     if es.size:
         _check_values("e", es)
         _check_values("u", us)
