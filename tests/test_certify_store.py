@@ -221,17 +221,24 @@ def test_cli_store_resume_verify_and_errors(tmp_path, capsys):
         assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
-def test_ragged_rows_are_taken_block_by_block():
+def test_ragged_rows_are_taken_as_the_rows_concatenated():
+    """_take_rows (a compiled loop) against the rows sliced and concatenated in Python:
+    any order, empty rows, other dtypes; rows outside the values refused."""
     R = importlib.import_module("stairbounce.structure._store_read")
     np = pytest.importorskip("numpy")
     rng = np.random.default_rng(4)
     lengths = rng.integers(0, 5, 50)
-    values = np.arange(int(lengths.sum())) * 3
     starts = np.cumsum(lengths) - lengths
-    order = rng.permutation(50)
-    want = np.concatenate([values[starts[k]:starts[k] + lengths[k]] for k in order])
-    for block in (1, 3, 7, 1 << 20):
-        assert np.array_equal(R._take_rows(values, starts[order], lengths[order], block=block), want)
+    for values in (np.arange(int(lengths.sum())) * 3, rng.normal(size=int(lengths.sum())),
+                   rng.integers(-9, 9, int(lengths.sum())).astype(np.int8)):
+        for order in (rng.permutation(50), np.arange(50)[::-1], np.array([], np.int64)):
+            want = (np.concatenate([values[starts[k]:starts[k] + lengths[k]] for k in order]) if order.size
+                    else values[:0])
+            got = R._take_rows(values, starts[order], lengths[order])
+            assert got.dtype == values.dtype and np.array_equal(got, want)
+    for s, n in (([0], [-1]), ([-1], [1]), ([int(lengths.sum())], [1])):
+        with pytest.raises(ValueError, match="outside"):
+            R._take_rows(np.arange(int(lengths.sum())), np.array(s), np.array(n))
 
 
 # ------------------------------------------------- verify a store tile by tile

@@ -4,7 +4,8 @@ returns (the same rows in the same order: by level, then j, then i).
 
 Kept apart from ``certify_store`` (which imports the certifier) so that the readers
 of atlas files (``certificate.read_atlas_file``, hence ``CertifiedAtlas.load`` and
-``sb.verify``) can read a store without an import circle; numpy, xarray and zarr only.
+``sb.verify``) can read a store without an import circle; numpy, xarray and zarr only (and
+one compiled loop, :func:`_copy_rows`).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import json
 import os
 
 import numpy as np
+from numba import njit
 
 STORE_KIND = "stairbounce certified atlas store"
 STORE_FORMAT = "stairbounce-certify-store-1"
@@ -279,25 +281,29 @@ def merge_tiles(tiles, n_boxes, n_steps, first=0):
     return xr.Dataset(ordered, attrs=attrs)
 
 
-def _take_rows(values, starts, lengths, block=1 << 20):
-    """The ragged rows ``values[starts[k]:starts[k] + lengths[k]]`` one after another, in
-    blocks of rows (the indices of a block at a time: 150 million itinerary steps at
-    depth 14 took three int64 index arrays of 1.2 GB each at once)."""
-    lengths = np.asarray(lengths, np.int64)
+def _take_rows(values, starts, lengths):
+    """The ragged rows ``values[starts[k]:starts[k] + lengths[k]]`` one after another (a
+    copy, of ``values``' dtype), by one compiled loop: no index arrays (an index a value
+    took three int64 arrays of 1.2 GB each for the 150 million itinerary steps of depth
+    14; then blocks of rows cut them, and their building was most of the trapping
+    pass's Python time)."""
+    values = np.ascontiguousarray(values)
+    starts = np.ascontiguousarray(starts, np.int64)
+    lengths = np.ascontiguousarray(lengths, np.int64)
+    if starts.shape != lengths.shape or starts.ndim != 1:
+        raise ValueError(f"starts and lengths must be two 1-d arrays of one length, got {starts.shape}, "
+                         f"{lengths.shape}")
+    if lengths.size and (lengths.min() < 0 or starts.min() < 0 or (starts + lengths).max() > values.size):
+        raise ValueError("a row of starts/lengths lies outside values")
     out = np.empty(int(lengths.sum()), values.dtype)
-    at = 0
-    for a in range(0, lengths.size, block):
-        idx = _gather(starts[a:a + block], lengths[a:a + block])
-        out[at:at + idx.size] = values[idx]
-        at += idx.size
+    _copy_rows(values, starts, lengths, out)
     return out
 
 
-def _gather(starts, lengths):
-    """Indices ``starts[0] .. starts[0]+lengths[0]-1, starts[1] ..`` (ragged rows in a new order)."""
-    lengths = np.asarray(lengths, np.int64)
-    total = int(lengths.sum())
-    if not total:
-        return np.zeros(0, np.int64)
-    first = np.cumsum(lengths) - lengths
-    return np.repeat(np.asarray(starts, np.int64) - first, lengths) + np.arange(total)
+@njit(cache=True, nogil=True)
+def _copy_rows(values, starts, lengths, out):
+    at = 0
+    for k in range(starts.size):
+        s, n = starts[k], lengths[k]
+        out[at:at + n] = values[s:s + n]
+        at += n

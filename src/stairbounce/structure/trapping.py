@@ -205,18 +205,19 @@ def _enqueue(c, flags, queue, tail):
 
 
 @njit(cache=True)
-def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, seed, flags, queue, miss, out):
-    """Grow the region from the cell rectangle ``seed = (i0, i1, j0, j1)``: the
+def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, i0, i1, j0, j1, flags, queue, out):
+    """Grow the region from the cell rectangle ``i0 .. i1`` x ``j0 .. j1``: the
     cells reachable by the branches' image enclosures (breadth first).
 
     ``flags`` (at least ``nv * ns``, zeroed) marks the region's cells (index ``j *
     nv + i``), ``queue`` (its length the most cells allowed) lists them, in the
     order found, the first ``cells`` of it; ``out`` (``(_CAP + 2, 5)``) is
-    :func:`_branches`'s.  Returns ``(code, cells)``; ``code`` is ``TRAP_OK`` when the region is
-    closed: every cell's images lie in it and no cell may slide.  Where a cell
-    may slide, ``miss[0]`` is the float estimate of its slide margin's largest
+    :func:`_branches`'s.  Returns ``(code, cells, miss)``; ``code`` is ``TRAP_OK`` when the
+    region is closed: every cell's images lie in it and no cell may slide.  Where a
+    cell may slide, ``miss`` is the float estimate of its slide margin's largest
     value over the cell's extent along the margin (``<= 1``: it fails by less
-    than a cell, so finer cells may close the region; numerical, a choice only).
+    than a cell, so finer cells may close the region; numerical, a choice only),
+    else ``inf``.  (Scalars in and out: no array is allocated a try.)
     """
     Tl = _dn(1.0 / U1)
     Th = _up(1.0 / U0)
@@ -225,11 +226,11 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, seed, flags, queue, miss, out
     ws = S1 - S0
     head = 0
     tail = 0
-    for j in range(seed[2], seed[3] + 1):
-        for i in range(seed[0], seed[1] + 1):
+    for j in range(j0, j1 + 1):
+        for i in range(i0, i1 + 1):
             t = _enqueue(j * nv + i, flags, queue, tail)
             if t < 0:
-                return TRAP_CELLS, tail
+                return TRAP_CELLS, tail, np.inf
             tail = t
     while head < tail:
         c = queue[head]
@@ -243,22 +244,22 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, seed, flags, queue, miss, out
         m = _branches(v0, v1, s0, s1, E0, E1, Tl, Th, Rl, out)
         if m < 0:
             if m == -TRAP_SLIDE:  # by how much, in the cell's own extent along the margin
-                miss[0] = (Th - v0 - Rl * s0) / ((v1 - v0) + Rl * (s1 - s0))
-            return -m, tail
+                return TRAP_SLIDE, tail, (Th - v0 - Rl * s0) / ((v1 - v0) + Rl * (s1 - s0))
+            return -m, tail, np.inf
         for r in range(m):
-            i0, i1 = _cell_range(out[r, 0], out[r, 1], V0, V1, nv)
-            j0, j1 = _cell_range(out[r, 2], out[r, 3], S0, S1, ns)
-            if i0 < 0 or j0 < 0:
+            a0, a1 = _cell_range(out[r, 0], out[r, 1], V0, V1, nv)
+            b0, b1 = _cell_range(out[r, 2], out[r, 3], S0, S1, ns)
+            if a0 < 0 or b0 < 0:
                 if np.isnan(out[r, 0]) or np.isnan(out[r, 1]) or np.isnan(out[r, 2]) or np.isnan(out[r, 3]):
-                    return TRAP_NAN, tail
-                return TRAP_ESCAPE, tail
-            for jj in range(j0, j1 + 1):
-                for ii in range(i0, i1 + 1):
+                    return TRAP_NAN, tail, np.inf
+                return TRAP_ESCAPE, tail, np.inf
+            for jj in range(b0, b1 + 1):
+                for ii in range(a0, a1 + 1):
                     t = _enqueue(jj * nv + ii, flags, queue, tail)
                     if t < 0:
-                        return TRAP_CELLS, tail
+                        return TRAP_CELLS, tail, np.inf
                     tail = t
-    return TRAP_OK, tail
+    return TRAP_OK, tail, np.inf
 
 
 @njit(cache=True)
@@ -266,22 +267,23 @@ def _orbit_hull(e, u, y, v, skip, steps, Th, Rl):
     """Numerical: the rectangle of ``(v, s)`` visited by the float map from ``(y,
     v)`` after step ``skip`` up to step ``skip + steps`` (``slid``: it slid on
     the way), and the largest ``Th - v - Rl s`` over those states (the slide
-    margin of a cell holding the state, at the box's worst corner)."""
+    margin of a cell holding the state, at the box's worst corner):
+    ``(v_lo, v_hi, s_lo, s_hi, slid, worst)``, scalars (no array a try)."""
     T, ratio = _model._constants(e, u)
-    h = np.array([np.inf, -np.inf, np.inf, -np.inf])
+    h0, h1, h2, h3 = np.inf, -np.inf, np.inf, -np.inf
     worst = -np.inf
     for n in range(skip + steps):
         y, v, k = _model._step(y, v, e, T, ratio)
         if k == _model.SLIDING:
-            return h, True, worst
+            return h0, h1, h2, h3, True, worst
         if n >= skip:
             s = math.sqrt(v * v + 2.0 * y)
-            h[0] = min(h[0], v)
-            h[1] = max(h[1], v)
-            h[2] = min(h[2], s)
-            h[3] = max(h[3], s)
+            h0 = min(h0, v)
+            h1 = max(h1, v)
+            h2 = min(h2, s)
+            h3 = max(h3, s)
             worst = max(worst, Th - v - Rl * s)
-    return h, False, worst
+    return h0, h1, h2, h3, False, worst
 
 
 @njit(cache=True)
@@ -290,8 +292,8 @@ def _hull(e, u, n0, steps):
     between steps ``n0`` and ``n0 + steps`` (``slid``: it slid on the way).  Only
     chooses where the grid lies; nothing proven rests on it."""
     skip = max(n0 - 1, 0)
-    h, slid, _ = _orbit_hull(e, u, 1.0, 0.0, skip, n0 + steps - skip, 0.0, 0.0)
-    return h, slid
+    h0, h1, h2, h3, slid, _ = _orbit_hull(e, u, 1.0, 0.0, skip, n0 + steps - skip, 0.0, 0.0)
+    return np.array([h0, h1, h2, h3]), slid
 
 
 @njit(cache=True)
@@ -336,9 +338,8 @@ def _try(e0, e1, u0, u1, max_iter, tries=_TRIES, max_cells=_MAX_CELLS):
             failure = "escape"
             continue
         flags = np.zeros(cells * cells, np.uint8)
-        code, m = _close(e0, e1, u0, u1, grid[0], grid[1], cells, grid[3], grid[4], cells,
-                         np.array([i0, i1, j0, j1], np.int64), flags, np.empty(max_cells, np.int64), np.zeros(1),
-                         out)
+        code, m, _ = _close(e0, e1, u0, u1, grid[0], grid[1], cells, grid[3], grid[4], cells, i0, i1, j0, j1,
+                            flags, np.empty(max_cells, np.int64), out)
         if code == TRAP_OK:
             return TrappingRegion(e=(e0, e1), u=(u0, u1), itinerary=tuple(int(k) for k in itin[:n]),
                                   grid=grid, cells=np.flatnonzero(flags).astype(np.int64),
@@ -381,24 +382,24 @@ def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flag
         return (TRAP_ENTRY if code == TRAP_SLIDE else code), 0, 0
     Th = 1.0 / u0
     Rl = (1.0 + e0) / (1.0 - e0)
-    h, slid, worst = _hull_from(0.5 * (e0 + e1), 0.5 * (u0 + u1), 0.5 * (v0 + v1), 0.5 * (s0 + s1), hull_steps,
-                                Th, Rl)
+    q0, q1, q2, q3, slid, worst = _hull_from(0.5 * (e0 + e1), 0.5 * (u0 + u1), 0.5 * (v0 + v1),
+                                             0.5 * (s0 + s1), hull_steps, Th, Rl)
     if slid or worst > 1e-9 * (1.0 + abs(Th)):
         # the float orbit slides, or passes a state whose cell cannot be proven clear of
         # the sliding set over the box (its margin at the box's worst corner is positive
         # by more than rounding): no region can close (numerical; it skips the tries only)
         return TRAP_SLIDE, 0, 0
-    h0, h1, h2, h3 = min(v0, h[0]), max(v1, h[1]), min(s0, h[2]), max(s1, h[3])
+    h0, h1, h2, h3 = min(v0, q0), max(v1, q1), min(s0, q2), max(s1, q3)
     dT = _up(1.0 / u0) - _dn(1.0 / u1)
     failure = TRAP_SLIDE
     escaped = False
-    miss = np.full(1, np.inf)
+    miss = np.inf
     for t in range(t_cells.size):
         cells, pad = t_cells[t], t_pad[t]
         g = t_gate[t]
-        if g == 1 and not (failure == TRAP_SLIDE and miss[0] <= 1.0):
+        if g == 1 and not (failure == TRAP_SLIDE and miss <= 1.0):
             continue  # finer cells only where the region failed by less than a cell
-        if g == 2 and failure == TRAP_SLIDE and miss[0] > 1.0:
+        if g == 2 and failure == TRAP_SLIDE and miss > 1.0:
             continue  # nor where it missed the sliding set by more than a cell
         if g == 3 and not escaped:
             continue  # a wider rectangle only where an image left the one before
@@ -411,9 +412,7 @@ def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flag
             failure = TRAP_ESCAPE
             escaped = True
             continue
-        miss[0] = np.inf
-        code, m = _close(e0, e1, u0, u1, g0, g1, cells, g3, g4, cells,
-                         np.array([i0, i1, j0, j1], np.int64), flags, queue, miss, out)
+        code, m, miss = _close(e0, e1, u0, u1, g0, g1, cells, g3, g4, cells, i0, i1, j0, j1, flags, queue, out)
         for c in range(m):  # flags zeroed again for the next try
             flags[queue[c]] = 0
         if code == TRAP_OK:
@@ -705,7 +704,7 @@ def trap_atlas(ds, progress=None, split=None):
     lengths[trapped] = ilen[tn]
     offsets = np.zeros(n_out + 1, np.int64)
     np.cumsum(lengths, out=offsets[1:])
-    itinerary = _take_rows(np.concatenate([itin0, entries]).astype(np.int64), starts, lengths)
+    itinerary = _take_rows(np.concatenate([itin0, entries.astype(np.int64, copy=False)]), starts, lengths)
     coff = np.zeros(clen.size + 1, np.int64)
     np.cumsum(clen, out=coff[1:])
     cell_off = np.zeros(trapped.size + 1, np.int64)
@@ -715,7 +714,7 @@ def trap_atlas(ds, progress=None, split=None):
                 trap_box=("trap", trapped.astype(np.int64)),
                 trap_grid=(("trap", "trap_grid_field"), grids[tn].reshape(-1, 6)),
                 trap_cell_offsets=("trap_offset", cell_off),
-                trap_cells=("trap_cell", _take_rows(cells, coff[tn], clen[tn]).astype(np.int64)))
+                trap_cells=("trap_cell", _take_rows(cells.astype(np.int64, copy=False), coff[tn], clen[tn])))
     out = xr.Dataset(data)
     for k in box_vars:
         out[k].attrs = ds[k].attrs
