@@ -21,7 +21,7 @@ os.environ.setdefault("STAIRBOUNCE_PROGRESS_INTERVAL", "1e9")
 # summed --durations); any file not named here comes after them, in its order.
 # Only the order changes: every test still runs, each file in one process.
 _SECONDS = {
-    "test_docs.py": 265, "test_explorer_browser.py": 153, "test_wheel.py": 71, "test_certify_store.py": 63,
+    "test_docs.py": 265, "test_explorer_browser.py": 153, "test_wheel.py": 45, "test_certify_store.py": 63,
     "test_figures.py": 58, "test_atlas.py": 50, "test_regions.py": 41, "test_faults.py": 38,
     "test_architecture.py": 34, "test_cli_fractal.py": 33, "test_faults_round2.py": 26,
     "test_dimension_protocol.py": 22, "test_explorer.py": 22, "test_docs_commands.py": 22,

@@ -356,11 +356,11 @@ def test_a_set_halt_flag_stops_the_kernel_before_any_pair():
     a, b, axis = borders._pairs(period, us.size, es.size)
     found = np.zeros(a.size, np.bool_)
     out = np.full((a.size, borders._OUT), 7.0)
-    borders._border_kernel(es, us, period, a, b, axis, max_iter, int(period.max()), True, found, out,
-                           np.ones(1, np.int64))
+    borders._border_kernel(es, us, period, a, b, axis, max_iter, int(period.max()),
+                           borders._WORD_BISECT, found, out, np.ones(1, np.int64))
     assert not found.any() and (out == 7.0).all()
-    borders._border_kernel(es, us, period, a, b, axis, max_iter, int(period.max()), True, found, out,
-                           np.zeros(1, np.int64))
+    borders._border_kernel(es, us, period, a, b, axis, max_iter, int(period.max()),
+                           borders._WORD_BISECT, found, out, np.zeros(1, np.int64))
     assert found.sum() == sb.border_points(ds).sizes["point"]
 
 

@@ -609,7 +609,9 @@ def test_kernels_return_at_once_when_halted_and_agree_when_not(reference):
     kernel called in place)."""
     from stairbounce import plane
 
-    es, us = reference.e.values, reference.u.values
+    # writeable copies: a coordinate's .values is read-only, and the kernel called with a
+    # read-only array is another signature, compiled again (about 15 s)
+    es, us = np.array(reference.e.values), np.array(reference.u.values)
     chunk, units = plane._chunking(es.size * us.size, 2)
     names = ("status", "word_length", "jumps", "period", "impacts")
     # pruned or not: a segment's listing answers pixels (pruned ones, those whose

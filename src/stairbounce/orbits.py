@@ -213,8 +213,10 @@ def orbit_diagram(e, u, y0=0.1, v0=0.0, transient=2000, keep=200, warm_start=Fal
     n = values.size
     # y and v (float64) and impacts (int32) for every kept iterate, and the coordinates
     _v.check_memory(f"keep = {keep} iterates of {n} parameter values", n * keep * 20 + 24 * n + 8 * keep)
-    es = np.ascontiguousarray(np.broadcast_to(ea, (n,)), dtype=np.float64)
-    us = np.ascontiguousarray(np.broadcast_to(ua, (n,)), dtype=np.float64)
+    # copies, writeable: a view of broadcast_to is read-only, and a read-only array is
+    # another signature of the kernel, compiled again (one a sweep's direction)
+    es = np.array(np.broadcast_to(ea, (n,)), dtype=np.float64)
+    us = np.array(np.broadcast_to(ua, (n,)), dtype=np.float64)
     ys = np.empty((n, keep))
     vs = np.empty((n, keep))
     ks = np.empty((n, keep), dtype=np.int32)
