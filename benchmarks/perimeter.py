@@ -5,13 +5,15 @@ sliding within max_iter, bracketed per scale by a certified atlas with class-lev
                                    [--store-from 12] [--tmp DIR]
 
 For each window (the figures' DIMENSION_WINDOWS) and depth: ``sb.certify(...,
-classes=True)`` (from ``--store-from`` on streamed with ``sb.certify_to_zarr`` into
-``--tmp`` and loaded back: the same boxes, less memory while certifying), then
-``CertifiedAtlas.perimeter_bracket()``, which runs the independent checker
-``sb.verify`` on every box and counts; the wall time of each part, the peak memory of
-the process so far (``ru_maxrss``), the lower/upper counts per scale k = 3 .. depth, the
-slope bracket between k = 3 and the depth, and the narrowest one between two scales
-whose lower counts are > 0.  The machine is shared: ``uptime`` is printed before and after.
+classes=True)``, then ``CertifiedAtlas.perimeter_bracket()``, which runs the independent
+checker ``sb.verify`` on every box and counts; from ``--store-from`` on the atlas is
+streamed with ``sb.certify_to_zarr`` into ``--tmp`` instead, and the bracket is taken
+twice, each in a fresh process: from the store tile by tile
+(``CertifiedStore.perimeter_bracket``) and from the atlas loaded whole (the counts must
+agree).  Printed: the wall time of each part, the peak memory of the process
+(``ru_maxrss``), the lower/upper counts per scale k = 3 .. depth, the slope bracket
+between k = 3 and the depth, and the narrowest one between two scales whose lower counts
+are > 0.  The machine is shared: its load is printed with the times.
 """
 
 from __future__ import annotations
@@ -37,7 +39,8 @@ def measure(name, e, u, depth, max_iter, store_from, tmp):
         path = os.path.join(tmp, f"{name}-d{depth}.zarr")
         shutil.rmtree(path, ignore_errors=True)
         sb.certify_to_zarr(path, e=e, u=u, depth=depth, max_iter=max_iter, classes=True, verify=False)
-        atlas = sb.CertifiedAtlas.load(path)
+        print(f"{name} depth {depth}: store written in {time.perf_counter() - t0:.1f} s", flush=True)
+        return _from_store(name, path)
     else:
         atlas = sb.certify(e=e, u=u, depth=depth, max_iter=max_iter, classes=True)
     t1 = time.perf_counter()
@@ -47,6 +50,46 @@ def measure(name, e, u, depth, max_iter, store_from, tmp):
     print(f"{name} depth {depth} max_iter {max_iter}: {atlas.boxes.sizes['box']:,} boxes; certify "
           f"{t1 - t0:.1f} s, verify + counts {t2 - t1:.1f} s; peak {rss:.2f} GiB; basis {r['basis']} "
           f"(verified {r['verified']}); {_uptime()}")
+    print("  k      " + " ".join(f"{k:>8d}" for k in r["k"]))
+    print("  lower  " + " ".join(f"{x:>8d}" for x in r["lower"]))
+    print("  upper  " + " ".join(f"{x:>8d}" for x in r["upper"]))
+    print(f"  slope {r['slope_text']}")
+    print(f"  narrowest between two scales with lower counts > 0: {r['finite_text']}", flush=True)
+    return r
+
+
+_CHILD = """
+import json, resource, sys, time
+import stairbounce as sb
+t = time.perf_counter()
+if sys.argv[2] == "streamed":
+    r = sb.CertifiedStore(sys.argv[1]).perimeter_bracket()
+else:
+    r = sb.CertifiedAtlas.load(sys.argv[1]).perimeter_bracket()
+print(json.dumps({"seconds": time.perf_counter() - t, "peak_gib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20,
+                  "lower": r["lower"], "upper": r["upper"], "k": r["k"], "basis": r["basis"],
+                  "slope_text": r["slope_text"], "finite_text": r["finite_text"]}))
+"""
+
+
+def _from_store(name, path):
+    """The store's perimeter bracket two ways, each in a fresh process (its own peak
+    memory): tile by tile (``CertifiedStore.perimeter_bracket``: the checker on the store,
+    then the counts) and loaded whole (``CertifiedAtlas.load(path).perimeter_bracket()``);
+    the counts must be equal."""
+    import json
+    import subprocess
+    import sys
+
+    got = {}
+    for how in ("streamed", "loaded"):
+        out = subprocess.run([sys.executable, "-c", _CHILD, path, how], capture_output=True, text=True, check=True)
+        got[how] = r = json.loads(out.stdout.strip().splitlines()[-1])
+        print(f"  {how}: verify + counts {r['seconds']:.1f} s, peak {r['peak_gib']:.2f} GiB (the process), "
+              f"basis {r['basis']}; {_uptime()}", flush=True)
+    r = got["streamed"]
+    same = all(got["streamed"][k] == got["loaded"][k] for k in ("lower", "upper", "k"))
+    print(f"  the same counts both ways: {same}")
     print("  k      " + " ".join(f"{k:>8d}" for k in r["k"]))
     print("  lower  " + " ".join(f"{x:>8d}" for x in r["lower"]))
     print("  upper  " + " ".join(f"{x:>8d}" for x in r["upper"]))

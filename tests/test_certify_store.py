@@ -65,6 +65,56 @@ def test_the_store_holds_the_in_memory_boxes_bit_for_bit(tmp_path, kw, tiling):
             assert mine[k][1] == pytest.approx(hi, rel=1e-13, abs=1e-300)
     for w in list(atlas.fraction("word"))[:3]:
         assert st.word_area_bounds(w) == pytest.approx(atlas.word_area_bounds(w), rel=1e-13)
+    # the perimeter's box counts taken tile by tile: the loaded atlas's, integer for integer
+    streamed, loaded = st.border_box_counts(), atlas.border_box_counts()
+    assert streamed.equals(loaded) and streamed.attrs == loaded.attrs
+    assert loaded["upper"].iloc[-1] > 0
+
+
+def test_the_store_s_perimeter_bracket_is_the_loaded_atlas_s(tmp_path):
+    """Issue 44 items 1 and 4: CertifiedStore.perimeter_bracket (counts tile by tile, the
+    checker on the store tile by tile) gives the dict of the loaded atlas's, basis
+    "proven"; lower counts > 0 at several scales, so the comparison could differ."""
+    kw = dict(e=(0.0, 0.333), u=(0.4, 0.733), depth=8, classes=True, trap=True)
+    st = sb.certify_to_zarr(tmp_path / "a.zarr", **kw, tile_level=5, tile_boxes=64)
+    seen = []
+    got = st.perimeter_bracket(progress=lambda d, t: seen.append((d, t)))
+    want = st.load().perimeter_bracket()
+    assert got == want and got["basis"] == "proven" and sum(x > 0 for x in got["lower"]) >= 3
+    assert seen[-1][0] == seen[-1][1] == len(seen) > 2
+    assert st.perimeter_bracket(2, 6, verify=False) == st.load().perimeter_bracket(2, 6, verify=False)
+    with pytest.raises(ValueError, match="border must be sliding"):
+        st.border_box_counts(border="words")
+    with pytest.raises(ValueError, match="verify must be True or False"):
+        st.perimeter_bracket(verify="yes")
+    with pytest.raises(ValueError, match="k2"):
+        st.perimeter_bracket(3, 3)
+
+
+def test_streamed_counts_refuse_a_store_cut_elsewhere_and_an_uncovered_window(tmp_path):
+    """The per-tile lower counts rest on each level-T cell's boxes lying in one tile: a
+    store whose stated tile level is coarser than its cut is refused, by name; boxes
+    that do not add up to the window give no counts."""
+    import zarr
+
+    B = importlib.import_module("stairbounce.structure.border_counts")
+    sb.certify_to_zarr(tmp_path / "a.zarr", **FIG7, depth=6, tile_level=5, tile_boxes=20)
+    root = zarr.open_group(str(tmp_path / "a.zarr"), mode="r+")
+    root.attrs["tile_level"] = 3
+    with pytest.raises(ValueError, match="not cut at its tile level 3"):
+        S.CertifiedStore(tmp_path / "a.zarr").border_box_counts()
+    np = pytest.importorskip("numpy")
+    acc = B.StreamedCounts(((0.0, 1.0), (0.0, 1.0)), 2, 2, 1)
+    acc.add(0, np.array([1, 1, 1]), np.array([0, 1, 0]), np.array([0, 0, 1]), np.array([0, 3, 1], np.int8))
+    with pytest.raises(ValueError, match="do not cover the window"):
+        acc.rows()
+    acc.add(1, np.array([1]), np.array([1]), np.array([1]), np.array([3], np.int8))
+    # the window in four level-1 boxes: (i, j) = (0, 0) a word, (0, 1) not sliding, (1, 0) and
+    # (1, 1) undecided.  k = 0: one cell with both classes; k = 1: each cell one box, every
+    # cell touching an undecided box; k = 2: the 4 x 4 cells of i >= 1 (i = 1 meets the
+    # undecided boxes' closure at their side), 12
+    rows = acc.rows()
+    assert [r["lower"] for r in rows] == [1, 0, 0] and [r["upper"] for r in rows] == [1, 4, 12]
 
 
 def test_the_default_tile_level():

@@ -733,6 +733,60 @@ def _border_classes(st, words, border):
     return cls
 
 
+def _counts_frame(rows, of, border):
+    """The table of :meth:`CertifiedAtlas.border_box_counts` from its rows (one dict a
+    scale: k, size_e, size_u, lower, upper), with the slope brackets between scales."""
+    import pandas as pd
+
+    df = pd.DataFrame(rows)
+    df["slope_lo"], df["slope_hi"] = _slope_bounds(df["lower"].to_numpy(float), df["upper"].to_numpy(float), 1)
+    df.attrs["of"] = of
+    df.attrs["border"] = border
+    return df
+
+
+def _scales(k1, k2, depth):
+    """The scales of :meth:`CertifiedAtlas.perimeter_bracket` (default ``min(3, depth - 1)
+    .. depth``), checked."""
+    k1 = check_count("k1", min(3, depth - 1) if k1 is None else k1, 0, depth)
+    k2 = check_count("k2", depth if k2 is None else k2, k1 + 1, depth)
+    return k1, k2
+
+
+def perimeter_result(df, k1, k2, depth, max_iter, verdict):
+    """The dict :meth:`CertifiedAtlas.perimeter_bracket` returns, from the sliding
+    border's counts ``df`` and the independent checker's ``verdict`` on the boxes they
+    were counted from (None: not run); :meth:`CertifiedStore.perimeter_bracket` builds
+    the same from a store's tiles."""
+    lower, upper = df["lower"].to_numpy(), df["upper"].to_numpy()
+    lo, hi = CertifiedAtlas._slope_between(df, k1, k2)
+    span = _finite_scales(lower, upper, k1, k2)
+    if span is None:
+        finite, finite_text = None, (f"no two scales of k = {k1} .. {k2} have a lower count > 0: every "
+                                     "slope bracket there has an open end")
+    else:
+        a, b = span
+        flo, fhi = CertifiedAtlas._slope_between(df, a, b)
+        finite, finite_text = (a, b, flo, fhi), slope_text(flo, fhi, a, b, lower, upper)
+    what = f"certified boxes (interval arithmetic, certify depth {depth}, max_iter {max_iter})"
+    if verdict is None:
+        verified, basis = None, "numerical"
+        proof = what + ", NOT re-verified (verify=False): the certifier's claim, not yet the checker's"
+    else:
+        v = verdict
+        verified = bool(v.ok and v.atlas and v.complete)
+        basis = "proven" if verified else "numerical"
+        proof = (what + f"; all {v.checked} boxes re-verified by the independent checker sb.verify"
+                 if verified else f"NOT proven: sb.verify did not pass the atlas ({v.message})")
+    proof += ("; the counts bound the number of closed window/2^k cells meeting the border of the region "
+              "sliding within max_iter")
+    return {"k1": k1, "k2": k2, "k": list(range(k1, k2 + 1)),
+            "lower": [int(x) for x in lower[k1:k2 + 1]], "upper": [int(x) for x in upper[k1:k2 + 1]],
+            "slope": (lo, hi), "slope_text": slope_text(lo, hi, k1, k2, lower, upper),
+            "finite": finite, "finite_text": finite_text, "depth": depth, "max_iter": max_iter,
+            "verified": verified, "basis": basis, "proof": proof, "not_proven": NOT_PROVEN}
+
+
 NOT_PROVEN = ("the border of the region sliding at all (the limit max_iter -> infinity), nor the dimension "
               "(the limit of small scales: a slope between finite scales is not the dimension)")
 """What the proven box counts of the perimeter (:meth:`CertifiedAtlas.perimeter_bracket`) do not prove."""
@@ -1010,8 +1064,6 @@ class CertifiedAtlas:
         if not book.complete:
             raise ValueError("border_box_counts: the boxes do not cover the window (sb.verify says how much is "
                              "uncovered): an uncovered part may hold the border, so no upper count is proven")
-        import pandas as pd
-
         ds = self.boxes
         level = ds["level"].values.astype(np.int64)
         ii = ds["i"].values
@@ -1059,11 +1111,7 @@ class CertifiedAtlas:
             (e_lo, e_hi), (u_lo, u_hi) = self.window
             rows.append({"k": k, "size_e": (e_hi - e_lo) / n, "size_u": (u_hi - u_lo) / n,
                          "lower": int(two.size), "upper": int(upper)})
-        df = pd.DataFrame(rows)
-        df["slope_lo"], df["slope_hi"] = _slope_bounds(df["lower"].to_numpy(float), df["upper"].to_numpy(float), 1)
-        df.attrs["of"] = book.of
-        df.attrs["border"] = border
-        return df
+        return _counts_frame(rows, book.of, border)
 
     def slope_bracket(self, k1, k2, border="sliding"):
         """slope_bracket(k1, k2, border="sliding") -> (lo, hi): proven bracket on the
@@ -1101,38 +1149,14 @@ class CertifiedAtlas:
         """
         if verify not in (True, False):
             raise ValueError(f"verify must be True or False, got {verify!r}")
-        k1 = check_count("k1", min(3, self.depth - 1) if k1 is None else k1, 0, self.depth)
-        k2 = check_count("k2", self.depth if k2 is None else k2, k1 + 1, self.depth)
+        k1, k2 = _scales(k1, k2, self.depth)
         df = self.border_box_counts("sliding")
-        lower, upper = df["lower"].to_numpy(), df["upper"].to_numpy()
-        lo, hi = self._slope_between(df, k1, k2)
-        span = _finite_scales(lower, upper, k1, k2)
-        if span is None:
-            finite, finite_text = None, (f"no two scales of k = {k1} .. {k2} have a lower count > 0: every "
-                                         "slope bracket there has an open end")
-        else:
-            a, b = span
-            flo, fhi = self._slope_between(df, a, b)
-            finite, finite_text = (a, b, flo, fhi), slope_text(flo, fhi, a, b, lower, upper)
-        what = f"certified boxes (interval arithmetic, certify depth {self.depth}, max_iter {self.max_iter})"
-        if not verify:
-            verified, basis = None, "numerical"
-            proof = what + ", NOT re-verified (verify=False): the certifier's claim, not yet the checker's"
-        else:
+        verdict = None
+        if verify:
             from .verdict import verify as check
 
-            v = check(self)
-            verified = bool(v.ok and v.atlas and v.complete)
-            basis = "proven" if verified else "numerical"
-            proof = (what + f"; all {v.checked} boxes re-verified by the independent checker sb.verify"
-                     if verified else f"NOT proven: sb.verify did not pass the atlas ({v.message})")
-        proof += ("; the counts bound the number of closed window/2^k cells meeting the border of the region "
-                  "sliding within max_iter")
-        return {"k1": k1, "k2": k2, "k": list(range(k1, k2 + 1)),
-                "lower": [int(x) for x in lower[k1:k2 + 1]], "upper": [int(x) for x in upper[k1:k2 + 1]],
-                "slope": (lo, hi), "slope_text": slope_text(lo, hi, k1, k2, lower, upper),
-                "finite": finite, "finite_text": finite_text, "depth": self.depth, "max_iter": self.max_iter,
-                "verified": verified, "basis": basis, "proof": proof, "not_proven": NOT_PROVEN}
+            verdict = check(self)
+        return perimeter_result(df, k1, k2, self.depth, self.max_iter, verdict)
 
     # -- files -------------------------------------------------------------
 

@@ -626,6 +626,46 @@ class CertifiedStore:
             other = down(other + st["no_slide_within"][0])
         return lo, float(np.nextafter(self._window_area()[1] - other, np.inf))
 
+    def border_box_counts(self, border="sliding", progress=None):
+        """border_box_counts(border="sliding", progress=None) -> pandas.DataFrame: the
+        proven box counts of the sliding region's border (the paper's perimeter), as
+        :meth:`CertifiedAtlas.border_box_counts` gives them on the loaded atlas, integer
+        for integer, taken tile by tile (:mod:`stairbounce.structure.border_counts`):
+        the memory of a tile and one bit per cell of each scale, not the whole atlas.
+
+        ``border="words"`` (every border between words) needs the words of every box
+        at once: load the atlas for it (ValueError here).  The counts are proven when
+        the boxes are; :meth:`perimeter_bracket` runs the checker on the store."""
+        from .border_counts import store_rows
+        from .certify import _counts_frame
+
+        if border != "sliding":
+            raise ValueError(f"border must be sliding for a store (the words' borders need every box at once: "
+                             f"CertifiedAtlas.load(path).border_box_counts(border={border!r})), got {border!r}")
+        rows, _ = store_rows(self.path, progress)
+        return _counts_frame(rows, "the window", "sliding")
+
+    def perimeter_bracket(self, k1=None, k2=None, *, verify=True, progress=None):
+        """perimeter_bracket(k1=None, k2=None, *, verify=True, progress=None) -> dict: the
+        proven box counts of the paper's perimeter and the slope brackets, as
+        :meth:`CertifiedAtlas.perimeter_bracket` gives them on the loaded atlas (the
+        same dict), with the store's memory: the counts tile by tile
+        (:meth:`border_box_counts`), and with ``verify`` the independent checker on the
+        store tile by tile (``sb.verify(path)``); ``basis`` is ``"proven"`` only when
+        it passes.  ``progress(done, total)``: after each tile counted."""
+        from .certify import _scales, perimeter_result
+
+        if verify not in (True, False):
+            raise ValueError(f"verify must be True or False, got {verify!r}")
+        k1, k2 = _scales(k1, k2, self.depth)
+        verdict = None
+        if verify:
+            from .verdict import verify as check
+
+            verdict = check(self.path)
+        df = self.border_box_counts("sliding", progress)
+        return perimeter_result(df, k1, k2, self.depth, self.max_iter, verdict)
+
     def __repr__(self):
         f = self.fraction()
         parts = ", ".join(f"{k} {100 * v:.1f}%" for k, v in f.items())
