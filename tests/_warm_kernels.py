@@ -51,6 +51,13 @@ def _proofs():
     sb.verify(sb.certify(depth=5, classes=True, **fig7))
     sb.verify(sb.certify(e=(0.29, 0.31), u=(0.40, 0.42), depth=5, trap=True))
     sb.certify_box((0.2, 0.2001), (0.62, 0.6201))
+    import numpy as np
+
+    from stairbounce.structure.border_counts import StreamedCounts
+
+    counts = StreamedCounts(((0.0, 1.0), (0.0, 1.0)), 2, 2, 1)  # a store's perimeter counts, tile by tile
+    counts.add(0, np.array([1, 1, 1, 1]), np.array([0, 1, 0, 1]), np.array([0, 0, 1, 1]), np.array([0, 3, 1, 3], np.int8))
+    counts.rows()
 
 
 PARTS = {"scans": _scans, "proofs": _proofs}

@@ -38,8 +38,9 @@ def _grid_mask(ds, y0=1.0, v0=0.0):
 
 
 def _count(es, us, max_iter=20, y0=1.0, v0=0.0, grid=True):
-    """Pixels the kernel pruned (its own count)."""
-    es, us = np.asarray(es, float), np.asarray(us, float)
+    """Pixels the kernel pruned (its own count).  Writeable copies: a coordinate's
+    ``.values`` is read-only, another signature of the kernel, compiled again (~15 s)."""
+    es, us = np.array(es, float), np.array(us, float)
     return sc._run(es, us, grid, max_iter, y0, v0, True)[1]
 
 
@@ -54,7 +55,7 @@ def _check_window(e, u, n_e, n_u, max_iter, y0=1.0, v0=0.0):
     mask = _grid_mask(pruned, y0, v0)
     n = _count(pruned.e.values, pruned.u.values, max_iter, y0, v0)
     assert n == mask.sum()
-    assert sc._run(pruned.e.values, pruned.u.values, True, max_iter, y0, v0, False)[1] == 0
+    assert sc._run(np.array(pruned.e.values), np.array(pruned.u.values), True, max_iter, y0, v0, False)[1] == 0
     assert (full.status.values[mask] == 1).all()
     return pruned, n
 
