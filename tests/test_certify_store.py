@@ -271,6 +271,29 @@ def test_cli_store_resume_verify_and_errors(tmp_path, capsys):
         assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
+def test_cli_classes_and_the_perimeter_of_a_verified_store_or_file(tmp_path, capsys):
+    """certify --classes (class-level proofs, in a store or in memory), then --verify
+    --perimeter: the counts printed per scale are the API's (a store's tile by tile, a
+    file's loaded), basis proven; --perimeter without --verify is one line, status 2."""
+    import re
+
+    store, nc = str(tmp_path / "s.zarr"), str(tmp_path / "a.nc")
+    args = ["certify", "--depth", "6", "--classes", "--top", "1"]
+    code, out, err = _cli(args + ["--store", store], capsys)
+    assert code == 0 and "sliding " in out.split("proven: at least")[1].split("\n")[0], (out, err)
+    assert _cli(args + ["--out", nc], capsys)[0] == 0
+    for path in (store, nc):
+        code, out, err = _cli(["certify", "--verify", path, "--perimeter"], capsys)
+        assert code == 0, err
+        r = (S.CertifiedStore(path) if path == store else sb.CertifiedAtlas.load(path)).perimeter_bracket()
+        assert "proven box counts of the sliding border (basis: proven, certify depth 6" in out
+        for k, lo, up in zip(r["k"], r["lower"], r["upper"]):
+            assert re.search(rf"k = +{k}  window/{1 << k} +lower +{lo:,}  upper +{up:,}\n", out), (k, out)
+        assert sum(r["lower"]) > 0 and f"slope {r['slope_text']}" in out and "not proven:" in out
+    code, out, err = _cli(["certify", "--perimeter"], capsys)
+    assert code == 2 and "--perimeter goes with --verify" in err and len(err.strip().splitlines()) == 1
+
+
 def test_ragged_rows_are_taken_as_the_rows_concatenated():
     """_take_rows (a compiled loop) against the rows sliced and concatenated in Python:
     any order, empty rows, other dtypes; rows outside the values refused."""

@@ -187,6 +187,19 @@ def window_size(size, e, u, default_window: bool) -> tuple[int, int]:
     return square_counts(e, u)
 
 
+def perimeter_lines(r, extra=()) -> list[str]:
+    """The lines printing a perimeter bracket ``r`` (``CertifiedAtlas.perimeter_bracket``'s
+    or ``CertifiedStore.perimeter_bracket``'s dict): its counts per scale, the slope
+    brackets, ``extra`` lines, then its basis and what it does not prove."""
+    lines = [f"proven box counts of the sliding border (basis: {r['basis']}, certify depth {r['depth']}, "
+             f"max_iter {r['max_iter']}): closed cells of side window/2^k meeting the border of the region "
+             "sliding within max_iter"]
+    lines += [f"  k = {k:2d}  window/{1 << k:<7d} lower {lo:>9,}  upper {up:>9,}"
+              for k, lo, up in zip(r["k"], r["lower"], r["upper"])]
+    lines += [f"  slope {r['slope_text']}", f"  narrowest between two scales with lower counts > 0: {r['finite_text']}"]
+    return lines + list(extra) + [f"  {r['basis']}: {r['proof']}", f"  not proven: {r['not_proven']}"]
+
+
 def plural(n: int, word: str, many: str | None = None) -> str:
     """``plural(1, "tile")`` -> "1 tile", ``plural(3, "tile")`` -> "3 tiles"."""
     return f"{n} {word if n == 1 else (many or word + 's')}"

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import typer
 
-from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, progress_bar, save_figure
+from ._app import (FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, perimeter_lines, progress_bar,
+                   save_figure)
 
 _FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -22,7 +23,11 @@ def _pct(x: float, digits: int, down: bool = True) -> str:
     return str((Decimal(x) * 100).quantize(q, rounding=ROUND_FLOOR if down else ROUND_CEILING))
 
 
-def _verify(path: Path) -> None:
+# the proven statuses the summaries list (with --classes, "sliding": some word, which of a few)
+_PROVEN = {False: ("word", "no_sliding", "no_slide_within"), True: ("word", "sliding", "no_sliding", "no_slide_within")}
+
+
+def _verify(path: Path, perimeter: bool = False) -> None:
     try:
         from ..structure.verdict import verify
     except ImportError:
@@ -45,8 +50,34 @@ def _verify(path: Path) -> None:
         typer.echo(f"  proven words: {len(words)} (at least that many words in {n['of']})")
         for w, (lo, hi) in words[:10]:
             typer.echo(f"  {w:<32} area in [{lo:.6g}, {hi:.6g}]")
+    if perimeter:
+        _perimeter(path, v)
     if not v.ok:
         raise typer.Exit(1)
+
+
+def _perimeter(path: Path, verdict) -> None:
+    """The proven box counts of the sliding region's border of the file just verified
+    (``verdict``: basis proven only when it passed): a store's tile by tile, an atlas
+    file's loaded."""
+    from ..structure._store_read import is_store
+    from ..structure.certify import CertifiedAtlas, _scales, perimeter_result
+    from ..structure.certify_store import CertifiedStore
+
+    try:
+        if is_store(path):
+            st = CertifiedStore(path)
+            df = _with_phases(lambda p, phase: (phase("border counts, tile by tile"),
+                                                st.border_box_counts(progress=p))[1])
+            depth, max_iter = st.depth, st.max_iter
+        else:
+            atlas = CertifiedAtlas.load(path)
+            df, depth, max_iter = atlas.border_box_counts(), atlas.depth, atlas.max_iter
+        r = perimeter_result(df, *_scales(None, None, depth), depth, max_iter, verdict)
+    except ValueError as exc:
+        raise CLIError(f"--perimeter: {exc}") from None
+    for line in perimeter_lines(r):
+        typer.echo(line)
 
 
 def _picture(atlas, png: Path, dpi: int, force: bool) -> None:
@@ -146,6 +177,14 @@ def certify_(
                               "reason 'trapping'). Costs more than the atlas itself."),
     verify: Path = typer.Option(None, "--verify", help="Instead: re-check the certificates of a saved atlas "
                                 "(.nc or .zarr, or a --store) with the independent checker."),
+    classes: bool = typer.Option(False, "--classes", help="Class-level proofs: a border box where every point "
+                                 "slides within --max-iter, with one of several words, is proven 'sliding', and "
+                                 "one where none does 'no_slide_within'; what stays undecided is the sliding "
+                                 "region's border (for the proven box counts of --verify --perimeter)."),
+    perimeter: bool = typer.Option(False, "--perimeter", help="With --verify: also print the proven box counts "
+                                   "of the sliding region's border (the paper's perimeter) per scale window/2^k "
+                                   "and the slope brackets, from the verified boxes (a store: tile by tile, in the "
+                                   "memory of a tile); proven only when the checker passed every box."),
     store: Path = typer.Option(None, "--store", help="Stream the atlas to this .zarr store tile by tile "
                                "(memory bounded by a tile, not the depth; the same boxes as in memory); "
                                "the same command resumes an interrupted store. Not with --out or --png "
@@ -173,8 +212,10 @@ def certify_(
     from ..structure.certificate import STATUSES
     from ..structure.certify import ATLAS_SUFFIXES, certify
 
+    if perimeter and verify is None:
+        raise CLIError("--perimeter goes with --verify (the counts of a saved atlas or store, from its verified boxes)")
     if verify is not None:
-        _verify(verify)
+        _verify(verify, perimeter)
         return
     e_lo, e_hi = parse_range("e", e)
     u_lo, u_hi = parse_range("u", u)
@@ -183,7 +224,7 @@ def certify_(
     if store is not None:
         if out is not None or png is not None:
             raise CLIError("--store writes the atlas itself: give --out or --png without --store, or load the store")
-        _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, top)
+        _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, classes, top)
         return
     if out is not None:
         suffix_of(out, ATLAS_SUFFIXES, "--out")   # the rule of CertifiedAtlas.save, before the work
@@ -196,7 +237,8 @@ def certify_(
     t0 = time.perf_counter()
     try:
         atlas = _with_phases(lambda p, ph: certify(e=(e_lo, e_hi), u=(u_lo, u_hi), depth=depth,
-                                                  max_iter=max_iter, progress=p, trap=trap, phase=ph))
+                                                  max_iter=max_iter, progress=p, trap=trap, classes=classes,
+                                                  phase=ph))
     except ValueError as exc:  # the library names its parameters; the options carry the same names
         raise CLIError(f"--{str(exc).replace('_', '-')}" if str(exc).split()[0] in ("depth", "max_iter")
                        else str(exc)) from None
@@ -213,7 +255,7 @@ def certify_(
     n_box = atlas.boxes.sizes["box"]
     typer.echo(f"e in [{e_lo:g}, {e_hi:g}], u in [{u_lo:g}, {u_hi:g}], depth {depth} (boxes down to "
                f"window/{1 << depth}), max_iter {max_iter}: {n_box} boxes in {seconds:.2f} s")
-    typer.echo("proven: at least " + ", ".join(f"{k} {_pct(f[k], 2)}%" for k in ("word", "no_sliding", "no_slide_within"))
+    typer.echo("proven: at least " + ", ".join(f"{k} {_pct(f[k], 2)}%" for k in _PROVEN[classes])
                + " of the window's area (proven bounds: the boxes' exact areas summed, rounded down)")
     if trap:
         rs, st = atlas.boxes["reason"].values, atlas.boxes["status"].values
@@ -233,7 +275,7 @@ def certify_(
                    f"({row.boxes} boxes)")
 
 
-def _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, top):
+def _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, classes, top):
     """``--store``: :func:`stairbounce.certify_to_zarr` behind a progress bar over its
     tiles, then the summary from the store's proven numbers (its boxes not loaded)."""
     import time
@@ -247,8 +289,8 @@ def _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, t
     t0 = time.perf_counter()
     try:
         st = _with_phases(lambda p, ph: certify_to_zarr(store, e=(e_lo, e_hi), u=(u_lo, u_hi), depth=depth,
-                                                        max_iter=max_iter, trap=trap, client=scheduler,
-                                                        progress=p, phase=ph))
+                                                        max_iter=max_iter, trap=trap, classes=classes,
+                                                        client=scheduler, progress=p, phase=ph))
     except KeyboardInterrupt:
         typer.echo(f"stairbounce: the complete tiles are kept in {store}; run the same command to resume", err=True)
         raise
@@ -259,7 +301,7 @@ def _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, t
     f, f_up = st.fraction(), st.fraction(bound="upper")
     typer.echo(f"wrote {store}: e in [{e_lo:g}, {e_hi:g}], u in [{u_lo:g}, {u_hi:g}], depth {depth}, max_iter "
                f"{max_iter}: {st.boxes} boxes in {st.attrs['n_tiles']} tiles, {seconds:.2f} s")
-    typer.echo("proven: at least " + ", ".join(f"{k} {_pct(f[k], 2)}%" for k in ("word", "no_sliding", "no_slide_within"))
+    typer.echo("proven: at least " + ", ".join(f"{k} {_pct(f[k], 2)}%" for k in _PROVEN[classes])
                + " of the window's area (proven bounds, summed over the tiles and rounded outward)")
     typer.echo(f"undecided at most {_pct(f_up['undecided'], 2, down=False)}%: "
                + ", ".join(f"{k} {_pct(v, 2, down=False)}%" for k, v in st.fraction("reason", "upper").items() if v > 0))

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from ._app import FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, progress_bar, save_figure
+from ._app import (FORCE_HELP, CLIError, app, check_dpi, check_outputs, parse_range, perimeter_lines, progress_bar,
+                   save_figure)
 
 # Scans with more pixel-steps than this show a progress bar.
 _PROGRESS_WORK = 2e8
@@ -534,17 +535,9 @@ def _print_proven_counts(ew, uw, depth, max_iter, dimension):
         r = atlas.perimeter_bracket(0 if depth == 1 else None)
     except ValueError as exc:
         raise CLIError(f"--proven-depth: {exc}") from None
-    typer.echo(f"proven box counts of the sliding border (basis: {r['basis']}, certify depth {depth}, "
-               f"max_iter {max_iter}): closed cells of side window/2^k meeting the border of the region "
-               "sliding within max_iter")
-    for k, lo, up in zip(r["k"], r["lower"], r["upper"]):
-        typer.echo(f"  k = {k:2d}  window/{1 << k:<7d} lower {lo:>9,}  upper {up:>9,}")
-    typer.echo(f"  slope {r['slope_text']}")
-    typer.echo(f"  narrowest between two scales with lower counts > 0: {r['finite_text']}")
     verdict, why = slope_verdict(dimension, r["finite"])
-    typer.echo(f"  beside the numerical D = {dimension:.4f}: {verdict} ({why})")
-    typer.echo(f"  {r['basis']}: {r['proof']}")
-    typer.echo(f"  not proven: {r['not_proven']}")
+    for line in perimeter_lines(r, [f"  beside the numerical D = {dimension:.4f}: {verdict} ({why})"]):
+        typer.echo(line)
 
 
 def _plot_uncertainty(result, ew, uw, compare=()):
