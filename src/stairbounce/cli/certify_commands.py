@@ -73,7 +73,8 @@ def _perimeter(path: Path, verdict) -> None:
         else:
             atlas = CertifiedAtlas.load(path)
             df, depth, max_iter = atlas.border_box_counts(), atlas.depth, atlas.max_iter
-        r = perimeter_result(df, *_scales(None, None, depth), depth, max_iter, verdict)
+        k1, k2 = _scales(None, None, depth)
+        r = perimeter_result(df, k1, k2, depth, max_iter, verdict)
     except ValueError as exc:
         raise CLIError(f"--perimeter: {exc}") from None
     for line in perimeter_lines(r):
