@@ -67,8 +67,12 @@ def _perimeter(path: Path, verdict) -> None:
     try:
         if is_store(path):
             st = CertifiedStore(path)
-            df = _with_phases(lambda p, phase: (phase("border counts, tile by tile"),
-                                                st.border_box_counts(progress=p))[1])
+
+            def count(progress, phase):
+                phase("border counts, tile by tile")
+                return st.border_box_counts(progress=progress)
+
+            df = _with_phases(count)
             depth, max_iter = st.depth, st.max_iter
         else:
             atlas = CertifiedAtlas.load(path)

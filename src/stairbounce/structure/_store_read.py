@@ -70,6 +70,14 @@ def read_tile(path, k):
     return arrays, dict(g.attrs)
 
 
+def tile_level(root, depth):
+    """The level the store's tiles are cut at (its root attribute ``tile_level``), or
+    ``depth`` when that is missing or not an int in ``[0, depth]``: the cut the verdict's
+    overlap argument and the streamed border counts rest on."""
+    level = root.get("tile_level")
+    return level if isinstance(level, int) and 0 <= level <= depth else depth
+
+
 def store_state(path):
     """``(root attrs, record attrs, done flags, checksums)`` of a store."""
     import zarr

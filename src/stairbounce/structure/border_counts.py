@@ -37,10 +37,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from . import _kernel as K
-from .certificate import STATUSES
-
-_SLIDING_STATUS = STATUSES.index("sliding")  # class-level proofs (certify(classes=True))
+from .certify import _border_classes
 
 
 @njit(cache=True, nogil=True)
@@ -137,7 +134,7 @@ class StreamedCounts:
         self.window, self.depth, self.deepest = window, int(depth), int(deepest)
         self.T = min(max(int(tile_level), 0), self.depth)
         self.touched = [_bitmap(k) for k in range(self.depth + 1)]
-        self.classes = [(_bitmap(k), _bitmap(k)) for k in range(self.T)]  # sliding, not sliding
+        self.classes = [(_bitmap(k), _bitmap(k)) for k in range(self.T)]  # not sliding, sliding
         self.lower = np.zeros(self.depth + 1, np.int64)
         self.owner = np.full(1 << (2 * self.T), -1, np.int32)  # the tile of each level-T cell
         self.cells = 0  # deepest-level cells the boxes cover, a Python int
@@ -150,21 +147,20 @@ class StreamedCounts:
         self.cells += sum(int(c) << (2 * (self.deepest - lv))
                           for lv, c in zip(*np.unique(level, return_counts=True)))
         self._own(tile, level, ii, jj)
-        cls = np.full(status.size, -2, np.int64)  # -2 undecided, 0 sliding, 1 not sliding
-        cls[(status == K.WORD) | (status == _SLIDING_STATUS)] = 0
-        cls[(status == K.NO_SLIDING) | (status == K.NO_SLIDE_WITHIN)] = 1
-        und = cls == -2
+        # CertifiedAtlas.border_box_counts' classes: -2 undecided, 0 sliding, -1 not sliding
+        sliding = _border_classes(np.asarray(status), None, "sliding") + 1  # -1 undecided, 1, 0
+        und = sliding < 0
         for k in range(self.depth + 1):
             _touch(self.touched[k], k, level[und], ii[und], jj[und])
             fine = (level >= k) & ~und
             if k < self.T:
                 for c in (0, 1):
-                    s = fine & (cls == c)
+                    s = fine & (sliding == c)
                     _mark(self.classes[k][c], k, level[s], ii[s], jj[s])
                 continue
             sh = level[fine] - k
             code = ((ii[fine] >> sh) << k) + (jj[fine] >> sh)
-            keys = np.unique(code * 2 + cls[fine])
+            keys = np.unique(code * 2 + sliding[fine])
             cell = keys >> 1
             two = cell[1:][cell[1:] == cell[:-1]]
             self.lower[k] += two.size
@@ -194,7 +190,6 @@ class StreamedCounts:
                  "lower": int(self.lower[k]), "upper": int(_count(self.touched[k]))} for k in range(self.depth + 1)]
 
 
-
 def store_rows(path, progress=None):
     """``(rows, attrs)``: the sliding border's counts of the store at ``path``, its tiles
     read one at a time, each checked against its checksum (a damaged or incomplete
@@ -215,9 +210,7 @@ def store_rows(path, progress=None):
             attrs0 = {k: v for k, v in attrs.items() if k not in R.TILE_ATTRS}
             depth = int(attrs0["depth"])
             window = (tuple(float(x) for x in attrs0["e_range"]), tuple(float(x) for x in attrs0["u_range"]))
-            level = root.get("tile_level")
-            level = level if isinstance(level, int) and 0 <= level <= depth else depth
-            acc = StreamedCounts(window, depth, deepest_level(depth, attrs0), level)
+            acc = StreamedCounts(window, depth, deepest_level(depth, attrs0), R.tile_level(root, depth))
         acc.add(t, arrays["level"], arrays["i"], arrays["j"], np.asarray(arrays["status"]))
         del arrays, got
         if progress is not None:

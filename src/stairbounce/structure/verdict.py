@@ -584,9 +584,7 @@ def _verify_tiles(path, workers):
     window, depth, shift = None, 0, 0
     if is_atlas:
         window, depth = _window(ds)
-        t_level = root.get("tile_level")
-        t_level = t_level if isinstance(t_level, int) and 0 <= t_level <= depth else depth
-        shift = 2 * (depth - t_level)
+        shift = 2 * (depth - R.tile_level(root, depth))
     job = (str(path), token, base, is_atlas, window, depth, shift)
     first_tile = _check_tile(job, 0, crc[0], ds)
     del ds
