@@ -2,7 +2,7 @@
 sliding within max_iter, bracketed per scale by a certified atlas with class-level proofs.
 
     python benchmarks/perimeter.py [--windows fig7,fig6] [--depths 10,12] [--max-iter 1000]
-                                   [--store-from 12] [--tmp DIR]
+                                   [--store-from 12] [--tmp DIR] [--stores DIR]
 
 For each window (the figures' DIMENSION_WINDOWS) and depth: ``sb.certify(...,
 classes=True)``, then ``CertifiedAtlas.perimeter_bracket()``, which runs the independent
@@ -11,9 +11,13 @@ streamed with ``sb.certify_to_zarr`` into ``--tmp`` instead, and the bracket is 
 twice, each in a fresh process: from the store tile by tile
 (``CertifiedStore.perimeter_bracket``) and from the atlas loaded whole (the counts must
 agree).  Printed: the wall time of each part, the peak memory of the process
-(``ru_maxrss``), the lower/upper counts per scale k = 3 .. depth, the slope bracket
+(``ru_maxrss``), the proven points inside undecided boxes that the lower counts
+used (``structure/witnesses.py``), the lower/upper counts per scale k = 3 .. depth, the slope bracket
 between k = 3 and the depth, and the narrowest one between two scales whose lower counts
-are > 0.  The machine is shared: its load is printed with the times.
+are > 0.  The machine is shared: its load is printed with the times.  ``--stores DIR``
+keeps the stores in DIR, and a store already there is resumed (``certify_to_zarr`` checks
+its tiles against their checksums and computes only what is missing) instead of written
+again: to count an existing store with changed counting code.
 """
 
 from __future__ import annotations
@@ -31,15 +35,16 @@ def _uptime():
         return "load " + " ".join(f.read().split()[:3])
 
 
-def measure(name, e, u, depth, max_iter, store_from, tmp):
+def measure(name, e, u, depth, max_iter, store_from, tmp, keep=False):
     import stairbounce as sb
 
     t0 = time.perf_counter()
     if depth >= store_from:
         path = os.path.join(tmp, f"{name}-d{depth}.zarr")
-        shutil.rmtree(path, ignore_errors=True)
+        if not keep:
+            shutil.rmtree(path, ignore_errors=True)
         sb.certify_to_zarr(path, e=e, u=u, depth=depth, max_iter=max_iter, classes=True, verify=False)
-        print(f"{name} depth {depth}: store written in {time.perf_counter() - t0:.1f} s", flush=True)
+        print(f"{name} depth {depth}: store written (or resumed) in {time.perf_counter() - t0:.1f} s", flush=True)
         return _from_store(name, path)
     else:
         atlas = sb.certify(e=e, u=u, depth=depth, max_iter=max_iter, classes=True)
@@ -49,7 +54,7 @@ def measure(name, e, u, depth, max_iter, store_from, tmp):
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
     print(f"{name} depth {depth} max_iter {max_iter}: {atlas.boxes.sizes['box']:,} boxes; certify "
           f"{t1 - t0:.1f} s, verify + counts {t2 - t1:.1f} s; peak {rss:.2f} GiB; basis {r['basis']} "
-          f"(verified {r['verified']}); {_uptime()}")
+          f"(verified {r['verified']}), {r['witnesses']:,} proven points in undecided boxes; {_uptime()}")
     print("  k      " + " ".join(f"{k:>8d}" for k in r["k"]))
     print("  lower  " + " ".join(f"{x:>8d}" for x in r["lower"]))
     print("  upper  " + " ".join(f"{x:>8d}" for x in r["upper"]))
@@ -68,7 +73,8 @@ else:
     r = sb.CertifiedAtlas.load(sys.argv[1]).perimeter_bracket()
 print(json.dumps({"seconds": time.perf_counter() - t, "peak_gib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20,
                   "lower": r["lower"], "upper": r["upper"], "k": r["k"], "basis": r["basis"],
-                  "slope_text": r["slope_text"], "finite_text": r["finite_text"]}))
+                  "slope_text": r["slope_text"], "finite_text": r["finite_text"],
+                  "witnesses": r["witnesses"], "tried": r["witnesses_tried"]}))
 """
 
 
@@ -86,7 +92,8 @@ def _from_store(name, path):
         out = subprocess.run([sys.executable, "-c", _CHILD, path, how], capture_output=True, text=True, check=True)
         got[how] = r = json.loads(out.stdout.strip().splitlines()[-1])
         print(f"  {how}: verify + counts {r['seconds']:.1f} s, peak {r['peak_gib']:.2f} GiB (the process), "
-              f"basis {r['basis']}; {_uptime()}", flush=True)
+              f"basis {r['basis']}, {r['witnesses']:,} proven points in undecided boxes ({r['tried']:,} "
+              f"certified); {_uptime()}", flush=True)
     r = got["streamed"]
     same = all(got["streamed"][k] == got["loaded"][k] for k in ("lower", "upper", "k"))
     print(f"  the same counts both ways: {same}")
@@ -107,13 +114,16 @@ def main(argv=None):
     p.add_argument("--max-iter", type=int, default=1000)
     p.add_argument("--store-from", type=int, default=12)
     p.add_argument("--tmp", default=None)
+    p.add_argument("--stores", default=None)
     a = p.parse_args(argv)
     print(f"{time.strftime('%Y-%m-%d %H:%M')} UTC, {os.cpu_count()} cores, {_uptime()}", flush=True)
     with tempfile.TemporaryDirectory(dir=a.tmp) as tmp:
+        if a.stores:
+            os.makedirs(a.stores, exist_ok=True)
         for name in a.windows.split(","):
             (e, u), _ = DIMENSION_WINDOWS[name]
             for depth in (int(d) for d in a.depths.split(",")):
-                measure(name, e, u, depth, a.max_iter, a.store_from, tmp)
+                measure(name, e, u, depth, a.max_iter, a.store_from, a.stores or tmp, keep=bool(a.stores))
     print(f"done, {_uptime()}")
 
 

@@ -150,8 +150,19 @@ def test_the_default_is_the_sliding_border_and_words_is_unchanged(classes):
         a.border_box_counts(border="words")
     assert default.equals(sliding) and default.attrs["border"] == "sliding"
     assert (words["lower"].to_list(), words["upper"].to_list()) == WORDS_BEFORE[classes]
-    assert (sliding["lower"].to_list(), sliding["upper"].to_list()) == SLIDING_BEFORE[classes]
-    assert a.slope_bracket(1, 3) == a.slope_bracket(1, 3, border="sliding") != a.slope_bracket(1, 3, border="words")
+    # the counts of the boxes alone (witnesses=False) are those from before the proven
+    # points inside undecided boxes; with them the lower counts rise, the upper ones stay
+    bare = a.border_box_counts(witnesses=False)
+    assert (bare["lower"].to_list(), bare["upper"].to_list()) == SLIDING_BEFORE[classes]
+    assert sliding["upper"].to_list() == SLIDING_BEFORE[classes][1]
+    assert (sliding["lower"] >= bare["lower"]).all() and (sliding["lower"] > bare["lower"]).sum() >= 3
+    assert (sliding["lower"] <= sliding["upper"]).all()
+    with pytest.raises(ValueError, match="border='sliding' only"):
+        a.border_box_counts(border="words", witnesses=True)
+    with pytest.raises(ValueError, match="witnesses must be"):
+        a.border_box_counts(witnesses="yes")
+    assert a.slope_bracket(1, 3) == a.slope_bracket(1, 3, border="sliding")
+    assert sliding["lower"].to_list() != words["lower"].to_list()
     assert all(isinstance(x, int) for x in a.perimeter_bracket(verify=False)["lower"])
 
 

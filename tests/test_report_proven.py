@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from pathlib import Path
 
 import pytest
@@ -13,6 +14,8 @@ import stairbounce
 from stairbounce import figures as F
 from stairbounce.plane import scan
 from stairbounce.structure.verdict import Verdict
+
+CERTIFY = sys.modules["stairbounce.structure.certify"]
 
 
 def _settings(tmp_path, scale):
@@ -72,11 +75,16 @@ def test_window_rows_are_proven_and_their_verdicts_computed(tmp_path):
     assert "sliding region's border" in bracket.quantity
     for k in range(3, depth + 1):
         assert f"k = {k}: {counts.lower[k]}..{counts.upper[k]}" in bracket.measured
-    # at depth 4 no cell of k >= 3 holds proven sliding and non-sliding boxes: every
-    # bracket has an open end, said in words, and the verdict cannot be taken
-    assert (counts.lower[3:] == 0).all()
-    assert "no upper bound: the lower count at k = 3 is 0" in bracket.measured
-    assert bracket.verdict == "not comparable" and "no finite proven bracket" in bracket.why
+    # at depth 4 no cell of k >= 3 holds proven sliding and non-sliding boxes; the proven
+    # points inside the undecided boxes give every one of those scales a lower count, so
+    # the bracket is finite and the verdict is taken from it (the row says how many points)
+    assert (atlas.border_box_counts(witnesses=False).lower[3:] == 0).all()
+    assert (counts.lower[3:] > 0).all() and counts.attrs["witnesses"] > 0
+    assert f"{counts.attrs['witnesses']} proven points inside undecided boxes" in bracket.measured
+    r = atlas.perimeter_bracket(verify=False)
+    assert r["finite"] is not None
+    assert (bracket.verdict, bracket.why) == CERTIFY.slope_verdict(1.4, r["finite"])
+    assert "re-verified by the checker" in bracket.proof
     assert "max_iter -> infinity" in bracket.measured and "limit of small scales" in bracket.measured
 
 

@@ -197,6 +197,9 @@ def perimeter_lines(r, extra=()) -> list[str]:
     lines += [f"  k = {k:2d}  window/{1 << k:<7d} lower {lo:>9,}  upper {up:>9,}"
               for k, lo, up in zip(r["k"], r["lower"], r["upper"])]
     lines += [f"  slope {r['slope_text']}", f"  narrowest between two scales with lower counts > 0: {r['finite_text']}"]
+    if r.get("witnesses"):
+        lines.append(f"  lower counts with {r['witnesses']:,} proven points inside undecided boxes "
+                     f"({r['witnesses_tried']:,} certified)")
     return lines + list(extra) + [f"  {r['basis']}: {r['proof']}", f"  not proven: {r['not_proven']}"]
 
 

@@ -177,7 +177,10 @@ def _border_bracket_row(s, name, certified, est):
                f"D = {DIMENSION_WINDOWS[name][1]} (numerical, box counting on pictures)",
                f"{_window_text(*atlas.window)}: closed cells of side window/2^k meeting the border of the region "
                f"sliding within max_iter, proven lower..upper counts, {table}; slope {r['slope_text']}; narrowest "
-               f"between two scales with lower counts > 0: {r['finite_text']}; this picture's fit: D = {est.dimension:.3f} "
-               f"(numerical); not proven: {r['not_proven']}",
+               f"between two scales with lower counts > 0: {r['finite_text']}; "
+               + (f"lower counts with {r['witnesses']} proven points inside undecided boxes; " if r["witnesses"] else "")
+               + f"this picture's fit: D = {est.dimension:.3f} (numerical); not proven: {r['not_proven']}",
                verdict=verdict, why=why, basis=basis,
-               proof=proof + " (the counts bound N(s); the slope brackets are rounded outward)")
+               proof=proof + " (the counts bound N(s); the slope brackets are rounded outward"
+               + ("; the points inside undecided boxes that the lower counts use are each certified as a degenerate "
+                  "box and re-verified by the checker)" if r["witnesses"] else ")"))

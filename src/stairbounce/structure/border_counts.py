@@ -138,8 +138,13 @@ class StreamedCounts:
         self.lower = np.zeros(self.depth + 1, np.int64)
         self.owner = np.full(1 << (2 * self.T), -1, np.int32)  # the tile of each level-T cell
         self.cells = 0  # deepest-level cells the boxes cover, a Python int
+        self.max_iter = None  # set: proven points inside the undecided boxes too (witnesses.py)
+        self.witnesses = self.witnesses_tried = 0
 
     def add(self, tile, level, ii, jj, status):
+        """Count one tile's boxes; with :attr:`witnesses` (set by the caller: the atlas's
+        ``max_iter``), also the proven points inside its undecided boxes that the lower
+        counts need (:func:`witnesses.witness_rows`, exact from the tile level on)."""
         level = np.asarray(level).astype(np.int64)
         ii, jj = np.asarray(ii).astype(np.int64), np.asarray(jj).astype(np.int64)
         if level.size and (level.min() < 0 or level.max() > self.deepest):
@@ -150,17 +155,31 @@ class StreamedCounts:
         # CertifiedAtlas.border_box_counts' classes: -2 undecided, 0 sliding, -1 not sliding
         sliding = _border_classes(np.asarray(status), None, "sliding") + 1  # -1 undecided, 1, 0
         und = sliding < 0
+        # the proven points the lower counts need, as proven "boxes" of their level-depth
+        # cell; they enter the lower counts only (every one lies in an undecided box)
+        wl = wi = wj = wc = np.zeros(0, np.int64)
+        if self.max_iter is not None and und.any():
+            from .witnesses import witness_rows
+
+            wi, wj, wc, _, _, tried = witness_rows(self.window, self.depth, self.max_iter, level, ii, jj, sliding,
+                                             exact_from=self.T)
+            wl = np.full(wi.size, self.depth, np.int64)
+            self.witnesses += wi.size
+            self.witnesses_tried += tried
+        pl = np.concatenate([level[~und], wl])
+        pi, pj = np.concatenate([ii[~und], wi]), np.concatenate([jj[~und], wj])
+        pc = np.concatenate([sliding[~und], wc])
         for k in range(self.depth + 1):
             _touch(self.touched[k], k, level[und], ii[und], jj[und])
-            fine = (level >= k) & ~und
+            fine = pl >= k
             if k < self.T:
                 for c in (0, 1):
-                    s = fine & (sliding == c)
-                    _mark(self.classes[k][c], k, level[s], ii[s], jj[s])
+                    s = fine & (pc == c)
+                    _mark(self.classes[k][c], k, pl[s], pi[s], pj[s])
                 continue
-            sh = level[fine] - k
-            code = ((ii[fine] >> sh) << k) + (jj[fine] >> sh)
-            keys = np.unique(code * 2 + sliding[fine])
+            sh = pl[fine] - k
+            code = ((pi[fine] >> sh) << k) + (pj[fine] >> sh)
+            keys = np.unique(code * 2 + pc[fine])
             cell = keys >> 1
             two = cell[1:][cell[1:] == cell[:-1]]
             self.lower[k] += two.size
@@ -190,11 +209,13 @@ class StreamedCounts:
                  "lower": int(self.lower[k]), "upper": int(_count(self.touched[k]))} for k in range(self.depth + 1)]
 
 
-def store_rows(path, progress=None):
-    """``(rows, attrs)``: the sliding border's counts of the store at ``path``, its tiles
-    read one at a time, each checked against its checksum (a damaged or incomplete
-    store refused with ValueError naming the tile), and the atlas's attributes (tile
-    0's).  ``progress(done, total)`` after each tile."""
+def store_rows(path, progress=None, witnesses=True):
+    """``(rows, attrs, found)``: the sliding border's counts of the store at ``path``, its
+    tiles read one at a time, each checked against its checksum (a damaged or incomplete
+    store refused with ValueError naming the tile), the atlas's attributes (tile 0's)
+    and ``found = (witnesses, tried)`` (the proven points the lower counts used, and
+    the points certified; 0 without ``witnesses``).  ``progress(done, total)`` after
+    each tile."""
     from . import _store_read as R
     from .tiling import deepest_level
 
@@ -211,8 +232,10 @@ def store_rows(path, progress=None):
             depth = int(attrs0["depth"])
             window = (tuple(float(x) for x in attrs0["e_range"]), tuple(float(x) for x in attrs0["u_range"]))
             acc = StreamedCounts(window, depth, deepest_level(depth, attrs0), R.tile_level(root, depth))
+            if witnesses:
+                acc.max_iter = int(attrs0["max_iter"])
         acc.add(t, arrays["level"], arrays["i"], arrays["j"], np.asarray(arrays["status"]))
         del arrays, got
         if progress is not None:
             progress(t + 1, crc.size)
-    return acc.rows(), attrs0
+    return acc.rows(), attrs0, (acc.witnesses, acc.witnesses_tried)

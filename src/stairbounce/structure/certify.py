@@ -778,13 +778,18 @@ def perimeter_result(df, k1, k2, depth, max_iter, verdict):
         basis = "proven" if verified else "numerical"
         proof = (what + f"; all {v.checked} boxes re-verified by the independent checker sb.verify"
                  if verified else f"NOT proven: sb.verify did not pass the atlas ({v.message})")
+    n_wit = int(df.attrs.get("witnesses", 0))
+    if n_wit:
+        proof += ("; the lower counts also use proven points inside undecided boxes (witnesses), each certified "
+                  "as a degenerate box and re-verified by the independent checker")
     proof += ("; the counts bound the number of closed window/2^k cells meeting the border of the region "
               "sliding within max_iter")
     return {"k1": k1, "k2": k2, "k": list(range(k1, k2 + 1)),
             "lower": [int(x) for x in lower[k1:k2 + 1]], "upper": [int(x) for x in upper[k1:k2 + 1]],
             "slope": (lo, hi), "slope_text": slope_text(lo, hi, k1, k2, lower, upper),
             "finite": finite, "finite_text": finite_text, "depth": depth, "max_iter": max_iter,
-            "verified": verified, "basis": basis, "proof": proof, "not_proven": NOT_PROVEN}
+            "verified": verified, "basis": basis, "proof": proof, "not_proven": NOT_PROVEN,
+            "witnesses": n_wit, "witnesses_tried": int(df.attrs.get("witnesses_tried", 0))}
 
 
 NOT_PROVEN = ("the border of the region sliding at all (the limit max_iter -> infinity), nor the dimension "
@@ -1024,8 +1029,8 @@ class CertifiedAtlas:
             s, rs, sp, it, dec, marg = _run_box(e0, e1, u0, u1, self.max_iter, form, itin)
             yield _certificate(e0, e1, u0, u1, self.max_iter, s, rs, sp, it, dec, marg)
 
-    def border_box_counts(self, border="sliding"):
-        """border_box_counts(border="sliding") -> pandas.DataFrame: for each scale
+    def border_box_counts(self, border="sliding", *, witnesses=None):
+        """border_box_counts(border="sliding", *, witnesses=None) -> pandas.DataFrame: for each scale
         s = window/2^k (k = 0 .. depth) proven bounds on N(s), the number of closed
         s-boxes of the window's grid that meet a border between classes of boxes.
 
@@ -1040,8 +1045,14 @@ class CertifiedAtlas:
         undecided there), ``no_sliding`` and ``no_slide_within`` together "not
         sliding": the union of all borders.
 
-        ``lower``: s-boxes holding proven boxes of two classes (a segment
-        between them, inside the s-box, crosses the border).  ``upper``:
+        ``lower``: s-boxes holding proven points of two classes (a segment
+        between them, inside the s-box, crosses the border): points of proven
+        boxes, and with ``witnesses`` (the default for ``border="sliding"``; not
+        offered for ``"words"``) proven points inside the undecided boxes, each
+        certified as a degenerate box and re-verified by the independent checker
+        (:mod:`stairbounce.structure.witnesses`: only those the counts need are
+        proven; ``df.attrs["witnesses"]`` says how many, ``df.attrs["witnesses_tried"]``
+        how many were certified).  ``upper``:
         s-boxes whose closure meets an undecided box, or holding two classes
         (two proven boxes of different classes never touch, so every border
         point lies in an undecided box).  ``slope_lo, slope_hi``: the bracket
@@ -1060,6 +1071,13 @@ class CertifiedAtlas:
         limit ``max_iter -> infinity``), nor the dimension (the limit of small
         scales): the bounds hold at the scales listed.
         """
+        if witnesses is None:
+            witnesses = border == "sliding"
+        if witnesses not in (True, False):
+            raise ValueError(f"witnesses must be True, False or None, got {witnesses!r}")
+        if witnesses and border != "sliding":
+            raise ValueError("witnesses: proven points are offered for border='sliding' only (a point's word "
+                             "class would need its word)")
         book = self._book()  # refuses boxes that are not the window's quadtree, before the work
         if not book.complete:
             raise ValueError("border_box_counts: the boxes do not cover the window (sb.verify says how much is "
@@ -1070,6 +1088,14 @@ class CertifiedAtlas:
         jj = ds["j"].values
         st = ds["status"].values
         cls = _border_classes(st, ds["word"].values, border)
+        n_wit = tried = 0
+        if witnesses:
+            from .witnesses import witness_rows
+
+            wi, wj, wc, _, _, tried = witness_rows(self.window, self.depth, self.max_iter, level, ii, jj,
+                                             np.where(cls == -2, -1, cls + 1))
+            n_wit = wi.size
+            wcls = wc - 1  # 1 sliding -> class 0, 0 not sliding -> -1
         rows = []
         for k in range(self.depth + 1):
             n = 1 << k
@@ -1079,7 +1105,12 @@ class CertifiedAtlas:
             cc = cls[fine]
             proven = cc != -2
             code = ci[proven] * n + cj[proven]
-            pairs = np.unique(np.stack([code, cc[proven]]), axis=1) if code.size else np.zeros((2, 0), np.int64)
+            pcls = cc[proven]
+            if n_wit:
+                ws = self.depth - k
+                code = np.concatenate([code, (wi >> ws) * n + (wj >> ws)])
+                pcls = np.concatenate([pcls, wcls])
+            pairs = np.unique(np.stack([code, pcls]), axis=1) if code.size else np.zeros((2, 0), np.int64)
             cells, cnt = np.unique(pairs[0], return_counts=True)
             two = cells[cnt >= 2]
             touched = [two]
@@ -1111,7 +1142,9 @@ class CertifiedAtlas:
             (e_lo, e_hi), (u_lo, u_hi) = self.window
             rows.append({"k": k, "size_e": (e_hi - e_lo) / n, "size_u": (u_hi - u_lo) / n,
                          "lower": int(two.size), "upper": int(upper)})
-        return _counts_frame(rows, book.of, border)
+        df = _counts_frame(rows, book.of, border)
+        df.attrs["witnesses"], df.attrs["witnesses_tried"] = int(n_wit), int(tried)
+        return df
 
     def slope_bracket(self, k1, k2, border="sliding"):
         """slope_bracket(k1, k2, border="sliding") -> (lo, hi): proven bracket on the

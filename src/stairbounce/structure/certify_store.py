@@ -626,8 +626,8 @@ class CertifiedStore:
             other = down(other + st["no_slide_within"][0])
         return lo, float(np.nextafter(self._window_area()[1] - other, np.inf))
 
-    def border_box_counts(self, border="sliding", progress=None):
-        """border_box_counts(border="sliding", progress=None) -> pandas.DataFrame: the
+    def border_box_counts(self, border="sliding", progress=None, *, witnesses=True):
+        """border_box_counts(border="sliding", progress=None, *, witnesses=True) -> pandas.DataFrame: the
         proven box counts of the sliding region's border (the paper's perimeter), as
         :meth:`CertifiedAtlas.border_box_counts` gives them on the loaded atlas, integer
         for integer, taken tile by tile (:mod:`stairbounce.structure.border_counts`):
@@ -635,15 +635,21 @@ class CertifiedStore:
 
         ``border="words"`` (every border between words) needs the words of every box
         at once: load the atlas for it (ValueError here).  The counts are proven when
-        the boxes are; :meth:`perimeter_bracket` runs the checker on the store."""
+        the boxes are; :meth:`perimeter_bracket` runs the checker on the store.
+        ``witnesses``: the proven points inside undecided boxes in the lower counts, as
+        :meth:`CertifiedAtlas.border_box_counts` (found tile by tile, the same counts)."""
         from .border_counts import store_rows
         from .certify import _counts_frame
 
         if border != "sliding":
             raise ValueError(f"border must be sliding for a store (the words' borders need every box at once: "
                              f"CertifiedAtlas.load(path).border_box_counts(border={border!r})), got {border!r}")
-        rows, _ = store_rows(self.path, progress)
-        return _counts_frame(rows, "the window", "sliding")
+        if witnesses not in (True, False):
+            raise ValueError(f"witnesses must be True or False, got {witnesses!r}")
+        rows, _, (found, tried) = store_rows(self.path, progress, witnesses)
+        df = _counts_frame(rows, "the window", "sliding")
+        df.attrs["witnesses"], df.attrs["witnesses_tried"] = int(found), int(tried)
+        return df
 
     def perimeter_bracket(self, k1=None, k2=None, *, verify=True, progress=None):
         """perimeter_bracket(k1=None, k2=None, *, verify=True, progress=None) -> dict: the
