@@ -42,7 +42,7 @@ def _float_of(typingctx, n):
     return types.float64(n), lambda context, builder, sig, args: builder.bitcast(args[0], ir.DoubleType())
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _up(x):
     """``np.nextafter(x, inf)``, float for float (tests/test_verify_fast.py compares them
     on zeros, subnormals, infinities and NaN): the next float above a finite x is one
@@ -56,7 +56,7 @@ def _up(x):
     return _float_of(b + 1 if x > 0.0 else b - 1)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _dn(x):
     """``np.nextafter(x, -inf)`` = ``-nextafter(-x, inf)``."""
     return -_up(-x)
