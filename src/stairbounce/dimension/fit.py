@@ -154,7 +154,8 @@ def _linear_region(x, y, tol, min_points):
             stderr = np.sqrt(np.maximum(syy - slope * sxy, 0.0) / (length - 2) / sxx)
             dev = np.maximum(top - slope, slope - bottom)
         finite = ((bad[i + m] - bad[i]) == 0) & (sxx > 0.0) & np.isfinite(slope)
-        ok = finite & (dev <= tol * np.abs(slope))
+        with np.errstate(over="ignore"):  # tol |slope| past the largest float is inf: the test holds
+            ok = finite & (dev <= tol * np.abs(slope))
         if ok.any():
             k = int(np.argmin(np.where(ok, stderr, np.inf)))
             return int(i[k]), int(i[k]) + length
