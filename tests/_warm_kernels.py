@@ -55,8 +55,9 @@ def _proofs():
 
     from stairbounce.structure.border_counts import StreamedCounts
 
-    counts = StreamedCounts(((0.0, 1.0), (0.0, 1.0)), 2, 2, 1)  # a store's perimeter counts, tile by tile
-    counts.max_iter = 10  # with the proven points inside the undecided boxes (structure/witnesses.py)
+    # a store's perimeter counts, tile by tile, with the proven points inside the undecided
+    # boxes (structure/witnesses.py: max_iter 10)
+    counts = StreamedCounts(((0.0, 1.0), (0.0, 1.0)), 2, 2, 1, 10)
     counts.add(0, np.array([1, 1, 1, 1]), np.array([0, 1, 0, 1]), np.array([0, 0, 1, 1]), np.array([0, 3, 1, 3], np.int8))
     counts.rows()
 

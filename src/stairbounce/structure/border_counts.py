@@ -130,7 +130,7 @@ class StreamedCounts:
     ``(level, i, j, status)``, then :meth:`rows` (one dict a scale, as
     :meth:`CertifiedAtlas.border_box_counts`' rows)."""
 
-    def __init__(self, window, depth, deepest, tile_level):
+    def __init__(self, window, depth, deepest, tile_level, max_iter=None):
         self.window, self.depth, self.deepest = window, int(depth), int(deepest)
         self.T = min(max(int(tile_level), 0), self.depth)
         self.touched = [_bitmap(k) for k in range(self.depth + 1)]
@@ -138,13 +138,13 @@ class StreamedCounts:
         self.lower = np.zeros(self.depth + 1, np.int64)
         self.owner = np.full(1 << (2 * self.T), -1, np.int32)  # the tile of each level-T cell
         self.cells = 0  # deepest-level cells the boxes cover, a Python int
-        self.max_iter = None  # set: proven points inside the undecided boxes too (witnesses.py)
+        self.max_iter = max_iter  # given: proven points inside the undecided boxes too (witnesses.py)
         self.witnesses = self.witnesses_tried = 0
 
     def add(self, tile, level, ii, jj, status):
-        """Count one tile's boxes; with :attr:`witnesses` (set by the caller: the atlas's
-        ``max_iter``), also the proven points inside its undecided boxes that the lower
-        counts need (:func:`witnesses.witness_rows`, exact from the tile level on)."""
+        """Count one tile's boxes; with ``max_iter`` (the atlas's) given, also the proven
+        points inside its undecided boxes that the lower counts need
+        (:func:`witnesses.witness_rows`, exact from the tile level on)."""
         level = np.asarray(level).astype(np.int64)
         ii, jj = np.asarray(ii).astype(np.int64), np.asarray(jj).astype(np.int64)
         if level.size and (level.min() < 0 or level.max() > self.deepest):
@@ -231,9 +231,8 @@ def store_rows(path, progress=None, witnesses=True):
             attrs0 = {k: v for k, v in attrs.items() if k not in R.TILE_ATTRS}
             depth = int(attrs0["depth"])
             window = (tuple(float(x) for x in attrs0["e_range"]), tuple(float(x) for x in attrs0["u_range"]))
-            acc = StreamedCounts(window, depth, deepest_level(depth, attrs0), R.tile_level(root, depth))
-            if witnesses:
-                acc.max_iter = int(attrs0["max_iter"])
+            acc = StreamedCounts(window, depth, deepest_level(depth, attrs0), R.tile_level(root, depth),
+                                 int(attrs0["max_iter"]) if witnesses else None)
         acc.add(t, arrays["level"], arrays["i"], arrays["j"], np.asarray(arrays["status"]))
         del arrays, got
         if progress is not None:

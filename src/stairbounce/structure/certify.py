@@ -1092,8 +1092,8 @@ class CertifiedAtlas:
         if witnesses:
             from .witnesses import witness_rows
 
-            wi, wj, wc, _, _, tried = witness_rows(self.window, self.depth, self.max_iter, level, ii, jj,
-                                             np.where(cls == -2, -1, cls + 1))
+            # cls + 1: witness_rows' classes (-1 undecided, 0 not sliding, 1 sliding)
+            wi, wj, wc, _, _, tried = witness_rows(self.window, self.depth, self.max_iter, level, ii, jj, cls + 1)
             n_wit = wi.size
             wcls = wc - 1  # 1 sliding -> class 0, 0 not sliding -> -1
         rows = []

@@ -241,19 +241,9 @@ def candidates(window, depth, max_iter, level, ii, jj, grid=GRID, grid_coarse=GR
     return rci[r], rcj[r], c.astype(np.int8), ce[r, c], cu[r, c]
 
 
-def _runs(sorted_codes):
-    """The distinct values of a sorted array."""
-    if sorted_codes.size == 0:
-        return sorted_codes
-    keep = np.empty(sorted_codes.size, bool)
-    keep[0] = True
-    np.not_equal(sorted_codes[1:], sorted_codes[:-1], out=keep[1:])
-    return sorted_codes[keep]
-
-
-def witness_rows(window, depth, max_iter, level, ii, jj, cls, exact_from=0, grid=GRID, progress=None):
-    """witness_rows(window, depth, max_iter, level, ii, jj, cls, exact_from=0, grid=3,
-    progress=None) -> (wi, wj, wcls, we, wu, tried)
+def witness_rows(window, depth, max_iter, level, ii, jj, cls, exact_from=0, grid=GRID):
+    """witness_rows(window, depth, max_iter, level, ii, jj, cls, exact_from=0, grid=3)
+    -> (wi, wj, wcls, we, wu, tried)
 
     The witnesses the box counts need among the boxes ``(level, ii, jj)`` with classes
     ``cls`` (-1 undecided, 0 proven not sliding, 1 proven sliding): each its
@@ -261,7 +251,7 @@ def witness_rows(window, depth, max_iter, level, ii, jj, cls, exact_from=0, grid
     candidates certified.
     From scale ``exact_from`` on, every cell of the boxes is whole here (all its boxes
     given); coarser cells may hold boxes not given (a store's other tiles).  See the
-    module's docstring.  ``progress(done, total)`` after each scale."""
+    module's docstring."""
     level = np.asarray(level, np.int64)
     ii, jj = np.asarray(ii, np.int64), np.asarray(jj, np.int64)
     cls = np.asarray(cls)
@@ -289,8 +279,7 @@ def witness_rows(window, depth, max_iter, level, ii, jj, cls, exact_from=0, grid
         y = cm >> s
         have, may = [], []
         for c in (0, 1):
-            boxes = np.sort(bm[(bc == c) & (pl >= k)] >> s)
-            h = np.union1d(boxes, y[(cc == c) & (state == 1)])
+            h = np.union1d(bm[(bc == c) & (pl >= k)] >> s, y[(cc == c) & (state == 1)])
             have.append(h)
             may.append(np.union1d(h, y[(cc == c) & (state == 0)]))
         both = np.intersect1d(may[0], may[1], assume_unique=True)
@@ -298,7 +287,7 @@ def witness_rows(window, depth, max_iter, level, ii, jj, cls, exact_from=0, grid
             if k >= exact_from:
                 targets = np.setdiff1d(both, have[c], assume_unique=True)
             else:
-                targets = np.setdiff1d(_runs(y[(cc == c) & (state == 0)]), have[c], assume_unique=True)
+                targets = np.setdiff1d(np.unique(y[(cc == c) & (state == 0)]), have[c], assume_unique=True)
             while targets.size:
                 pend = np.flatnonzero((cc == c) & (state == 0))
                 pend = pend[np.isin(y[pend], targets, assume_unique=False)]
@@ -309,7 +298,5 @@ def witness_rows(window, depth, max_iter, level, ii, jj, cls, exact_from=0, grid
                 tried += first.size
                 state[first] = np.where(ok, 1, 2)
                 targets = np.setdiff1d(targets, y[first[ok]], assume_unique=True)
-        if progress is not None:
-            progress(int(depth) - k + 1, int(depth) + 1)
     w = state == 1
     return ci[w], cj[w], cc[w].astype(np.int64), ce[w], cu[w], tried
