@@ -11,6 +11,12 @@ the non-sliding area below the curve that trapping proves (trapping /
 verdict and time on the trapped atlas.  Boxes split below the depth
 (``trap_split`` levels, issue 44 item 5) are counted by level.  Usage:
 ``python benchmarks/trapping.py [depth ...]`` (default 8).
+
+``python benchmarks/trapping.py --rounds N depth`` measures the issue's ratio
+only (issue 44 item 5: the trapping pass at most twice the atlas): N rounds in
+one process, each the plain atlas, then ``trap_atlas`` on its table, and prints
+every round's pass / atlas with their median and the ratio of the fastest of
+each (the first round compiles nothing: one warm-up round runs before).
 """
 
 import os
@@ -80,5 +86,31 @@ def main(depths):
         np.seterr(all="ignore")
 
 
+def rounds(depth, n):
+    from stairbounce.structure.trapping import trap_atlas
+
+    win = dict(e=(0.0, 1.0), u=(0.0, 1.5), depth=depth, max_iter=1000)
+    trap_atlas(sb.certify(**win).boxes)  # warm-up: every kernel compiled or loaded
+    print(f"load {os.getloadavg()}")
+    atlas, trap = [], []
+    for r in range(n):
+        t0 = time.perf_counter()
+        plain = sb.certify(**win)
+        t1 = time.perf_counter()
+        ds = trap_atlas(plain.boxes)
+        t2 = time.perf_counter()
+        atlas.append(t1 - t0)
+        trap.append(t2 - t1)
+        print(f"round {r + 1}: the atlas {t1 - t0:.2f} s, the trapping pass {t2 - t1:.2f} s "
+              f"({ds.attrs['trap_tried']} boxes tried), pass / atlas {(t2 - t1) / (t1 - t0):.2f}")
+    ratios = np.array(trap) / np.array(atlas)
+    print(f"depth {depth}, {n} rounds: pass / atlas median {np.median(ratios):.2f}, largest {ratios.max():.2f}; "
+          f"fastest pass / fastest atlas {min(trap) / min(atlas):.2f}; the load now {os.getloadavg()}")
+
+
 if __name__ == "__main__":
-    main([int(a) for a in sys.argv[1:]] or [8])
+    args = sys.argv[1:]
+    if args[:1] == ["--rounds"]:
+        rounds(int(args[2]) if len(args) > 2 else 12, int(args[1]))
+    else:
+        main([int(a) for a in args] or [8])

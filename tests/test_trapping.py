@@ -71,6 +71,43 @@ def test_certificate_verdicts(region):
     assert not sb.verify(dataclasses.replace(c, u=(0.40, 0.401)))  # the region's box differs
 
 
+def test_cell_range_is_the_cells_by_their_edges():
+    # the definition, cell by cell: i0 the cell whose lower edge is <= a below the next
+    # one's, i1 the last cell whose lower edge is < b (the search starts from a guess and
+    # the axis's 1/n and n/width computed once; the answer must not depend on either)
+    from stairbounce.structure.trapping import _cell_edge, _cell_range
+
+    rng = np.random.default_rng(44)
+    for n in (1, 3, 48, 64, 100, 512):
+        for lo, hi in ((0.0, 1.0), (-2.5, 7.0), (1.0, 1.0 + 2.0 ** -40), (-1e-300, 1e-300)):
+            edges = np.array([_cell_edge(lo, hi - lo, hi, i, n) for i in range(n + 1)])
+            pts = np.concatenate([edges, np.nextafter(edges, np.inf), np.nextafter(edges, -np.inf),
+                                  rng.uniform(lo, hi, 40)])
+            pts = pts[(pts >= lo) & (pts <= hi)]
+            for a, b in zip(rng.choice(pts, 150), rng.choice(pts, 150)):
+                a, b = min(a, b), max(a, b)
+                want0 = int(np.flatnonzero(edges[:n] <= a)[-1])
+                want1 = max(int(np.flatnonzero(edges[:n] < b)[-1]) if (edges[:n] < b).any() else 0, want0)
+                assert _cell_range(a, b, lo, hi, n) == (want0, want1), (n, lo, hi, a, b)
+            assert _cell_range(lo - 1.0, hi, lo, hi, n) == (-1, -1)
+            assert _cell_range(lo, hi + 1.0, lo, hi, n) == (-1, -1)
+            assert _cell_range(np.nan, hi, lo, hi, n) == (-1, -1)
+
+
+def test_a_grid_whose_side_is_not_a_power_of_two_closes_and_verifies():
+    # the regions' search finds a cell's (i, j) by a mask and a shift when the side is a
+    # power of two, by a division otherwise: both kinds of grid close over BOX, and the
+    # independent checker accepts each region
+    from stairbounce.structure.trapping import _try
+
+    (e0, e1), (u0, u1) = BOX
+    for cells in (64, 96):
+        r, why = _try(e0, e1, u0, u1, 1000, tries=((cells, 0.3),))
+        assert why == "ok" and r.grid[2] == r.grid[5] == cells
+        assert verify_region(e0, e1, u0, u1, 1000, r.itinerary, r.grid, r.cells) == "ok"
+        assert verify_region(e0, e1, u0, u1, 1000, r.itinerary, r.grid, r.cells[:-1]) != "ok"
+
+
 def test_no_region_where_every_point_slides():
     # inside the (1, 0^inf) tongue of Theorem 3.1 (u^2 <= (1/2)((1-e)/(1+e))^2)
     assert sb.trapping_region((0.1, 0.101), (0.3, 0.301)) is None

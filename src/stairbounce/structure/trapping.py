@@ -146,22 +146,54 @@ _cell_edge = njit(cache=True)(_cell_edge_py)
 
 
 @njit(cache=True)
-def _cell_range(a, b, lo, hi, n):
-    """Cells ``i0..i1`` of the axis whose union covers ``[a, b]`` (-1 when outside)."""
+def _edge(lo, w, hi, i, n, inv):
+    """:func:`_cell_edge` with ``inv = 1.0 / n`` computed once by the caller: the
+    same float, bit for bit (``float(i) * inv`` is the product it forms)."""
+    if i >= n:
+        return hi
+    return lo + w * (float(i) * inv)
+
+
+@njit(cache=True)
+def _guess(x, scale, n):
+    """A cell index to start the search from: ``x * scale`` clamped to ``0 .. n - 1``
+    before it becomes an int (so a NaN or an overflow cannot reach the conversion).
+    Only a start: :func:`_axis_range` corrects it to the exact cell."""
+    g = x * scale
+    if not g >= 0.0:
+        g = 0.0
+    if g > n - 1.0:
+        g = n - 1.0
+    return int(g)
+
+
+@njit(cache=True)
+def _axis_range(a, b, lo, hi, n, inv, scale):
+    """:func:`_cell_range` with the axis's ``inv = 1.0 / n`` and ``scale = n / (hi -
+    lo)`` computed once by the caller (:func:`_close` calls it twice a branch)."""
     if not (a >= lo and b <= hi and a <= b):
         return -1, -1
     w = hi - lo
-    i0 = min(max(int((a - lo) / w * n), 0), n - 1)
-    while i0 > 0 and _cell_edge(lo, w, hi, i0, n) > a:
+    i0 = _guess(a - lo, scale, n)
+    while i0 > 0 and _edge(lo, w, hi, i0, n, inv) > a:
         i0 -= 1
-    while i0 < n - 1 and _cell_edge(lo, w, hi, i0 + 1, n) <= a:
+    while i0 < n - 1 and _edge(lo, w, hi, i0 + 1, n, inv) <= a:
         i0 += 1
-    i1 = min(max(int((b - lo) / w * n), i0), n - 1)
-    while i1 < n - 1 and _cell_edge(lo, w, hi, i1 + 1, n) < b:
+    i1 = max(_guess(b - lo, scale, n), i0)
+    while i1 < n - 1 and _edge(lo, w, hi, i1 + 1, n, inv) < b:
         i1 += 1
-    while i1 > i0 and _cell_edge(lo, w, hi, i1, n) >= b:
+    while i1 > i0 and _edge(lo, w, hi, i1, n, inv) >= b:
         i1 -= 1
     return i0, i1
+
+
+@njit(cache=True)
+def _cell_range(a, b, lo, hi, n):
+    """Cells ``i0..i1`` of the axis whose union covers ``[a, b]`` (-1 when outside):
+    ``i0`` the cell holding ``a`` (its lower edge ``<= a`` below the next one), ``i1``
+    the last cell whose lower edge is ``< b``.  Whatever cell the search starts from,
+    it ends at these, so the start is only a guess."""
+    return _axis_range(a, b, lo, hi, n, 1.0 / n, n / (hi - lo))
 
 
 @njit(cache=True)
@@ -224,6 +256,12 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, i0, i1, j0, j1, flags, queue,
     Rl = _dn(_dn(1.0 + E0) / _up(1.0 - E0))
     wv = V1 - V0
     ws = S1 - S0
+    iv, sv = 1.0 / nv, nv / wv  # each axis's 1/n and n/width, once a region
+    is_, ss = 1.0 / ns, ns / ws
+    shift = 0  # a queued cell's (i, j) by a mask and a shift when nv is a power of 2
+    while (1 << shift) < nv:
+        shift += 1
+    pow2 = (1 << shift) == nv
     head = 0
     tail = 0
     for j in range(j0, j1 + 1):
@@ -235,20 +273,24 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, i0, i1, j0, j1, flags, queue,
     while head < tail:
         c = queue[head]
         head += 1
-        i = c % nv
-        j = c // nv
-        v0 = _cell_edge(V0, wv, V1, i, nv)
-        v1 = _cell_edge(V0, wv, V1, i + 1, nv)
-        s0 = _cell_edge(S0, ws, S1, j, ns)
-        s1 = _cell_edge(S0, ws, S1, j + 1, ns)
+        if pow2:  # (a 64-bit division costs more than the rest of the cell's bookkeeping)
+            i = c & (nv - 1)
+            j = c >> shift
+        else:
+            i = c % nv
+            j = c // nv
+        v0 = _edge(V0, wv, V1, i, nv, iv)
+        v1 = _edge(V0, wv, V1, i + 1, nv, iv)
+        s0 = _edge(S0, ws, S1, j, ns, is_)
+        s1 = _edge(S0, ws, S1, j + 1, ns, is_)
         m = _branches(v0, v1, s0, s1, E0, E1, Tl, Th, Rl, out)
         if m < 0:
             if m == -TRAP_SLIDE:  # by how much, in the cell's own extent along the margin
                 return TRAP_SLIDE, tail, (Th - v0 - Rl * s0) / ((v1 - v0) + Rl * (s1 - s0))
             return -m, tail, np.inf
         for r in range(m):
-            a0, a1 = _cell_range(out[r, 0], out[r, 1], V0, V1, nv)
-            b0, b1 = _cell_range(out[r, 2], out[r, 3], S0, S1, ns)
+            a0, a1 = _axis_range(out[r, 0], out[r, 1], V0, V1, nv, iv, sv)
+            b0, b1 = _axis_range(out[r, 2], out[r, 3], S0, S1, ns, is_, ss)
             if a0 < 0 or b0 < 0:
                 if np.isnan(out[r, 0]) or np.isnan(out[r, 1]) or np.isnan(out[r, 2]) or np.isnan(out[r, 3]):
                     return TRAP_NAN, tail, np.inf
