@@ -444,7 +444,14 @@ def _step(y, v, e, T, ratio):
 
     Returns ``(1, 0, SLIDING)`` when the impacts accumulate before the edge.
     """
-    s = math.sqrt(v * v + 2.0 * y)
+    return _step_from(y, v, math.sqrt(v * v + 2.0 * y), e, T, ratio)
+
+
+@njit(cache=True)
+def _step_from(y, v, s, e, T, ratio):
+    """:func:`_step` given the state's impact speed ``s = math.sqrt(v * v + 2.0 * y)``
+    (that float: a caller that has it already, e.g. for the state's hull, does not
+    take the root twice; the same map, bit for bit)."""
     if v + ratio * s <= T:  # (2.4): accumulation before the edge
         return 1.0, 0.0, SLIDING
     t = v + s  # first impact

@@ -305,26 +305,34 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, i0, i1, j0, j1, flags, queue,
 
 
 @njit(cache=True)
-def _orbit_hull(e, u, y, v, skip, steps, Th, Rl):
+def _orbit_hull(e, u, y, v, skip, steps, Th, Rl, stop=np.inf):
     """Numerical: the rectangle of ``(v, s)`` visited by the float map from ``(y,
     v)`` after step ``skip`` up to step ``skip + steps`` (``slid``: it slid on
     the way), and the largest ``Th - v - Rl s`` over those states (the slide
     margin of a cell holding the state, at the box's worst corner):
-    ``(v_lo, v_hi, s_lo, s_hi, slid, worst)``, scalars (no array a try)."""
+    ``(v_lo, v_hi, s_lo, s_hi, slid, worst)``, scalars (no array a try).
+
+    It returns as soon as ``worst`` exceeds ``stop`` (a running maximum only
+    grows, so a caller that rejects ``worst > stop`` decides the same; the hull is
+    then partial).  Each state's ``s`` is the root :func:`model._step_from` takes
+    for the next step: one root a step."""
     T, ratio = _model._constants(e, u)
     h0, h1, h2, h3 = np.inf, -np.inf, np.inf, -np.inf
     worst = -np.inf
+    s = math.sqrt(v * v + 2.0 * y)
     for n in range(skip + steps):
-        y, v, k = _model._step(y, v, e, T, ratio)
+        y, v, k = _model._step_from(y, v, s, e, T, ratio)
         if k == _model.SLIDING:
             return h0, h1, h2, h3, True, worst
+        s = math.sqrt(v * v + 2.0 * y)
         if n >= skip:
-            s = math.sqrt(v * v + 2.0 * y)
             h0 = min(h0, v)
             h1 = max(h1, v)
             h2 = min(h2, s)
             h3 = max(h3, s)
             worst = max(worst, Th - v - Rl * s)
+            if worst > stop:
+                return h0, h1, h2, h3, False, worst
     return h0, h1, h2, h3, False, worst
 
 
@@ -339,12 +347,13 @@ def _hull(e, u, n0, steps):
 
 
 @njit(cache=True)
-def _hull_from(e, u, v, s, steps, Th, Rl):
+def _hull_from(e, u, v, s, steps, Th, Rl, stop):
     """Numerical: as :func:`_hull`, from the state ``(v, s)`` (``y = (s^2 - v^2)/2``,
     the middle of the entry's enclosure) for ``steps`` steps, so that the orbit's
     first ``n`` steps are not iterated again, with :func:`_orbit_hull`'s largest
-    slide margin.  Only chooses where the grid lies and which tries are skipped."""
-    return _orbit_hull(e, u, max(0.5 * (s * s - v * v), 0.0), v, 0, steps, Th, Rl)
+    slide margin (returned once past ``stop``).  Only chooses where the grid lies and
+    which tries are skipped."""
+    return _orbit_hull(e, u, max(0.5 * (s * s - v * v), 0.0), v, 0, steps, Th, Rl, stop)
 
 
 # grid tries: (cells a side, padding of the float orbits' rectangle, in its extent)
@@ -424,9 +433,10 @@ def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flag
         return (TRAP_ENTRY if code == TRAP_SLIDE else code), 0, 0
     Th = 1.0 / u0
     Rl = (1.0 + e0) / (1.0 - e0)
+    clear = 1e-9 * (1.0 + abs(Th))
     q0, q1, q2, q3, slid, worst = _hull_from(0.5 * (e0 + e1), 0.5 * (u0 + u1), 0.5 * (v0 + v1),
-                                             0.5 * (s0 + s1), hull_steps, Th, Rl)
-    if slid or worst > 1e-9 * (1.0 + abs(Th)):
+                                             0.5 * (s0 + s1), hull_steps, Th, Rl, clear)
+    if slid or worst > clear:
         # the float orbit slides, or passes a state whose cell cannot be proven clear of
         # the sliding set over the box (its margin at the box's worst corner is positive
         # by more than rounding): no region can close (numerical; it skips the tries only)
