@@ -346,11 +346,13 @@ def test_the_paper_plane_edges_are_undecided_by_range():
     r = a.fraction("reason")
     assert r["range"] > 0
     ds = a.boxes
-    edge = (ds["e1"].values == 1.0) | (ds["u0"].values == 0.0) | (ds["e0"].values == 0.0)
+    edge = (ds["e1"].values == 1.0) | (ds["u0"].values == 0.0)
     assert (ds["reason"].values[edge] == "range").all()
-    # split to the last level: a strip one box wide along the three edges e = 0, e = 1, u = 0
+    assert (ds["reason"].values[~edge] != "range").all()
+    # split to the last level: a strip one box wide along the two edges e = 1 and u = 0
+    # (e = 0 is inside the model: its boxes are certified, test_boxes_touching_e_zero...)
     assert (ds["level"].values[edge] == 4).all()
-    assert r["range"] == pytest.approx((3 * 16 - 2) / 256)
+    assert r["range"] == pytest.approx((2 * 16 - 1) / 256)
 
 
 # ---- the command line -------------------------------------------------------
@@ -536,18 +538,49 @@ def test_the_atlas_form_is_stored_and_its_certificates_follow_it(tmp_path):
     assert sb.certify(**kw).boxes.attrs["form"] == "corners"  # the default
 
 
-def test_e_zero_is_a_window_edge_not_a_box():
-    # a box has 0 < e0 (the checker and the Arb reference refuse e0 = 0); a window
-    # may start at e = 0, and its boxes touching e = 0 are undecided "range", so
-    # every certificate of such an atlas passes the independent checker
+def test_boxes_touching_e_zero_are_certified_by_the_corners_form():
+    # e = 0 is the perfectly plastic impact (docs/design.md): a ball that lands before
+    # the edge slides, eq. (2.4) with ratio 1; the corners form's coefficients increase
+    # with e on [0, 1), so a box [0, e1] x [u0, u1] is bounded by its two corners.
+    # Known answer: at e = 0 the orbit of (1, 0) flies over the steps while
+    # sqrt(v^2 + 2y) + v > 1/u and slides on the first landing, so u < 1/sqrt(2)
+    # slides on step 1, (1, 0^inf) (also Theorem 3.1's first tongue as e -> 0).
+    from . import naive
+
+    c = sb.certify_box(e=(0.0, 0.01), u=(0.6, 0.61))
+    assert c.status == "word" and str(c.word) == "(1, 0^∞)" and sb.verify(c)
+    for form in ("naive", "mean-value"):  # their enclosures are not argued on [0, e1]
+        with pytest.raises(ValueError, match=r"^e0 = 0 is certified by form='corners' only"):
+            sb.certify_box(e=(0.0, 0.01), u=(0.6, 0.61), form=form)
     with pytest.raises(ValueError, match=r"^e must be"):
-        sb.certify_box(e=(0.0, 0.01), u=(0.6, 0.61))
+        sb.certify_box(e=(-1e-3, 0.01), u=(0.6, 0.61))
     atlas = sb.certify(e=(0.0, 0.333), u=(0.4, 0.733), depth=6)
     b = atlas.boxes
-    at_zero = (b.e0.values == 0.0)
-    assert at_zero.any() and set(b.status.values[at_zero].tolist()) == {sb.structure.certificate.STATUSES.index("undecided")}
-    assert set(b.reason.values[at_zero].tolist()) == {"range"}
+    at_zero = np.flatnonzero(b.e0.values == 0.0)
+    assert "range" not in set(b.reason.values.tolist())
+    words = b.status.values[at_zero] == sb.structure.certificate.STATUSES.index("word")
+    assert words.sum() >= 8 and {"(1, 0^inf)", "(2, 0^inf)"} <= set(b.word.values[at_zero][words].tolist())
     assert sb.verify(atlas).ok
+    rng = np.random.default_rng(0)
+    for k in at_zero[words]:
+        e1, u0, u1 = (float(b[v].values[k]) for v in ("e1", "u0", "u1"))
+        want = tuple(int(x) for x in str(b.word.values[k]).strip("()").replace(", 0^inf", "").split(", "))
+        es = [0.0, e1, *rng.uniform(2.0 ** -50, e1, 4)]
+        us = [u0, u1, *rng.uniform(u0, u1, 4)]
+        for e, u in zip(es, us):
+            assert naive.word(e, u) == want, (k, e, u)
+    # the checker rejects a wrong claim there: a (1, 0^inf) box claimed to fly over first
+    from stairbounce.structure.certificate import Certificate
+
+    k = int(at_zero[words & (b.word.values[at_zero] == "(1, 0^inf)")][0])
+    cert = sb.certify_box(e=(0.0, float(b.e1.values[k])), u=(float(b.u0.values[k]), float(b.u1.values[k])))
+    assert cert.status == "word" and list(cert.itinerary) == [-1] and sb.verify(cert)
+    forged = Certificate.from_dict({**cert.to_dict(), "word": [2], "itinerary": [0, -1]})
+    assert not sb.verify(forged)
+    # the forms other than the corners leave them undecided "range", which claims nothing
+    naive_atlas = sb.certify(e=(0.0, 0.333), u=(0.4, 0.733), depth=6, form="naive")
+    nb = naive_atlas.boxes
+    assert set(nb.reason.values[nb.e0.values == 0.0].tolist()) == {"range"} and sb.verify(naive_atlas).ok
 
 
 # ---- the shared "nonsliding" check ----------------------------------------------

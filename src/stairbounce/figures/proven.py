@@ -45,7 +45,8 @@ def _certified_atlas(s, name, e, u, classes=False):
     """The certified atlas of a window at :func:`_certify_depth` and the
     checker's verdict on it: ``(atlas, depth, n_proven, basis, proof, override)``.
     A window from e = 0 is certified as it is: its boxes touching e = 0 are
-    undecided ("range"), outside the checker's domain 0 < e of a proven box.
+    certified like the others (the corners form's bounds hold on [0, e1]; e = 0 is
+    the perfectly plastic impact) and re-verified by the checker.
     ``classes``: with class-level proofs (``certify(classes=True)``), for the
     proven box counts of the sliding region's border."""
     import stairbounce as sb

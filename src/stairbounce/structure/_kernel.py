@@ -606,7 +606,9 @@ def _certify_level(win, level, ii, jj, max_iter, cap, form, ns_points, status, r
             E1 = _edge(win[0], ew, win[1], ii[b] + 1, level)
             U0 = _edge(win[2], uw, win[3], jj[b], level)
             U1 = _edge(win[2], uw, win[3], jj[b] + 1, level)
-            if U0 < _U_MIN or E1 >= 1.0 or E0 <= 0.0:  # touches u = 0, e = 1 or e = 0: outside (0, 1)
+            # touches u = 0 or e = 1 (outside the model), or e = 0 for a form other than the corners
+            # (whose enclosures hold on [0, e1]: ratio, A_j, B_k and e^k increase with e on [0, 1))
+            if U0 < _U_MIN or E1 >= 1.0 or E0 < 0.0 or (E0 == 0.0 and form != CORNERS):
                 st, rs, sp, ni = UNDECIDED, RANGE, 0, 0
             else:
                 st, rs, sp, ni, nd = _certify_box(E0, E1, U0, U1, max_iter, cap, form, itin, False, dec, marg)

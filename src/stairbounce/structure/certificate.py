@@ -317,14 +317,16 @@ def _pair(name, value):
     return _v.real(f"{name}0", value[0]), _v.real(f"{name}1", value[1])
 
 
-def _check_e(e, window=False):
-    """``(e0, e1)`` with ``0 < e0 <= e1 < 1`` (a box) or ``0 <= e0 < e1 <= 1`` (a
-    window, whose boxes touching e = 0 or e = 1 are undecided "range"), each 0 or
-    >= 2^-53."""
+def _check_e(e, window=False, zero=False):
+    """``(e0, e1)`` with ``0 < e0 <= e1 < 1`` (a box; ``0 <= e0`` with ``zero``, a box
+    the corners form certifies) or ``0 <= e0 < e1 <= 1`` (a window, whose boxes
+    touching e = 1 are undecided "range", and those touching e = 0 too for a form
+    other than the corners), each 0 or >= 2^-53."""
     e0, e1 = _pair("e", e)
     top = "<= 1" if window else "< 1"
-    rule = f"e must be a pair (e0, e1) with 0 {'<=' if window else '<'} e0 {'<' if window else '<='} e1 {top}"
-    if not ((0.0 <= e0 if window else 0.0 < e0) and (e1 <= 1.0 if window else e1 < 1.0)):
+    low = "<=" if (window or zero) else "<"
+    rule = f"e must be a pair (e0, e1) with 0 {low} e0 {'<' if window else '<='} e1 {top}"
+    if not ((0.0 <= e0 if (window or zero) else 0.0 < e0) and (e1 <= 1.0 if window else e1 < 1.0)):
         raise ValueError(f"{rule} (restitution coefficients), got ({e0}, {e1})")
     if not (e0 < e1 if window else e0 <= e1):
         raise ValueError(f"{rule}: {'an empty' if e0 == e1 else 'a reversed'} range, got ({e0}, {e1})")

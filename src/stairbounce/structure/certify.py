@@ -222,7 +222,10 @@ def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
 
     Parameters
     ----------
-    e : pair (e0, e1), 0 < e0 <= e1 < 1, each >= 2^-53
+    e : pair (e0, e1), 0 <= e0 <= e1 < 1, each 0 or >= 2^-53; e0 = 0 with the corners
+        form only (the coefficients above increase with e on [0, 1), so its two corners
+        bound the box with e = 0 in it; e = 0 is the perfectly plastic impact: a ball
+        that lands before the edge slides, eq. (2.4) with ratio 1)
     u : pair (u0, u1), 1e-150 <= u0 <= u1 <= 1e150
     max_iter : int >= 1, default 1000
         Steps followed before the claim ``no_slide_within``.
@@ -240,10 +243,13 @@ def certify_box(e, u, max_iter=1000, *, form="corners") -> Certificate:
     >>> c.status, str(c.word)
     ('word', '(1, 1, 1, 2, 0^∞)')
     """
-    e0, e1 = _check_e(e)
+    e0, e1 = _check_e(e, zero=True)
     u0, u1 = _check_u(u)
     max_iter = check_count("max_iter", max_iter, 1)
     code = _check_form(form)
+    if e0 == 0.0 and code != K.CORNERS:
+        raise ValueError(f"e0 = 0 is certified by form='corners' only (its enclosures hold on [0, e1]), "
+                         f"got form={form!r}")
     st, rs, sp, itin, dec, marg = _run_box(e0, e1, u0, u1, max_iter, code, _itinerary_buffer(max_iter))
     return _certificate(e0, e1, u0, u1, max_iter, st, rs, sp, itin, dec, marg)
 
@@ -271,8 +277,11 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
     tells the undecided area of a border from that of non-sliding motion, at
     the last level too (the corners are shared between boxes and iterated
     once).  A
-    box touching ``e = 0``, ``e = 1`` or ``u = 0`` is undecided (reason ``"range"``) and
-    split down to the last level, so only a strip one box wide stays so.
+    box touching ``e = 1`` or ``u = 0`` is undecided (reason ``"range"``) and split
+    down to the last level, so only a strip one box wide stays so; a box touching
+    ``e = 0`` is certified like the others by the corners form (e = 0 is the
+    perfectly plastic impact, inside the corners form's monotonicity on [0, 1);
+    the other forms leave it "range").
 
     Every box is computed from its integer position in the window's quadtree
     alone, in parallel (numba ``prange`` over the boxes of a level): any number

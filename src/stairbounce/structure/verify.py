@@ -9,9 +9,11 @@ shares no code with the certifier's kernel nor with ``stairbounce.model``; only
 
 What is checked, per box (the first failure is the box's verdict):
 
-* ``box``: ``0 < e0 <= e1 < 1`` and ``1e-150 <= u0 <= u1 <= 1e150``, finite (an
-  undecided box with no listed step, which claims nothing, may touch e = 0, e = 1
-  and u = 0: an atlas's boxes on its window's edges);
+* ``box``: ``0 <= e0 <= e1 < 1`` and ``1e-150 <= u0 <= u1 <= 1e150``, finite (an
+  undecided box with no listed step, which claims nothing, may touch e = 1 and
+  u = 0: an atlas's boxes on its window's edges).  e0 = 0 is a box like the others:
+  the coefficients below increase with e on [0, 1), so the bounds at e0 = 0 hold
+  (e = 0, the perfectly plastic impact, has ``ratio = 1``, ``e^k = 0`` for k >= 1);
 * ``status``: a known status code;
 * ``itinerary``: impact numbers >= -1, the slide (-1) only as the last entry;
   ``word``: ends with -1 and has at most ``max_iter`` steps;
@@ -202,9 +204,10 @@ def _structure(e0, e1, u0, u1, status, max_iter, itinerary, offsets):
     step = np.zeros(n, dtype=np.int64)
     with np.errstate(invalid="ignore"):
         bad_box = ~(np.isfinite(e0) & np.isfinite(e1) & np.isfinite(u0) & np.isfinite(u1)
-                    & (e0 > 0.0) & (e0 <= e1) & (e1 < 1.0) & (u0 >= _v.U_MIN) & (u0 <= u1) & (u1 <= _v.U_MAX))
+                    & (e0 >= 0.0) & (e0 <= e1) & (e1 < 1.0) & (u0 >= _v.U_MIN) & (u0 <= u1) & (u1 <= _v.U_MAX))
         # an undecided box with no listed step claims nothing: an atlas's boxes on
-        # its window's edges e = 0, e = 1, u = 0 (reason "range") are such boxes
+        # its window's edges e = 1, u = 0 (reason "range"; e = 0 too for the forms other than
+        # the corners) are such boxes
         edge_box = ((status == _UNDECIDED_S) & (np.diff(offsets) == 0) & (e0 >= 0.0) & (e0 <= e1)
                     & (e1 <= 1.0) & (u0 >= 0.0) & (u0 <= u1) & (u1 <= _v.U_MAX))
     code[bad_box & ~edge_box] = _BOX

@@ -156,7 +156,7 @@ def check_atlas_branches(data, arrays, code, failed_code):
     words = _texts(data, "word")
     cols = [np.asarray(arrays[k], dtype=np.float64)[rows] for k in ("e0", "e1", "u0", "u1")]
     e0, e1, u0, u1 = cols
-    ok = ((off[rows + 1] == off[rows]) & (0.0 < e0) & (e0 <= e1) & (e1 < 1.0) & (0.0 < u0) & (u0 <= u1)
+    ok = ((off[rows + 1] == off[rows]) & (0.0 <= e0) & (e0 <= e1) & (e1 < 1.0) & (0.0 < u0) & (u0 <= u1)
           & (max_live >= 1) & (max_leaves >= 1))
     code[rows[~ok]] = failed_code
     rows, e0, e1, u0, u1 = rows[ok], e0[ok], e1[ok], u0[ok], u1[ok]
