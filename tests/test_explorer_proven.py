@@ -196,6 +196,25 @@ def test_tap_shows_the_certificate_of_the_box_or_why_it_is_undecided():
     assert "<b>undecided</b> (numerical), reason <b>graze</b>" in text and "re-verified" not in text
 
 
+def test_a_view_from_e_0_taps_a_proven_box_on_e_0():
+    # the boxes touching e = 0 are certified (the corners form on [0, e1]): a tap there
+    # shows the certificate, re-verified; (1, 0^inf) is the word of the impact-by-impact
+    # loop at e = 0 for u < 1/sqrt(2) (a plastic ball slides on its first landing)
+    from . import naive
+
+    app, sched = _explorer(V.View(0.0, 0.333, 0.4, 0.733, 64, 48, max_iter=300, overlays=("proven",)))
+    sched.run_all()
+    boxes = app.proven.done[1].boxes
+    at_zero = boxes["e0"].values == 0.0
+    assert at_zero.any() and "range" not in set(boxes["reason"].values.tolist())
+    app._on_tap(SimpleNamespace(x=1e-4, y=0.5))
+    sched.run_all()
+    c = P.proven_at(app.proven.done[1], *app.view.point)
+    assert c["box"][0][0] == 0.0 and c["status"] == "word" and c["verdict"].ok
+    assert c["word"] == "(1, 0^inf)" and naive.word(0.0, 0.5) == (1,)
+    assert "proven by interval arithmetic, re-verified by sb.verify" in app.point_pane.object
+
+
 def test_a_window_the_certifier_refuses_is_a_message_not_a_traceback():
     # e between 0 and 2^-53 is refused by name (the certifier's contract)
     app, sched = _explorer(V.View(1e-300, 1e-3, 0.5, 0.6, 16, 16, max_iter=50, overlays=("proven",)))

@@ -208,9 +208,9 @@ def certify_(
     of the box, flies over at others), edge (a later impact, likewise), chatter (the
     slide test (2.4) differs across the box), impacts (over 4096 impacts on one step),
     nonsliding (every decision proven, but the float map does not slide within
-    --max-iter: numerical; --trap tries to prove it), range (the box touches e = 0,
-    e = 1 or u = 0).  A box is the binary floats of the typed decimals; see
-    docs/citing.md for citing a proven box."""
+    --max-iter: numerical; --trap tries to prove it), range (the box touches e = 1 or
+    u = 0; a box touching e = 0 is certified like the others).  A box is the binary
+    floats of the typed decimals; see docs/citing.md for citing a proven box."""
     import time
 
     from .._io import suffix_of

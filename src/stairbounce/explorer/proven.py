@@ -71,7 +71,7 @@ STYLES = {
     "chatter": ("#ffffff", 0.45, "x", "#0f5a00", "undecided, chatter: the slide test (2.4) not decided"),
     "nonsliding": ("#ffffff", 0.45, "-", "#6b6b6b", "undecided, nonsliding: the float map slides at none of "
                                                     "the box's corners and centre (numerical)"),
-    "range": ("#ffffff", 0.45, "|", "#6b6b6b", "undecided, range: the box touches e = 0, e = 1 or u = 0"),
+    "range": ("#ffffff", 0.45, "|", "#6b6b6b", "undecided, range: the box touches e = 1 or u = 0"),
     "impacts": ("#ffffff", 0.45, "+", "#6b6b6b", "undecided, impacts: a step with more bounces than the "
                                                  "enclosures resolve"),
 }
