@@ -183,6 +183,7 @@ def test_split_boxes_are_quadtree_children_and_verify(split_atlas):
     ds = atlas.boxes
     _assert_agree(plain.boxes, ds)  # the boxes not split are the plain atlas's
     level, reason = ds["level"].values, ds["reason"].values
+    assert reason.dtype == plain.boxes["reason"].values.dtype == object  # one object per distinct text
     assert ds.attrs["trap_split"] == SPLIT_LEVELS >= 1
     below = level > atlas.depth
     assert (below & (reason == "trapping")).any()  # boxes proven only below the depth

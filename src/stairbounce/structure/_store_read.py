@@ -310,8 +310,16 @@ def _take_rows(values, starts, lengths):
 
 @njit(cache=True, nogil=True)
 def _copy_rows(values, starts, lengths, out):
+    """Row after row into ``out``; rows that follow each other in ``values`` (most of
+    them, where a table keeps its rows in their order) are copied as one block."""
     at = 0
-    for k in range(starts.size):
+    k = 0
+    n_rows = starts.size
+    while k < n_rows:
         s, n = starts[k], lengths[k]
+        k += 1
+        while k < n_rows and starts[k] == s + n:
+            n += lengths[k]
+            k += 1
         out[at:at + n] = values[s:s + n]
         at += n

@@ -541,8 +541,9 @@ def trapping_region(e, u, max_iter=1000):
     return _try(e0, e1, u0, u1, max_iter)[0]
 
 
-# boxes a compiled call tries between two checks of Ctrl-C and progress (and a thread's task)
-_BATCH = 256
+# boxes a compiled call tries between two checks of Ctrl-C and progress (and a thread's task;
+# about 12 ms of tries at 12 us a try: Ctrl-C stays immediate, and a task's overhead is small)
+_BATCH = 1024
 
 
 def _try_all(e0, e1, u0, u1, max_iter, progress=None, done=0, total=0, threads=None):
@@ -694,11 +695,12 @@ def trap_atlas(ds, progress=None, split=None):
     proven = codes == TRAP_OK
     # a node is useful when it or a descendant is proven (children come after parents)
     useful = proven.copy()
-    for k in np.flatnonzero(useful)[::-1]:
-        p = parent[k]
-        while p >= 0 and not useful[p]:
-            useful[p] = True
-            p = parent[p]
+    up = np.flatnonzero(useful & (parent >= 0))
+    while up.size:  # one level of ancestors a pass (a tree of len(res) levels)
+        p = np.unique(parent[up])
+        p = p[~useful[p]]
+        useful[p] = True
+        up = p[parent[p] >= 0]
     is_split = useful & ~proven
     has_parent = parent >= 0
     emit = np.zeros(lv.size, bool)
@@ -740,9 +742,10 @@ def trap_atlas(ds, progress=None, split=None):
 
     trapped = np.flatnonzero(proven_at(node))
     cols["status"][trapped] = NO_SLIDING
+    # Python strings, as certify's table holds them (one object per distinct text)
     reason = cols["reason"].astype(object, copy=False)
     reason[trapped] = "trapping"
-    cols["reason"] = reason.astype(str)
+    cols["reason"] = reason
     cols["step"][trapped] = 0
     tn = node[trapped]
     # itineraries: a proven box's entry, else its source row's
