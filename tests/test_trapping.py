@@ -75,7 +75,8 @@ def test_cell_range_is_the_cells_by_their_edges():
     # the definition, cell by cell: i0 the cell whose lower edge is <= a below the next
     # one's, i1 the last cell whose lower edge is < b (the search starts from a guess and
     # the axis's 1/n and n/width computed once; the answer must not depend on either)
-    from stairbounce.structure.trapping import _cell_edge, _cell_range
+    from stairbounce.structure.certificate import _cell_edge  # the regions' edges, as the checker reads them
+    from stairbounce.structure.trapping import _cell_range
 
     rng = np.random.default_rng(44)
     for n in (1, 3, 48, 64, 100, 512):

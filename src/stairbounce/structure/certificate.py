@@ -323,10 +323,10 @@ def _check_e(e, window=False, zero=False):
     touching e = 1 are undecided "range", and those touching e = 0 too for a form
     other than the corners), each 0 or >= 2^-53."""
     e0, e1 = _pair("e", e)
+    zero = zero or window  # may e0 be 0
     top = "<= 1" if window else "< 1"
-    low = "<=" if (window or zero) else "<"
-    rule = f"e must be a pair (e0, e1) with 0 {low} e0 {'<' if window else '<='} e1 {top}"
-    if not ((0.0 <= e0 if (window or zero) else 0.0 < e0) and (e1 <= 1.0 if window else e1 < 1.0)):
+    rule = f"e must be a pair (e0, e1) with 0 {'<=' if zero else '<'} e0 {'<' if window else '<='} e1 {top}"
+    if not ((0.0 <= e0 if zero else 0.0 < e0) and (e1 <= 1.0 if window else e1 < 1.0)):
         raise ValueError(f"{rule} (restitution coefficients), got ({e0}, {e1})")
     if not (e0 < e1 if window else e0 <= e1):
         raise ValueError(f"{rule}: {'an empty' if e0 == e1 else 'a reversed'} range, got ({e0}, {e1})")

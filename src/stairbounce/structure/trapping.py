@@ -65,7 +65,6 @@ from .. import model as _model
 from .._interrupt import check_halt
 from ._kernel import _dn, _up
 from .certificate import Certificate, TrappingRegion, _check_e, _check_u
-from .certificate import _cell_edge as _cell_edge_py
 
 __all__ = ["TrappingRegion", "trapping_region"]
 
@@ -141,13 +140,10 @@ def _branches(v0, v1, s0, s1, E0, E1, Tl, Th, Rl, out):
     return n
 
 
-# the edge of certificate.py (TrappingRegion.boxes), compiled for the kernels below
-_cell_edge = njit(cache=True)(_cell_edge_py)
-
-
 @njit(cache=True)
 def _edge(lo, w, hi, i, n, inv):
-    """:func:`_cell_edge` with ``inv = 1.0 / n`` computed once by the caller: the
+    """The cell edge of ``certificate._cell_edge`` (``TrappingRegion.boxes``, the
+    checker's), compiled, with ``inv = 1.0 / n`` computed once by the caller: the
     same float, bit for bit (``float(i) * inv`` is the product it forms)."""
     if i >= n:
         return hi
