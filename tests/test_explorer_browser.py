@@ -305,38 +305,55 @@ def _type_windows(page, e, u):
     page.locator(".sb-u-window input").press("Enter")
 
 
+def _wait_view(page, window, shown, stale=None, timeout=60.0):
+    """Wait until the window boxes read ``window`` and, at the same moment, the
+    status reports a finished render whose text starts with ``shown`` (and not
+    with ``stale``, the view before).
+
+    Both at once: a render that started at once leaves the last view's
+    "computed in" line on the page until it finishes, so the status alone (or
+    the boxes alone, before the server has taken a Back) can read an older view.
+    """
+    deadline = time.monotonic() + timeout
+    while True:
+        info = page.locator(".sb-status .sb-info").all_inner_texts()
+        now = _window(page), any(t.startswith(shown) and "computed in" in t
+                                 and not (stale and t.startswith(stale)) for t in info)
+        if now == (window, True):
+            return
+        if time.monotonic() > deadline:
+            raise AssertionError(f"waited for {window} and {shown!r}; the page shows {now[0]} and {info}")
+        time.sleep(0.1)
+
+
 def test_back_and_forward_restore_the_view(server, page):
     """Defect 1: Back undoes a zoom (picture, window boxes, status, address bar agree)."""
     page.goto(server.url + "?e=0:1&u=0:1.5&size=200x200&max_iter=200")
     _wait_rendered(page)
     start = page.evaluate("() => history.length")
     _type_windows(page, "0:0.5", "0.5:1.5")
-    page.locator(".sb-status .sb-info").get_by_text("e 0 to 0.5, u 0.5 to 1.5:").wait_for(timeout=60_000)
+    _wait_view(page, ("0:0.5", "0.5:1.5"), "e 0 to 0.5, u 0.5 to 1.5:")
     box = _map_canvas(page).bounding_box()  # a wheel zoom: another entry
     page.mouse.move(box["x"] + box["width"] * 0.4, box["y"] + box["height"] * 0.5)
     page.mouse.wheel(0, -300)
     page.wait_for_function("() => !document.location.search.includes('e=0:0.5&')", timeout=30_000)
-    _wait_rendered(page)
-    zoomed = _window(page)
+    zoomed = _window(page)  # the boxes are set with the address bar, before the render
+    assert zoomed != ("0:0.5", "0.5:1.5")
+    _wait_view(page, zoomed, "e ", stale="e 0 to 0.5, u 0.5 to 1.5:")
     assert page.evaluate("() => history.length") == start + 2
     page.go_back()
-    page.locator(".sb-status .sb-info").get_by_text("e 0 to 0.5, u 0.5 to 1.5:").wait_for(timeout=60_000)
-    assert _window(page) == ("0:0.5", "0.5:1.5") and _query(page)["e"] == "0:0.5"
+    _wait_view(page, ("0:0.5", "0.5:1.5"), "e 0 to 0.5, u 0.5 to 1.5:")
+    assert _query(page)["e"] == "0:0.5"
     page.go_back()
-    page.locator(".sb-status .sb-info").get_by_text("e 0 to 1, u 0 to 1.5:").wait_for(timeout=60_000)
-    assert _window(page) == ("0:1", "0:1.5")
+    _wait_view(page, ("0:1", "0:1.5"), "e 0 to 1, u 0 to 1.5:")
     page.go_forward()
-    page.locator(".sb-status .sb-info").get_by_text("e 0 to 0.5, u 0.5 to 1.5:").wait_for(timeout=60_000)
+    _wait_view(page, ("0:0.5", "0.5:1.5"), "e 0 to 0.5, u 0.5 to 1.5:")
     page.go_forward()
     page.wait_for_function("([e]) => document.location.search.includes('e=' + e + '&')",
                            arg=[zoomed[0]], timeout=30_000)
     # the address bar changes at once; the boxes and the picture follow when
-    # the server has taken the Forward (the status still reads the last view)
-    deadline = time.monotonic() + 30
-    while _window(page) != zoomed and time.monotonic() < deadline:
-        time.sleep(0.1)
-    assert _window(page) == zoomed
-    _wait_rendered(page)
+    # the server has taken the Forward
+    _wait_view(page, zoomed, "e ", stale="e 0 to 0.5, u 0.5 to 1.5:")
     # navigating history made no new entries
     assert page.evaluate("() => history.length") == start + 2
 
