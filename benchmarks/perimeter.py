@@ -3,6 +3,7 @@ sliding within max_iter, bracketed per scale by a certified atlas with class-lev
 
     python benchmarks/perimeter.py [--windows fig7,fig6] [--depths 10,12] [--max-iter 1000]
                                    [--store-from 12] [--tmp DIR] [--stores DIR]
+                                   [--trap {none,on,fine}]
 
 For each window (the figures' DIMENSION_WINDOWS) and depth: ``sb.certify(...,
 classes=True)``, then ``CertifiedAtlas.perimeter_bracket()``, which runs the independent
@@ -17,7 +18,9 @@ between k = 3 and the depth, and the narrowest one between two scales whose lowe
 are > 0.  The machine is shared: its load is printed with the times.  ``--stores DIR``
 keeps the stores in DIR, and a store already there is resumed (``certify_to_zarr`` checks
 its tiles against their checksums and computes only what is missing) instead of written
-again: to count an existing store with changed counting code.
+again: to count an existing store with changed counting code.  ``--trap on`` / ``fine``
+certifies with ``trap=True`` / ``trap="fine"`` as well (trapping regions prove boxes
+below the Corollary 2.1 curve ``no_sliding``: fewer undecided boxes, lower upper counts).
 """
 
 from __future__ import annotations
@@ -35,7 +38,7 @@ def _uptime():
         return "load " + " ".join(f.read().split()[:3])
 
 
-def measure(name, e, u, depth, max_iter, store_from, tmp, keep=False):
+def measure(name, e, u, depth, max_iter, store_from, tmp, keep=False, trap=False):
     import stairbounce as sb
 
     t0 = time.perf_counter()
@@ -43,16 +46,17 @@ def measure(name, e, u, depth, max_iter, store_from, tmp, keep=False):
         path = os.path.join(tmp, f"{name}-d{depth}.zarr")
         if not keep:
             shutil.rmtree(path, ignore_errors=True)
-        sb.certify_to_zarr(path, e=e, u=u, depth=depth, max_iter=max_iter, classes=True, verify=False)
-        print(f"{name} depth {depth}: store written (or resumed) in {time.perf_counter() - t0:.1f} s", flush=True)
+        sb.certify_to_zarr(path, e=e, u=u, depth=depth, max_iter=max_iter, classes=True, trap=trap, verify=False)
+        print(f"{name} depth {depth} trap {trap}: store written (or resumed) in {time.perf_counter() - t0:.1f} s",
+              flush=True)
         return _from_store(name, path)
     else:
-        atlas = sb.certify(e=e, u=u, depth=depth, max_iter=max_iter, classes=True)
+        atlas = sb.certify(e=e, u=u, depth=depth, max_iter=max_iter, classes=True, trap=trap)
     t1 = time.perf_counter()
     r = atlas.perimeter_bracket()
     t2 = time.perf_counter()
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
-    print(f"{name} depth {depth} max_iter {max_iter}: {atlas.boxes.sizes['box']:,} boxes; certify "
+    print(f"{name} depth {depth} max_iter {max_iter} trap {trap}: {atlas.boxes.sizes['box']:,} boxes; certify "
           f"{t1 - t0:.1f} s, verify + counts {t2 - t1:.1f} s; peak {rss:.2f} GiB; basis {r['basis']} "
           f"(verified {r['verified']}), {r['witnesses']:,} proven points in undecided boxes; {_uptime()}")
     print("  k      " + " ".join(f"{k:>8d}" for k in r["k"]))
@@ -115,7 +119,9 @@ def main(argv=None):
     p.add_argument("--store-from", type=int, default=12)
     p.add_argument("--tmp", default=None)
     p.add_argument("--stores", default=None)
+    p.add_argument("--trap", choices=("none", "on", "fine"), default="none")
     a = p.parse_args(argv)
+    trap = {"none": False, "on": True, "fine": "fine"}[a.trap]
     print(f"{time.strftime('%Y-%m-%d %H:%M')} UTC, {os.cpu_count()} cores, {_uptime()}", flush=True)
     with tempfile.TemporaryDirectory(dir=a.tmp) as tmp:
         if a.stores:
@@ -123,7 +129,8 @@ def main(argv=None):
         for name in a.windows.split(","):
             (e, u), _ = DIMENSION_WINDOWS[name]
             for depth in (int(d) for d in a.depths.split(",")):
-                measure(name, e, u, depth, a.max_iter, a.store_from, a.stores or tmp, keep=bool(a.stores))
+                measure(name, e, u, depth, a.max_iter, a.store_from, a.stores or tmp, keep=bool(a.stores),
+                        trap=trap)
     print(f"done, {_uptime()}")
 
 

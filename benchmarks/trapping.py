@@ -17,6 +17,9 @@ only (issue 44 item 5: the trapping pass at most twice the atlas): N rounds in
 one process, each the plain atlas, then ``trap_atlas`` on its table, and prints
 every round's pass / atlas with their median and the ratio of the fastest of
 each (the first round compiles nothing: one warm-up round runs before).
+``--rounds N --fine depth`` runs the pass with ``fine=True`` too in every round
+(the two finer grids, ``trap="fine"``) and prints both passes against the atlas,
+with the trapped share of each.
 """
 
 import os
@@ -86,13 +89,24 @@ def main(depths):
         np.seterr(all="ignore")
 
 
-def rounds(depth, n):
+def _share(ds):
+    """The trapped share of the non-sliding area below the curve (trapping / (trapping + nonsliding))."""
+    area = (ds["e1"].values - ds["e0"].values) * (ds["u1"].values - ds["u0"].values)
+    reason = ds["reason"].values
+    by_trap, left = float(area[reason == "trapping"].sum()), float(area[reason == "nonsliding"].sum())
+    return 100 * by_trap / max(by_trap + left, 1e-300)
+
+
+def rounds(depth, n, fine=False):
     from stairbounce.structure.trapping import trap_atlas
 
     win = dict(e=(0.0, 1.0), u=(0.0, 1.5), depth=depth, max_iter=1000)
-    trap_atlas(sb.certify(**win).boxes)  # warm-up: every kernel compiled or loaded
+    warm = sb.certify(**win).boxes  # warm-up: every kernel compiled or loaded
+    trap_atlas(warm)
+    if fine:
+        trap_atlas(warm, fine=True)
     print(f"load {os.getloadavg()}")
-    atlas, trap = [], []
+    atlas, trap, trap_fine = [], [], []
     for r in range(n):
         t0 = time.perf_counter()
         plain = sb.certify(**win)
@@ -101,16 +115,31 @@ def rounds(depth, n):
         t2 = time.perf_counter()
         atlas.append(t1 - t0)
         trap.append(t2 - t1)
-        print(f"round {r + 1}: the atlas {t1 - t0:.2f} s, the trapping pass {t2 - t1:.2f} s "
-              f"({ds.attrs['trap_tried']} boxes tried), pass / atlas {(t2 - t1) / (t1 - t0):.2f}")
+        line = (f"round {r + 1}: the atlas {t1 - t0:.2f} s, the trapping pass {t2 - t1:.2f} s "
+                f"({ds.attrs['trap_tried']} boxes tried, share {_share(ds):.2f} %), pass / atlas "
+                f"{(t2 - t1) / (t1 - t0):.2f}")
+        if fine:
+            t3 = time.perf_counter()
+            dsf = trap_atlas(plain.boxes, fine=True)
+            t4 = time.perf_counter()
+            trap_fine.append(t4 - t3)
+            line += (f"; fine pass {t4 - t3:.2f} s (share {_share(dsf):.2f} %), fine / atlas "
+                     f"{(t4 - t3) / (t1 - t0):.2f}")
+        print(line)
     ratios = np.array(trap) / np.array(atlas)
     print(f"depth {depth}, {n} rounds: pass / atlas median {np.median(ratios):.2f}, largest {ratios.max():.2f}; "
           f"fastest pass / fastest atlas {min(trap) / min(atlas):.2f}; the load now {os.getloadavg()}")
+    if fine:
+        rf = np.array(trap_fine) / np.array(atlas)
+        print(f"  fine pass / atlas median {np.median(rf):.2f}, largest {rf.max():.2f}; fine pass / pass median "
+              f"{np.median(np.array(trap_fine) / np.array(trap)):.2f}")
 
 
 if __name__ == "__main__":
     args = sys.argv[1:]
     if args[:1] == ["--rounds"]:
-        rounds(int(args[2]) if len(args) > 2 else 12, int(args[1]))
+        fine = "--fine" in args
+        rest = [a for a in args[2:] if a != "--fine"]
+        rounds(int(rest[0]) if rest else 12, int(args[1]), fine)
     else:
         main([int(a) for a in args] or [8])

@@ -47,6 +47,7 @@ def assert_same_atlas(got, ref):
     (dict(FIG7, depth=6), dict()),                                   # the default tile level: the last level
     (dict(OTHER, depth=6, max_iter=300), dict(tile_level=3, tile_boxes=7)),
     (dict(FIG7, depth=6, trap=True), dict(tile_level=4, tile_boxes=20)),
+    (dict(FIG7, depth=6, trap="fine"), dict(tile_level=4, tile_boxes=20)),
     (dict(OTHER, depth=6, classes=True), dict(tile_level=4, tile_boxes=30)),
 ])
 def test_the_store_holds_the_in_memory_boxes_bit_for_bit(tmp_path, kw, tiling):
@@ -164,6 +165,9 @@ def test_other_arguments_on_an_existing_store_are_refused_by_name(tmp_path):
         sb.certify_to_zarr(path, **FIG7, depth=5, max_iter=500)
     with pytest.raises(ValueError, match="trap"):
         sb.certify_to_zarr(path, **FIG7, depth=5, trap=True)
+    sb.certify_to_zarr(tmp_path / "t.zarr", **FIG7, depth=5, trap=True)
+    with pytest.raises(ValueError, match="trap: store True, asked 'fine'"):
+        sb.certify_to_zarr(tmp_path / "t.zarr", **FIG7, depth=5, trap="fine")
     (tmp_path / "b.zarr").mkdir()
     with pytest.raises(ValueError, match="not a certified atlas store"):
         sb.certify_to_zarr(tmp_path / "b.zarr", **FIG7, depth=5)

@@ -396,3 +396,63 @@ def test_streamed_store_holds_the_split_boxes(tmp_path, split_atlas):
     sb.certify_to_zarr(tmp_path / "t.zarr", e=(0.28, 0.32), u=(0.38, 0.42), depth=6, max_iter=1000, trap=True,
                        tile_level=4, tile_boxes=20)
     assert_same_atlas(sb.CertifiedAtlas.load(tmp_path / "t.zarr").boxes, atlas.boxes)
+
+
+def test_fine_grids_prove_more_and_contain_the_default_pass():
+    """``trap="fine"`` (two finer grids after the 512-cell try, where it failed by
+    less than a cell): the tries before are the default pass's, so every box the
+    default pass proves lies in a box the fine pass proves (itself or an
+    ancestor, one not split); the fine pass proves more area (regions of 1024 and
+    2048 cells a side, which the default pass never makes), the independent checker
+    accepts every box, and float orbits at random points of the boxes only the fine
+    pass proves never slide within 10^5 steps."""
+    win = dict(e=(0.155, 0.2138), u=(0.6, 0.658), depth=6, max_iter=1000)
+    plain, fine = sb.certify(**win, trap=True).boxes, sb.certify(**win, trap="fine").boxes
+    assert plain.attrs["trap_grids"] == [64, 128, 64, 256, 512]
+    assert fine.attrs["trap_grids"] == [64, 128, 64, 256, 512, 1024, 2048]
+    assert plain["trap_grid"].values[:, 2].max() <= 512
+    assert {1024, 2048} <= set(fine["trap_grid"].values[:, 2].astype(int))
+
+    def trapped(ds):
+        t = np.flatnonzero(ds["reason"].values == "trapping")
+        return t, {(int(ds["level"].values[b]), int(ds["i"].values[b]), int(ds["j"].values[b])) for b in t}
+
+    def area(ds, rows):
+        return sum((Fraction(float(ds["e1"].values[b])) - Fraction(float(ds["e0"].values[b])))
+                   * (Fraction(float(ds["u1"].values[b])) - Fraction(float(ds["u0"].values[b]))) for b in rows)
+
+    rows_p, keys_p = trapped(plain)
+    rows_f, keys_f = trapped(fine)
+
+    def covered_by(keys, L, i, j):
+        return any((m, i >> (L - m), j >> (L - m)) in keys for m in range(L + 1))
+
+    assert all(covered_by(keys_f, *k) for k in keys_p)
+    assert area(fine, rows_f) > area(plain, rows_p) > 0
+    v = sb.verify(sb.CertifiedAtlas(fine))
+    assert v and v.rejected == 0 and v.complete and v.checked == fine.sizes["box"]
+    only = [b for b in rows_f if not covered_by(keys_p, int(fine["level"].values[b]), int(fine["i"].values[b]),
+                                                  int(fine["j"].values[b]))]
+    assert only
+    rng = np.random.default_rng(12)
+    for b in rng.choice(only, min(6, len(only)), replace=False):
+        e0, e1, u0, u1 = (float(fine[k].values[b]) for k in ("e0", "e1", "u0", "u1"))
+        for e, u in zip(rng.uniform(e0, e1, 3), rng.uniform(u0, u1, 3)):
+            T, ratio = _constants(e, u)
+            assert _slide_or_steps(1.0, 0.0, e, T, ratio, 100_000)[0] == 0
+
+
+def test_cli_fine_trap_and_bad_trap_values(tmp_path, capsys):
+    from stairbounce.cli import main
+
+    win = ["--e", "0.155:0.2138", "--u", "0.6:0.658", "--depth", "5"]
+    out = tmp_path / "f.nc"
+    with pytest.raises(SystemExit) as exit_:
+        main(["certify", *win, "--fine-trap", "--out", str(out)])
+    assert exit_.value.code == 0
+    assert "no_sliding by a trapping region at least" in capsys.readouterr().out
+    ds = sb.CertifiedAtlas.load(out).boxes
+    assert list(ds.attrs["trap_grids"]) == [64, 128, 64, 256, 512, 1024, 2048]
+    for bad in (1, "yes", None, "Fine"):
+        with pytest.raises(ValueError, match="trap must be True, False or 'fine'"):
+            sb.certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=3, trap=bad)

@@ -166,6 +166,53 @@ def test_trapping_regions_get_the_numpy_checker_s_verdicts(region):
     assert verdicts[0] == "ok" and {"invariant", "slide"} & set(verdicts) and verdicts.count("ok") < len(cases)
 
 
+def test_the_coverage_rule_gives_the_prefix_sum_s_answers():
+    """``_check_kernel.covered`` reads a region by its sorted cells and their row
+    runs (memory and time of the region's cells, not of the grid rectangle
+    holding them); its answers are the numpy checker's prefix sum over the whole
+    grid: on rings, scattered cells and holes, with runs ending at a row's last
+    column (the next cell index is the next row's first), rectangles at and
+    beyond the grid's edges, one cell wide, empty and NaN."""
+    from stairbounce.structure._check_kernel import covered, edges, runs
+
+    rng = np.random.default_rng(44)
+    answers = []
+    for trial in range(60):
+        nv, ns = int(rng.integers(1, 40)), int(rng.integers(1, 40))
+        ev, es = edges(-1.0, 2.0, nv), edges(0.5, 3.0, ns)
+        jj, ii = np.mgrid[0:ns, 0:nv]
+        kind = trial % 3
+        if kind == 0:  # a ring: a rectangle less a smaller one
+            flags = ((ii >= nv // 5) & (ii <= nv - 1) & (jj >= ns // 6)
+                     & ~((ii > nv // 2) & (ii < nv - 2) & (jj > ns // 3) & (jj < ns - 3)))
+        elif kind == 1:  # dense with holes
+            flags = rng.random((ns, nv)) < 0.93
+        else:  # scattered
+            flags = rng.random((ns, nv)) < 0.3
+        cells = np.flatnonzero(flags.ravel()).astype(np.int64)
+        if not cells.size:
+            continue
+        cells = np.concatenate([cells, cells[: cells.size // 4]])  # repeats change nothing
+        rng.shuffle(cells)
+        s, last = runs(cells, nv)
+        a, b = rng.uniform(-1.4, 2.4, 400), rng.uniform(0.2, 3.3, 400)
+        w, h = rng.exponential(0.3, 400), rng.exponential(0.3, 400)
+        a0, a1, b0, b1 = a, a + w, b, b + h
+        # on the edges, one cell, empty and NaN rectangles
+        k = rng.integers(0, nv, 40)
+        m = rng.integers(0, ns, 40)
+        a0 = np.concatenate([a0, ev[k], ev[k], [ev[0], ev[0], np.nan, 0.5]])
+        a1 = np.concatenate([a1, ev[k + 1], ev[k], [ev[-1], ev[0] - 1e-12, 0.6, np.nan]])
+        b0 = np.concatenate([b0, es[m], es[m], [es[0], es[0], 1.0, 1.0]])
+        b1 = np.concatenate([b1, es[m + 1], es[m], [es[-1], es[-1], 1.1, 1.1]])
+        want = numpy_checker._covered(flags.ravel().astype(np.int64), ev, es, a0, a1, b0, b1)
+        got = np.array([covered(s, last, ev, es, *r) for r in zip(a0, a1, b0, b1)])
+        assert np.array_equal(got, want), (trial, np.flatnonzero(got != want)[:5])
+        answers.append(want)
+    answers = np.concatenate(answers)
+    assert 0.05 < answers.mean() < 0.95  # both answers, many times
+
+
 def test_work_beyond_the_limit_is_refused_by_name(monkeypatch, tmp_path):
     c = sb.certify_box(*WITHIN, max_iter=5000)
     monkeypatch.setattr(checker, "MAX_WORK", 4000)

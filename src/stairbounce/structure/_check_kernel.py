@@ -246,13 +246,37 @@ def _search_left(edges, x):
 
 
 @njit(cache=True)
-def covered(prefix, ev, es, a0, a1, b0, b1, oi=0, oj=0):
+def runs(cells, nv):
+    """A region's cells (indices ``j * nv + i``) as the coverage test reads them:
+    sorted row by row without repeats, and for each the last column of the run of
+    region cells in its row that holds it.  Memory and time scale with the
+    region's cells, not with the rectangle of the grid that holds them (a thin
+    ring on a fine grid)."""
+    s = np.unique(cells)
+    m = s.size
+    last = np.empty(m, np.int64)
+    for k in range(m - 1, -1, -1):
+        i = s[k] % nv
+        if k + 1 < m and s[k + 1] == s[k] + 1 and i + 1 < nv:  # the next cell, in the same row
+            last[k] = last[k + 1]
+        else:
+            last[k] = i
+    return s, last
+
+
+@njit(cache=True, inline="always")
+def _index(s, key):
+    """The position of ``key`` in the sorted ``s``, or -1."""
+    p = _search_left(s, key)
+    return p if p < s.size and s[p] == key else -1
+
+
+@njit(cache=True)
+def covered(s, last, ev, es, a0, a1, b0, b1):
     """Whether the rectangle ``[a0, a1] x [b0, b1]`` lies in the union of the
-    flagged cells of the grid with edges ``ev`` (v) and ``es`` (s);
-    ``prefix[j, i]`` counts the flagged cells of the columns ``oi ..`` and rows
-    ``oj ..`` (a rectangle of the grid holding every flagged cell) below row ``oj
-    + j`` and left of column ``oi + i``: a rectangle of cells reaching outside it
-    holds an unflagged cell."""
+    region cells ``s`` (with their runs ``last``, from :func:`runs`) of the grid
+    with edges ``ev`` (v) and ``es`` (s): every grid cell it meets, row by row,
+    lies in one run of region cells."""
     nv, ns = len(ev) - 1, len(es) - 1
     if not (a0 >= ev[0] and a1 <= ev[nv] and b0 >= es[0] and b1 <= es[ns] and a0 <= a1 and b0 <= b1):
         return False
@@ -260,16 +284,15 @@ def covered(prefix, ev, es, a0, a1, b0, b1, oi=0, oj=0):
     i1 = max(min(max(_search_left(ev, a1) - 1, 0), nv - 1), i0)
     j0 = min(max(_search_right(es, b0) - 1, 0), ns - 1)
     j1 = max(min(max(_search_left(es, b1) - 1, 0), ns - 1), j0)
-    pj, pi = prefix.shape[0] - 1, prefix.shape[1] - 1
-    i0, i1, j0, j1 = i0 - oi, i1 - oi, j0 - oj, j1 - oj
-    if i0 < 0 or j0 < 0 or i1 >= pi or j1 >= pj:
-        return False
-    count = prefix[j1 + 1, i1 + 1] - prefix[j0, i1 + 1] - prefix[j1 + 1, i0] + prefix[j0, i0]
-    return count == (i1 - i0 + 1) * (j1 - j0 + 1)
+    for j in range(j0, j1 + 1):
+        p = _index(s, j * nv + i0)
+        if p < 0 or last[p] < i1:
+            return False
+    return True
 
 
 @njit(cache=True)
-def region_check(e0, e1, u0, u1, v0, v1, s0, s1, prefix, ev, es, cap, oi=0, oj=0):
+def region_check(e0, e1, u0, u1, v0, v1, s0, s1, cs, last, ev, es, cap):
     """The ``slide`` and ``invariant`` checks of ``verify_trapping.verify_region``
     on the cells ``[v0, v1] x [s0, s1]`` (arrays): 0 when both hold, 1 when the
     slide margin is not proven < 0 on a cell, 2 when an image is not covered (or
@@ -318,7 +341,7 @@ def region_check(e0, e1, u0, u1, v0, v1, s0, s1, prefix, ev, es, cap, oi=0, oj=0
                 b0 = _sqrt(_dn(q0 + 2.0), _dn(q0 + 2.0))[0]
                 q1 = _mul_pos(w_hi, w_hi, w_hi, w_hi)[1]
                 b1 = _sqrt(_up(q1 + 2.0), _up(q1 + 2.0))[1]
-                if not covered(prefix, ev, es, a0, a1, b0, b1, oi, oj):
+                if not covered(cs, last, ev, es, a0, a1, b0, b1):
                     return 2
             # impact k + 1 may happen where T - t_{k+1} is not proven < 0
             hi_prev[c] = _up(th - _dn(v0[c] + _max(_dn(A1_lo * s0[c]), 0.0)))
@@ -357,24 +380,10 @@ def regions(e0, e1, u0, u1, itinerary, offsets, grids, cell_off, cells, todo, ca
         ns = int(grids[r, 5])
         ev = edges(grids[r, 0], grids[r, 1], nv)
         es = edges(grids[r, 3], grids[r, 4], ns)
-        # a 2-D prefix sum of the flagged cells over the rectangle of cells holding them
-        # (columns oi .. oi + pw - 1, rows oj .. oj + ph - 1): P[j, i] counts those
-        # below row oj + j, left of column oi + i
         c0, c1 = cell_off[r], cell_off[r + 1]
-        oi, oj, zi, zj = nv, ns, -1, -1
-        for k in range(c0, c1):
-            i, j = cells[k] % nv, cells[k] // nv
-            oi, zi, oj, zj = min(oi, i), max(zi, i), min(oj, j), max(zj, j)
-        pw, ph = zi - oi + 1, zj - oj + 1
-        flags = np.zeros((ph, pw), np.int64)
-        for k in range(c0, c1):
-            flags[cells[k] // nv - oj, cells[k] % nv - oi] = 1
-        P = np.zeros((ph + 1, pw + 1), np.int64)
-        for j in range(ph):
-            for i in range(pw):
-                P[j + 1, i + 1] = flags[j, i] + P[j, i + 1] + P[j + 1, i] - P[j, i]
+        cs, last = runs(cells[c0:c1], nv)
         a0, a1, b0, b1 = entered(e0[r], e1[r], u0[r], u1[r], itinerary[offsets[r]:offsets[r + 1]])
-        if not covered(P, ev, es, a0, a1, b0, b1, oi, oj):
+        if not covered(cs, last, ev, es, a0, a1, b0, b1):
             out[r] = 3
             continue
         m = c1 - c0
@@ -383,7 +392,7 @@ def regions(e0, e1, u0, u1, itinerary, offsets, grids, cell_off, cells, todo, ca
             i = cells[c0 + k] % nv
             j = cells[c0 + k] // nv
             v0[k], v1[k], s0[k], s1[k] = ev[i], ev[i + 1], es[j], es[j + 1]
-        what = region_check(e0[r], e1[r], u0[r], u1[r], v0, v1, s0, s1, P, ev, es, cap, oi, oj)
+        what = region_check(e0[r], e1[r], u0[r], u1[r], v0, v1, s0, s1, cs, last, ev, es, cap)
         out[r] = 0 if what == 0 else (4 if what == 1 else 5)
 
 

@@ -124,7 +124,7 @@ def _table(win, depth, max_iter, code, parts, classes, trap):
     if trap:
         from .trapping import trap_atlas
 
-        ds = trap_atlas(ds)
+        ds = trap_atlas(ds, fine=trap == "fine")
         _recheck_regions(ds)
     return ds
 
@@ -292,7 +292,7 @@ def _store_attrs(win, depth, max_iter, form, trap, classes, tile_level, tile_box
 
     return {"kind": R.STORE_KIND, "format": R.STORE_FORMAT, "e_range": [float(win[0]), float(win[1])],
             "u_range": [float(win[2]), float(win[3])], "depth": int(depth), "max_iter": int(max_iter),
-            "form": form, "trap": bool(trap), "classes": bool(classes), "tile_level": int(tile_level),
+            "form": form, "trap": trap, "classes": bool(classes), "tile_level": int(tile_level),
             "tile_boxes": int(tile_boxes), "n_tiles": int(n_tiles), "tiles_crc": positions,
             "impact_cap": int(K.IMPACT_CAP), "stairbounce_version": __version__}
 
@@ -410,7 +410,10 @@ def certify_to_zarr(path, e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=
 
     path = _check_path(path)
     e_lo, e_hi, u_lo, u_hi, depth, max_iter, code = _check_request(e, u, depth, max_iter, form)
-    for name, flag in (("trap", trap), ("classes", classes), ("verify", verify)):
+    from .trapping import check_trap
+
+    trap = check_trap(trap)
+    for name, flag in (("classes", classes), ("verify", verify)):
         if not isinstance(flag, (bool, np.bool_)):
             raise ValueError(f"{name} must be True or False, got {flag!r}")
     if progress is not None and not callable(progress):
@@ -474,7 +477,7 @@ def certify_to_zarr(path, e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=
         if todo and phase is not None:
             phase(f"tiles of levels {tile_level}-{depth}")
         args = [(str(path), token, owner, k, win, depth, tile_level, ti[cuts[k - 1]:cuts[k - 1] + tile_boxes],
-                 tj[cuts[k - 1]:cuts[k - 1] + tile_boxes], max_iter, code, bool(classes), bool(trap),
+                 tj[cuts[k - 1]:cuts[k - 1] + tile_boxes], max_iter, code, bool(classes), trap,
                  numba_threads if client is None else (numba_threads or 1))
                 for k in todo]
         if client is None:

@@ -406,6 +406,33 @@ _FAST_TRIES = _TRIES + ((256, 0.3), (512, 0.3))
 _TRY_CELLS = np.array([c for c, _ in _FAST_TRIES], np.int64)
 _TRY_PAD = np.array([p for _, p in _FAST_TRIES], np.float64)
 _TRY_GATE = np.array([0, 2, 3, 1, 1], np.int64)
+# trap="fine": two finer grids after the 512-cell try, each where the try before failed by
+# less than a cell (thin regions along the Corollary 2.1 curve; benchmarks/README.md,
+# "finer trapping grids": the share of the paper's plane 84.7 -> 88.3 %, the pass about 1.7
+# times as long)
+_FINE_TRIES = _FAST_TRIES + ((1024, 0.3), (2048, 0.3))
+_FINE_CELLS = np.array([c for c, _ in _FINE_TRIES], np.int64)
+_FINE_PAD = np.array([p for _, p in _FINE_TRIES], np.float64)
+_FINE_GATE = np.array([0, 2, 3, 1, 1, 1, 1], np.int64)
+TRAP_MODES = (False, True, "fine")
+"""The values of ``trap`` (:func:`stairbounce.certify`, ``certify_to_zarr``): no
+trapping pass, the pass, the pass with two finer grids (1024 and 2048 cells a
+side) tried where the 512-cell try failed by less than a cell."""
+
+
+def check_trap(trap):
+    """``trap`` as one of :data:`TRAP_MODES` (numpy booleans taken as booleans), or a
+    ValueError naming the allowed values."""
+    if isinstance(trap, (bool, np.bool_)):
+        return bool(trap)
+    if isinstance(trap, str) and trap == "fine":
+        return "fine"
+    raise ValueError(f"trap must be True, False or 'fine', got {trap!r}")
+
+
+def _try_grids(fine):
+    """The grid tries' ``(cells a side, paddings, gates)`` of the pass."""
+    return (_FINE_CELLS, _FINE_PAD, _FINE_GATE) if fine else (_TRY_CELLS, _TRY_PAD, _TRY_GATE)
 SPLIT_LEVELS = 1
 """Levels below the atlas's depth that :func:`trap_atlas` splits a box whose
 trapping region failed into (its quadtree children, tried in turn); an atlas
@@ -542,7 +569,7 @@ def trapping_region(e, u, max_iter=1000):
 _BATCH = 1024
 
 
-def _try_all(e0, e1, u0, u1, max_iter, progress=None, done=0, total=0, threads=None):
+def _try_all(e0, e1, u0, u1, max_iter, progress=None, done=0, total=0, threads=None, fine=False):
     """:func:`_try_fast` on every box, in compiled batches of ``_BATCH`` boxes (Ctrl-C and
     ``progress`` between them): ``(codes, grids, itinerary lengths, itineraries, cell
     counts, cells)``, the entries and the cells concatenated box after box.
@@ -560,6 +587,7 @@ def _try_all(e0, e1, u0, u1, max_iter, progress=None, done=0, total=0, threads=N
 
     n = e0.size
     threads = numba.get_num_threads() if threads is None else int(threads)
+    t_cells, t_pad, t_gate = _try_grids(fine)
     codes = np.zeros(n, np.int64)
     grids = np.zeros((n, 6))
     itin_len = np.zeros(n, np.int64)
@@ -576,7 +604,7 @@ def _try_all(e0, e1, u0, u1, max_iter, progress=None, done=0, total=0, threads=N
         pos = lo
         while pos < hi:
             got, ip, cp = _try_batch(e0[pos:hi], e1[pos:hi], u0[pos:hi], u1[pos:hi], 0, max_iter, _FAST_HULL_STEPS,
-                                     _TRY_CELLS, _TRY_PAD, _TRY_GATE, _MAX_CELLS, codes[pos:hi], grids[pos:hi],
+                                     t_cells, t_pad, t_gate, _MAX_CELLS, codes[pos:hi], grids[pos:hi],
                                      itin_len[pos:hi], local.itin, cell_len[pos:hi], local.cell)
             itins.append(local.itin[:ip].copy())
             cells.append(local.cell[:cp].copy())
@@ -615,7 +643,7 @@ def _try_all(e0, e1, u0, u1, max_iter, progress=None, done=0, total=0, threads=N
     return codes, grids, itin_len, cat(itins), cell_len, cat(cells)
 
 
-def trap_atlas(ds, progress=None, split=None):
+def trap_atlas(ds, progress=None, split=None, fine=False):
     """The atlas table ``ds`` (``certify``'s Dataset) with its undecided
     ``"nonsliding"`` boxes tried for a trapping region (:func:`_try_fast`): a box
     whose region closes becomes ``no_sliding`` with reason ``"trapping"``; a box
@@ -629,7 +657,10 @@ def trap_atlas(ds, progress=None, split=None):
     whose descendants was proven stays one row.  The rows are in the atlas's
     order (level, then j, then i), each a quadtree box of the window at its
     level; ``attrs["trap_split"]`` states ``split`` (``sb.verify`` accepts boxes
-    down to ``depth + trap_split``).
+    down to ``depth + trap_split``).  With ``fine`` two finer grids (1024 and
+    2048 cells a side) are tried after the 512-cell one where it failed by less
+    than a cell (:data:`TRAP_MODES`); ``attrs["trap_grids"]`` lists the cells a
+    side of the grids tried, in their order.
 
     The regions: entry itinerary in ``itinerary``/``offsets``, the region in
     ``trap_box`` (the box's row), ``trap_grid`` (``v_lo, v_hi, nv, s_lo, s_hi,
@@ -670,7 +701,7 @@ def trap_atlas(ds, progress=None, split=None):
         L, I, J = lv[-1], ii[-1], jj[-1]
         e0, e1, u0, u1 = (np.empty(L.size) for _ in range(4))
         _box_edges(win, L, I, J, e0, e1, u0, u1)
-        r = _try_all(e0, e1, u0, u1, max_iter, progress, done, done + L.size)
+        r = _try_all(e0, e1, u0, u1, max_iter, progress, done, done + L.size, fine=fine)
         done += L.size
         res.append(r)
         fail = np.flatnonzero((r[0] != TRAP_OK) & (L < lmax))
@@ -769,7 +800,8 @@ def trap_atlas(ds, progress=None, split=None):
     out = xr.Dataset(data)
     for k in box_vars:
         out[k].attrs = ds[k].attrs
-    out.attrs = dict(ds.attrs, trap_split=int(split), trap_tried=int(lv.size),
+    out.attrs = dict(ds.attrs, trap_split=int(split), trap_grids=[int(c) for c in _try_grids(fine)[0]],
+                     trap_tried=int(lv.size),
                      trap_seconds=time.perf_counter() - t0,
                      trap_failures=", ".join(f"{k} {v}" for k, v in sorted(failures.items())))
     return out
