@@ -291,7 +291,7 @@ def test_the_proven_box_counts_are_printed_with_their_basis(capsys):
     d = number(r"\nD = ([\d.]+)", out)
     assert re.search(r"beside the numerical D = [\d.]+: (agrees|differs|not comparable) \(", out)
     from stairbounce.structure.certify import slope_verdict
-    assert f": {slope_verdict(d, r['finite'])[0]} (" in out
+    assert f": {slope_verdict(d, r['across'])[0]} (" in out
 
 
 def test_proven_depth_0_leaves_the_counts_out_and_wrong_uses_are_one_line(capsys, tmp_path):

@@ -124,6 +124,37 @@ def test_a_zero_lower_count_leaves_the_slope_open_and_says_so():
     assert CERTIFY._finite_scales(lower, upper, 0, 3) == min(widths, key=widths.get) == (0, 2)
 
 
+def test_the_verdict_s_bracket_spans_the_scales_with_proven_lower_counts():
+    """``across`` (what the verdicts compare the numerical D with) runs from the
+    coarsest to the finest scale whose lower count is > 0, not between the two with
+    the narrowest bracket.  The counts are the Fig. 6 window's at depth 12 with
+    class-level proofs and trap="fine" (benchmarks/perimeter.py --trap fine, the
+    record in benchmarks/README.md): there the narrowest bracket, between k = 3 and
+    4, excludes the pictures' D = 1.55 (a finite-scale slope at scales where the
+    border fills about half of the cells) while the slope from k = 3 to 12 holds it."""
+    import pandas as pd
+
+    # k = 0, 1, 2 first (not in the scales 3 .. 12 asked for)
+    lower = [1, 4, 14, 31, 82, 243, 701, 2046, 5756, 16257, 45404, 117739, 265565]
+    upper = [1, 4, 16, 31, 83, 251, 736, 2180, 6533, 20412, 67304, 234218, 850943]
+    df = pd.DataFrame({"lower": lower, "upper": upper}, index=pd.Index(range(13), name="k"))
+    r = CERTIFY.perimeter_result(df, 3, 12, 12, 1000, None)
+    a, b, lo, hi = r["finite"]
+    assert (a, b) == (3, 4) and 1.40 < lo < hi < 1.43
+    assert r["across"][:2] == (3, 12) and r["across"][2:] == r["slope"]
+    assert CERTIFY.slope_verdict(1.55, r["finite"])[0] == "differs"
+    assert CERTIFY.slope_verdict(1.55, r["across"])[0] == "agrees"
+    # a zero lower count at the ends: the span shrinks to the scales that have one
+    df2 = df.copy()
+    df2.loc[3, "lower"] = 0
+    df2.loc[12, "lower"] = 0
+    assert CERTIFY.perimeter_result(df2, 3, 12, 12, 1000, None)["across"][:2] == (4, 11)
+    df2["lower"] = 0
+    df2.loc[7, "lower"] = 5
+    r2 = CERTIFY.perimeter_result(df2, 3, 12, 12, 1000, None)
+    assert r2["across"] is None and CERTIFY.slope_verdict(1.55, r2["across"])[0] == "not comparable"
+
+
 def test_slope_verdict_can_fail_and_says_when_it_cannot_decide():
     assert CERTIFY.slope_verdict(1.5, None)[0] == "not comparable"
     assert CERTIFY.slope_verdict(1.5, (3, 5, 1.2, 1.7))[0] == "agrees"

@@ -82,20 +82,20 @@ def test_window_rows_are_proven_and_their_verdicts_computed(tmp_path):
     assert (counts.lower[3:] > 0).all() and counts.attrs["witnesses"] > 0
     assert f"{counts.attrs['witnesses']} proven points inside undecided boxes" in bracket.measured
     r = atlas.perimeter_bracket(verify=False)
-    assert r["finite"] is not None
-    assert (bracket.verdict, bracket.why) == CERTIFY.slope_verdict(1.4, r["finite"])
+    assert r["finite"] is not None and r["across"] is not None
+    assert (bracket.verdict, bracket.why) == CERTIFY.slope_verdict(1.4, r["across"])
     assert "re-verified by the checker" in bracket.proof
     assert "max_iter -> infinity" in bracket.measured and "limit of small scales" in bracket.measured
 
 
-def test_the_perimeter_row_differs_outside_its_finite_bracket(tmp_path):
+def test_the_perimeter_row_differs_outside_its_bracket_across_the_scales(tmp_path):
     # depth 8: lower counts > 0 at k = 3 .. 5, so a finite bracket, and a verdict either way
     (e, u), _ = F.DIMENSION_WINDOWS["fig7"]
     certified = F.proven._certified_atlas(_settings(tmp_path, 0.5), "fig7", e, u, classes=True)
     atlas = certified[0]
     assert certified[1] == 8 and certified[3] == "proven"
     r = atlas.perimeter_bracket(verify=False)
-    a, b, lo, hi = r["finite"]
+    a, b, lo, hi = r["across"]
     assert 3 <= a < b <= 8 and math.isfinite(lo) and math.isfinite(hi)
     for d, verdict in ((hi + 0.5, "differs"), (lo - 0.5, "differs"), ((lo + hi) / 2, None)):
         row = F.proven._border_bracket_row(None, "fig7", certified, type("Fit", (), {"dimension": d})())

@@ -535,7 +535,7 @@ def _print_proven_counts(ew, uw, depth, max_iter, dimension):
         r = atlas.perimeter_bracket(0 if depth == 1 else None)
     except ValueError as exc:
         raise CLIError(f"--proven-depth: {exc}") from None
-    verdict, why = slope_verdict(dimension, r["finite"])
+    verdict, why = slope_verdict(dimension, r["across"])
     for line in perimeter_lines(r, [f"  beside the numerical D = {dimension:.4f}: {verdict} ({why})"]):
         typer.echo(line)
 

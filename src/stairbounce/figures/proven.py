@@ -160,15 +160,16 @@ def _border_bracket_row(s, name, certified, est):
     """The proven box counts of the sliding region's border (the paper's perimeter:
     ``CertifiedAtlas.perimeter_bracket``) and the slope bracket between the scales
     k = 3 .. depth, beside the numerical dimension ``est`` of this picture: it
-    differs when the numerical D lies outside the narrowest bracket between two
-    scales where both of its ends are finite (a zero lower count leaves an end open), and is
-    not comparable when there is no such bracket or when it holds all of [1, 2]
-    (too wide to decide)."""
+    differs when the numerical D lies outside the bracket between the coarsest and
+    the finest scale whose lower counts are > 0 (both of its ends finite: a zero
+    lower count leaves an end open; ``across``, :func:`slope_verdict` says why not
+    the narrowest), and is not comparable when there is no such bracket or when it
+    holds all of [1, 2] (too wide to decide)."""
     from ..structure.certify import slope_verdict
 
     atlas, depth, n_proven, basis, proof, override = certified
     r = atlas.perimeter_bracket(verify=False)  # the checker's verdict is the certified one's
-    verdict, why = slope_verdict(est.dimension, r["finite"])
+    verdict, why = slope_verdict(est.dimension, r["across"])
     if override:
         verdict, why = override
     table = "; ".join(f"k = {k}: {lo}..{up}" for k, lo, up in zip(r["k"], r["lower"], r["upper"]))

@@ -782,6 +782,12 @@ def perimeter_result(df, k1, k2, depth, max_iter, verdict):
         a, b = span
         flo, fhi = CertifiedAtlas._slope_between(df, a, b)
         finite, finite_text = (a, b, flo, fhi), slope_text(flo, fhi, a, b, lower, upper)
+    widest = _widest_scales(lower, k1, k2)
+    if widest is None:
+        across = None
+    else:
+        a, b = widest
+        across = (a, b, *CertifiedAtlas._slope_between(df, a, b))
     what = f"certified boxes (interval arithmetic, certify depth {depth}, max_iter {max_iter})"
     if verdict is None:
         verified, basis = None, "numerical"
@@ -801,7 +807,7 @@ def perimeter_result(df, k1, k2, depth, max_iter, verdict):
     return {"k1": k1, "k2": k2, "k": list(range(k1, k2 + 1)),
             "lower": [int(x) for x in lower[k1:k2 + 1]], "upper": [int(x) for x in upper[k1:k2 + 1]],
             "slope": (lo, hi), "slope_text": slope_text(lo, hi, k1, k2, lower, upper),
-            "finite": finite, "finite_text": finite_text, "depth": depth, "max_iter": max_iter,
+            "finite": finite, "finite_text": finite_text, "across": across, "depth": depth, "max_iter": max_iter,
             "verified": verified, "basis": basis, "proof": proof, "not_proven": NOT_PROVEN,
             "witnesses": n_wit, "witnesses_tried": int(df.attrs.get("witnesses_tried", 0))}
 
@@ -844,6 +850,14 @@ def _finite_scales(lower, upper, k1, k2):
     return best
 
 
+def _widest_scales(lower, k1, k2):
+    """``(a, b)``: the coarsest and the finest scale of ``k1 .. k2`` whose lower counts
+    are > 0 (the widest span with both ends of the slope bracket finite); None when
+    fewer than two scales have one."""
+    ks = [k for k in range(k1, k2 + 1) if lower[k] > 0]
+    return (ks[0], ks[-1]) if len(ks) >= 2 else None
+
+
 def slope_text(lo, hi, k1, k2, lower, upper):
     """The proven bracket ``(lo, hi)`` on the box-counting slope between the scales
     ``k1 < k2`` as text, its ends rounded outward to 3 decimals; an end that a zero
@@ -863,12 +877,17 @@ def slope_text(lo, hi, k1, k2, lower, upper):
 
 def slope_verdict(dimension, finite):
     """``(verdict, why)``: does a numerical dimension lie inside the proven slope
-    bracket ``finite = (a, b, lo, hi)`` (:meth:`CertifiedAtlas.perimeter_bracket`'s
-    ``finite``: the scales where both ends are finite), its ends rounded outward to 3
-    decimals?  "differs" when outside, "not comparable" when there is no finite
-    bracket or when it holds all of [1, 2] (too wide to decide: every dimension a
-    border in the plane can have), "agrees" when inside a narrower one.  A slope
-    between finite scales is not the dimension: the verdict compares the two."""
+    bracket ``finite = (a, b, lo, hi)``, its ends rounded outward to 3 decimals?
+    "differs" when outside, "not comparable" when there is no finite bracket or when
+    it holds all of [1, 2] (too wide to decide: every dimension a border in the plane
+    can have), "agrees" when inside a narrower one.  A slope between finite scales is
+    not the dimension: the verdict compares the two.  The callers pass
+    :meth:`CertifiedAtlas.perimeter_bracket`'s ``across``, the slope from the coarsest
+    to the finest scale with a lower count > 0, not the narrowest bracket
+    (``finite``): at the coarsest scales the border fills much of the window's cells
+    and the slope between two of them is pulled away from the dimension (the Fig. 6
+    window at depth 12 with ``trap="fine"``: [1.403, 1.421] between k = 3 and 4, while
+    between 3 and 12 it is [1.451, 1.639]; the pictures' D is about 1.55)."""
     if finite is None:
         return "not comparable", ("no finite proven bracket: fewer than two scales have a lower count > 0, "
                                   "and a zero lower count leaves the slope unbounded")
@@ -1188,7 +1207,9 @@ class CertifiedAtlas:
         where a zero lower count leaves an end open) and ``slope_text``;
         ``finite``: ``(a, b, lo, hi)``, the narrowest bracket between two scales
         ``k1 <= a < b <= k2`` whose lower counts are both > 0 (both ends finite), or
-        None, and ``finite_text``; ``depth``, ``max_iter``; ``verified`` (True when the
+        None, and ``finite_text``; ``across``: ``(a, b, lo, hi)`` between the
+        coarsest and the finest of those scales, or None (what a numerical dimension
+        is compared with: :func:`slope_verdict`); ``depth``, ``max_iter``; ``verified`` (True when the
         independent checker ``sb.verify`` passed every box and the boxes cover
         the window, False when it rejected some, None with ``verify=False``);
         ``basis`` ``"proven"`` only when verified, else ``"numerical"``, with
