@@ -91,8 +91,8 @@ def test_certify_with_trapping_rechecks_its_regions(monkeypatch):
 
     real = trapping.trap_atlas
 
-    def spoiled(ds, progress=None):
-        out = real(ds, progress)
+    def spoiled(ds, progress=None, **kw):
+        out = real(ds, progress, **kw)
         cells = out["trap_cells"].values.copy()
         cells[:] = 0  # every region reduced to one cell: no longer invariant
         return out.assign(trap_cells=(out["trap_cells"].dims, cells))

@@ -221,8 +221,7 @@ def certify_(
     from ..structure.certificate import STATUSES
     from ..structure.certify import ATLAS_SUFFIXES, certify
 
-    if fine_trap:
-        trap = "fine"  # the pass with the finer grids (trapping.TRAP_MODES)
+    mode: bool | str = "fine" if fine_trap else trap  # trapping.TRAP_MODES: "fine", the finer grids too
     if perimeter and verify is None:
         raise CLIError("--perimeter goes with --verify (the counts of a saved atlas or store, from its verified boxes)")
     if verify is not None:
@@ -235,7 +234,7 @@ def certify_(
     if store is not None:
         if out is not None or png is not None:
             raise CLIError("--store writes the atlas itself: give --out or --png without --store, or load the store")
-        _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, classes, top)
+        _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, mode, classes, top)
         return
     if out is not None:
         suffix_of(out, ATLAS_SUFFIXES, "--out")   # the rule of CertifiedAtlas.save, before the work
@@ -248,7 +247,7 @@ def certify_(
     t0 = time.perf_counter()
     try:
         atlas = _with_phases(lambda p, ph: certify(e=(e_lo, e_hi), u=(u_lo, u_hi), depth=depth,
-                                                  max_iter=max_iter, progress=p, trap=trap, classes=classes,
+                                                  max_iter=max_iter, progress=p, trap=mode, classes=classes,
                                                   phase=ph))
     except ValueError as exc:  # the library names its parameters; the options carry the same names
         raise CLIError(f"--{str(exc).replace('_', '-')}" if str(exc).split()[0] in ("depth", "max_iter")
@@ -268,7 +267,7 @@ def certify_(
                f"window/{1 << depth}), max_iter {max_iter}: {n_box} boxes in {seconds:.2f} s")
     typer.echo("proven: at least " + ", ".join(f"{k} {_pct(f[k], 2)}%" for k in _PROVEN[classes])
                + " of the window's area (proven bounds: the boxes' exact areas summed, rounded down)")
-    if trap:
+    if mode:
         rs, st = atlas.boxes["reason"].values, atlas.boxes["status"].values
         book = atlas._book()
         trapped = book.share((st == STATUSES.index("no_sliding")) & (rs == "trapping"))[0]
