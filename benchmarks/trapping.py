@@ -125,6 +125,17 @@ def rounds(depth, n, fine=False):
             trap_fine.append(t4 - t3)
             line += (f"; fine pass {t4 - t3:.2f} s (share {_share(dsf):.2f} %), fine / atlas "
                      f"{(t4 - t3) / (t1 - t0):.2f}")
+            # the independent checker on each pass's regions (certify's re-check)
+            from stairbounce.structure.certify import _recheck_regions
+
+            t5 = time.perf_counter()
+            _recheck_regions(ds)
+            t6 = time.perf_counter()
+            _recheck_regions(dsf)
+            t7 = time.perf_counter()
+            line += (f"; re-check {t6 - t5:.2f} s ({int(ds['trap_box'].size)} regions, "
+                     f"{int(ds['trap_cells'].size):,} cells), fine {t7 - t6:.2f} s ({int(dsf['trap_box'].size)} "
+                     f"regions, {int(dsf['trap_cells'].size):,} cells)")
         print(line)
     ratios = np.array(trap) / np.array(atlas)
     print(f"depth {depth}, {n} rounds: pass / atlas median {np.median(ratios):.2f}, largest {ratios.max():.2f}; "
