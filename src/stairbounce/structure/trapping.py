@@ -408,8 +408,8 @@ _TRY_PAD = np.array([p for _, p in _FAST_TRIES], np.float64)
 _TRY_GATE = np.array([0, 2, 3, 1, 1], np.int64)
 # trap="fine": two finer grids after the 512-cell try, each where the try before failed by
 # less than a cell (thin regions along the Corollary 2.1 curve; benchmarks/README.md,
-# "finer trapping grids": the share of the paper's plane 84.7 -> 88.3 %, the pass about 1.7
-# times as long)
+# "Trapping regions in the perimeter's counts": the share of the paper's plane 84.7 -> 88.3 %,
+# the pass about 1.7 times as long)
 _FINE_TRIES = _FAST_TRIES + ((1024, 0.3), (2048, 0.3))
 _FINE_CELLS = np.array([c for c, _ in _FINE_TRIES], np.int64)
 _FINE_PAD = np.array([p for _, p in _FINE_TRIES], np.float64)
@@ -433,6 +433,8 @@ def check_trap(trap):
 def _try_grids(fine):
     """The grid tries' ``(cells a side, paddings, gates)`` of the pass."""
     return (_FINE_CELLS, _FINE_PAD, _FINE_GATE) if fine else (_TRY_CELLS, _TRY_PAD, _TRY_GATE)
+
+
 SPLIT_LEVELS = 1
 """Levels below the atlas's depth that :func:`trap_atlas` splits a box whose
 trapping region failed into (its quadtree children, tried in turn); an atlas
