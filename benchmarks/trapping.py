@@ -31,6 +31,15 @@ import numpy as np
 import stairbounce as sb
 
 
+def _areas(ds):
+    """The shares of the window (floats, numerical) trapped (``no_sliding`` by a region) and
+    left undecided ``nonsliding``."""
+    (e0, e1), (u0, u1) = ds.attrs["e_range"], ds.attrs["u_range"]
+    area = (ds["e1"].values - ds["e0"].values) * (ds["u1"].values - ds["u0"].values) / ((e1 - e0) * (u1 - u0))
+    reason = ds["reason"].values
+    return float(area[reason == "trapping"].sum()), float(area[reason == "nonsliding"].sum())
+
+
 def main(depths):
     print(f"load {os.getloadavg()}")
     for depth in depths:
@@ -40,10 +49,8 @@ def main(depths):
         trapped = sb.certify(e=(0.0, 1.0), u=(0.0, 1.5), depth=depth, max_iter=1000, trap=True)
         t2 = time.perf_counter()
         ds = trapped.boxes
-        area = (ds["e1"].values - ds["e0"].values) * (ds["u1"].values - ds["u0"].values) / 1.5
         reason = ds["reason"].values
-        by_trap = float(area[reason == "trapping"].sum())
-        left = float(area[reason == "nonsliding"].sum())
+        by_trap, left = _areas(ds)
         t3 = time.perf_counter()
         verdict = sb.verify(trapped)
         t4 = time.perf_counter()
@@ -65,7 +72,7 @@ def main(depths):
               f"({1e3 * (t5 - t4) / max(int(ds['trap_box'].size), 1):.3f} ms a region)")
         print(f"  share of the plane: trapped (no_sliding by a region) {100 * by_trap:.3f} %, "
               f"nonsliding left undecided {100 * left:.3f} %, proven share of the non-sliding area below "
-              f"the curve {100 * by_trap / max(by_trap + left, 1e-300):.1f} %")
+              f"the curve {_share(ds):.1f} %")
         print(f"  fractions {trapped.fraction()}; failures: {ds.attrs['trap_failures']}")
         print(f"  sb.verify: {verdict.message} in {t4 - t3:.1f} s; the load now {os.getloadavg()}")
         # the pass's tries in one thread (the baseline) and in numba's thread count, the same
@@ -91,9 +98,7 @@ def main(depths):
 
 def _share(ds):
     """The trapped share of the non-sliding area below the curve (trapping / (trapping + nonsliding))."""
-    area = (ds["e1"].values - ds["e0"].values) * (ds["u1"].values - ds["u0"].values)
-    reason = ds["reason"].values
-    by_trap, left = float(area[reason == "trapping"].sum()), float(area[reason == "nonsliding"].sum())
+    by_trap, left = _areas(ds)
     return 100 * by_trap / max(by_trap + left, 1e-300)
 
 

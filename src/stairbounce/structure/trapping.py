@@ -399,21 +399,24 @@ def _try(e0, e1, u0, u1, max_iter, tries=_TRIES, max_cells=_MAX_CELLS):
 # grid, the same three grid tries; a box that fails is split into its quadtree
 # children, down to SPLIT_LEVELS levels below the atlas's depth
 _FAST_HULL_STEPS = 100
-# (cells a side, padding); when each is tried: 0 always, 1 only where the try before
+# (cells a side, padding, when it is tried): 0 always, 1 only where the try before
 # failed by less than a cell, 2 not where it failed by more than a cell, 3 only where an
-# image left the rectangle of an earlier try (numerical choices: which tries are made)
-_FAST_TRIES = _TRIES + ((256, 0.3), (512, 0.3))
-_TRY_CELLS = np.array([c for c, _ in _FAST_TRIES], np.int64)
-_TRY_PAD = np.array([p for _, p in _FAST_TRIES], np.float64)
-_TRY_GATE = np.array([0, 2, 3, 1, 1], np.int64)
-# trap="fine": two finer grids after the 512-cell try, each where the try before failed by
-# less than a cell (thin regions along the Corollary 2.1 curve; benchmarks/README.md,
+# image left the rectangle of an earlier try (numerical choices: which tries are made).
+# trap="fine" adds two finer grids after the 512-cell try, each where the try before failed
+# by less than a cell (thin regions along the Corollary 2.1 curve; benchmarks/README.md,
 # "Trapping regions in the perimeter's counts": the share of the paper's plane 84.7 -> 88.3 %,
 # the pass about 1.7 times as long)
-_FINE_TRIES = _FAST_TRIES + ((1024, 0.3), (2048, 0.3))
-_FINE_CELLS = np.array([c for c, _ in _FINE_TRIES], np.int64)
-_FINE_PAD = np.array([p for _, p in _FINE_TRIES], np.float64)
-_FINE_GATE = np.array([0, 2, 3, 1, 1, 1, 1], np.int64)
+_FAST_TRIES = tuple(t + (g,) for t, g in zip(_TRIES, (0, 2, 3))) + ((256, 0.3, 1), (512, 0.3, 1))
+_FINE_TRIES = _FAST_TRIES + ((1024, 0.3, 1), (2048, 0.3, 1))
+
+
+def _tries_arrays(tries):
+    """``(cells a side, paddings, gates)`` of ``tries`` as the kernel takes them."""
+    cells, pads, gates = zip(*tries)
+    return np.array(cells, np.int64), np.array(pads, np.float64), np.array(gates, np.int64)
+
+
+_PASS_GRIDS = {False: _tries_arrays(_FAST_TRIES), True: _tries_arrays(_FINE_TRIES)}
 TRAP_MODES = (False, True, "fine")
 """The values of ``trap`` (:func:`stairbounce.certify`, ``certify_to_zarr``): no
 trapping pass, the pass, the pass with two finer grids (1024 and 2048 cells a
@@ -432,7 +435,7 @@ def check_trap(trap):
 
 def _try_grids(fine):
     """The grid tries' ``(cells a side, paddings, gates)`` of the pass."""
-    return (_FINE_CELLS, _FINE_PAD, _FINE_GATE) if fine else (_TRY_CELLS, _TRY_PAD, _TRY_GATE)
+    return _PASS_GRIDS[bool(fine)]
 
 
 SPLIT_LEVELS = 1
