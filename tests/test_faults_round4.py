@@ -225,7 +225,7 @@ def test_r9_trapping_region_with_max_iter_1e12_is_refused_by_name():
         sb.trapping_region(e=(0.299, 0.30), u=(0.413, 0.414), max_iter=10**12)
 
 
-@pytest.mark.parametrize("n", [10**6, 10**9])
+@pytest.mark.parametrize("n", [3 * 10**8, 10**9])
 def test_r9_a_trapping_certificate_with_a_huge_grid_is_refused_by_name(n):
     from stairbounce.structure.trapping import certificate_of
 
@@ -233,9 +233,25 @@ def test_r9_a_trapping_certificate_with_a_huge_grid_is_refused_by_name(n):
     assert r is not None
     cert = certificate_of(dataclasses.replace(r, grid=r.grid[:2] + (n,) + r.grid[3:5] + (n,)), 1000)
     # the report: MemoryError; now refused by name before anything is allocated: the
-    # checker's work estimate (boxes + steps + cells) names the grid's cells and the limit
-    with pytest.raises(ValueError, match=rf"the trapping region: .* {n * n + r.cells.size:,} trapping cells .* limit"):
+    # checker's work estimate (boxes + steps + cells + the grid's edges: it reads a region
+    # by its own cells, never the whole grid) names them and the limit
+    with pytest.raises(ValueError, match=rf"the trapping region: .* {2 * n + r.cells.size:,} trapping cells and "
+                                         "grid edges .* limit"):
         sb.verify(cert)
+
+
+def test_r9_a_region_of_a_large_grid_is_checked_by_its_cells():
+    """A grid of 10^6 cells a side (10^12 cells) is within the work limit now that the
+    checker reads a region by its cells: the region moved onto it is checked, in bounded
+    memory, and fails (its cells' indices now name other places), and the true one passes."""
+    from stairbounce.structure.trapping import certificate_of
+
+    r = sb.trapping_region(e=(0.299, 0.30), u=(0.413, 0.414))
+    assert sb.verify(certificate_of(r, 1000)).ok
+    n = 10**6
+    moved = certificate_of(dataclasses.replace(r, grid=r.grid[:2] + (n,) + r.grid[3:5] + (n,)), 1000)
+    verdict = sb.verify(moved)
+    assert not verdict.ok and verdict.check == "trapping" and "failed" in verdict.message
 
 
 # --------------------------------------------------------------------------- #

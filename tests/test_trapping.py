@@ -399,19 +399,19 @@ def test_streamed_store_holds_the_split_boxes(tmp_path, split_atlas):
 
 
 def test_fine_grids_prove_more_and_contain_the_default_pass():
-    """``trap="fine"`` (two finer grids after the 512-cell try, where it failed by
-    less than a cell): the tries before are the default pass's, so every box the
-    default pass proves lies in a box the fine pass proves (itself or an
-    ancestor, one not split); the fine pass proves more area (regions of 1024 and
-    2048 cells a side, which the default pass never makes), the independent checker
-    accepts every box, and float orbits at random points of the boxes only the fine
-    pass proves never slide within 10^5 steps."""
+    """``trap="fine"`` (the default pass's tries as it makes them, then, where the
+    spread of T over the box is narrow, the grids its gates skipped and 1024 to 8192
+    cells a side): its first tries are the default pass's, so every box the default
+    pass proves lies in a box the fine pass proves (itself or an ancestor, one not
+    split); the fine pass proves more area (with grids the default pass never makes),
+    the independent checker accepts every box, and float orbits at random points of
+    the boxes only the fine pass proves never slide within 10^5 steps."""
     win = dict(e=(0.155, 0.2138), u=(0.6, 0.658), depth=6, max_iter=1000)
     plain, fine = sb.certify(**win, trap=True).boxes, sb.certify(**win, trap="fine").boxes
     assert plain.attrs["trap_grids"] == [64, 128, 64, 256, 512]
-    assert fine.attrs["trap_grids"] == [64, 128, 64, 256, 512, 1024, 2048]
+    assert fine.attrs["trap_grids"] == [64, 128, 64, 256, 512, 128, 256, 512, 1024, 2048, 4096, 8192]
     assert plain["trap_grid"].values[:, 2].max() <= 512
-    assert {1024, 2048} <= set(fine["trap_grid"].values[:, 2].astype(int))
+    assert {1024, 2048, 4096, 8192} & set(fine["trap_grid"].values[:, 2].astype(int))
 
     def trapped(ds):
         t = np.flatnonzero(ds["reason"].values == "trapping")
@@ -452,7 +452,42 @@ def test_cli_fine_trap_and_bad_trap_values(tmp_path, capsys):
     assert exit_.value.code == 0
     assert "no_sliding by a trapping region at least" in capsys.readouterr().out
     ds = sb.CertifiedAtlas.load(out).boxes
-    assert list(ds.attrs["trap_grids"]) == [64, 128, 64, 256, 512, 1024, 2048]
+    assert list(ds.attrs["trap_grids"]) == [64, 128, 64, 256, 512, 128, 256, 512, 1024, 2048, 4096, 8192]
     for bad in (1, "yes", None, "Fine"):
         with pytest.raises(ValueError, match="trap must be True, False or 'fine'"):
             sb.certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=3, trap=bad)
+
+
+def test_the_set_of_cells_is_a_set_and_empties_again():
+    """The pass's set of cells (a hash table, so that a grid of 8192^2 cells costs no
+    more than its region's cells): against Python's set on cells with many
+    collisions (multiples of the table's size, neighbours, indices of a 8192^2
+    grid), repeats not queued twice, a full queue refused (-1), and the table
+    empty again after :func:`_forget` (the next try starts from nothing)."""
+    from stairbounce.structure.trapping import _enqueue, _forget, _seen_table
+
+    rng = np.random.default_rng(3)
+    max_cells = 500
+    seen = _seen_table(max_cells)
+    assert seen.size >= 2 * max_cells and (seen.size & (seen.size - 1)) == 0 and (seen == -1).all()
+    queue, slots = np.empty(max_cells, np.int64), np.empty(max_cells, np.int64)
+    for _ in range(3):
+        cells = np.concatenate([rng.integers(0, 8192 * 8192, 300), np.arange(40) * seen.size,
+                                np.arange(1000, 1040), rng.integers(0, 64, 200)])
+        rng.shuffle(cells)
+        ref, tail = [], 0
+        for c in cells:
+            t = _enqueue(int(c), seen, queue, slots, tail)
+            if int(c) in ref:
+                assert t == tail
+            elif len(ref) < max_cells:
+                ref.append(int(c))
+                assert t == tail + 1
+            else:
+                assert t == -1
+                continue
+            tail = t
+        assert list(queue[:tail]) == ref
+        assert sorted(seen[seen != -1]) == sorted(ref)
+        _forget(seen, slots, tail)
+        assert (seen == -1).all()

@@ -220,26 +220,61 @@ def _entry(E0, E1, U0, U1, max_steps, itin, out):
 
 
 @njit(cache=True)
-def _enqueue(c, flags, queue, tail):
-    """Put cell ``c`` at ``queue[tail]`` unless it was queued before (``flags``): the
-    new tail, or -1 when the queue (``max_cells`` long) is full."""
-    if flags[c] != 0:
+def _seen_table(max_cells):
+    """An empty set of cells for :func:`_close` (``-1``: a free slot): open addressing,
+    twice as many slots as cells allowed, a power of 2 (the grid's size does not
+    matter: a region of a 8192 x 8192 grid costs what one of 64 x 64 does)."""
+    size = 1
+    while size < 2 * max_cells:
+        size *= 2
+    return np.full(size, -1, np.int64)
+
+
+@njit(cache=True, inline="always")
+def _slot(c, seen):
+    """The slot of cell ``c`` in the table ``seen``: its own, or the free one where
+    it would go (multiplicative hash, linear probing)."""
+    mask = seen.size - 1
+    x = np.uint64(c) * np.uint64(0x9E3779B97F4A7C15)  # Fibonacci hashing (unsigned: it wraps)
+    x ^= x >> np.uint64(29)
+    h = np.int64(x & np.uint64(mask))
+    while seen[h] != -1 and seen[h] != c:
+        h = (h + 1) & mask
+    return h
+
+
+@njit(cache=True)
+def _enqueue(c, seen, queue, slots, tail):
+    """Put cell ``c`` at ``queue[tail]`` unless it was queued before (``seen``, its
+    slot recorded in ``slots[tail]``): the new tail, or -1 when the queue
+    (``max_cells`` long) is full."""
+    h = _slot(c, seen)
+    if seen[h] == c:
         return tail
     if tail >= queue.size:
         return -1
-    flags[c] = 1
+    seen[h] = c
     queue[tail] = c
+    slots[tail] = h
     return tail + 1
 
 
 @njit(cache=True)
-def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, i0, i1, j0, j1, flags, queue, out):
+def _forget(seen, slots, m):
+    """Empty the table again after a region of ``m`` cells (its slots only)."""
+    for k in range(m):
+        seen[slots[k]] = -1
+
+
+@njit(cache=True)
+def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, i0, i1, j0, j1, seen, queue, slots, out):
     """Grow the region from the cell rectangle ``i0 .. i1`` x ``j0 .. j1``: the
     cells reachable by the branches' image enclosures (breadth first).
 
-    ``flags`` (at least ``nv * ns``, zeroed) marks the region's cells (index ``j *
-    nv + i``), ``queue`` (its length the most cells allowed) lists them, in the
-    order found, the first ``cells`` of it; ``out`` (``(_CAP + 2, 5)``) is
+    ``seen`` (:func:`_seen_table`, empty) holds the region's cells (index ``j * nv +
+    i``), ``queue`` (its length the most cells allowed) lists them, in the order
+    found, the first ``cells`` of it, and ``slots`` their slots in ``seen`` (empty
+    it with :func:`_forget`); ``out`` (``(_CAP + 2, 5)``) is
     :func:`_branches`'s.  Returns ``(code, cells, miss)``; ``code`` is ``TRAP_OK`` when the
     region is closed: every cell's images lie in it and no cell may slide.  Where a
     cell may slide, ``miss`` is the float estimate of its slide margin's largest
@@ -262,7 +297,7 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, i0, i1, j0, j1, flags, queue,
     tail = 0
     for j in range(j0, j1 + 1):
         for i in range(i0, i1 + 1):
-            t = _enqueue(j * nv + i, flags, queue, tail)
+            t = _enqueue(j * nv + i, seen, queue, slots, tail)
             if t < 0:
                 return TRAP_CELLS, tail, np.inf
             tail = t
@@ -293,7 +328,7 @@ def _close(E0, E1, U0, U1, V0, V1, nv, S0, S1, ns, i0, i1, j0, j1, flags, queue,
                 return TRAP_ESCAPE, tail, np.inf
             for jj in range(b0, b1 + 1):
                 for ii in range(a0, a1 + 1):
-                    t = _enqueue(jj * nv + ii, flags, queue, tail)
+                    t = _enqueue(jj * nv + ii, seen, queue, slots, tail)
                     if t < 0:
                         return TRAP_CELLS, tail, np.inf
                     tail = t
@@ -384,12 +419,12 @@ def _try(e0, e1, u0, u1, max_iter, tries=_TRIES, max_cells=_MAX_CELLS):
         if i0 < 0 or j0 < 0:
             failure = "escape"
             continue
-        flags = np.zeros(cells * cells, np.uint8)
+        queue = np.empty(max_cells, np.int64)
         code, m, _ = _close(e0, e1, u0, u1, grid[0], grid[1], cells, grid[3], grid[4], cells, i0, i1, j0, j1,
-                            flags, np.empty(max_cells, np.int64), out)
+                            _seen_table(max_cells), queue, np.empty(max_cells, np.int64), out)
         if code == TRAP_OK:
             return TrappingRegion(e=(e0, e1), u=(u0, u1), itinerary=tuple(int(k) for k in itin[:n]),
-                                  grid=grid, cells=np.flatnonzero(flags).astype(np.int64),
+                                  grid=grid, cells=np.sort(queue[:m]),
                                   entry=(float(v0), float(v1), float(s0), float(s1))), "ok"
         failure = TRAP_FAILURES[code]
     return None, failure
@@ -399,15 +434,22 @@ def _try(e0, e1, u0, u1, max_iter, tries=_TRIES, max_cells=_MAX_CELLS):
 # grid, the same three grid tries; a box that fails is split into its quadtree
 # children, down to SPLIT_LEVELS levels below the atlas's depth
 _FAST_HULL_STEPS = 100
-# (cells a side, padding, when it is tried): 0 always, 1 only where the try before
-# failed by less than a cell, 2 not where it failed by more than a cell, 3 only where an
-# image left the rectangle of an earlier try (numerical choices: which tries are made).
-# trap="fine" adds two finer grids after the 512-cell try, each where the try before failed
-# by less than a cell (thin regions along the Corollary 2.1 curve; benchmarks/README.md,
-# "Trapping regions in the perimeter's counts": the share of the paper's plane 84.7 -> 88.3 %,
-# the pass about 1.7 times as long)
+_SPREAD_CELLS = 8.0
+# (cells a side, padding, when it is tried): 0 always (until a try closes), 1 only where
+# the try before failed by less than a cell, 2 not where it failed by more than a cell, 3
+# only where an image left the rectangle of an earlier try, 4 only where the spread of T
+# over the box is at most _SPREAD_CELLS of the grid's cells along v and the box has not
+# tried that grid already (numerical choices: which tries are made; the region is proven
+# whatever they are).
 _FAST_TRIES = tuple(t + (g,) for t, g in zip(_TRIES, (0, 2, 3))) + ((256, 0.3, 1), (512, 0.3, 1))
-_FINE_TRIES = _FAST_TRIES + ((1024, 0.3, 1), (2048, 0.3, 1))
+# trap="fine": the default pass's tries as it makes them, then where the spread of T over
+# the box is narrow the grids its gates skipped (a coarse grid that fails by many cells is
+# no sign that a finer one fails: the motion there is nearly neutral along v, so a coarse
+# region's overestimate grows a cell a round) and four finer grids (the set of cells is a
+# hash table: a grid's size costs nothing, its region's cells do); the tries and what they
+# prove: benchmarks/README.md ("Finer trapping grids ...")
+_FINE_TRIES = _FAST_TRIES + tuple((c, p, 4) for c, p, g in _FAST_TRIES if g in (1, 2)) + (
+    (1024, 0.3, 4), (2048, 0.3, 4), (4096, 0.3, 4), (8192, 0.3, 4))
 
 
 def _tries_arrays(tries):
@@ -419,8 +461,8 @@ def _tries_arrays(tries):
 _PASS_GRIDS = {False: _tries_arrays(_FAST_TRIES), True: _tries_arrays(_FINE_TRIES)}
 TRAP_MODES = (False, True, "fine")
 """The values of ``trap`` (:func:`stairbounce.certify`, ``certify_to_zarr``): no
-trapping pass, the pass, the pass with two finer grids (1024 and 2048 cells a
-side) tried where the 512-cell try failed by less than a cell."""
+trapping pass, the pass, the pass with every grid tried where the one before
+failed and four finer grids after them (1024 to 8192 cells a side)."""
 
 
 def check_trap(trap):
@@ -446,14 +488,14 @@ down to ``depth + trap_split``."""
 
 
 @njit(cache=True)
-def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flags, queue, out, itin, grid,
-              cells_out):
+def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, seen, queue, slots, out, itin,
+              grid, cells_out):
     """:func:`_try` compiled, the grid placed by one float orbit at the box's
     centre (``hull_steps`` steps after the entry): ``(code, n, m)``, the failure
     code (``TRAP_OK`` when a region closed), the entry's length ``n`` (in
     ``itin``) and the region's ``m`` cells (sorted, in ``cells_out``), its grid
-    in ``grid``; ``flags`` (zeroed, at least the largest grid's cells) and
-    ``queue`` (the most cells allowed) are :func:`_close`'s, left zeroed.  The
+    in ``grid``; ``seen``, ``queue`` (the most cells allowed) and ``slots`` are
+    :func:`_close`'s, ``seen`` left empty.  The
     grid's place is a numerical choice only: the region is proven by
     :func:`_close` whatever it is."""
     code, n, v0, v1, s0, s1 = _entry(e0, e1, u0, u1, max_iter, itin, out)
@@ -474,17 +516,31 @@ def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flag
     failure = TRAP_SLIDE
     escaped = False
     miss = np.inf
+    made = np.zeros(t_cells.size, np.bool_)
     for t in range(t_cells.size):
         cells, pad = t_cells[t], t_pad[t]
         g = t_gate[t]
-        if g == 1 and not (failure == TRAP_SLIDE and miss <= 1.0):
-            continue  # finer cells only where the region failed by less than a cell
-        if g == 2 and failure == TRAP_SLIDE and miss > 1.0:
-            continue  # nor where it missed the sliding set by more than a cell
-        if g == 3 and not escaped:
-            continue  # a wider rectangle only where an image left the one before
         dv, ds = h1 - h0, h3 - h2
         g0, g1 = h0 - pad * dv - 2 * dT, h1 + pad * dv + 2 * dT
+        # the spread of T over the box within _SPREAD_CELLS of the grid's cells along v (a
+        # region's images are at least that wide: a grid much finer only makes more cells)
+        narrow = dT <= _SPREAD_CELLS * (g1 - g0) / cells
+        if g == 1:  # finer cells only where the region failed by less than a cell
+            tried = failure == TRAP_SLIDE and miss <= 1.0
+        elif g == 2:  # not where it missed the sliding set by more than a cell
+            tried = not (failure == TRAP_SLIDE and miss > 1.0)
+        elif g == 3:  # a wider rectangle only where an image left the one before
+            tried = escaped
+        elif g == 4:  # where the spread of T is narrow, on a grid not tried before
+            tried = narrow
+            for t2 in range(t):
+                if made[t2] and t_cells[t2] == cells and t_pad[t2] == pad:
+                    tried = False
+        else:
+            tried = True
+        if not tried:
+            continue
+        made[t] = True
         g3, g4 = max(h2 - pad * ds - dT, 1.0), h3 + pad * ds + dT
         i0, i1 = _cell_range(v0 - 1e-9 * (1 + abs(v0)), v1 + 1e-9 * (1 + abs(v1)), g0, g1, cells)
         j0, j1 = _cell_range(s0 - 1e-9 * s0, s1 + 1e-9 * s1, g3, g4, cells)
@@ -492,9 +548,9 @@ def _try_fast(e0, e1, u0, u1, max_iter, hull_steps, t_cells, t_pad, t_gate, flag
             failure = TRAP_ESCAPE
             escaped = True
             continue
-        code, m, miss = _close(e0, e1, u0, u1, g0, g1, cells, g3, g4, cells, i0, i1, j0, j1, flags, queue, out)
-        for c in range(m):  # flags zeroed again for the next try
-            flags[queue[c]] = 0
+        code, m, miss = _close(e0, e1, u0, u1, g0, g1, cells, g3, g4, cells, i0, i1, j0, j1, seen, queue, slots,
+                               out)
+        _forget(seen, slots, m)  # empty again for the next try
         if code == TRAP_OK:
             grid[0], grid[1], grid[2], grid[3], grid[4], grid[5] = g0, g1, cells, g3, g4, cells
             cells_out[:m] = np.sort(queue[:m])
@@ -513,15 +569,16 @@ def _try_batch(E0, E1, U0, U1, start, max_iter, hull_steps, t_cells, t_pad, t_ga
     failure).  Returns ``(next box, itinerary steps, cells)`` written."""
     itin = np.empty(max(max_iter, 1), np.int64)
     found = np.empty(max_cells, np.int64)
-    flags = np.zeros(np.max(t_cells) ** 2, np.uint8)
+    seen = _seen_table(max_cells)
     queue = np.empty(max_cells, np.int64)
+    slots = np.empty(max_cells, np.int64)
     out = np.empty((_CAP + 2, 5))
     ip = 0
     cp = 0
     b = start
     while b < E0.size and ip + max_iter <= itin_buf.size and cp + max_cells <= cell_buf.size:
-        code, n, m = _try_fast(E0[b], E1[b], U0[b], U1[b], max_iter, hull_steps, t_cells, t_pad, t_gate, flags,
-                               queue, out, itin, grids[b], found)
+        code, n, m = _try_fast(E0[b], E1[b], U0[b], U1[b], max_iter, hull_steps, t_cells, t_pad, t_gate, seen,
+                               queue, slots, out, itin, grids[b], found)
         codes[b] = code
         if code == TRAP_OK:
             itin_buf[ip:ip + n] = itin[:n]
@@ -662,10 +719,11 @@ def trap_atlas(ds, progress=None, split=None, fine=False):
     whose descendants was proven stays one row.  The rows are in the atlas's
     order (level, then j, then i), each a quadtree box of the window at its
     level; ``attrs["trap_split"]`` states ``split`` (``sb.verify`` accepts boxes
-    down to ``depth + trap_split``).  With ``fine`` two finer grids (1024 and
-    2048 cells a side) are tried after the 512-cell one where it failed by less
-    than a cell (:data:`TRAP_MODES`); ``attrs["trap_grids"]`` lists the cells a
-    side of the grids tried, in their order.
+    down to ``depth + trap_split``).  With ``fine`` every grid of the default
+    pass is tried where the one before failed (not only where it failed by less
+    than a cell), then grids of 1024, 2048, 4096 and 8192 cells a side
+    (:data:`TRAP_MODES`); ``attrs["trap_grids"]`` lists the cells a side of the
+    grids tried, in their order.
 
     The regions: entry itinerary in ``itinerary``/``offsets``, the region in
     ``trap_box`` (the box's row), ``trap_grid`` (``v_lo, v_hi, nv, s_lo, s_hi,

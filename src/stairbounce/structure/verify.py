@@ -182,16 +182,17 @@ class WorkLimitError(ValueError):
     (a claim too large to check is neither verified nor rejected)."""
 
 
-def check_work(n_boxes, n_entries, n_cells=0, what="the certificates"):
-    """check_work(n_boxes, n_entries, n_cells=0, what="the certificates") -> int
+def check_work(n_boxes, n_entries, n_cells=0, what="the certificates", cells="trapping cells"):
+    """check_work(n_boxes, n_entries, n_cells=0, what="the certificates", cells="trapping cells") -> int
 
     The checker's work estimate ``n_boxes + n_entries + n_cells`` (boxes,
-    itinerary entries, trapping cells), refused beyond :data:`MAX_WORK`."""
+    itinerary entries, trapping cells; ``cells`` names the last in the message),
+    refused beyond :data:`MAX_WORK`."""
     work = int(n_boxes) + int(n_entries) + int(n_cells)
     if work > MAX_WORK:
         raise WorkLimitError(
             f"{what}: {int(n_boxes):,} boxes, {int(n_entries):,} itinerary entries (steps)"
-            + (f" and {int(n_cells):,} trapping cells" if n_cells else "")
+            + (f" and {int(n_cells):,} {cells}" if n_cells else "")
             + f" are {work:,} units of checking work, more than the checker's limit of {MAX_WORK:,} "
             "(stairbounce.structure.verify.MAX_WORK, about a minute): split the atlas or raise the limit")
     return work

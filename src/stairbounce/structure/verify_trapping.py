@@ -55,12 +55,17 @@ def _edges(lo, hi, n):
     return e
 
 
+_CELLS_AND_EDGES = "trapping cells and grid edges"
+
+
 def _region_inputs(e0, e1, u0, u1, max_iter, itinerary, grid, cells):
     """One region's arguments checked and converted: ``(e0, e1, u0, u1,
-    itinerary, nv, ns, cells, ev, es, flags)`` (``ev``, ``es`` the cell edges,
-    ``flags`` 1 on the region's cells), or ``None`` when they are not a box and
-    a grid (the check ``"box"``; :func:`verify_regions` makes the same checks on
-    many regions at once)."""
+    itinerary, nv, ns, cells, ev, es)`` (``ev``, ``es`` the cell edges), or
+    ``None`` when they are not a box and a grid (the check ``"box"``;
+    :func:`verify_regions` makes the same checks on many regions at once).  The
+    work counted is the cells and the grid's edges (the checker reads a region
+    by its own cells, never the whole grid: a region of a 8192 x 8192 grid costs
+    what its cells cost)."""
     e0, e1, u0, u1 = (float(x) for x in (e0, e1, u0, u1))
     itinerary = np.asarray(itinerary, dtype=np.int64).ravel()
     v_lo, v_hi, nv, s_lo, s_hi, ns = grid
@@ -70,11 +75,9 @@ def _region_inputs(e0, e1, u0, u1, max_iter, itinerary, grid, cells):
             and np.all((cells >= 0) & (cells < nv * ns)) and len(itinerary) <= max_iter
             and np.isfinite([v_lo, v_hi, s_lo, s_hi]).all() and v_lo < v_hi and 0.0 < s_lo < s_hi):
         return None
-    check_work(1, len(itinerary), cells.size + nv * ns, what="the trapping region")
+    check_work(1, len(itinerary), cells.size + nv + ns, what="the trapping region", cells=_CELLS_AND_EDGES)
     ev, es = _edges(float(v_lo), float(v_hi), nv), _edges(float(s_lo), float(s_hi), ns)
-    flags = np.zeros(nv * ns, np.int64)
-    flags[cells] = 1
-    return e0, e1, u0, u1, itinerary, nv, ns, cells, ev, es, flags
+    return e0, e1, u0, u1, itinerary, nv, ns, cells, ev, es
 
 
 def verify_regions(e0, e1, u0, u1, max_iter, itinerary, offsets, grids, cell_off, cells):
@@ -123,9 +126,11 @@ def verify_regions(e0, e1, u0, u1, max_iter, itinerary, offsets, grids, cell_off
     run = np.flatnonzero(good)
     if not run.size:
         return out
-    work = 1 + np.diff(offsets)[run] + counts[run] + size[run]
+    edges = nv + ns  # the checker reads a region by its cells and its grid's edges, not the grid
+    work = 1 + np.diff(offsets)[run] + counts[run] + edges[run]
     r = run[int(np.argmax(work))]
-    check_work(1, offsets[r + 1] - offsets[r], counts[r] + size[r], what="the trapping region")
+    check_work(1, offsets[r + 1] - offsets[r], counts[r] + edges[r], what="the trapping region",
+               cells=_CELLS_AND_EDGES)
     code, _ = verify_codes(e0[run], e1[run], u0[run], u1[run], ["undecided"] * run.size, max_iter,
                            _take_rows(itinerary, offsets[run], np.diff(offsets)[run]),
                            np.concatenate([[0], np.cumsum(np.diff(offsets)[run])]))
