@@ -281,7 +281,8 @@ def test_the_proven_box_counts_are_printed_with_their_basis(capsys):
     assert code == 0, err
     head = "proven box counts of the sliding border (basis: proven, certify depth 8, max_iter 200)"
     assert head in out and out.index("D = ") < out.index(head)
-    r = sb.certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=8, max_iter=200, classes=True).perimeter_bracket()
+    r = sb.certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=8, max_iter=200, classes=True,
+                   trap="fine").perimeter_bracket()
     for k, lo, up in zip(r["k"], r["lower"], r["upper"]):
         assert re.search(rf"k = +{k}  window/{1 << k} +lower +{lo:,}  upper +{up:,}\n", out), (k, out)
     assert f"slope {r['slope_text']}" in out and r["finite_text"] in out

@@ -52,7 +52,7 @@ def _window_rows(tmp_path, name, e, u, scale=1 / 32):
     s = _settings(tmp_path, scale)
     n = s.px(400)
     ds = scan(e=(e[0], e[1], n), u=(u[0], u[1], n))
-    certified = F.proven._certified_atlas(s, name, e, u, classes=True)
+    certified = F.proven._certified_atlas(s, name, e, u, perimeter=True)
     est = type("Fit", (), {"dimension": 1.4})()
     return certified, F.proven._proven_area_row(s, name, e, u, ds, certified), F.proven._border_bracket_row(s, name, certified, est)
 
@@ -91,7 +91,7 @@ def test_window_rows_are_proven_and_their_verdicts_computed(tmp_path):
 def test_the_perimeter_row_differs_outside_its_bracket_across_the_scales(tmp_path):
     # depth 8: lower counts > 0 at k = 3 .. 5, so a finite bracket, and a verdict either way
     (e, u), _ = F.DIMENSION_WINDOWS["fig7"]
-    certified = F.proven._certified_atlas(_settings(tmp_path, 0.5), "fig7", e, u, classes=True)
+    certified = F.proven._certified_atlas(_settings(tmp_path, 0.5), "fig7", e, u, perimeter=True)
     atlas = certified[0]
     assert certified[1] == 8 and certified[3] == "proven"
     r = atlas.perimeter_bracket(verify=False)

@@ -281,7 +281,7 @@ def dimension(
     fit_range: str = typer.Option(None, "--fit-range", help="Boxes: box sides to fit, MIN:MAX pixels (default: largest linear region, a heuristic; with --store 16 px to 1/32 of the picture). The paper's numbers: 1:64 at 500 px. Uncertainty: eps to fit, MIN:MAX (default: all with >= 25 uncertain points)."),
     offsets: int = typer.Option(1, "--offsets", help="Boxes: grid shifts per axis, counts averaged over them (>= 1)."),
     connectivity: int = typer.Option(4, "--connectivity", help="Boxes: neighbours that define the border: 4 or 8."),
-    proven_depth: int = typer.Option(None, "--proven-depth", help="A window of the model with --which sliding: also print proven box counts of the sliding region's border (the paper's perimeter), lower/upper per scale window/2^k and the slope bracket, from a certified atlas of this depth at --max-iter (class-level proofs, every box re-verified by sb.verify), beside the numerical D. 0: off. Default 8: about 9 s more on the Fig. 7 window on 2 cores (18 s in all); 9: about 14-25 s more; each level about 3x more."),
+    proven_depth: int = typer.Option(None, "--proven-depth", help="A window of the model with --which sliding: also print proven box counts of the sliding region's border (the paper's perimeter), lower/upper per scale window/2^k and the slope bracket, from a certified atlas of this depth at --max-iter (class-level proofs and the fine trapping pass, every box re-verified by sb.verify), beside the numerical D. 0: off. Default 8: about 9 s more on the Fig. 7 window on 2 cores (18 s in all); 9: about 14-25 s more; each level about 3x more."),
     png: Path = typer.Option(None, "--png", help="Draw the result (border and log-log plot, or f(eps) and local dimensions) to this file (.png, .pdf, .svg)."),
     dpi: int = typer.Option(120, "--dpi", help="Resolution of raster output (10-1200)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
@@ -521,9 +521,10 @@ def _check_proven_depth(depth, picture, which):
 
 def _print_proven_counts(ew, uw, depth, max_iter, dimension):
     """Proven lower/upper box counts of the sliding region's border (the paper's
-    perimeter) and the slope bracket, from a certified atlas of ``depth`` whose
-    boxes the independent checker re-verifies (its basis says whether it did),
-    beside the numerical ``dimension``."""
+    perimeter) and the slope bracket, from a certified atlas of ``depth`` (class-level
+    proofs and the fine trapping pass: fewer undecided boxes below the Corollary 2.1
+    curve, lower upper counts) whose boxes the independent checker re-verifies (its
+    basis says whether it did), beside the numerical ``dimension``."""
     if not depth:
         return
     import stairbounce as sb
@@ -531,7 +532,7 @@ def _print_proven_counts(ew, uw, depth, max_iter, dimension):
 
     try:
         atlas = _with_bar(f"certifying (depth {depth})", lambda progress: sb.certify(
-            e=ew, u=uw, depth=depth, max_iter=max_iter, classes=True, progress=progress))
+            e=ew, u=uw, depth=depth, max_iter=max_iter, classes=True, trap="fine", progress=progress))
         r = atlas.perimeter_bracket(0 if depth == 1 else None)
     except ValueError as exc:
         raise CLIError(f"--proven-depth: {exc}") from None

@@ -150,7 +150,7 @@ def _dimension(name):
         ]
         rows.append(_slicing_row(s, name, e, u, paper))
         rows.append(_study_row(name, paper, best))
-        certified = _certified_atlas(s, name, e, u, classes=True)
+        certified = _certified_atlas(s, name, e, u, perimeter=True)
         if name == "fig7":
             rows.append(_proven_area_row(s, name, e, u, ds, certified))
         rows.append(_border_bracket_row(s, name, certified, est))

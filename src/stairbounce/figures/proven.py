@@ -41,19 +41,22 @@ def _proof(n_certs, rejected, first):
     return ("proven", f"interval arithmetic; {n_certs} certificates re-verified by sb.verify", None)
 
 
-def _certified_atlas(s, name, e, u, classes=False):
+def _certified_atlas(s, name, e, u, perimeter=False):
     """The certified atlas of a window at :func:`_certify_depth` and the
     checker's verdict on it: ``(atlas, depth, n_proven, basis, proof, override)``.
     A window from e = 0 is certified as it is: its boxes touching e = 0 are
     certified like the others (the corners form's bounds hold on [0, e1]; e = 0 is
     the perfectly plastic impact) and re-verified by the checker.
-    ``classes``: with class-level proofs (``certify(classes=True)``), for the
-    proven box counts of the sliding region's border."""
+    ``perimeter``: with class-level proofs and the fine trapping pass
+    (``certify(classes=True, trap="fine")``), for the proven box counts of the
+    sliding region's border."""
     import stairbounce as sb
 
     depth = _certify_depth(s)
-    s.note(f"{name}: certified atlas, depth {depth}" + (", class-level proofs" if classes else ""))
-    atlas = sb.certify(e=e, u=u, depth=depth, max_iter=s.max_iter, classes=classes)
+    s.note(f"{name}: certified atlas, depth {depth}"
+           + (", class-level proofs, trapping regions (fine)" if perimeter else ""))
+    atlas = sb.certify(e=e, u=u, depth=depth, max_iter=s.max_iter, classes=perimeter,
+                       trap="fine" if perimeter else False)
     n_proven = int((atlas.boxes["status"].values != _undecided_code()).sum())
     v = sb.verify(atlas)
     rejected = 0 if v.ok else max(v.rejected, 1)
