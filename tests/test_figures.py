@@ -679,7 +679,8 @@ def test_every_row_states_its_basis_and_the_certifier_rows_are_proven(made):
         assert (name, f"proven sliding area and number of words (certified atlas, depth {depth})") in proven
     for name in ("fig6", "fig7"):
         assert (name, f"proven box counts of the sliding region's border and their slope (certified atlas, depth "
-                      f"{depth}, class-level proofs, max_iter {manifest_max_iter(manifest, name)})") in proven
+                      f"{depth}, class-level proofs, trapping regions, max_iter "
+                      f"{manifest_max_iter(manifest, name)})") in proven
     assert names.count("fig1") == 1  # the periodic solution, proven at its point
     # nothing else: every other row is a floating-point computation
     assert len(proven) == 6

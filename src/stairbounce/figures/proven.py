@@ -177,8 +177,9 @@ def _border_bracket_row(s, name, certified, est):
         verdict, why = override
     table = "; ".join(f"k = {k}: {lo}..{up}" for k, lo, up in zip(r["k"], r["lower"], r["upper"]))
     classes = "class-level proofs, " if (atlas.boxes["status"].values == STATUSES.index("sliding")).any() else ""
+    trapped = "trapping regions, " if "trap_grids" in atlas.boxes.attrs else ""  # the atlas had the pass
     return Row(f"proven box counts of the sliding region's border and their slope (certified atlas, depth "
-               f"{depth}, {classes}max_iter {atlas.max_iter})",
+               f"{depth}, {classes}{trapped}max_iter {atlas.max_iter})",
                f"D = {DIMENSION_WINDOWS[name][1]} (numerical, box counting on pictures)",
                f"{_window_text(*atlas.window)}: closed cells of side window/2^k meeting the border of the region "
                f"sliding within max_iter, proven lower..upper counts, {table}; slope {r['slope_text']}; narrowest "
