@@ -51,7 +51,8 @@ def test_scan_prints_the_api_result(capsys):
 
 def test_png_draws_border_and_loglog_plot(tmp_path, capsys):
     png = tmp_path / "fig7.png"
-    code, out, err = run([*FIG7, "--method", "boxes", "--resolution", "96", "--max-iter", "200", "--png", str(png)], capsys)
+    code, out, err = run([*FIG7, "--method", "boxes", "--resolution", "96", "--max-iter", "200", "--png", str(png),
+                          "--proven-depth", "0"], capsys)
     assert code == 0, err
     with Image.open(png) as im:
         assert im.format == "PNG" and im.width > im.height > 200
@@ -157,7 +158,7 @@ def test_uncertainty_is_the_default_for_a_window_and_prints_the_api_result(tmp_p
 
     png = tmp_path / "u.png"
     code, out, err = run([*FIG7, "--max-iter", "200", "--points", "2000", "--eps", "1e-3:0.1:5",
-                          "--seed", "3", "--png", str(png)], capsys)
+                          "--seed", "3", "--png", str(png), "--proven-depth", "0"], capsys)
     assert code == 0, err
     ref = uncertainty_dimension(sliding_classifier(200), ((0.155, 0.2138), (0.6, 0.658)),
                                 eps=np.logspace(-3, -1, 5), n_points=2000, seed=3)
@@ -233,7 +234,7 @@ def test_every_method_prints_scales_max_iter_and_an_interval_covering_the_drift(
     from stairbounce.dimension import sliding_classifier, slicing_dimension
 
     code, out, err = run([*FIG7, "--method", "slicing", "--max-iter", "200", "--lines", "8",
-                          "--scales", "1e-5:1e-2", "--seed", "2"], capsys)
+                          "--scales", "1e-5:1e-2", "--seed", "2", "--proven-depth", "0"], capsys)
     assert code == 0, err
     ref = slicing_dimension(sliding_classifier(200), ((0.155, 0.2138), (0.6, 0.658)), n_lines=8,
                             scale_min=1e-5, scale_max=1e-2, seed=2)
@@ -252,12 +253,12 @@ def test_every_method_prints_scales_max_iter_and_an_interval_covering_the_drift(
 
 def test_check_max_iter_shows_the_local_dimension_at_four_times_max_iter(capsys):
     code, out, err = run([*FIG7, "--max-iter", "50", "--points", "2000", "--eps", "1e-3:0.1:5",
-                          "--check-max-iter"], capsys)
+                          "--check-max-iter", "--proven-depth", "0"], capsys)
     assert code == 0, err
     assert "local dimension at max_iter 50 and 200" in out
     assert ("converged at every scale" in out) != ("is not converged at scales" in out)
     code, out, err = run([*FIG7, "--method", "boxes", "--resolution", "64", "--max-iter", "50",
-                          "--check-max-iter"], capsys)
+                          "--check-max-iter", "--proven-depth", "0"], capsys)
     assert code == 0, err
     assert "local dimension at max_iter 50 and 200" in out and "+- 0.0300" in out
 
