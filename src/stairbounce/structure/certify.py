@@ -317,8 +317,8 @@ def certify(e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, progress
         spread of T = 1/u over the box is narrow, the grids their gates skipped
         and grids of 1024 to 8192 cells a side: the paper's plane at depth 12:
         84.7 -> 95.0 % of the non-sliding area below the curve proven, the pass
-        about 14 times the atlas (twice on the windows of Figs. 6 and 7), its
-        regions about 40 million cells (8 bytes each).
+        about 14 times the atlas (about twice on Fig. 7's window at depth 10),
+        its regions about 40 million cells (8 bytes each).
 
     classes : bool, default False
         Class-level proofs (:mod:`stairbounce.structure.classes`): an undecided

@@ -409,6 +409,7 @@ def _try(e0, e1, u0, u1, max_iter, tries=_TRIES, max_cells=_MAX_CELLS):
             hull = np.array([min(hull[0], h[0]), max(hull[1], h[1]), min(hull[2], h[2]), max(hull[3], h[3])])
     dT = _up(1.0 / u0) - _dn(1.0 / u1)
     failure = "slide"
+    seen, queue, slots = _seen_table(max_cells), np.empty(max_cells, np.int64), np.empty(max_cells, np.int64)
     for cells, pad in tries:
         dv, ds = hull[1] - hull[0], hull[3] - hull[2]
         grid = (hull[0] - pad * dv - 2 * dT, hull[1] + pad * dv + 2 * dT, cells,
@@ -419,9 +420,9 @@ def _try(e0, e1, u0, u1, max_iter, tries=_TRIES, max_cells=_MAX_CELLS):
         if i0 < 0 or j0 < 0:
             failure = "escape"
             continue
-        queue = np.empty(max_cells, np.int64)
         code, m, _ = _close(e0, e1, u0, u1, grid[0], grid[1], cells, grid[3], grid[4], cells, i0, i1, j0, j1,
-                            _seen_table(max_cells), queue, np.empty(max_cells, np.int64), out)
+                            seen, queue, slots, out)
+        _forget(seen, slots, m)  # empty again for the next try
         if code == TRAP_OK:
             return TrappingRegion(e=(e0, e1), u=(u0, u1), itinerary=tuple(int(k) for k in itin[:n]),
                                   grid=grid, cells=np.sort(queue[:m]),
@@ -461,8 +462,9 @@ def _tries_arrays(tries):
 _PASS_GRIDS = {False: _tries_arrays(_FAST_TRIES), True: _tries_arrays(_FINE_TRIES)}
 TRAP_MODES = (False, True, "fine")
 """The values of ``trap`` (:func:`stairbounce.certify`, ``certify_to_zarr``): no
-trapping pass, the pass, the pass with every grid tried where the one before
-failed and four finer grids after them (1024 to 8192 cells a side)."""
+trapping pass, the pass, the pass followed, where the spread of T over a box is
+narrow, by the grids its gates skipped and four finer grids (1024 to 8192 cells
+a side)."""
 
 
 def check_trap(trap):
@@ -719,11 +721,12 @@ def trap_atlas(ds, progress=None, split=None, fine=False):
     whose descendants was proven stays one row.  The rows are in the atlas's
     order (level, then j, then i), each a quadtree box of the window at its
     level; ``attrs["trap_split"]`` states ``split`` (``sb.verify`` accepts boxes
-    down to ``depth + trap_split``).  With ``fine`` every grid of the default
-    pass is tried where the one before failed (not only where it failed by less
-    than a cell), then grids of 1024, 2048, 4096 and 8192 cells a side
-    (:data:`TRAP_MODES`); ``attrs["trap_grids"]`` lists the cells a side of the
-    grids tried, in their order.
+    down to ``depth + trap_split``).  With ``fine`` the default pass's tries are
+    followed, where the spread of T over the box is at most ``_SPREAD_CELLS``
+    cells of the grid along v, by the grids their gates skipped and grids of
+    1024, 2048, 4096 and 8192 cells a side (:data:`TRAP_MODES`);
+    ``attrs["trap_grids"]`` lists the cells a side of the grids in the order
+    they may be tried.
 
     The regions: entry itinerary in ``itinerary``/``offsets``, the region in
     ``trap_box`` (the box's row), ``trap_grid`` (``v_lo, v_hi, nv, s_lo, s_hi,
