@@ -1,7 +1,7 @@
 """Certified atlases (issue 36): throughput and proven fractions, against baselines in the same process.
 
     python benchmarks/certify.py [--windows fig7,fig5e,fig6,paper] [--depths 10,14] [--repeat 1]
-                                 [--baselines reference,mean-value,threads,naive]
+                                 [--baselines reference,order,mean-value,threads,naive]
 
 For each window and depth (max_iter 1000):
 
@@ -14,6 +14,10 @@ For each window and depth (max_iter 1000):
   interval form; and the reference, the same atlas with the float map's "nonsliding"
   check taken box by box in the level kernel (the algorithm before the shared check:
   the boxes must be identical);
+* ``order`` (a baseline): the same call with the quadtree's children made in the
+  order before (four runs a level, so the table is sorted by a full argsort and the
+  shared corners' cache by ``np.unique``) and the kept itineraries copied by numpy's
+  fancy indexing, as before (the boxes must be identical);
 * the proven fractions by status, the undecided area by reason, the number of
   proven words;
 * "the sliding area" and the share of it proven.  The sliding area is the
@@ -33,6 +37,7 @@ The machine is shared: ``uptime`` is printed before and after.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import resource
@@ -62,6 +67,48 @@ def _uptime():
 def _cpu():
     r = resource.getrusage(resource.RUSAGE_SELF)
     return r.ru_utime + r.ru_stime
+
+
+@contextlib.contextmanager
+def _previous_order():
+    """The Python steps of the table as they were before the quadtree kept the atlas's
+    order (the baseline ``order``): children in four runs, ``np.unique`` and a quicksort
+    argsort, the kept itineraries copied by fancy indexing."""
+    saved = K._children, K._kept_itineraries, C._unique_runs, C._box_table
+
+    def children(ii, jj, out_i, out_j):
+        i2, j2 = 2 * ii, 2 * jj
+        out_i[:] = np.concatenate([i2, i2 + 1, i2, i2 + 1])
+        out_j[:] = np.concatenate([j2, j2, j2 + 1, j2 + 1])
+
+    def kept_itineraries(itinerary, offsets, kept, row):
+        short = row >= 0
+        lengths = (offsets[1:] - offsets[:-1])[short]
+        ranks = np.arange(int(lengths.sum())) - np.repeat(np.cumsum(lengths) - lengths, lengths)
+        rows = kept[row[short]]
+        itinerary[np.repeat(offsets[:-1][short], lengths) + ranks] = \
+            rows[np.arange(kept.shape[1])[None, :] < lengths[:, None]]
+
+    def unique(keys):
+        new, inverse = np.unique(keys, return_inverse=True)
+        return new, inverse.ravel()
+
+    def box_table(parts):
+        from stairbounce.structure._store_read import row_key
+
+        cols = [np.concatenate([p[k] for p in parts]) for k in range(8)]
+        order = np.argsort(row_key(*cols[:3]))
+        st = cols[3]
+        keep = ((st == K.WORD) | (st == K.NO_SLIDE_WITHIN)) & (cols[6] <= C._KEPT)
+        row = np.full(st.size, -1, np.int64)
+        row[keep] = np.arange(int(keep.sum()))
+        return [c[order] for c in cols[:7]], cols[7], row[order]
+
+    K._children, K._kept_itineraries, C._unique_runs, C._box_table = children, kept_itineraries, unique, box_table
+    try:
+        yield
+    finally:
+        K._children, K._kept_itineraries, C._unique_runs, C._box_table = saved
 
 
 def _run(e, u, depth, threads=None, form="corners", repeat=1, reference=False):
@@ -185,7 +232,7 @@ def main():
     p.add_argument("--depths", default="10")
     p.add_argument("--repeat", type=int, default=1)
     p.add_argument("--baselines", default="mean-value,threads,naive",
-                   help="comma-separated: reference, mean-value, threads, naive (or none)")
+                   help="comma-separated: reference, order, mean-value, threads, naive (or none)")
     args = p.parse_args()
     print(f"numba threads {numba.get_num_threads()}, cpus {os.cpu_count()}, load before {_uptime()}")
     for form in ("corners", "mean-value", "naive"):  # compile / load every kernel (depth 8 reaches them all)
@@ -215,6 +262,13 @@ def main():
                 print(f"  reference (nonsliding check box by box): {dtr:.2f} s wall, {ar.cpu_seconds:.2f} s CPU; "
                       f"x{dtr / dt:.2f} in wall, x{ar.cpu_seconds / a.cpu_seconds:.2f} in CPU; same boxes: {same}")
                 del ar
+            if "order" in baselines:
+                with _previous_order():
+                    dto, ao, _ = _run(e, u, depth, repeat=args.repeat)
+                same = ao.boxes.drop_attrs().identical(a.boxes.drop_attrs())
+                print(f"  order before (children in four runs, the table sorted): {dto:.2f} s wall, "
+                      f"{ao.cpu_seconds:.2f} s CPU; x{dto / dt:.2f} in wall; same boxes: {same}")
+                del ao
             if "threads" in baselines:
                 dt1, a1, _ = _run(e, u, depth, threads=1)
                 same = a1.boxes.drop_attrs().identical(a.boxes.drop_attrs())

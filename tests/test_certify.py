@@ -666,3 +666,92 @@ def test_words_are_spelled_the_same_when_hashes_collide(monkeypatch):
     o, it = good["offsets"].values, good["itinerary"].values
     for b in np.flatnonzero(good["status"].values == K.WORD)[::7]:
         assert good["word"].values[b] == C.word_from_impacts(it[o[b]:o[b + 1]]).format(ascii=True)
+
+
+# ---- the quadtree's order ------------------------------------------------------
+# _run_tile makes each level's children in the atlas's order (by j, then i) when the
+# parents are, so the table needs no sort and the shared corners' cache merges sorted
+# runs (issue 44, depth 14's time); any order must give the same boxes.
+
+
+def _old_children(ii, jj):
+    i2, j2 = 2 * ii, 2 * jj
+    return np.concatenate([i2, i2 + 1, i2, i2 + 1]), np.concatenate([j2, j2, j2 + 1, j2 + 1])
+
+
+@pytest.mark.parametrize("shuffle", [False, True])
+def test_children_are_the_four_of_each_box_in_the_atlas_order(shuffle):
+    rng = np.random.default_rng(11)
+    # distinct boxes of level 6, in the atlas's order (by j, then i) or shuffled
+    key = np.unique(rng.integers(0, 64 * 64, 900))
+    jj, ii = key // 64, key % 64
+    if shuffle:
+        p = rng.permutation(key.size)
+        ii, jj = ii[p], jj[p]
+    ci, cj = np.empty(4 * ii.size, np.int64), np.empty(4 * ii.size, np.int64)
+    K._children(ii.astype(np.int64), jj.astype(np.int64), ci, cj)
+    oi, oj = _old_children(ii, jj)
+    got = cj * 128 + ci
+    assert np.array_equal(np.sort(got), np.sort(oj * 128 + oi))  # the same children, each once
+    assert np.unique(got).size == got.size
+    if not shuffle:  # sorted parents give sorted children
+        assert np.all(np.diff(got) > 0)
+    else:  # shuffled ones do not (so the table's sort is exercised below)
+        assert not np.all(np.diff(got) > 0)
+
+
+def test_unique_runs_is_numpys_unique():
+    import importlib
+
+    C = importlib.import_module("stairbounce.structure.certify")
+    rng = np.random.default_rng(3)
+    runs = [np.sort(rng.integers(0, 500, 400)) for _ in range(4)]
+    for keys in (np.concatenate(runs), rng.integers(0, 50, 1000), np.arange(7), np.zeros(0, np.int64)):
+        keys = keys.astype(np.int64)
+        want, inv = np.unique(keys, return_inverse=True)
+        got, ginv = C._unique_runs(keys)
+        assert np.array_equal(got, want) and np.array_equal(ginv, inv.ravel())
+        assert np.array_equal(got[ginv], keys)
+
+
+def test_the_table_is_the_same_whatever_order_the_boxes_come_in(monkeypatch):
+    # the quadtree made with children in the old order (four runs: the table sorts them)
+    # gives the table made in the atlas's order (no sort): the same boxes, bit for bit
+    import importlib
+
+    C = importlib.import_module("stairbounce.structure.certify")
+    kw = dict(depth=7, **FIG7)
+    fast = sb.certify(**kw).boxes
+
+    def children(ii, jj, out_i, out_j):
+        oi, oj = _old_children(ii, jj)
+        out_i[:], out_j[:] = oi, oj
+
+    seen = []
+    real_table = C._box_table
+
+    def table(parts):
+        key = np.concatenate([p[0].astype(np.int64) << 56 | p[2] << 28 | p[1] for p in parts])
+        seen.append(bool(np.all(np.diff(key) > 0)))
+        return real_table(parts)
+
+    monkeypatch.setattr(K, "_children", children)
+    monkeypatch.setattr(C, "_box_table", table)
+    slow = sb.certify(**kw).boxes
+    assert seen == [False]  # the boxes did come unsorted
+    assert fast.drop_attrs().identical(slow.drop_attrs())
+
+
+@pytest.mark.parametrize("kept", [0, 4, 2000])
+def test_itineraries_kept_or_computed_again_are_the_same(monkeypatch, kept):
+    # the level kernel keeps itineraries of at most _KEPT steps; longer ones are computed
+    # again into their place in the table: every mix gives the same table
+    import importlib
+
+    C = importlib.import_module("stairbounce.structure.certify")
+    kw = dict(depth=6, max_iter=40, **FIG7)  # its no_slide_within boxes have 40 steps
+    ref = sb.certify(**kw).boxes
+    n = np.diff(ref["offsets"].values)
+    assert (n > 32).sum() > 5 and ((n > 0) & (n <= 4)).sum() > 100  # both kinds at the default
+    monkeypatch.setattr(C, "_KEPT", kept)
+    assert sb.certify(**kw).boxes.drop_attrs().identical(ref.drop_attrs())

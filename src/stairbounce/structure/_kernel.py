@@ -489,13 +489,13 @@ def _lift(e):
     return e
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def _centres(win, level, ii, jj, es, us):
     """The centres of the boxes ``(ii[b], jj[b])`` of a level, as :func:`_any_slides`
     computes them (its first point), into ``es, us``."""
     ew = win[1] - win[0]
     uw = win[3] - win[2]
-    for b in range(ii.shape[0]):
+    for b in prange(ii.shape[0]):
         E0 = _edge(win[0], ew, win[1], ii[b], level)
         E1 = _edge(win[0], ew, win[1], ii[b] + 1, level)
         U0 = _edge(win[2], uw, win[3], jj[b], level)
@@ -513,6 +513,44 @@ def _grid_points(win, level, gi, gj, es, us):
     for p in range(gi.shape[0]):
         es[p] = _lift(_edge(win[0], ew, win[1], gi[p], level))
         us[p] = _edge(win[2], uw, win[3], gj[p], level)
+
+
+@njit(cache=True)
+def _children(ii, jj, out_i, out_j):
+    """The four children of each box ``(ii[b], jj[b])`` of a level into ``out_i, out_j``
+    (``4 n`` each), row by row: for each run of boxes with the same ``j``, the children
+    of row ``2 j`` then those of row ``2 j + 1``, each run's boxes in their order.  When
+    the boxes are in the atlas's order (by ``j``, then ``i``) so are their children
+    (``i -> 2 i, 2 i + 1`` and ``j -> 2 j, 2 j + 1`` keep it), so the atlas's table,
+    the float map's shared corners and their cache are sorted by merging runs
+    (``certify._box_table``, ``certify._SlideCache``); any order gives the same boxes."""
+    n = ii.shape[0]
+    o = 0
+    a = 0
+    while a < n:
+        b = a + 1
+        while b < n and jj[b] == jj[a]:
+            b += 1
+        for r in range(2):
+            for p in range(a, b):
+                out_i[o] = 2 * ii[p]
+                out_j[o] = 2 * jj[p] + r
+                out_i[o + 1] = 2 * ii[p] + 1
+                out_j[o + 1] = 2 * jj[p] + r
+                o += 2
+        a = b
+
+
+@njit(cache=True, parallel=True)
+def _kept_itineraries(itinerary, offsets, kept, row):
+    """Copy the kept itinerary ``kept[row[b], :n]`` of each box with ``row[b] >= 0`` to
+    ``itinerary[offsets[b]:offsets[b] + n]``, ``n = offsets[b + 1] - offsets[b]``."""
+    for b in prange(row.shape[0]):
+        r = row[b]
+        if r >= 0:
+            o = offsets[b]
+            for k in range(offsets[b + 1] - o):
+                itinerary[o + k] = kept[r, k]
 
 
 @njit(cache=True, parallel=True)
@@ -625,9 +663,9 @@ def _certify_level(win, level, ii, jj, max_iter, cap, form, ns_points, status, r
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _itineraries(win, level, ii, jj, max_iter, cap, form, offsets, out, halt):
+def _itineraries(win, level, ii, jj, max_iter, cap, form, starts, ends, out, halt):
     """Write the itineraries of the boxes ``(level[b], ii[b], jj[b])`` to
-    ``out[offsets[b]:offsets[b+1]]`` (the same computation as :func:`_certify_level`)."""
+    ``out[starts[b]:ends[b]]`` (the same computation as :func:`_certify_level`)."""
     n = ii.shape[0]
     ew = win[1] - win[0]
     uw = win[3] - win[2]
@@ -644,6 +682,6 @@ def _itineraries(win, level, ii, jj, max_iter, cap, form, offsets, out, halt):
             U0 = _edge(win[2], uw, win[3], jj[b], L)
             U1 = _edge(win[2], uw, win[3], jj[b] + 1, L)
             _certify_box(E0, E1, U0, U1, max_iter, cap, form, itin, False, dec, marg)
-            o = offsets[b]
-            for k in range(offsets[b + 1] - o):
+            o = starts[b]
+            for k in range(ends[b] - o):
                 out[o + k] = itin[k]

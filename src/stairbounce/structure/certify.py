@@ -504,10 +504,11 @@ def _run_tile(win, depth, start, gi, gj, max_iter, form, out, points=None, batch
         held += sum(a.nbytes for a in out[-1])
         del kept
         split = ~final
-        i2 = 2 * ii[split]
-        j2 = 2 * jj[split]
-        ii = np.concatenate([i2, i2 + 1, i2, i2 + 1])
-        jj = np.concatenate([j2, j2, j2 + 1, j2 + 1])
+        parents_i, parents_j = ii[split], jj[split]
+        ii = np.empty(4 * parents_i.size, np.int64)
+        jj = np.empty(4 * parents_i.size, np.int64)
+        K._children(parents_i, parents_j, ii, jj)  # in the atlas's order when the parents are
+        del parents_i, parents_j
         yield level, True
 
 
@@ -521,12 +522,17 @@ def _box_table(parts):
     # by level, then j, then i (np.lexsort((ii, jj, level))'s order) by one int64 key
     from ._store_read import row_key
 
-    order = np.argsort(row_key(level, ii, jj))
+    key = row_key(level, ii, jj)
     # the kept rows follow their proven boxes (kept for the proven boxes only, in box order)
     st = cols[3]
     keep = ((st == K.WORD) | (st == K.NO_SLIDE_WITHIN)) & (cols[6] <= _KEPT)
     row = np.full(st.size, -1, np.int64)
     row[keep] = np.arange(int(keep.sum()))
+    if bool(np.all(key[1:] > key[:-1])):  # one tile: the levels' boxes came in this order (_run_tile)
+        return cols[:7], cols[7], row
+    # tiles, or boxes given in another order: sorted runs, merged (the keys are distinct)
+    order = np.argsort(key, kind="stable")
+    del key
     return [c[order] for c in cols[:7]], cols[7], row[order]
 
 
@@ -548,8 +554,9 @@ class _SlideCache:
     def corners(self, level, gi, gj):
         """The verdict at the grid points ``(gi, gj)`` of ``level``."""
         sh = self.depth - level
-        keys = (gi << sh) * ((1 << self.depth) + 1) + (gj << sh)
-        new, inverse = np.unique(keys, return_inverse=True)
+        # by j, then i: the corners of boxes in the atlas's order come as four sorted runs
+        keys = (gj << sh) * ((1 << self.depth) + 1) + (gi << sh)
+        new, inverse = _unique_runs(keys)
         pos = np.minimum(np.searchsorted(self.keys, new), max(self.keys.size - 1, 0))
         known = (self.keys[pos] == new) if self.keys.size else np.zeros(new.size, bool)
         slid = np.zeros(new.size, bool)
@@ -557,7 +564,7 @@ class _SlideCache:
         todo = np.flatnonzero(~known)
         if todo.size:
             n = (1 << self.depth) + 1
-            ti, tj = new[todo] // n >> sh, new[todo] % n >> sh
+            tj, ti = new[todo] // n >> sh, new[todo] % n >> sh
             es, us = np.empty(todo.size), np.empty(todo.size)
             K._grid_points(self.win, level, ti, tj, es, us)
             slid[todo] = self.slides(es, us)
@@ -566,6 +573,21 @@ class _SlideCache:
             self.keys = keys_all[order]
             self.slid = np.concatenate([self.slid, slid[todo]])[order]
         return slid[inverse.ravel()]
+
+
+def _unique_runs(keys):
+    """``np.unique(keys, return_inverse=True)`` by a stable sort, which merges sorted
+    runs (timsort) instead of sorting from scratch: the same arrays."""
+    if not keys.size:
+        return keys.copy(), np.zeros(0, np.int64)
+    order = np.argsort(keys, kind="stable")
+    ordered = keys[order]
+    first = np.empty(keys.size, bool)
+    first[0] = True
+    np.not_equal(ordered[1:], ordered[:-1], out=first[1:])
+    inverse = np.empty(keys.size, np.int64)
+    inverse[order] = np.cumsum(first) - 1
+    return ordered[first], inverse
 
 
 def _slides_at(es, us, max_iter, chunk=1 << 20):
@@ -632,22 +654,13 @@ def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, st
     offsets = np.zeros(level.size + 1, np.int64)
     np.cumsum(lengths, out=offsets[1:])
     itinerary = np.empty(int(offsets[-1]), np.int64)
-    short = row >= 0
+    short = row >= 0  # (proven, with at most _KEPT steps: lengths = nsteps)
     if short.any():
-        rows = kept[row[short]]
-        cols_ = np.arange(_KEPT)
-        itinerary[np.repeat(offsets[:-1][short], lengths[short]) + _ranks(lengths[short])] = \
-            rows[cols_[None, :] < lengths[short][:, None]]
-        del rows
+        K._kept_itineraries(itinerary, offsets, kept, row)
     sel = np.flatnonzero(proven_path & ~short)
     if sel.size:
-        sub_off = np.zeros(sel.size + 1, np.int64)
-        np.cumsum(lengths[sel], out=sub_off[1:])
-        buf = np.empty(int(sub_off[-1]), np.int64)
         run_kernel(K._itineraries, win, level[sel].astype(np.int64), ii[sel], jj[sel], max_iter, K.IMPACT_CAP, form,
-                   sub_off, buf)
-        for k, b in enumerate(sel):
-            itinerary[offsets[b]:offsets[b + 1]] = buf[sub_off[k]:sub_off[k + 1]]
+                   offsets[sel], offsets[sel + 1], itinerary)
     words = _word_texts(status, itinerary, offsets)
     reasons = np.array([""] + list(UNDECIDED_REASONS), dtype=object)[np.where(status == K.UNDECIDED, reason + 1, 0)]
     ds = xr.Dataset(
@@ -719,12 +732,6 @@ def _word_texts(status, itinerary, offsets):
                       for b in wb[first]] + [""], dtype=object)[:-1]
     words[wb] = names[inverse]
     return words
-
-
-def _ranks(lengths):
-    """``0, 1, .., n0-1, 0, 1, .., n1-1, ...`` for ``lengths = (n0, n1, ...)``."""
-    starts = np.repeat(np.cumsum(lengths) - lengths, lengths)
-    return np.arange(int(lengths.sum())) - starts
 
 
 def _area(ds):
