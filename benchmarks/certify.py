@@ -81,7 +81,7 @@ def _previous_order():
         out_i[:] = np.concatenate([i2, i2 + 1, i2, i2 + 1])
         out_j[:] = np.concatenate([j2, j2, j2 + 1, j2 + 1])
 
-    def kept_itineraries(itinerary, offsets, kept, row):
+    def kept_itineraries(itinerary, offsets, kept, row, halt):
         short = row >= 0
         lengths = (offsets[1:] - offsets[:-1])[short]
         ranks = np.arange(int(lengths.sum())) - np.repeat(np.cumsum(lengths) - lengths, lengths)

@@ -656,7 +656,7 @@ def _atlas_dataset(win, depth, max_iter, form, level, ii, jj, status, reason, st
     itinerary = np.empty(int(offsets[-1]), np.int64)
     short = row >= 0  # (proven, with at most _KEPT steps: lengths = nsteps)
     if short.any():
-        K._kept_itineraries(itinerary, offsets, kept, row)
+        run_kernel(K._kept_itineraries, itinerary, offsets, kept, row)
     sel = np.flatnonzero(proven_path & ~short)
     if sel.size:
         run_kernel(K._itineraries, win, level[sel].astype(np.int64), ii[sel], jj[sel], max_iter, K.IMPACT_CAP, form,
