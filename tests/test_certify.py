@@ -730,8 +730,10 @@ def test_the_table_is_the_same_whatever_order_the_boxes_come_in(monkeypatch):
     seen = []
     real_table = C._box_table
 
+    from stairbounce.structure._store_read import row_key
+
     def table(parts):
-        key = np.concatenate([p[0].astype(np.int64) << 56 | p[2] << 28 | p[1] for p in parts])
+        key = np.concatenate([row_key(p[0], p[1], p[2]) for p in parts])
         seen.append(bool(np.all(np.diff(key) > 0)))
         return real_table(parts)
 
