@@ -3,7 +3,7 @@ sliding within max_iter, bracketed per scale by a certified atlas with class-lev
 
     python benchmarks/perimeter.py [--windows fig7,fig6] [--depths 10,12] [--max-iter 1000]
                                    [--store-from 12] [--tmp DIR] [--stores DIR]
-                                   [--trap {none,on,fine}]
+                                   [--trap {none,on,fine}] [--focus K] [--streamed-only]
 
 For each window (the figures' DIMENSION_WINDOWS) and depth: ``sb.certify(...,
 classes=True)``, then ``CertifiedAtlas.perimeter_bracket()``, which runs the independent
@@ -22,6 +22,10 @@ again: to count an existing store with changed counting code.  ``--trap on`` / `
 certifies with ``trap=True`` / ``trap="fine"`` as well (trapping regions prove boxes
 below the Corollary 2.1 curve ``no_sliding``: fewer undecided boxes, lower upper counts).
 ``--streamed-only`` takes a store's bracket tile by tile only (not loaded whole as well).
+``--focus K`` streams with ``certify_to_zarr(focus=K)``: certified to depth K, then
+deepened to the depth only where the counts at k <= K can change
+(``structure/focus.py``); the counts are then taken at k = 3 .. K, and the store's
+boxes, its time and the number of boxes each round took up are printed.
 """
 
 from __future__ import annotations
@@ -39,17 +43,23 @@ def _uptime():
         return "load " + " ".join(f.read().split()[:3])
 
 
-def measure(name, e, u, depth, max_iter, store_from, tmp, keep=False, trap=False, ways=("streamed", "loaded")):
+def measure(name, e, u, depth, max_iter, store_from, tmp, keep=False, trap=False, ways=("streamed", "loaded"),
+            focus=None):
     import stairbounce as sb
 
     t0 = time.perf_counter()
-    if depth >= store_from:
-        path = os.path.join(tmp, f"{name}-d{depth}.zarr")
+    if depth >= store_from or focus is not None:
+        path = os.path.join(tmp, f"{name}-d{depth}" + ("" if focus is None else f"-focus{focus}") + ".zarr")
         if not keep:
             shutil.rmtree(path, ignore_errors=True)
-        sb.certify_to_zarr(path, e=e, u=u, depth=depth, max_iter=max_iter, classes=True, trap=trap, verify=False)
-        print(f"{name} depth {depth} trap {trap}: store written (or resumed) in {time.perf_counter() - t0:.1f} s",
-              flush=True)
+        rounds = _count_rounds() if focus is not None else {}
+        st = sb.certify_to_zarr(path, e=e, u=u, depth=depth, max_iter=max_iter, classes=True, trap=trap,
+                                verify=False, focus=focus)
+        print(f"{name} depth {depth} trap {trap} focus {focus}: store written (or resumed) in "
+              f"{time.perf_counter() - t0:.1f} s, {st.boxes:,} boxes; {_uptime()}", flush=True)
+        if rounds:
+            print("  rounds (depth: rows certified again, rows whose trapping tries went one level further, rows): "
+                  + ", ".join(f"{d}: {a:,}, {b:,}, {n:,}" for d, (a, b, n) in sorted(rounds.items())), flush=True)
         return _from_store(name, path, ways)
     else:
         atlas = sb.certify(e=e, u=u, depth=depth, max_iter=max_iter, classes=True, trap=trap)
@@ -81,6 +91,27 @@ print(json.dumps({"seconds": time.perf_counter() - t, "peak_gib": resource.getru
                   "slope_text": r["slope_text"], "finite_text": r["finite_text"],
                   "witnesses": r["witnesses"], "tried": r["witnesses_tried"]}))
 """
+
+
+def _count_rounds():
+    """The rows each round of ``focus.refine`` took up, summed over the tiles of this
+    process (``{depth: [again, deeper, rows]}``)."""
+    from stairbounce.structure import focus
+
+    rounds = {}
+    plain = focus.refine
+
+    def refine(*args, report=None, **kw):
+        def each(d, again, deeper, rows):
+            r = rounds.setdefault(d, [0, 0, 0])
+            r[0] += again
+            r[1] += deeper
+            r[2] += rows
+
+        return plain(*args, report=each, **kw)
+
+    focus.refine = refine
+    return rounds
 
 
 def _from_store(name, path, ways=("streamed", "loaded")):
@@ -123,6 +154,7 @@ def main(argv=None):
     p.add_argument("--stores", default=None)
     p.add_argument("--trap", choices=("none", "on", "fine"), default="none")
     p.add_argument("--streamed-only", action="store_true")
+    p.add_argument("--focus", type=int, default=None)
     a = p.parse_args(argv)
     trap = {"none": False, "on": True, "fine": "fine"}[a.trap]
     print(f"{time.strftime('%Y-%m-%d %H:%M')} UTC, {os.cpu_count()} cores, {_uptime()}", flush=True)
@@ -133,7 +165,7 @@ def main(argv=None):
             (e, u), _ = DIMENSION_WINDOWS[name]
             for depth in (int(d) for d in a.depths.split(",")):
                 measure(name, e, u, depth, a.max_iter, a.store_from, a.stores or tmp, keep=bool(a.stores),
-                        trap=trap, ways=("streamed",) if a.streamed_only else ("streamed", "loaded"))
+                        trap=trap, ways=("streamed",) if a.streamed_only else ("streamed", "loaded"), focus=a.focus)
     print(f"done, {_uptime()}")
 
 

@@ -191,7 +191,8 @@ def perimeter_lines(r, extra=()) -> list[str]:
     """The lines printing a perimeter bracket ``r`` (``CertifiedAtlas.perimeter_bracket``'s
     or ``CertifiedStore.perimeter_bracket``'s dict): its counts per scale, the slope
     brackets, ``extra`` lines, then its basis and what it does not prove."""
-    lines = [f"proven box counts of the sliding border (basis: {r['basis']}, certify depth {r['depth']}, "
+    refined = "" if r.get("focus") is None else f" refined for k <= {r['focus']}"
+    lines = [f"proven box counts of the sliding border (basis: {r['basis']}, certify depth {r['depth']}{refined}, "
              f"max_iter {r['max_iter']}): closed cells of side window/2^k meeting the border of the region "
              "sliding within max_iter"]
     lines += [f"  k = {k:2d}  window/{1 << k:<7d} lower {lo:>9,}  upper {up:>9,}"

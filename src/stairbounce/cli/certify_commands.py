@@ -61,7 +61,7 @@ def _perimeter(path: Path, verdict) -> None:
     (``verdict``: basis proven only when it passed): a store's tile by tile, an atlas
     file's loaded."""
     from ..structure._store_read import is_store
-    from ..structure.certify import CertifiedAtlas, _scales, perimeter_result
+    from ..structure.certify import CertifiedAtlas, _scales, counted_depth, perimeter_result
     from ..structure.certify_store import CertifiedStore
 
     try:
@@ -73,12 +73,12 @@ def _perimeter(path: Path, verdict) -> None:
                 return st.border_box_counts(progress=progress)
 
             df = _with_phases(count)
-            depth, max_iter = st.depth, st.max_iter
+            attrs = st.attrs
         else:
             atlas = CertifiedAtlas.load(path)
-            df, depth, max_iter = atlas.border_box_counts(), atlas.depth, atlas.max_iter
-        k1, k2 = _scales(None, None, depth)
-        r = perimeter_result(df, k1, k2, depth, max_iter, verdict)
+            df, attrs = atlas.border_box_counts(), atlas.boxes.attrs
+        k1, k2 = _scales(None, None, counted_depth(attrs))  # a --focus store: the scales k <= focus
+        r = perimeter_result(df, k1, k2, int(attrs["depth"]), int(attrs["max_iter"]), verdict, attrs.get("focus"))
     except ValueError as exc:
         raise CLIError(f"--perimeter: {exc}") from None
     for line in perimeter_lines(r):
@@ -202,6 +202,10 @@ def certify_(
     scheduler: str = typer.Option(None, "--scheduler", help="With --store: compute the tiles on the Dask "
                                   "scheduler at this address (tcp://HOST:8786); the workers write the store, "
                                   "which they must see at the same path."),
+    focus: int = typer.Option(None, "--focus", help="With --store, for the perimeter's proven counts at the "
+                              "scales k <= FOCUS: certify to depth FOCUS, then deepen to --depth only the "
+                              "undecided boxes next to a window/2^FOCUS cell not yet holding proven points of "
+                              "both classes (--verify --perimeter then counts k <= FOCUS)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ):
     """Cover a window of the (e, u) plane with boxes on which interval arithmetic proves
@@ -232,10 +236,12 @@ def certify_(
     u_lo, u_hi = parse_range("u", u)
     if scheduler is not None and store is None:
         raise CLIError("--scheduler needs --store (the tiles of a streamed atlas)")
+    if focus is not None and store is None:
+        raise CLIError("--focus needs --store (a store refined for the perimeter's counts)")
     if store is not None:
         if out is not None or png is not None:
             raise CLIError("--store writes the atlas itself: give --out or --png without --store, or load the store")
-        _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, mode, classes, top)
+        _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, mode, classes, top, focus)
         return
     if out is not None:
         suffix_of(out, ATLAS_SUFFIXES, "--out")   # the rule of CertifiedAtlas.save, before the work
@@ -286,7 +292,7 @@ def certify_(
                    f"({row.boxes} boxes)")
 
 
-def _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, classes, top):
+def _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, classes, top, focus=None):
     """``--store``: :func:`stairbounce.certify_to_zarr` behind a progress bar over its
     tiles, then the summary from the store's proven numbers (its boxes not loaded)."""
     import time
@@ -301,12 +307,12 @@ def _streamed(store, scheduler, e_lo, e_hi, u_lo, u_hi, depth, max_iter, trap, c
     try:
         st = _with_phases(lambda p, ph: certify_to_zarr(store, e=(e_lo, e_hi), u=(u_lo, u_hi), depth=depth,
                                                         max_iter=max_iter, trap=trap, classes=classes,
-                                                        client=scheduler, progress=p, phase=ph))
+                                                        client=scheduler, progress=p, phase=ph, focus=focus))
     except KeyboardInterrupt:
         typer.echo(f"stairbounce: the complete tiles are kept in {store}; run the same command to resume", err=True)
         raise
     except ValueError as exc:
-        raise CLIError(f"--{str(exc).replace('_', '-')}" if str(exc).split()[0] in ("depth", "max_iter")
+        raise CLIError(f"--{str(exc).replace('_', '-')}" if str(exc).split()[0] in ("depth", "max_iter", "focus")
                        else str(exc)) from None
     seconds = time.perf_counter() - t0
     f, f_up = st.fraction(), st.fraction(bound="upper")

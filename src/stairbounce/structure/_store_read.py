@@ -5,7 +5,8 @@ returns (the same rows in the same order: by level, then j, then i).
 Kept apart from ``certify_store`` (which imports the certifier) so that the readers
 of atlas files (``certificate.read_atlas_file``, hence ``CertifiedAtlas.load`` and
 ``sb.verify``) can read a store without an import circle; numpy, xarray and zarr only (and
-one compiled loop, :func:`_copy_rows`).
+one compiled loop, :func:`_copy_rows`; pandas for :func:`encode`, the tile's form as
+written, which the store's writer and ``focus.py``'s rounds share).
 """
 
 from __future__ import annotations
@@ -115,6 +116,33 @@ def _decode(arrays, attrs, key):
         raise ValueError(f"{key}_code {codes[bad[0]].item()!r} at row {int(bad[0])} of a tile is outside its "
                          f"names list {key}_names ({len(names)} names)")
     return table[codes]
+
+
+def encode(ds):
+    """A tile's table as written: word and reason as int32 codes into names lists kept in
+    attributes (CertifiedAtlas.save's .zarr form; :func:`_decode` reads them back)."""
+    ds = ds.copy()
+    ds.attrs = {k: (list(v) if isinstance(v, tuple) else v) for k, v in ds.attrs.items()}
+    for k in ("word", "reason"):
+        codes, names = factorize(ds[k].values)
+        ds = ds.drop_vars(k).assign({f"{k}_code": ("box", codes.astype(np.int32))})
+        ds.attrs[f"{k}_names"] = names
+    return ds
+
+
+def factorize(values):
+    """``(codes, names)``: the distinct texts of ``values`` (sorted) and each value's index
+    among them, by hashing (no fixed-width copy of the texts: a word can be hundreds of
+    letters, and a ``<U`` copy of a tile's words took 170 MiB at depth 12)."""
+    import pandas as pd
+
+    v = np.asarray(values)
+    codes, uniques = pd.factorize(v if v.dtype.kind == "O" else v.astype(object))
+    names = [str(x) for x in uniques]
+    order = sorted(range(len(names)), key=names.__getitem__)
+    remap = np.empty(len(names), np.int64)
+    remap[order] = np.arange(len(names))
+    return remap[codes] if len(names) else codes.astype(np.int64), [names[k] for k in order]
 
 
 def store_sizes(path):

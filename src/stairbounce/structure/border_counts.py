@@ -37,12 +37,31 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .certify import _border_classes
+from .certify import _border_classes, counted_depth
 
 
 @njit(cache=True, nogil=True)
 def _set(bits, c):
     bits[c >> 3] |= np.uint8(1 << (c & 7))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def closure_cells(k, L, i, j):
+    """``(a0, a1, b0, b1)``: the scale-k cells ``a0 .. a1`` by ``b0 .. b1`` (along e, u;
+    not clipped to the window) whose closure meets the box ``(L, i, j)``: its own cell and
+    the neighbours across the sides (and corners) it touches, or for a box coarser than
+    the cells those it covers and the ring around them."""
+    if L >= k:
+        sh = L - k
+        m = (np.int64(1) << sh) - 1
+        ci, cj = i >> sh, j >> sh
+        a0 = ci - 1 if (i & m) == 0 else ci
+        a1 = ci + 1 if (i & m) == m else ci
+        b0 = cj - 1 if (j & m) == 0 else cj
+        b1 = cj + 1 if (j & m) == m else cj
+        return a0, a1, b0, b1
+    f = np.int64(1) << (k - L)
+    return i * f - 1, (i + 1) * f, j * f - 1, (j + 1) * f
 
 
 @njit(cache=True, nogil=True)
@@ -51,20 +70,7 @@ def _touch(bits, k, level, ii, jj):
     closure meets one of the boxes ``(level, i, j)`` (the undecided ones)."""
     n = np.int64(1) << k
     for b in range(level.size):
-        L = np.int64(level[b])
-        i, j = np.int64(ii[b]), np.int64(jj[b])
-        if L >= k:
-            sh = L - k
-            m = (np.int64(1) << sh) - 1
-            ci, cj = i >> sh, j >> sh
-            a0 = ci - 1 if (i & m) == 0 else ci
-            a1 = ci + 1 if (i & m) == m else ci
-            b0 = cj - 1 if (j & m) == 0 else cj
-            b1 = cj + 1 if (j & m) == m else cj
-        else:
-            f = np.int64(1) << (k - L)
-            a0, a1 = i * f - 1, (i + 1) * f
-            b0, b1 = j * f - 1, (j + 1) * f
+        a0, a1, b0, b1 = closure_cells(np.int64(k), np.int64(level[b]), np.int64(ii[b]), np.int64(jj[b]))
         for a in range(max(a0, 0), min(a1, n - 1) + 1):
             for c in range(max(b0, 0), min(b1, n - 1) + 1):
                 _set(bits, a * n + c)
@@ -231,7 +237,8 @@ def store_rows(path, progress=None, witnesses=True):
             attrs0 = {k: v for k, v in attrs.items() if k not in R.TILE_ATTRS}
             depth = int(attrs0["depth"])
             window = (tuple(float(x) for x in attrs0["e_range"]), tuple(float(x) for x in attrs0["u_range"]))
-            acc = StreamedCounts(window, depth, deepest_level(depth, attrs0), R.tile_level(root, depth),
+            # the scales counted: 0 .. depth, or 0 .. focus for a store refined for them (focus.py)
+            acc = StreamedCounts(window, counted_depth(attrs0), deepest_level(depth, attrs0), R.tile_level(root, depth),
                                  int(attrs0["max_iter"]) if witnesses else None)
         acc.add(t, arrays["level"], arrays["i"], arrays["j"], np.asarray(arrays["status"]))
         del arrays, got

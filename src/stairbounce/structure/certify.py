@@ -740,6 +740,14 @@ def _area(ds):
     return (ds["e1"].values - ds["e0"].values) * (ds["u1"].values - ds["u0"].values)
 
 
+def counted_depth(attrs):
+    """The finest scale an atlas's border counts are taken at: its ``depth``, or its
+    ``focus`` when it was refined only where the counts at ``k <= focus`` can change
+    (``certify_to_zarr(focus=...)``, :mod:`stairbounce.structure.focus`)."""
+    focus = attrs.get("focus")
+    return int(attrs["depth"]) if focus is None else int(focus)
+
+
 def _border_classes(st, words, border):
     """The class of each box for :meth:`CertifiedAtlas.border_box_counts`: -2 undecided,
     -1 not sliding (``no_sliding``, ``no_slide_within``), >= 0 sliding (``"sliding"``:
@@ -778,7 +786,7 @@ def _scales(k1, k2, depth):
     return k1, k2
 
 
-def perimeter_result(df, k1, k2, depth, max_iter, verdict):
+def perimeter_result(df, k1, k2, depth, max_iter, verdict, focus=None):
     """The dict :meth:`CertifiedAtlas.perimeter_bracket` returns, from the sliding
     border's counts ``df`` and the independent checker's ``verdict`` on the boxes they
     were counted from (None: not run); :meth:`CertifiedStore.perimeter_bracket` builds
@@ -799,7 +807,8 @@ def perimeter_result(df, k1, k2, depth, max_iter, verdict):
     else:
         a, b = widest
         across = (a, b, *CertifiedAtlas._slope_between(df, a, b))
-    what = f"certified boxes (interval arithmetic, certify depth {depth}, max_iter {max_iter})"
+    refined = "" if focus is None else f", refined below depth {int(focus)} only where the counts at k <= {int(focus)} can change"
+    what = f"certified boxes (interval arithmetic, certify depth {depth}{refined}, max_iter {max_iter})"
     if verdict is None:
         verified, basis = None, "numerical"
         proof = what + ", NOT re-verified (verify=False): the certifier's claim, not yet the checker's"
@@ -818,7 +827,8 @@ def perimeter_result(df, k1, k2, depth, max_iter, verdict):
     return {"k1": k1, "k2": k2, "k": list(range(k1, k2 + 1)),
             "lower": [int(x) for x in lower[k1:k2 + 1]], "upper": [int(x) for x in upper[k1:k2 + 1]],
             "slope": (lo, hi), "slope_text": slope_text(lo, hi, k1, k2, lower, upper),
-            "finite": finite, "finite_text": finite_text, "across": across, "depth": depth, "max_iter": max_iter,
+            "finite": finite, "finite_text": finite_text, "across": across, "depth": depth,
+            "focus": None if focus is None else int(focus), "max_iter": max_iter,
             "verified": verified, "basis": basis, "proof": proof, "not_proven": NOT_PROVEN,
             "witnesses": n_wit, "witnesses_tried": int(df.attrs.get("witnesses_tried", 0))}
 
@@ -1127,6 +1137,7 @@ class CertifiedAtlas:
             raise ValueError("border_box_counts: the boxes do not cover the window (sb.verify says how much is "
                              "uncovered): an uncovered part may hold the border, so no upper count is proven")
         ds = self.boxes
+        depth = counted_depth(ds.attrs)  # the finest scale counted (focus.py: a refined store's focus)
         level = ds["level"].values.astype(np.int64)
         ii = ds["i"].values
         jj = ds["j"].values
@@ -1137,11 +1148,11 @@ class CertifiedAtlas:
             from .witnesses import witness_rows
 
             # cls + 1: witness_rows' classes (-1 undecided, 0 not sliding, 1 sliding)
-            wi, wj, wc, _, _, tried = witness_rows(self.window, self.depth, self.max_iter, level, ii, jj, cls + 1)
+            wi, wj, wc, _, _, tried = witness_rows(self.window, depth, self.max_iter, level, ii, jj, cls + 1)
             n_wit = wi.size
             wcls = wc - 1  # 1 sliding -> class 0, 0 not sliding -> -1
         rows = []
-        for k in range(self.depth + 1):
+        for k in range(depth + 1):
             n = 1 << k
             fine = level >= k
             sh = level[fine] - k
@@ -1151,7 +1162,7 @@ class CertifiedAtlas:
             code = ci[proven] * n + cj[proven]
             pcls = cc[proven]
             if n_wit:
-                ws = self.depth - k
+                ws = depth - k
                 code = np.concatenate([code, (wi >> ws) * n + (wj >> ws)])
                 pcls = np.concatenate([pcls, wcls])
             pairs = np.unique(np.stack([code, pcls]), axis=1) if code.size else np.zeros((2, 0), np.int64)
@@ -1196,8 +1207,8 @@ class CertifiedAtlas:
         of the border :meth:`border_box_counts` counts; ``hi`` is ``inf`` when the
         lower count at ``k1`` is 0 (no upper bound), ``lo`` is ``-inf`` when the one
         at ``k2`` is (no lower bound)."""
-        k1 = check_count("k1", k1, 0, self.depth)
-        k2 = check_count("k2", k2, k1 + 1, self.depth)
+        k1 = check_count("k1", k1, 0, counted_depth(self.boxes.attrs))
+        k2 = check_count("k2", k2, k1 + 1, counted_depth(self.boxes.attrs))
         df = self.border_box_counts(border)
         return self._slope_between(df, k1, k2)
 
@@ -1228,14 +1239,14 @@ class CertifiedAtlas:
         """
         if verify not in (True, False):
             raise ValueError(f"verify must be True or False, got {verify!r}")
-        k1, k2 = _scales(k1, k2, self.depth)
+        k1, k2 = _scales(k1, k2, counted_depth(self.boxes.attrs))
         df = self.border_box_counts("sliding")
         verdict = None
         if verify:
             from .verdict import verify as check
 
             verdict = check(self)
-        return perimeter_result(df, k1, k2, self.depth, self.max_iter, verdict)
+        return perimeter_result(df, k1, k2, self.depth, self.max_iter, verdict, self.boxes.attrs.get("focus"))
 
     # -- files -------------------------------------------------------------
 

@@ -63,6 +63,8 @@ import numpy as np
 from ..model import check_count
 from . import _kernel as K
 from . import _store_read as R
+from ._store_read import encode as _encode
+from ._store_read import factorize as _factorize
 from .certificate import STATUSES
 from .certify import (_START_LEVEL, UNDECIDED_REASONS, CertifiedAtlas, _atlas_dataset, _box_table, _check_request,
                       _recheck_regions, _run_tile, _SlideCache)
@@ -112,11 +114,16 @@ def _coarse(win, depth, start, tile_level, max_iter, code, classes):
     return parts, ii[order], jj[order]
 
 
-def _table(win, depth, max_iter, code, parts, classes, trap):
+def _table(win, depth, max_iter, code, parts, classes, trap, root=False):
     """A tile's table from its final boxes, with the class-level proofs and trapping
-    regions of :func:`certify` (box by box)."""
+    regions of :func:`certify` (box by box); with ``root`` the column ``focus.ROOT``
+    (each row's quadtree box's level, which the trapping pass's pieces inherit)."""
     cols, kept, row = _box_table(parts)
     ds = _atlas_dataset(win, depth, max_iter, code, *cols, kept, row)
+    if root:
+        from .focus import ROOT
+
+        ds[ROOT] = ds["level"].copy()
     if classes:
         from .classes import mark_atlas
 
@@ -164,42 +171,41 @@ def _summary(ds):
                                            for x in (lo, hi))))}
 
 
-def _encode(ds):
-    """A tile's table as written: word and reason as int32 codes into names lists kept in
-    attributes (CertifiedAtlas.save's .zarr form)."""
-    ds = ds.copy()
-    ds.attrs = {k: (list(v) if isinstance(v, tuple) else v) for k, v in ds.attrs.items()}
-    for k in ("word", "reason"):
-        codes, names = _factorize(ds[k].values)
-        ds = ds.drop_vars(k).assign({f"{k}_code": ("box", codes.astype(np.int32))})
-        ds.attrs[f"{k}_names"] = names
-    return ds
-
-
-def _factorize(values):
-    """``(codes, names)``: the distinct texts of ``values`` (sorted) and each value's index
-    among them, by hashing (no fixed-width copy of the texts: a word can be hundreds of
-    letters, and a ``<U`` copy of a tile's words took 170 MiB at depth 12)."""
-    import pandas as pd
-
-    v = np.asarray(values)
-    codes, uniques = pd.factorize(v if v.dtype.kind == "O" else v.astype(object))
-    names = [str(x) for x in uniques]
-    order = sorted(range(len(names)), key=names.__getitem__)
-    remap = np.empty(len(names), np.int64)
-    remap[order] = np.arange(len(names))
-    return remap[codes] if len(names) else codes.astype(np.int64), [names[k] for k in order]
-
-
-def _compute_tile(win, depth, tile_level, gi, gj, max_iter, code, classes, trap, parts=None):
+def _compute_tile(win, depth, tile_level, gi, gj, max_iter, code, classes, trap, parts=None, focus=None):
     """A tile's table: the quadtree below the level-``tile_level`` boxes ``(gi, gj)``,
-    or the given final boxes ``parts`` (tile 0)."""
+    or the given final boxes ``parts`` (tile 0); with ``focus``, to depth ``focus``,
+    then refined to ``depth`` where the counts at the scales ``k <= focus`` can change
+    (:func:`focus.refine`)."""
+    top = depth if focus is None else focus
     if parts is None:
-        parts = []
-        points = _SlideCache(win, depth, max_iter)
-        for _ in _run_tile(win, depth, tile_level, gi, gj, max_iter, code, parts, points, classes=classes):
-            pass
-    return _table(win, depth, max_iter, code, parts or _empty_parts(), classes, trap)
+        parts = _quadtree(win, top, tile_level, gi, gj, max_iter, code, classes)
+    ds = _table(win, top, max_iter, code, parts or _empty_parts(), classes, trap, root=focus is not None)
+    if focus is None:
+        return ds
+    from .focus import refine
+
+    def rerun(level, ii, jj, d):
+        return _table(win, d, max_iter, code, _quadtree(win, d, level, ii, jj, max_iter, code, classes) or
+                      _empty_parts(), classes, trap, root=True)
+
+    def deeper(table, tried):
+        from .trapping import trap_atlas
+
+        out = trap_atlas(table, fine=trap == "fine", tried=tried)
+        _recheck_regions(out)
+        return out
+
+    return refine(ds, depth, focus, tile_level, rerun, deeper if trap else None, classes)
+
+
+def _quadtree(win, depth, level, ii, jj, max_iter, code, classes):
+    """The final boxes (``_run_tile``'s tuples) of the quadtree to ``depth`` below the
+    level-``level`` boxes ``(ii, jj)``."""
+    parts = []
+    points = _SlideCache(win, depth, max_iter)
+    for _ in _run_tile(win, depth, level, ii, jj, max_iter, code, parts, points, classes=classes):
+        pass
+    return parts
 
 
 def _write_tile(path, token, owner, k, ds):
@@ -234,14 +240,14 @@ def _write_tile(path, token, owner, k, ds):
     return json.loads(attrs["summary"])
 
 
-def _tile_task(path, token, owner, k, win, depth, tile_level, gi, gj, max_iter, code, classes, trap,
+def _tile_task(path, token, owner, k, win, depth, tile_level, gi, gj, max_iter, code, classes, trap, focus,
                numba_threads=None):
     """Compute and write tile ``k`` (here or on a Dask worker): returns ``(k, summary)``."""
-    ds = _tile_table(win, depth, tile_level, gi, gj, max_iter, code, classes, trap, numba_threads)
+    ds = _tile_table(win, depth, tile_level, gi, gj, max_iter, code, classes, trap, focus, numba_threads)
     return k, _write_tile(path, token, owner, k, ds)
 
 
-def _tile_table(win, depth, tile_level, gi, gj, max_iter, code, classes, trap, numba_threads):
+def _tile_table(win, depth, tile_level, gi, gj, max_iter, code, classes, trap, focus, numba_threads):
     """Tile ``(gi, gj)``'s table computed with ``numba_threads`` threads (None: numba's)."""
     import numba
 
@@ -249,7 +255,7 @@ def _tile_table(win, depth, tile_level, gi, gj, max_iter, code, classes, trap, n
     if numba_threads is not None:
         numba.set_num_threads(max(1, min(numba_threads, numba.config.NUMBA_NUM_THREADS)))
     try:
-        return _compute_tile(win, depth, tile_level, gi, gj, max_iter, code, classes, trap)
+        return _compute_tile(win, depth, tile_level, gi, gj, max_iter, code, classes, trap, focus=focus)
     finally:
         numba.set_num_threads(before)
 
@@ -287,19 +293,20 @@ def _local_tiles(args, each):
 # --------------------------------------------------------------------------- #
 
 
-def _store_attrs(win, depth, max_iter, form, trap, classes, tile_level, tile_boxes, n_tiles, positions):
+def _store_attrs(win, depth, max_iter, form, trap, classes, tile_level, tile_boxes, n_tiles, positions, focus=None):
     from .._version import __version__
 
     return {"kind": R.STORE_KIND, "format": R.STORE_FORMAT, "e_range": [float(win[0]), float(win[1])],
             "u_range": [float(win[2]), float(win[3])], "depth": int(depth), "max_iter": int(max_iter),
             "form": form, "trap": trap, "classes": bool(classes), "tile_level": int(tile_level),
             "tile_boxes": int(tile_boxes), "n_tiles": int(n_tiles), "tiles_crc": positions,
-            "impact_cap": int(K.IMPACT_CAP), "stairbounce_version": __version__}
+            "impact_cap": int(K.IMPACT_CAP), "focus": None if focus is None else int(focus),
+            "stairbounce_version": __version__}
 
 
 # what an existing store must agree on (the version may differ: the same boxes by design)
 _SAME = ("format", "e_range", "u_range", "depth", "max_iter", "form", "trap", "classes", "tile_level",
-         "tile_boxes", "n_tiles", "tiles_crc", "impact_cap")
+         "tile_boxes", "n_tiles", "tiles_crc", "impact_cap", "focus")
 
 
 def _create(path, attrs, n_tiles):
@@ -346,8 +353,8 @@ def _clean_temporaries(path):
 
 def certify_to_zarr(path, e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=1000, *, form="corners",
                     trap=False, classes=False, client=None, progress=None, phase=None, tile_level=None,
-                    tile_boxes=TILE_BOXES, numba_threads=None, verify=True) -> "CertifiedStore":
-    """certify_to_zarr(path, e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, *, form="corners", trap=False, classes=False, client=None, progress=None, phase=None, tile_level=None, tile_boxes=256, numba_threads=None, verify=True) -> CertifiedStore
+                    tile_boxes=TILE_BOXES, numba_threads=None, verify=True, focus=None) -> "CertifiedStore":
+    """certify_to_zarr(path, e=(lo, hi), u=(lo, hi), depth=10, max_iter=1000, *, form="corners", trap=False, classes=False, client=None, progress=None, phase=None, tile_level=None, tile_boxes=256, numba_threads=None, verify=True, focus=None) -> CertifiedStore
 
     :func:`stairbounce.certify` streamed to a Zarr store tile by tile: the memory is
     bounded by a tile, not by the depth, and the boxes are the same, bit for bit.
@@ -393,6 +400,15 @@ def certify_to_zarr(path, e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=
         Numba threads per tile: None, all of them locally and one on a Dask worker.
     verify : bool, default True
         Check the tiles marked done against their checksums before resuming.
+    focus : int in [tile_level, depth] or None, default None
+        For the perimeter's proven box counts at the scales ``k <= focus``: each tile
+        is certified to depth ``focus`` as without it, then deepened one level a round
+        to ``depth`` only where those counts can still change (an undecided box with a
+        cell of scale ``focus`` not yet holding proven points of both classes;
+        :mod:`stairbounce.structure.focus`).  The boxes are certified boxes that tile
+        the window, so ``sb.verify`` checks them as any store's; the counts are taken
+        at ``k <= focus`` (the store's attribute ``focus``).  The tile level's default
+        is then that of depth ``focus``.  None: every undecided box to ``depth``.
 
     Returns
     -------
@@ -421,8 +437,11 @@ def certify_to_zarr(path, e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=
     if phase is not None and not callable(phase):
         raise ValueError(f"phase must be None or a callable phase(name), got {phase!r}")
     start = min(_START_LEVEL, depth)
-    tile_level = _default_tile_level(depth) if tile_level is None else check_count("tile_level", tile_level,
-                                                                                     start, depth)
+    if focus is not None:
+        focus = check_count("focus", focus, start, depth)
+    top = depth if focus is None else focus  # the plain quadtree's depth (round 0 with focus)
+    tile_level = _default_tile_level(top) if tile_level is None else check_count("tile_level", tile_level,
+                                                                                   start, top)
     tile_boxes = check_count("tile_boxes", tile_boxes, 1)
     if numba_threads is not None:
         numba_threads = check_count("numba_threads", numba_threads, 1)
@@ -434,11 +453,12 @@ def certify_to_zarr(path, e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=
 
     if phase is not None:
         phase(f"levels {start}-{tile_level - 1}" if tile_level > start else f"level {start}")
-    parts, ti, tj = _coarse(win, depth, start, tile_level, max_iter, code, classes)
+    parts, ti, tj = _coarse(win, top, start, tile_level, max_iter, code, classes)
     cuts = list(range(0, ti.size, tile_boxes))
     n_tiles = 1 + len(cuts)
     positions = _positions_crc(ti, tj)
-    attrs = _store_attrs(win, depth, max_iter, form, trap, classes, tile_level, tile_boxes, n_tiles, positions)
+    attrs = _store_attrs(win, depth, max_iter, form, trap, classes, tile_level, tile_boxes, n_tiles, positions,
+                         focus)
 
     with _connected_and_locked(path, client) as (client, owner):
         if path.exists():
@@ -469,7 +489,7 @@ def certify_to_zarr(path, e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=
                 progress(n_done, n_tiles)
 
         if not done[0]:
-            ds = _compute_tile(win, depth, tile_level, None, None, max_iter, code, classes, trap, parts)
+            ds = _compute_tile(win, depth, tile_level, None, None, max_iter, code, classes, trap, parts, focus)
             each(_write_tile(str(path), token, owner, 0, ds))
             del ds
         del parts
@@ -477,7 +497,7 @@ def certify_to_zarr(path, e=(0.155, 0.2138), u=(0.6, 0.658), depth=10, max_iter=
         if todo and phase is not None:
             phase(f"tiles of levels {tile_level}-{depth}")
         args = [(str(path), token, owner, k, win, depth, tile_level, ti[cuts[k - 1]:cuts[k - 1] + tile_boxes],
-                 tj[cuts[k - 1]:cuts[k - 1] + tile_boxes], max_iter, code, bool(classes), trap,
+                 tj[cuts[k - 1]:cuts[k - 1] + tile_boxes], max_iter, code, bool(classes), trap, focus,
                  numba_threads if client is None else (numba_threads or 1))
                 for k in todo]
         if client is None:
@@ -662,18 +682,18 @@ class CertifiedStore:
         (:meth:`border_box_counts`), and with ``verify`` the independent checker on the
         store tile by tile (``sb.verify(path)``); ``basis`` is ``"proven"`` only when
         it passes.  ``progress(done, total)``: after each tile counted."""
-        from .certify import _scales, perimeter_result
+        from .certify import _scales, counted_depth, perimeter_result
 
         if verify not in (True, False):
             raise ValueError(f"verify must be True or False, got {verify!r}")
-        k1, k2 = _scales(k1, k2, self.depth)
+        k1, k2 = _scales(k1, k2, counted_depth(self.attrs))
         verdict = None
         if verify:
             from .verdict import verify as check
 
             verdict = check(self.path)
         df = self.border_box_counts("sliding", progress)
-        return perimeter_result(df, k1, k2, self.depth, self.max_iter, verdict)
+        return perimeter_result(df, k1, k2, self.depth, self.max_iter, verdict, self.attrs.get("focus"))
 
     def __repr__(self):
         f = self.fraction()

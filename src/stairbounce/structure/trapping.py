@@ -707,7 +707,7 @@ def _try_all(e0, e1, u0, u1, max_iter, progress=None, done=0, total=0, threads=N
     return codes, grids, itin_len, cat(itins), cell_len, cat(cells)
 
 
-def trap_atlas(ds, progress=None, split=None, fine=False):
+def trap_atlas(ds, progress=None, split=None, fine=False, tried=None):
     """The atlas table ``ds`` (``certify``'s Dataset) with its undecided
     ``"nonsliding"`` boxes tried for a trapping region (:func:`_try_fast`): a box
     whose region closes becomes ``no_sliding`` with reason ``"trapping"``; a box
@@ -732,7 +732,15 @@ def trap_atlas(ds, progress=None, split=None, fine=False):
     ``trap_box`` (the box's row), ``trap_grid`` (``v_lo, v_hi, nv, s_lo, s_hi,
     ns``), ``trap_cell_offsets`` and ``trap_cells``; ``attrs["trap_seconds"]``,
     ``attrs["trap_tried"]`` (boxes tried, the split's included) and
-    ``attrs["trap_failures"]`` (why the tries failed, :data:`TRAP_FAILURES`)."""
+    ``attrs["trap_failures"]`` (why the tries failed, :data:`TRAP_FAILURES`).
+
+    ``tried`` (one int a row, or None): the deepest level down to which an earlier
+    pass already tried the row's tree and failed everywhere (the rows of an earlier
+    pass's table that it left unproven: a row kept whole, or an unproven leaf of a
+    split).  The tries of those levels are not made again (the same box, the same
+    try, the same failure: each try depends on its box alone); their children are,
+    down to the new depth (``focus.refine``, which deepens such rows a level at a
+    time).  ``trap_tried`` counts the tries made."""
     import time
 
     import xarray as xr
@@ -754,6 +762,9 @@ def trap_atlas(ds, progress=None, split=None, fine=False):
     e0c, e1c, u0c, u1c = (ds[k].values for k in ("e0", "e1", "u0", "u1"))
     sel = np.flatnonzero((st0 == UNDECIDED) & (reason0 == "nonsliding"))
     sel = sel[(e0c[sel] > 0.0) & (e1c[sel] < 1.0) & (u0c[sel] >= _U_MIN)]
+    before = None if tried is None else np.asarray(tried, np.int64)
+    if before is not None and before.shape != st0.shape:
+        raise ValueError(f"tried must hold one level a row ({st0.size}), got shape {before.shape}")
     # the tree of tries, level by level: node -> (level, i, j, parent node, root row)
     lv = [ds["level"].values[sel].astype(np.int64)]
     ii = [ds["i"].values[sel].astype(np.int64)]
@@ -767,8 +778,19 @@ def trap_atlas(ds, progress=None, split=None, fine=False):
         L, I, J = lv[-1], ii[-1], jj[-1]
         e0, e1, u0, u1 = (np.empty(L.size) for _ in range(4))
         _box_edges(win, L, I, J, e0, e1, u0, u1)
-        r = _try_all(e0, e1, u0, u1, max_iter, progress, done, done + L.size, fine=fine)
-        done += L.size
+        if before is None:
+            r = _try_all(e0, e1, u0, u1, max_iter, progress, done, done + L.size, fine=fine)
+            done += L.size
+        else:  # the tries of the levels tried before are not made again (code -1: failed before)
+            new = np.flatnonzero(L > before[root[-1]])
+            got = _try_all(e0[new], e1[new], u0[new], u1[new], max_iter, progress, done, done + new.size,
+                           fine=fine)
+            done += new.size
+            codes_l = np.full(L.size, -1, np.int64)
+            grids_l = np.zeros((L.size, 6))
+            ilen_l, clen_l = np.zeros(L.size, np.int64), np.zeros(L.size, np.int64)
+            codes_l[new], grids_l[new], ilen_l[new], clen_l[new] = got[0], got[1], got[2], got[4]
+            r = (codes_l, grids_l, ilen_l, got[3], clen_l, got[5])  # ragged parts: the tried ones, in order
         res.append(r)
         fail = np.flatnonzero((r[0] != TRAP_OK) & (L < lmax))
         i2, j2 = 2 * I[fail], 2 * J[fail]
@@ -799,7 +821,7 @@ def trap_atlas(ds, progress=None, split=None, fine=False):
     emit = np.zeros(lv.size, bool)
     emit[has_parent] = is_split[parent[has_parent]] & (proven[has_parent] | ~useful[has_parent])
     emit[~has_parent] = ~is_split[~has_parent]  # roots not split stay (changed if proven)
-    why, count = np.unique(codes[~proven], return_counts=True)
+    why, count = np.unique(codes[~proven & (codes >= 0)], return_counts=True)
     failures = {TRAP_FAILURES[int(c)]: int(n) for c, n in zip(why, count)}
     # the new table: the rows not split, then the leaves of the splits; each from a source row
     split_rows = np.zeros(st0.size, bool)
@@ -867,7 +889,7 @@ def trap_atlas(ds, progress=None, split=None, fine=False):
     for k in box_vars:
         out[k].attrs = ds[k].attrs
     out.attrs = dict(ds.attrs, trap_split=int(split), trap_grids=[int(c) for c in _try_grids(fine)[0]],
-                     trap_tried=int(lv.size),
+                     trap_tried=int(done),
                      trap_seconds=time.perf_counter() - t0,
                      trap_failures=", ".join(f"{k} {v}" for k, v in sorted(failures.items())))
     return out
