@@ -26,9 +26,6 @@ below the Corollary 2.1 curve ``no_sliding``: fewer undecided boxes, lower upper
 deepened to the depth only where the counts at k <= K can change
 (``structure/focus.py``); the counts are then taken at k = 3 .. K, and the store's
 boxes, its time and the number of boxes each round took up are printed.
-``--max-work N`` raises the checker's limit (``structure.verify.MAX_WORK``, 5e8 units:
-boxes + itinerary steps + trapping cells) for the bracket of a large store: Fig. 6's
-store at depth 14 with ``--trap fine`` holds 0.93e9.
 """
 
 from __future__ import annotations
@@ -47,7 +44,7 @@ def _uptime():
 
 
 def measure(name, e, u, depth, max_iter, store_from, tmp, keep=False, trap=False, ways=("streamed", "loaded"),
-            focus=None, max_work=None):
+            focus=None):
     import stairbounce as sb
 
     t0 = time.perf_counter()
@@ -63,7 +60,7 @@ def measure(name, e, u, depth, max_iter, store_from, tmp, keep=False, trap=False
         if rounds:
             print("  rounds (depth: rows certified again, rows whose trapping tries went one level further, rows): "
                   + ", ".join(f"{d}: {a:,}, {b:,}, {n:,}" for d, (a, b, n) in sorted(rounds.items())), flush=True)
-        return _from_store(name, path, ways, max_work)
+        return _from_store(name, path, ways)
     else:
         atlas = sb.certify(e=e, u=u, depth=depth, max_iter=max_iter, classes=True, trap=trap)
     t1 = time.perf_counter()
@@ -84,9 +81,6 @@ def measure(name, e, u, depth, max_iter, store_from, tmp, keep=False, trap=False
 _CHILD = """
 import json, resource, sys, time
 import stairbounce as sb
-import stairbounce.structure.verify as V
-if sys.argv[3] != "None":
-    V.MAX_WORK = int(sys.argv[3])  # --max-work: the checker's limit (a store verified tile by tile)
 t = time.perf_counter()
 if sys.argv[2] == "streamed":
     r = sb.CertifiedStore(sys.argv[1]).perimeter_bracket()
@@ -120,7 +114,7 @@ def _count_rounds():
     return rounds
 
 
-def _from_store(name, path, ways=("streamed", "loaded"), max_work=None):
+def _from_store(name, path, ways=("streamed", "loaded")):
     """The store's perimeter bracket two ways, each in a fresh process (its own peak
     memory): tile by tile (``CertifiedStore.perimeter_bracket``: the checker on the store,
     then the counts) and loaded whole (``CertifiedAtlas.load(path).perimeter_bracket()``);
@@ -131,8 +125,7 @@ def _from_store(name, path, ways=("streamed", "loaded"), max_work=None):
 
     got = {}
     for how in ways:
-        out = subprocess.run([sys.executable, "-c", _CHILD, path, how, str(max_work)], capture_output=True,
-                             text=True, check=True)
+        out = subprocess.run([sys.executable, "-c", _CHILD, path, how], capture_output=True, text=True, check=True)
         got[how] = r = json.loads(out.stdout.strip().splitlines()[-1])
         print(f"  {how}: verify + counts {r['seconds']:.1f} s, peak {r['peak_gib']:.2f} GiB (the process), "
               f"basis {r['basis']}, {r['witnesses']:,} proven points in undecided boxes ({r['tried']:,} "
@@ -162,7 +155,6 @@ def main(argv=None):
     p.add_argument("--trap", choices=("none", "on", "fine"), default="none")
     p.add_argument("--streamed-only", action="store_true")
     p.add_argument("--focus", type=int, default=None)
-    p.add_argument("--max-work", type=int, default=None)
     a = p.parse_args(argv)
     trap = {"none": False, "on": True, "fine": "fine"}[a.trap]
     print(f"{time.strftime('%Y-%m-%d %H:%M')} UTC, {os.cpu_count()} cores, {_uptime()}", flush=True)
@@ -173,7 +165,7 @@ def main(argv=None):
             (e, u), _ = DIMENSION_WINDOWS[name]
             for depth in (int(d) for d in a.depths.split(",")):
                 measure(name, e, u, depth, a.max_iter, a.store_from, a.stores or tmp, keep=bool(a.stores),
-                        trap=trap, ways=("streamed",) if a.streamed_only else ("streamed", "loaded"), focus=a.focus, max_work=a.max_work)
+                        trap=trap, ways=("streamed",) if a.streamed_only else ("streamed", "loaded"), focus=a.focus)
     print(f"done, {_uptime()}")
 
 

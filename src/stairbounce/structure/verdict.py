@@ -522,6 +522,11 @@ def _store_tile(path, k, token, crc, base_attrs):
         n_boxes, n_steps = arrays["offsets"].size - 1, arrays["itinerary"].size
     except KeyError as exc:
         raise ValueError(f"tile {k} of {path} lacks its variable {exc}: the store is damaged") from None
+    from .verify import check_work
+
+    # the limit of one call, held by each tile: a store is checked a tile at a time
+    check_work(n_boxes, n_steps, arrays["trap_cells"].size if "trap_cells" in arrays else 0,
+               what=f"tile {k} of the atlas store {str(path)!r}")
     ds = R.merge_tiles([(arrays, attrs)], n_boxes, n_steps, first=k)
     if base_attrs is not None:
         ds.attrs = dict(base_attrs)
@@ -770,7 +775,7 @@ def _read_checked(path):
     """The atlas file, read after its work (``verify.MAX_WORK``) is estimated
     from its variables' sizes, opened lazily; for a streamed atlas's store its sizes
     from its summary (None when it has none) instead: :func:`_verify_store` reads it a
-    tile at a time."""
+    tile at a time, and the limit holds for each tile (:func:`_store_tile`)."""
     import xarray as xr
 
     from .._io import check_input
@@ -779,11 +784,9 @@ def _read_checked(path):
 
     s = str(path)
     check_input(path, (".nc", ".zarr"))  # a FIFO or device would block the opening below forever
-    if is_store(path):  # a streamed atlas (certify_to_zarr): its size from its summary
-        sizes = store_sizes(path)
-        if sizes is not None:
-            check_work(*sizes, what=f"the atlas store {s!r}")
-        return sizes
+    if is_store(path):  # a streamed atlas (certify_to_zarr): checked a tile at a time, the
+        # work limit held by each tile (_store_tile), as its memory is
+        return store_sizes(path)
     try:
         f = xr.open_zarr(s, consolidated=False) if s.endswith(".zarr") else xr.open_dataset(s, engine="netcdf4")
     except Exception:  # noqa: BLE001 - read_atlas_file names what is wrong with the file

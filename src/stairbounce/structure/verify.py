@@ -103,8 +103,10 @@ cells of one call.  The compiled checker re-decides about 10^7 steps a second
 on one core (benchmarks/README.md), so the limit is about a minute of work and
 4 GB of itinerary; beyond it ``verify``, ``verify_codes`` and ``verify_file``
 refuse with a ValueError naming the size, before reading a file's arrays
-(``stairbounce certify --verify``: one line, exit 2).  Raise it here (it is
-read at each call) to check more in one call."""
+(``stairbounce certify --verify``: one line, exit 2).  A streamed atlas's store
+(``certify_to_zarr``) is checked a tile at a time, and the limit holds for each
+tile, as its memory does: a store of any size can be checked.  Raise it here (it
+is read at each call) to check more in one call."""
 
 _OK, _BOX, _STATUS, _ITIN, _COR, _SLIDE, _IMPACT, _NOIMPACT, _WORD, _TRAP, _BRANCHES = range(len(CHECKS))
 _SLIDING_S = STATUSES.index("sliding")
