@@ -128,11 +128,16 @@ def _table(win, depth, max_iter, code, parts, classes, trap, root=False):
         from .classes import mark_atlas
 
         mark_atlas(ds)
-    if trap:
-        from .trapping import trap_atlas
+    return _trapped(ds, trap) if trap else ds
 
-        ds = trap_atlas(ds, fine=trap == "fine")
-        _recheck_regions(ds)
+
+def _trapped(ds, trap, tried=None):
+    """``ds`` with the trapping pass of ``trap`` (True or "fine"; ``tried``: as
+    :func:`trapping.trap_atlas`'s) and its regions re-checked by the independent checker."""
+    from .trapping import trap_atlas
+
+    ds = trap_atlas(ds, fine=trap == "fine", tried=tried)
+    _recheck_regions(ds)
     return ds
 
 
@@ -189,11 +194,7 @@ def _compute_tile(win, depth, tile_level, gi, gj, max_iter, code, classes, trap,
                       _empty_parts(), classes, trap, root=True)
 
     def deeper(table, tried):
-        from .trapping import trap_atlas
-
-        out = trap_atlas(table, fine=trap == "fine", tried=tried)
-        _recheck_regions(out)
-        return out
+        return _trapped(table, trap, tried)
 
     return refine(ds, depth, focus, tile_level, rerun, deeper if trap else None, classes)
 

@@ -161,7 +161,8 @@ def choose(ds, K, tile_level, depth, classes=False):
     lower cells only, and they stay lower whatever the round does, since a cell holds a
     proven point of a class exactly when one of its candidates is provable,
     ``witnesses.py``.)"""
-    again, deeper = selected(ds, K, lower_cells(ds, K, tile_level), depth, classes)
+    again = np.zeros(ds["status"].size, bool)  # nothing taken up yet: every witness counts
+    deeper = again.copy()
     while True:
         a, d = selected(ds, K, lower_cells(ds, K, tile_level, again | deeper), depth, classes)
         a |= again

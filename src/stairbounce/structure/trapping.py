@@ -762,8 +762,9 @@ def trap_atlas(ds, progress=None, split=None, fine=False, tried=None):
     e0c, e1c, u0c, u1c = (ds[k].values for k in ("e0", "e1", "u0", "u1"))
     sel = np.flatnonzero((st0 == UNDECIDED) & (reason0 == "nonsliding"))
     sel = sel[(e0c[sel] > 0.0) & (e1c[sel] < 1.0) & (u0c[sel] >= _U_MIN)]
-    before = None if tried is None else np.asarray(tried, np.int64)
-    if before is not None and before.shape != st0.shape:
+    # the deepest level each row's tree was tried down to before (-1: none)
+    before = np.full(st0.size, -1, np.int64) if tried is None else np.asarray(tried, np.int64)
+    if before.shape != st0.shape:
         raise ValueError(f"tried must hold one level a row ({st0.size}), got shape {before.shape}")
     # the tree of tries, level by level: node -> (level, i, j, parent node, root row)
     lv = [ds["level"].values[sel].astype(np.int64)]
@@ -778,19 +779,15 @@ def trap_atlas(ds, progress=None, split=None, fine=False, tried=None):
         L, I, J = lv[-1], ii[-1], jj[-1]
         e0, e1, u0, u1 = (np.empty(L.size) for _ in range(4))
         _box_edges(win, L, I, J, e0, e1, u0, u1)
-        if before is None:
-            r = _try_all(e0, e1, u0, u1, max_iter, progress, done, done + L.size, fine=fine)
-            done += L.size
-        else:  # the tries of the levels tried before are not made again (code -1: failed before)
-            new = np.flatnonzero(L > before[root[-1]])
-            got = _try_all(e0[new], e1[new], u0[new], u1[new], max_iter, progress, done, done + new.size,
-                           fine=fine)
-            done += new.size
-            codes_l = np.full(L.size, -1, np.int64)
-            grids_l = np.zeros((L.size, 6))
-            ilen_l, clen_l = np.zeros(L.size, np.int64), np.zeros(L.size, np.int64)
-            codes_l[new], grids_l[new], ilen_l[new], clen_l[new] = got[0], got[1], got[2], got[4]
-            r = (codes_l, grids_l, ilen_l, got[3], clen_l, got[5])  # ragged parts: the tried ones, in order
+        # the tries of the levels tried before are not made again (code -1: failed before)
+        new = np.flatnonzero(L > before[root[-1]])
+        got = _try_all(e0[new], e1[new], u0[new], u1[new], max_iter, progress, done, done + new.size, fine=fine)
+        done += new.size
+        codes_l = np.full(L.size, -1, np.int64)
+        grids_l = np.zeros((L.size, 6))
+        ilen_l, clen_l = np.zeros(L.size, np.int64), np.zeros(L.size, np.int64)
+        codes_l[new], grids_l[new], ilen_l[new], clen_l[new] = got[0], got[1], got[2], got[4]
+        r = (codes_l, grids_l, ilen_l, got[3], clen_l, got[5])  # ragged parts: the tried ones, in order
         res.append(r)
         fail = np.flatnonzero((r[0] != TRAP_OK) & (L < lmax))
         i2, j2 = 2 * I[fail], 2 * J[fail]
